@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Installs probecast's build and test dependencies on Debian 12 (apt packages only).
+# Idempotent: packages already present are left alone; safe to run on every build.
+set -euo pipefail
+
+packages=(
+  build-essential cmake pkg-config
+  glslang-tools            # glslangValidator: GLSL -> SPIR-V at build time
+  libvulkan-dev            # Vulkan loader and headers
+  mesa-vulkan-drivers      # lavapipe (Vulkan on the CPU) for headless runs and CI
+  vulkan-validationlayers  # tests run with VK_LAYER_KHRONOS_validation
+  libtinygltf-dev libstb-dev nlohmann-json3-dev  # glTF / GLB loading, image decoding
+  libpng-dev libturbojpeg0-dev                   # PNG and JPEG output
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  exit 0
+fi
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+echo "installing: ${missing[*]}" >&2
+$SUDO apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null

@@ -1,0 +1,355 @@
+#include "gpu_scene.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "bvh.h"
+#include "xform.h"
+
+static double now_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
+
+static void *xcalloc(size_t n, size_t size)
+{
+    void *p = calloc(n ? n : 1, size ? size : 1);
+    if (!p) {
+        fprintf(stderr, "probecast: out of memory\n");
+        abort();
+    }
+    return p;
+}
+
+static inline float u2f(uint32_t u)
+{
+    float f;
+    memcpy(&f, &u, sizeof f);
+    return f;
+}
+
+static pc_vec4 v4(const float *p, float w)
+{
+    return (pc_vec4){p[0], p[1], p[2], w};
+}
+
+/* Creates a device buffer holding size bytes of data. */
+static rd_vk_result upload_new(rd_vk *vk, rd_buffer *b, const void *data, size_t size, char *err,
+                               size_t errlen)
+{
+    rd_vk_result r = rd_buffer_create(vk, b, size, RD_MEMORY_DEVICE, err, errlen);
+    if (r == RD_VK_OK && size > 0) r = rd_buffer_upload(vk, b, 0, data, size, err, errlen);
+    return r;
+}
+
+static void fill_material(pc_material *g, const rd_material *m, uint32_t texture_count)
+{
+    memset(g, 0, sizeof *g);
+    g->base_color = (pc_vec4){m->base_color[0], m->base_color[1], m->base_color[2],
+                              m->base_color[3]};
+    g->emission = (pc_vec4){m->emission[0], m->emission[1], m->emission[2], 0};
+    bool bc = m->base_color_texture >= 0 && (uint32_t)m->base_color_texture < texture_count;
+    bool em = m->emissive_texture >= 0 && (uint32_t)m->emissive_texture < texture_count;
+    g->tex.x = bc ? (uint32_t)m->base_color_texture + 1 : 0;
+    g->tex.y = em ? (uint32_t)m->emissive_texture + 1 : 0;
+    g->tex.z = m->alpha_mode == RD_ALPHA_MASK ? PC_ALPHA_MASK
+               : m->alpha_mode == RD_ALPHA_BLEND ? PC_ALPHA_BLEND
+                                                 : PC_ALPHA_OPAQUE;
+    g->tex.w = m->double_sided ? 1u : 0u;
+    g->params.x = m->alpha_cutoff;
+}
+
+static rd_vk_result upload_materials(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, char *err,
+                                     size_t errlen)
+{
+    pc_material *mats = xcalloc(s->material_count, sizeof *mats);
+    for (uint32_t i = 0; i < s->material_count; i++)
+        fill_material(&mats[i], &s->materials[i], s->texture_count);
+    rd_vk_result r = upload_new(vk, &gs->materials, mats, sizeof *mats * s->material_count, err,
+                                errlen);
+    free(mats);
+    if (r != RD_VK_OK) return r;
+
+    uint64_t texel_total = 0;
+    pc_texture *texs = xcalloc(s->texture_count, sizeof *texs);
+    for (uint32_t i = 0; i < s->texture_count; i++) {
+        const rd_texture *t = &s->textures[i];
+        texs[i].info = (pc_uvec4){(uint32_t)texel_total, t->width, t->height,
+                                  t->wrap_s | t->wrap_t << 4 | (t->nearest ? 0x100u : 0u)};
+        texel_total += (uint64_t)t->width * t->height;
+    }
+    if (texel_total > UINT32_MAX) {
+        free(texs);
+        snprintf(err, errlen, "textures hold %llu texels, more than the 4 Gi texel limit",
+                 (unsigned long long)texel_total);
+        return RD_VK_ERR_OUT_OF_MEMORY;
+    }
+    r = upload_new(vk, &gs->textures, texs, sizeof *texs * s->texture_count, err, errlen);
+    free(texs);
+    if (r != RD_VK_OK) return r;
+    r = rd_buffer_create(vk, &gs->texels, texel_total * 4, RD_MEMORY_DEVICE, err, errlen);
+    uint64_t offset = 0;
+    for (uint32_t i = 0; r == RD_VK_OK && i < s->texture_count; i++) {
+        const rd_texture *t = &s->textures[i];
+        uint64_t bytes = (uint64_t)t->width * t->height * 4;
+        if (bytes) r = rd_buffer_upload(vk, &gs->texels, offset, t->rgba, bytes, err, errlen);
+        offset += bytes;
+    }
+    return r;
+}
+
+/* Builds every mesh's BLAS into one node array and the triangle records in leaf order. */
+static rd_vk_result build_blas(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, char *err,
+                               size_t errlen)
+{
+    double t0 = now_ms();
+    gs->mesh_count = s->mesh_count;
+    gs->mesh_root = xcalloc(s->mesh_count, sizeof *gs->mesh_root);
+    gs->mesh_bounds = xcalloc(s->mesh_count, 6 * sizeof(float));
+    rd_bvh *bvhs = xcalloc(s->mesh_count, sizeof *bvhs);
+    uint64_t tri_total = 0, node_total = 0;
+    for (uint32_t m = 0; m < s->mesh_count; m++) {
+        const rd_mesh *mesh = &s->meshes[m];
+        if (!rd_bvh_build_triangles(&bvhs[m], mesh->positions, mesh->tri_count, NULL)) {
+            fprintf(stderr, "probecast: out of memory building a BVH\n");
+            abort();
+        }
+        gs->mesh_root[m] = (uint32_t)node_total;
+        const pc_bvh_node *root = &bvhs[m].nodes[0];
+        float *b = &gs->mesh_bounds[m * 6];
+        b[0] = root->bmin.x, b[1] = root->bmin.y, b[2] = root->bmin.z;
+        b[3] = root->bmax.x, b[4] = root->bmax.y, b[5] = root->bmax.z;
+        if (bvhs[m].depth > gs->max_blas_depth) gs->max_blas_depth = bvhs[m].depth;
+        tri_total += mesh->tri_count;
+        node_total += bvhs[m].node_count;
+    }
+    gs->blas_build_ms = now_ms() - t0;
+    gs->tri_count = tri_total;
+    gs->blas_node_count = node_total;
+    if (tri_total > UINT32_MAX / 2 || node_total > UINT32_MAX / 2) {
+        for (uint32_t m = 0; m < s->mesh_count; m++) rd_bvh_destroy(&bvhs[m]);
+        free(bvhs);
+        snprintf(err, errlen, "scene too large: %llu triangles",
+                 (unsigned long long)tri_total);
+        return RD_VK_ERR_OUT_OF_MEMORY;
+    }
+
+    pc_bvh_node *nodes = xcalloc(node_total, sizeof *nodes);
+    pc_tri *tris = xcalloc(tri_total, sizeof *tris);
+    pc_tri_attr *attrs = xcalloc(tri_total, sizeof *attrs);
+    uint32_t node_base = 0, tri_base = 0;
+    for (uint32_t m = 0; m < s->mesh_count; m++) {
+        const rd_mesh *mesh = &s->meshes[m];
+        const rd_bvh *bvh = &bvhs[m];
+        for (uint32_t i = 0; i < bvh->node_count; i++) {
+            pc_bvh_node n = bvh->nodes[i];
+            uint32_t first = rd_bvh_node_first(&n), count = rd_bvh_node_count(&n);
+            n.bmin.w = u2f(first + (count ? tri_base : node_base));
+            nodes[node_base + i] = n;
+        }
+        for (uint32_t i = 0; i < bvh->prim_count; i++) {
+            uint32_t src = bvh->prim_index[i];
+            uint32_t mat = mesh->material[src] < s->material_count ? mesh->material[src] : 0;
+            const rd_material *mm = &s->materials[mat];
+            uint32_t flags = (mm->double_sided ? PC_TRI_DOUBLE_SIDED : 0) |
+                             (mm->alpha_mode == RD_ALPHA_MASK ? PC_TRI_ALPHA_MASK : 0);
+            const float *p = &mesh->positions[src * 9];
+            const float *n = &mesh->normals[src * 9];
+            const float *uv = &mesh->uvs[src * 6];
+            pc_tri *t = &tris[tri_base + i];
+            t->v0 = v4(p, u2f(mat));
+            t->v1 = v4(p + 3, u2f(flags));
+            t->v2 = v4(p + 6, u2f(src));
+            pc_tri_attr *a = &attrs[tri_base + i];
+            a->n0 = v4(n, 0), a->n1 = v4(n + 3, 0), a->n2 = v4(n + 6, 0);
+            a->uv01 = (pc_vec4){uv[0], uv[1], uv[2], uv[3]};
+            a->uv2 = (pc_vec4){uv[4], uv[5], 0, 0};
+        }
+        node_base += bvh->node_count;
+        tri_base += mesh->tri_count;
+        rd_bvh_destroy(&bvhs[m]);
+    }
+    free(bvhs);
+
+    double t1 = now_ms();
+    rd_vk_result r = upload_new(vk, &gs->blas_nodes, nodes, sizeof *nodes * node_total, err, errlen);
+    if (r == RD_VK_OK) r = upload_new(vk, &gs->tris, tris, sizeof *tris * tri_total, err, errlen);
+    if (r == RD_VK_OK)
+        r = upload_new(vk, &gs->tri_attrs, attrs, sizeof *attrs * tri_total, err, errlen);
+    gs->upload_ms += now_ms() - t1;
+    free(nodes);
+    free(tris);
+    free(attrs);
+    return r;
+}
+
+/* World box of a mesh's object-space box under m (the 8 transformed corners). */
+static void world_box(const float m[16], const float *b, float *lo, float *hi)
+{
+    lo[0] = lo[1] = lo[2] = INFINITY;
+    hi[0] = hi[1] = hi[2] = -INFINITY;
+    if (!(b[0] <= b[3] && b[1] <= b[4] && b[2] <= b[5])) return; /* empty mesh */
+    for (int c = 0; c < 8; c++) {
+        float p[3] = {b[(c & 1) ? 3 : 0], b[(c & 2) ? 4 : 1], b[(c & 4) ? 5 : 2]}, w[3];
+        rd_mat4_transform_point(m, p, w);
+        for (int k = 0; k < 3; k++) {
+            if (w[k] < lo[k]) lo[k] = w[k];
+            if (w[k] > hi[k]) hi[k] = w[k];
+        }
+    }
+}
+
+static void rows3(pc_vec4 out[3], const float m[16])
+{
+    for (int r = 0; r < 3; r++) out[r] = (pc_vec4){m[r], m[4 + r], m[8 + r], m[12 + r]};
+}
+
+rd_vk_result rd_gpu_scene_update_instances(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
+                                           char *err, size_t errlen)
+{
+    double t0 = now_ms();
+    uint32_t n = s->instance_count;
+    if (n != gs->instance_capacity && gs->instance_capacity != 0) {
+        snprintf(err, errlen, "instance count changed from %u to %u", gs->instance_capacity, n);
+        return RD_VK_ERR_VULKAN;
+    }
+    pc_instance *inst = xcalloc(n, sizeof *inst);
+    float *lo = xcalloc(n, 3 * sizeof(float)), *hi = xcalloc(n, 3 * sizeof(float));
+    for (uint32_t i = 0; i < n; i++) {
+        const rd_instance *in = &s->instances[i];
+        const float *world = s->nodes[in->node].world;
+        float inv[16];
+        bool invertible = rd_mat4_inverse(inv, world);
+        rows3(inst[i].object_to_world, world);
+        rows3(inst[i].world_to_object, invertible ? inv : world);
+        uint32_t flags = rd_mat4_det3(world) < 0 ? PC_INST_NEG_DET : 0;
+        inst[i].info = (pc_uvec4){gs->mesh_root[in->mesh], in->mesh, flags, in->node};
+        if (invertible) {
+            world_box(world, &gs->mesh_bounds[in->mesh * 6], &lo[i * 3], &hi[i * 3]);
+        } else { /* a singular transform flattens the mesh: it cannot be hit */
+            lo[i * 3] = lo[i * 3 + 1] = lo[i * 3 + 2] = INFINITY;
+            hi[i * 3] = hi[i * 3 + 1] = hi[i * 3 + 2] = -INFINITY;
+        }
+    }
+    rd_bvh tlas = {0};
+    if (!rd_bvh_build(&tlas, lo, hi, n, NULL)) {
+        fprintf(stderr, "probecast: out of memory building the top-level BVH\n");
+        abort();
+    }
+    free(lo);
+    free(hi);
+    gs->tlas_build_ms = now_ms() - t0;
+    gs->tlas_node_count = tlas.node_count;
+
+    rd_vk_result r = RD_VK_OK;
+    if (gs->instance_capacity == 0) {
+        /* A TLAS over n boxes has at most 2n - 1 nodes: size for the worst case once. */
+        uint32_t max_nodes = n ? 2 * n : 1;
+        r = rd_buffer_create(vk, &gs->instances, sizeof(pc_instance) * n, RD_MEMORY_DEVICE, err,
+                             errlen);
+        if (r == RD_VK_OK)
+            r = rd_buffer_create(vk, &gs->tlas_nodes, sizeof(pc_bvh_node) * max_nodes,
+                                 RD_MEMORY_DEVICE, err, errlen);
+        if (r == RD_VK_OK)
+            r = rd_buffer_create(vk, &gs->tlas_index, sizeof(uint32_t) * (n ? n : 1),
+                                 RD_MEMORY_DEVICE, err, errlen);
+        gs->instance_capacity = n;
+    }
+    if (r == RD_VK_OK && n)
+        r = rd_buffer_upload(vk, &gs->instances, 0, inst, sizeof *inst * n, err, errlen);
+    if (r == RD_VK_OK)
+        r = rd_buffer_upload(vk, &gs->tlas_nodes, 0, tlas.nodes,
+                             sizeof(pc_bvh_node) * tlas.node_count, err, errlen);
+    if (r == RD_VK_OK && n)
+        r = rd_buffer_upload(vk, &gs->tlas_index, 0, tlas.prim_index, sizeof(uint32_t) * n, err,
+                             errlen);
+    rd_bvh_destroy(&tlas);
+    free(inst);
+    return r;
+}
+
+rd_vk_result rd_gpu_scene_update_lights(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
+                                        char *err, size_t errlen)
+{
+    uint32_t n = s->light_count;
+    if (n > gs->light_capacity || gs->lights.buffer == VK_NULL_HANDLE) {
+        rd_buffer_destroy(vk, &gs->lights);
+        uint32_t cap = n < 16 ? 16 : n;
+        rd_vk_result r = rd_buffer_create(vk, &gs->lights, sizeof(pc_light) * cap,
+                                          RD_MEMORY_DEVICE, err, errlen);
+        if (r != RD_VK_OK) return r;
+        gs->light_capacity = cap;
+        gs->refs.lights = gs->lights.address;
+    }
+    pc_light *lights = xcalloc(n, sizeof *lights);
+    for (uint32_t i = 0; i < n; i++) {
+        const rd_light *l = &s->lights[i];
+        float dir[3];
+        const float down[3] = {0, 0, -1};
+        rd_vec3_normalize(dir, l->direction, down);
+        lights[i].position_range = v4(l->position, l->range > 0 ? l->range : 0);
+        lights[i].direction = v4(dir, 0);
+        lights[i].radiance = (pc_vec4){l->color[0] * l->intensity, l->color[1] * l->intensity,
+                                       l->color[2] * l->intensity, l->intensity};
+        float outer = l->outer_cone, inner = l->inner_cone < outer ? l->inner_cone : outer;
+        lights[i].spot = (pc_vec4){cosf(outer), cosf(inner), 0, 0};
+        /* equal cones would make smoothstep undefined: keep a tiny soft edge */
+        if (lights[i].spot.y - lights[i].spot.x < 1e-4f) lights[i].spot.y = lights[i].spot.x + 1e-4f;
+        lights[i].info = (pc_uvec4){l->type == RD_LIGHT_SPOT          ? PC_LIGHT_SPOT
+                                    : l->type == RD_LIGHT_DIRECTIONAL ? PC_LIGHT_DIRECTIONAL
+                                                                      : PC_LIGHT_POINT,
+                                    0, 0, 0};
+    }
+    rd_vk_result r = RD_VK_OK;
+    if (n) r = rd_buffer_upload(vk, &gs->lights, 0, lights, sizeof *lights * n, err, errlen);
+    free(lights);
+    gs->refs.counts.y = n;
+    return r;
+}
+
+rd_vk_result rd_gpu_scene_create(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, char *err,
+                                 size_t errlen)
+{
+    memset(gs, 0, sizeof *gs);
+    rd_vk_result r = build_blas(vk, gs, s, err, errlen);
+    if (r == RD_VK_OK) r = rd_gpu_scene_update_instances(vk, gs, s, err, errlen);
+    if (r == RD_VK_OK) r = upload_materials(vk, gs, s, err, errlen);
+    if (r == RD_VK_OK) r = rd_gpu_scene_update_lights(vk, gs, s, err, errlen);
+    if (r != RD_VK_OK) {
+        rd_gpu_scene_destroy(vk, gs);
+        return r;
+    }
+    gs->refs = (pc_scene_refs){
+        .tris = gs->tris.address,
+        .tri_attrs = gs->tri_attrs.address,
+        .blas_nodes = gs->blas_nodes.address,
+        .tlas_nodes = gs->tlas_nodes.address,
+        .tlas_index = gs->tlas_index.address,
+        .instances = gs->instances.address,
+        .materials = gs->materials.address,
+        .textures = gs->textures.address,
+        .texels = gs->texels.address,
+        .lights = gs->lights.address,
+        .counts = {s->instance_count, s->light_count, s->material_count, s->texture_count},
+    };
+    return RD_VK_OK;
+}
+
+void rd_gpu_scene_destroy(rd_vk *vk, rd_gpu_scene *gs)
+{
+    rd_buffer *bufs[] = {&gs->tris,      &gs->tri_attrs, &gs->blas_nodes, &gs->tlas_nodes,
+                         &gs->tlas_index, &gs->instances, &gs->materials, &gs->textures,
+                         &gs->texels,    &gs->lights};
+    for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; i++) rd_buffer_destroy(vk, bufs[i]);
+    free(gs->mesh_root);
+    free(gs->mesh_bounds);
+    gs->mesh_root = NULL;
+    gs->mesh_bounds = NULL;
+    gs->instance_capacity = gs->light_capacity = 0;
+    memset(&gs->refs, 0, sizeof gs->refs);
+}

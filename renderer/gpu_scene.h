@@ -1,0 +1,41 @@
+/* gpu_scene.h: a scene's acceleration structures and shading data, resident on the GPU.
+ *
+ * Bottom-level BVHs are built once per mesh; the top-level BVH over instances is rebuilt
+ * when nodes move (rd_gpu_scene_update_instances), so moving an object costs one small
+ * rebuild and upload. Lights are a separate small upload.
+ */
+#ifndef RD_GPU_SCENE_H
+#define RD_GPU_SCENE_H
+
+#include "../shaders/gpu_types.h"
+#include "scene.h"
+#include "vk_buffer.h"
+
+typedef struct rd_gpu_scene {
+    rd_buffer tris, tri_attrs, blas_nodes, tlas_nodes, tlas_index, instances;
+    rd_buffer materials, textures, texels, lights;
+    pc_scene_refs refs;      /* addresses and counts, ready for pc_globals */
+    uint32_t mesh_count;
+    uint32_t *mesh_root;     /* absolute BLAS root node per mesh */
+    float *mesh_bounds;      /* 6 floats per mesh: object-space min, max */
+    uint32_t instance_capacity;
+    uint32_t light_capacity;
+    /* statistics */
+    double blas_build_ms, tlas_build_ms, upload_ms;
+    uint64_t tri_count, blas_node_count;
+    uint32_t tlas_node_count, max_blas_depth;
+} rd_gpu_scene;
+
+/* Builds every BVH and uploads the scene. On failure everything is released. */
+rd_vk_result rd_gpu_scene_create(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *scene, char *err,
+                                 size_t errlen);
+/* Rebuilds the top-level BVH and instance transforms from scene's current node world
+ * matrices (call rd_scene_update first). The instance count must not change. */
+rd_vk_result rd_gpu_scene_update_instances(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *scene,
+                                           char *err, size_t errlen);
+/* Re-uploads the lights (the count may change). */
+rd_vk_result rd_gpu_scene_update_lights(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *scene,
+                                        char *err, size_t errlen);
+void rd_gpu_scene_destroy(rd_vk *vk, rd_gpu_scene *gs); /* idempotent */
+
+#endif

@@ -1,0 +1,153 @@
+#include "render.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "shaders/primary.spv.h"
+#include "shaders/shade.spv.h"
+#include "shaders/tonemap.spv.h"
+
+#define DEFAULT_WIDTH 960
+#define DEFAULT_HEIGHT 540
+
+rd_vk_result rd_renderer_create(rd_vk *vk, rd_renderer *r, char *err, size_t errlen)
+{
+    memset(r, 0, sizeof *r);
+    r->vk = vk;
+    rd_vk_result res = rd_pipeline_create(vk, &r->primary, "primary", pc_spv_primary,
+                                          sizeof pc_spv_primary, sizeof(pc_push), err, errlen);
+    if (res == RD_VK_OK)
+        res = rd_pipeline_create(vk, &r->shade, "shade", pc_spv_shade, sizeof pc_spv_shade,
+                                 sizeof(pc_push), err, errlen);
+    if (res == RD_VK_OK)
+        res = rd_pipeline_create(vk, &r->tonemap, "tonemap", pc_spv_tonemap,
+                                 sizeof pc_spv_tonemap, sizeof(pc_push), err, errlen);
+    if (res == RD_VK_OK)
+        res = rd_buffer_create(vk, &r->globals, sizeof(pc_globals), RD_MEMORY_UPLOAD, err, errlen);
+    if (res == RD_VK_OK)
+        res = rd_buffer_create(vk, &r->counters, sizeof(pc_counters), RD_MEMORY_READBACK, err,
+                               errlen);
+    if (res == RD_VK_OK) res = rd_timer_create(vk, &r->timer, err, errlen);
+    if (res != RD_VK_OK) rd_renderer_destroy(r);
+    return res;
+}
+
+void rd_renderer_destroy(rd_renderer *r)
+{
+    if (!r->vk) return;
+    rd_timer_destroy(r->vk, &r->timer);
+    rd_buffer_destroy(r->vk, &r->rgba8);
+    rd_buffer_destroy(r->vk, &r->radiance);
+    rd_buffer_destroy(r->vk, &r->gbuffer);
+    rd_buffer_destroy(r->vk, &r->counters);
+    rd_buffer_destroy(r->vk, &r->globals);
+    rd_pipeline_destroy(r->vk, &r->tonemap);
+    rd_pipeline_destroy(r->vk, &r->shade);
+    rd_pipeline_destroy(r->vk, &r->primary);
+    r->width = r->height = 0;
+}
+
+/* (Re)creates the per-pixel buffers when the resolution changes. */
+static rd_vk_result ensure_size(rd_renderer *r, unsigned w, unsigned h, char *err, size_t errlen)
+{
+    if (w == r->width && h == r->height) return RD_VK_OK;
+    rd_buffer_destroy(r->vk, &r->gbuffer);
+    rd_buffer_destroy(r->vk, &r->radiance);
+    rd_buffer_destroy(r->vk, &r->rgba8);
+    r->width = r->height = 0;
+    size_t px = (size_t)w * h;
+    rd_vk_result res = rd_buffer_create(r->vk, &r->gbuffer, px * sizeof(pc_gbuffer_texel),
+                                        RD_MEMORY_DEVICE, err, errlen);
+    if (res == RD_VK_OK)
+        res = rd_buffer_create(r->vk, &r->radiance, px * 16, RD_MEMORY_DEVICE, err, errlen);
+    if (res == RD_VK_OK)
+        res = rd_buffer_create(r->vk, &r->rgba8, px * 4, RD_MEMORY_DEVICE, err, errlen);
+    if (res == RD_VK_OK) {
+        r->width = w;
+        r->height = h;
+    }
+    return res;
+}
+
+rd_vk_result rd_renderer_render(rd_renderer *r, const rd_gpu_scene *scene,
+                                const rd_view_camera *camera, const rd_frame_settings *fs,
+                                char *err, size_t errlen)
+{
+    unsigned w = fs->width ? fs->width : DEFAULT_WIDTH;
+    unsigned h = fs->height ? fs->height : DEFAULT_HEIGHT;
+    if (w > 16384 || h > 16384) {
+        snprintf(err, errlen, "resolution %ux%u exceeds 16384 in a dimension", w, h);
+        return RD_VK_ERR_UNSUPPORTED;
+    }
+    rd_vk_result res = ensure_size(r, w, h, err, errlen);
+    if (res != RD_VK_OK) return res;
+
+    pc_globals g;
+    memset(&g, 0, sizeof g);
+    g.scene = scene->refs;
+    rd_camera_to_view(camera, w, h, &g.view);
+    g.view.size = (pc_uvec4){w, h, r->frame_index, fs->seed};
+    g.view.sky = (pc_vec4){fs->sky[0], fs->sky[1], fs->sky[2], 0};
+    g.view.tonemap = (pc_vec4){exp2f(fs->exposure_ev), (float)fs->tonemap, 0, 0};
+    memcpy(r->globals.mapped, &g, sizeof g);
+    memset(r->counters.mapped, 0, sizeof(pc_counters));
+
+    rd_cmd cmd;
+    res = rd_cmd_begin(r->vk, &cmd, err, errlen);
+    if (res != RD_VK_OK) return res;
+    uint32_t gx = (w + PC_WG_2D_X - 1) / PC_WG_2D_X, gy = (h + PC_WG_2D_Y - 1) / PC_WG_2D_Y;
+    pc_push push = {.globals = r->globals.address, .buf1 = r->counters.address};
+    rd_timer_begin(&cmd, &r->timer);
+    push.buf0 = r->gbuffer.address;
+    rd_cmd_dispatch(&cmd, &r->primary, &push, gx, gy, 1);
+    rd_cmd_barrier(&cmd);
+    rd_timer_mark(&cmd, &r->timer, "primary");
+    push.buf2 = r->radiance.address;
+    rd_cmd_dispatch(&cmd, &r->shade, &push, gx, gy, 1);
+    rd_cmd_barrier(&cmd);
+    rd_timer_mark(&cmd, &r->timer, "shade");
+    push.buf0 = r->radiance.address;
+    push.buf1 = r->rgba8.address;
+    rd_cmd_dispatch(&cmd, &r->tonemap, &push, gx, gy, 1);
+    rd_cmd_barrier(&cmd);
+    rd_timer_mark(&cmd, &r->timer, "tonemap");
+    res = rd_cmd_submit_wait(r->vk, &cmd, err, errlen);
+    if (res != RD_VK_OK) return res;
+    r->frame_index++;
+
+    rd_frame_stats *st = &r->stats;
+    memset(st, 0, sizeof *st);
+    memcpy(&st->rays, r->counters.mapped, sizeof st->rays);
+    res = rd_timer_resolve(r->vk, &r->timer, err, errlen);
+    if (res != RD_VK_OK) return res;
+    st->timed = r->timer.valid;
+    for (uint32_t i = 1; i < r->timer.count && i < RD_TIMER_MAX; i++) {
+        st->pass_name[st->pass_count] = r->timer.names[i];
+        st->pass_ms[st->pass_count] = r->timer.ms[i];
+        st->pass_count++;
+    }
+    return RD_VK_OK;
+}
+
+rd_vk_result rd_renderer_read_rgba8(rd_renderer *r, uint8_t *out, char *err, size_t errlen)
+{
+    return rd_buffer_download(r->vk, &r->rgba8, 0, out, (VkDeviceSize)r->width * r->height * 4,
+                              err, errlen);
+}
+
+rd_vk_result rd_renderer_read_hdr(rd_renderer *r, float *rgb, char *err, size_t errlen)
+{
+    size_t px = (size_t)r->width * r->height;
+    float *rgba = malloc(px * 16);
+    if (!rgba) abort();
+    rd_vk_result res = rd_buffer_download(r->vk, &r->radiance, 0, rgba, px * 16, err, errlen);
+    for (size_t i = 0; res == RD_VK_OK && i < px; i++) {
+        rgb[i * 3 + 0] = rgba[i * 4 + 0];
+        rgb[i * 3 + 1] = rgba[i * 4 + 1];
+        rgb[i * 3 + 2] = rgba[i * 4 + 2];
+    }
+    free(rgba);
+    return res;
+}

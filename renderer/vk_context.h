@@ -1,0 +1,88 @@
+/* vk_context.h: headless Vulkan instance and device for compute.
+ *
+ * Device choice: options.device, else $PROBECAST_DEVICE, else the best ranked device
+ * (discrete > integrated > virtual > CPU, e.g. lavapipe). A selector is a decimal index into
+ * the physical-device list or a case-insensitive substring of the device name.
+ * Validation: options.validation, or $PROBECAST_VALIDATION=1, enables VK_LAYER_KHRONOS_validation
+ * with a debug messenger; every warning or error message is logged to stderr and counted.
+ * Requires Vulkan 1.2 with bufferDeviceAddress, shaderInt64 and storageBuffer16BitAccess.
+ */
+#ifndef RD_VK_CONTEXT_H
+#define RD_VK_CONTEXT_H
+
+#include <stdatomic.h>
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <vulkan/vulkan.h>
+
+typedef enum rd_vk_result {
+    RD_VK_OK = 0,
+    RD_VK_ERR_NO_LOADER,        /* no Vulkan loader / instance creation failed */
+    RD_VK_ERR_NO_VALIDATION,    /* validation asked for but the layer is missing */
+    RD_VK_ERR_NO_DEVICE,        /* no physical device at all */
+    RD_VK_ERR_DEVICE_NOT_FOUND, /* the selector matched no device */
+    RD_VK_ERR_UNSUPPORTED,      /* device lacks a required feature */
+    RD_VK_ERR_OUT_OF_MEMORY,
+    RD_VK_ERR_DEVICE_LOST,
+    RD_VK_ERR_VULKAN,           /* any other VkResult failure (detail in the message) */
+} rd_vk_result;
+
+const char *rd_vk_strerror(rd_vk_result r);
+const char *rd_vk_result_name(VkResult r); /* "VK_ERROR_DEVICE_LOST" ... */
+/* Maps a VkResult to rd_vk_result (VK_SUCCESS -> RD_VK_OK). */
+rd_vk_result rd_vk_from_vkresult(VkResult r);
+
+typedef struct rd_vk_options {
+    const char *device; /* selector, NULL = $PROBECAST_DEVICE or automatic */
+    int validation;     /* 0 = $PROBECAST_VALIDATION, 1 = on, -1 = off */
+} rd_vk_options;
+
+typedef struct rd_vk {
+    VkInstance instance;
+    VkDebugUtilsMessengerEXT messenger;
+    VkPhysicalDevice physical;
+    VkDevice device;
+    VkQueue queue;
+    uint32_t queue_family;
+    VkCommandPool command_pool;
+    VkPhysicalDeviceProperties properties;
+    VkPhysicalDeviceMemoryProperties memory;
+    double timestamp_period_ns; /* 0 when the queue has no timestamps */
+    bool validation;
+    bool is_cpu;                /* lavapipe or another CPU implementation */
+    atomic_uint validation_messages;
+    char device_name[VK_MAX_PHYSICAL_DEVICE_NAME_SIZE];
+    /* Optional features, enabled when the device has them. */
+    bool has_scalar_block_layout;
+    bool has_shader_float16;
+    bool has_shader_int16;
+    uint32_t timestamp_valid_bits; /* of the chosen queue family; 0 = no timestamps */
+    bool device_lost;              /* set once any call saw VK_ERROR_DEVICE_LOST */
+} rd_vk;
+
+/* Creates instance, device, queue and command pool. On failure returns a code, writes a
+ * sentence to err and leaves vk destroyed (nothing to clean up). opt may be NULL.
+ * The debug messenger counts into vk->validation_messages, so vk must not move in memory
+ * between rd_vk_create and rd_vk_destroy. */
+rd_vk_result rd_vk_create(rd_vk *vk, const rd_vk_options *opt, char *err, size_t errlen);
+/* Waits for the device, destroys in reverse order; idempotent. */
+void rd_vk_destroy(rd_vk *vk);
+/* Number of validation warnings/errors reported so far. */
+unsigned rd_vk_validation_messages(rd_vk *vk);
+/* Writes one line per physical device ("INDEX: NAME (TYPE)") to out. */
+rd_vk_result rd_vk_list_devices(char *out, size_t outlen, char *err, size_t errlen);
+/* Writes one line describing the chosen device (name, type, API version, driver) to f. */
+void rd_vk_log_device(const rd_vk *vk, FILE *f);
+
+/* Helpers shared by the renderer modules. rd_vk_fail logs "what failed: VK_..." to stderr,
+ * writes it as a sentence to err, marks vk->device_lost on VK_ERROR_DEVICE_LOST (vk may be
+ * NULL) and returns rd_vk_from_vkresult(r). rd_vk_errorf formats into err (err may be NULL). */
+rd_vk_result rd_vk_fail(rd_vk *vk, VkResult r, const char *what, char *err, size_t errlen);
+#if defined(__GNUC__)
+__attribute__((format(printf, 3, 4)))
+#endif
+void rd_vk_errorf(char *err, size_t errlen, const char *fmt, ...);
+
+#endif

@@ -1,0 +1,260 @@
+/* probecast render: offline rendering of one scene to PNG/JPEG and/or linear PFM. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "cli.h"
+#include "renderer/image_io.h"
+#include "renderer/procedural.h"
+#include "renderer/render.h"
+
+static void render_usage(FILE *f)
+{
+    fprintf(f,
+            "usage: probecast render SCENE [OPTIONS]\n"
+            "\n"
+            "Renders SCENE, a .gltf/.glb file or builtin:NAME, to an image.\n"
+            "Builtin scenes: %s\n"
+            "\n"
+            "Options:\n"
+            "  --width W, --height H  image size in pixels (default 960 x 540)\n"
+            "  --camera INDEX         the scene's camera to use (default: the first, else one\n"
+            "                         framing the scene bounds)\n"
+            "  -o FILE                tone-mapped output, .png or .jpg (default render.png)\n"
+            "  --hdr FILE             linear un-tonemapped radiance as little-endian PFM\n"
+            "  --exposure EV          exposure in stops before tone mapping (default 0)\n"
+            "  --tonemap aces|clamp   tone curve (default aces)\n"
+            "  --sky R,G,B            radiance of rays that leave the scene (default 0,0,0)\n"
+            "  --quality Q            JPEG quality 1..100 (default 92)\n"
+            "  --timings              print BVH build time, per-pass GPU times and rays/s\n"
+            "  --repeat N             frames to render and average for --timings (default 5)\n"
+            "  --device INDEX|NAME    GPU to use (default: $PROBECAST_DEVICE, else a discrete\n"
+            "                         GPU, else lavapipe)\n"
+            "  --list-devices         list the Vulkan devices and exit\n"
+            "  --help                 this text\n",
+            rd_procedural_names());
+}
+
+typedef struct render_args {
+    const char *scene, *out, *hdr, *device;
+    rd_frame_settings fs;
+    int camera;
+    unsigned quality, repeat;
+    bool timings, list_devices;
+} render_args;
+
+/* Returns -1 when parsing succeeded, else the exit status to use. */
+static int parse(int argc, char **argv, render_args *a)
+{
+    memset(a, 0, sizeof *a);
+    a->camera = -1;
+    a->quality = 92;
+    a->repeat = 5;
+    a->fs.width = 960;
+    a->fs.height = 540;
+    for (int i = 1; i < argc; i++) {
+        const char *o = argv[i];
+        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
+#define NEED_VALUE                                                                               \
+    if (!v) {                                                                                    \
+        fprintf(stderr, "probecast render: %s needs a value\n", o);                              \
+        return 2;                                                                                \
+    }                                                                                            \
+    i++;
+        if (strcmp(o, "--help") == 0 || strcmp(o, "-h") == 0) {
+            render_usage(stdout);
+            return 0;
+        } else if (strcmp(o, "--timings") == 0) {
+            a->timings = true;
+        } else if (strcmp(o, "--list-devices") == 0) {
+            a->list_devices = true;
+        } else if (strcmp(o, "--width") == 0) {
+            NEED_VALUE
+            if (!cli_parse_uint(o, v, 1, 16384, &a->fs.width)) return 2;
+        } else if (strcmp(o, "--height") == 0) {
+            NEED_VALUE
+            if (!cli_parse_uint(o, v, 1, 16384, &a->fs.height)) return 2;
+        } else if (strcmp(o, "--camera") == 0) {
+            NEED_VALUE
+            unsigned c;
+            if (!cli_parse_uint(o, v, 0, 1u << 20, &c)) return 2;
+            a->camera = (int)c;
+        } else if (strcmp(o, "-o") == 0 || strcmp(o, "--output") == 0) {
+            NEED_VALUE
+            a->out = v;
+        } else if (strcmp(o, "--hdr") == 0) {
+            NEED_VALUE
+            a->hdr = v;
+        } else if (strcmp(o, "--exposure") == 0) {
+            NEED_VALUE
+            if (!cli_parse_float(o, v, &a->fs.exposure_ev)) return 2;
+        } else if (strcmp(o, "--tonemap") == 0) {
+            NEED_VALUE
+            if (strcmp(v, "aces") == 0) a->fs.tonemap = PC_TONEMAP_ACES;
+            else if (strcmp(v, "clamp") == 0) a->fs.tonemap = PC_TONEMAP_CLAMP;
+            else {
+                fprintf(stderr, "probecast render: --tonemap expects aces or clamp\n");
+                return 2;
+            }
+        } else if (strcmp(o, "--sky") == 0) {
+            NEED_VALUE
+            if (!cli_parse_floats(o, v, a->fs.sky, 3)) return 2;
+        } else if (strcmp(o, "--quality") == 0) {
+            NEED_VALUE
+            if (!cli_parse_uint(o, v, 1, 100, &a->quality)) return 2;
+        } else if (strcmp(o, "--repeat") == 0) {
+            NEED_VALUE
+            if (!cli_parse_uint(o, v, 1, 1000, &a->repeat)) return 2;
+        } else if (strcmp(o, "--device") == 0) {
+            NEED_VALUE
+            a->device = v;
+        } else if (o[0] == '-' && o[1] != '\0') {
+            fprintf(stderr, "probecast render: unknown option '%s' (see --help)\n", o);
+            return 2;
+        } else if (!a->scene) {
+            a->scene = o;
+        } else {
+            fprintf(stderr, "probecast render: more than one scene given ('%s')\n", o);
+            return 2;
+        }
+#undef NEED_VALUE
+    }
+    if (!a->list_devices && !a->scene) {
+        fprintf(stderr, "probecast render: no scene given (see --help)\n");
+        return 2;
+    }
+    if (!a->out && !a->hdr) a->out = "render.png";
+    return -1;
+}
+
+static double now_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
+
+static void print_timings(const rd_vk *vk, const rd_scene *s, const rd_gpu_scene *gs,
+                          const rd_frame_stats *avg, unsigned frames, unsigned w, unsigned h)
+{
+    printf("device      %s\n", vk->device_name);
+    printf("scene       %llu triangles, %u instances, %u lights\n",
+           (unsigned long long)gs->tri_count, s->instance_count, s->light_count);
+    printf("bvh build   %.1f ms bottom level (%llu nodes, depth %u), %.3f ms top level, "
+           "%.1f ms upload\n",
+           gs->blas_build_ms, (unsigned long long)gs->blas_node_count, gs->max_blas_depth,
+           gs->tlas_build_ms, gs->upload_ms);
+    printf("frame       %ux%u, mean of %u frames\n", w, h, frames);
+    if (!avg->timed) {
+        printf("(this device has no GPU timestamps)\n");
+        return;
+    }
+    printf("%-10s %10s %12s %12s\n", "pass", "GPU ms", "rays", "Mrays/s");
+    double total = 0;
+    for (unsigned i = 0; i < avg->pass_count; i++) {
+        double rays = 0;
+        if (strcmp(avg->pass_name[i], "primary") == 0) rays = avg->rays.primary_rays;
+        if (strcmp(avg->pass_name[i], "shade") == 0) rays = avg->rays.shadow_rays;
+        total += avg->pass_ms[i];
+        if (rays > 0)
+            printf("%-10s %10.3f %12.0f %12.1f\n", avg->pass_name[i], avg->pass_ms[i], rays,
+                   avg->pass_ms[i] > 0 ? rays / (avg->pass_ms[i] * 1e3) : 0.0);
+        else
+            printf("%-10s %10.3f %12s %12s\n", avg->pass_name[i], avg->pass_ms[i], "-", "-");
+    }
+    printf("%-10s %10.3f\n", "total", total);
+}
+
+int cli_render(int argc, char **argv)
+{
+    render_args a;
+    int status = parse(argc, argv, &a);
+    if (status >= 0) return status;
+    char err[512] = "";
+    if (a.list_devices) {
+        char list[4096];
+        if (rd_vk_list_devices(list, sizeof list, err, sizeof err) != RD_VK_OK) {
+            fprintf(stderr, "probecast: %s\n", err);
+            return 1;
+        }
+        fputs(list, stdout);
+        return 0;
+    }
+
+    rd_scene scene;
+    double t0 = now_ms();
+    if (!cli_load_scene(a.scene, &scene)) return 1;
+    double load_ms = now_ms() - t0;
+
+    rd_view_camera cam;
+    if (!rd_camera_for_scene(&scene, a.camera, &cam, err, sizeof err)) {
+        fprintf(stderr, "probecast: %s\n", err);
+        rd_scene_destroy(&scene);
+        return 1;
+    }
+
+    rd_vk vk;
+    rd_gpu_scene gs;
+    rd_renderer r;
+    memset(&gs, 0, sizeof gs);
+    memset(&r, 0, sizeof r);
+    rd_vk_options vo = {.device = a.device};
+    rd_vk_result vr = rd_vk_create(&vk, &vo, err, sizeof err);
+    if (vr != RD_VK_OK) {
+        fprintf(stderr, "probecast: %s\n", err);
+        rd_scene_destroy(&scene);
+        return 1;
+    }
+    vr = rd_gpu_scene_create(&vk, &gs, &scene, err, sizeof err);
+    if (vr == RD_VK_OK) vr = rd_renderer_create(&vk, &r, err, sizeof err);
+    unsigned frames = a.timings ? a.repeat : 1;
+    rd_frame_stats sum = {0};
+    for (unsigned f = 0; vr == RD_VK_OK && f < frames + (a.timings ? 1 : 0); f++) {
+        vr = rd_renderer_render(&r, &gs, &cam, &a.fs, err, sizeof err);
+        if (vr != RD_VK_OK || (a.timings && f == 0)) continue; /* frame 0 warms up */
+        const rd_frame_stats *st = &r.stats;
+        sum.timed = st->timed;
+        sum.pass_count = st->pass_count;
+        for (unsigned i = 0; i < st->pass_count; i++) {
+            sum.pass_name[i] = st->pass_name[i];
+            sum.pass_ms[i] += st->pass_ms[i] / frames;
+        }
+        sum.rays = st->rays;
+    }
+    size_t px = (size_t)a.fs.width * a.fs.height;
+    if (vr == RD_VK_OK && a.out) {
+        uint8_t *rgba = malloc(px * 4);
+        if (!rgba) abort();
+        vr = rd_renderer_read_rgba8(&r, rgba, err, sizeof err);
+        if (vr == RD_VK_OK &&
+            rd_image_write_rgba8(a.out, rgba, a.fs.width, a.fs.height, (int)a.quality, err,
+                                 sizeof err) != RD_IMAGE_OK)
+            vr = RD_VK_ERR_VULKAN; /* reported below through err */
+        free(rgba);
+    }
+    if (vr == RD_VK_OK && a.hdr) {
+        float *rgb = malloc(px * 12);
+        if (!rgb) abort();
+        vr = rd_renderer_read_hdr(&r, rgb, err, sizeof err);
+        if (vr == RD_VK_OK &&
+            rd_image_write_pfm(a.hdr, rgb, a.fs.width, a.fs.height, err, sizeof err) != RD_IMAGE_OK)
+            vr = RD_VK_ERR_VULKAN;
+        free(rgb);
+    }
+    if (vr == RD_VK_OK && a.timings) {
+        printf("scene load  %.1f ms\n", load_ms);
+        print_timings(&vk, &scene, &gs, &sum, frames, a.fs.width, a.fs.height);
+    }
+    if (vr != RD_VK_OK) fprintf(stderr, "probecast: %s\n", err);
+    rd_renderer_destroy(&r);
+    rd_gpu_scene_destroy(&vk, &gs);
+    unsigned validation = rd_vk_validation_messages(&vk);
+    rd_vk_destroy(&vk);
+    rd_scene_destroy(&scene);
+    if (vr == RD_VK_OK && validation > 0) {
+        fprintf(stderr, "probecast: %u Vulkan validation message(s)\n", validation);
+        return 1;
+    }
+    return vr == RD_VK_OK ? 0 : 1;
+}

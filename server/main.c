@@ -1,0 +1,38 @@
+/* probecast: entry point. Dispatches to the sub-commands. */
+#include <stdio.h>
+#include <string.h>
+
+#include "cli.h"
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+            "usage: probecast COMMAND [OPTIONS]\n"
+            "\n"
+            "Commands:\n"
+            "  render SCENE   render a glTF scene (or builtin:NAME) to an image\n"
+            "\n"
+            "Options:\n"
+            "  --help         this text (also: probecast COMMAND --help)\n"
+            "  --version      print the version\n");
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        usage(stderr);
+        return 2;
+    }
+    const char *cmd = argv[1];
+    if (strcmp(cmd, "--help") == 0 || strcmp(cmd, "-h") == 0 || strcmp(cmd, "help") == 0) {
+        usage(stdout);
+        return 0;
+    }
+    if (strcmp(cmd, "--version") == 0 || strcmp(cmd, "version") == 0) {
+        printf("probecast %s\n", PROBECAST_VERSION);
+        return 0;
+    }
+    if (strcmp(cmd, "render") == 0) return cli_render(argc - 1, argv + 1);
+    fprintf(stderr, "probecast: unknown command '%s' (try probecast --help)\n", cmd);
+    return 2;
+}

@@ -1,0 +1,246 @@
+/* common.glsl: scene access shared by every pass: buffer references, push constants,
+ * texture sampling, surface reconstruction at a hit, punctual-light evaluation, and the
+ * trace routine (trace.glsl). Passes include this file first. */
+#ifndef PC_COMMON_GLSL
+#define PC_COMMON_GLSL
+
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#extension GL_GOOGLE_include_directive : require
+
+#include "gpu_types.h"
+
+#define PC_PI 3.14159265358979323846
+
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer GlobalsRef { pc_globals g; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer TriRef { pc_tri v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer TriAttrRef { pc_tri_attr v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer InstanceRef { pc_instance v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer MaterialRef { pc_material v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer TextureRef { pc_texture v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer TexelRef { uint v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer LightRef { pc_light v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer CounterRef { pc_counters c; };
+
+layout(push_constant) uniform PushBlock { pc_push pc; };
+
+pc_globals load_globals() { return GlobalsRef(pc.globals).g; }
+
+/* ---- colour ---------------------------------------------------------------------------- */
+
+vec3 srgb_to_linear(vec3 c)
+{
+    return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), greaterThan(c, vec3(0.04045)));
+}
+
+vec3 linear_to_srgb(vec3 c)
+{
+    c = clamp(c, 0.0, 1.0);
+    return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, greaterThan(c, vec3(0.0031308)));
+}
+
+float luminance(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }
+
+/* ---- textures: RGBA8 texels in one buffer, bilinear or nearest, glTF wrap modes ---------- */
+
+int wrap_coord(int i, int n, uint mode)
+{
+    if (mode == PC_WRAP_CLAMP) return clamp(i, 0, n - 1);
+    if (mode == PC_WRAP_MIRROR) {
+        int period = 2 * n;
+        int m = ((i % period) + period) % period;
+        return m < n ? m : period - 1 - m;
+    }
+    return ((i % n) + n) % n;
+}
+
+vec4 texel_fetch(pc_scene_refs s, pc_texture t, int x, int y)
+{
+    int w = int(t.info.y), h = int(t.info.z);
+    x = wrap_coord(x, w, t.info.w & 15u);
+    y = wrap_coord(y, h, (t.info.w >> 4) & 15u);
+    vec4 c = unpackUnorm4x8(TexelRef(s.texels).v[t.info.x + uint(y * w + x)]);
+    return vec4(srgb_to_linear(c.rgb), c.a); /* filter in linear space */
+}
+
+/* Samples texture index (0-based) at uv; colour returned linear, alpha as stored. */
+vec4 sample_texture(pc_scene_refs s, uint index, vec2 uv)
+{
+    pc_texture t = TextureRef(s.textures).v[index];
+    vec2 size = vec2(t.info.y, t.info.z);
+    if (any(isnan(uv)) || any(isinf(uv))) uv = vec2(0.0);
+    uv = uv - floor(uv / 4096.0) * 4096.0; /* keep float precision for huge repeats */
+    vec2 p = uv * size - 0.5;
+    if ((t.info.w & 0x100u) != 0u) {
+        ivec2 ip = ivec2(floor(p + 0.5));
+        return texel_fetch(s, t, ip.x, ip.y);
+    }
+    ivec2 i0 = ivec2(floor(p));
+    vec2 f = p - vec2(i0);
+    vec4 a = texel_fetch(s, t, i0.x, i0.y), b = texel_fetch(s, t, i0.x + 1, i0.y);
+    vec4 c = texel_fetch(s, t, i0.x, i0.y + 1), d = texel_fetch(s, t, i0.x + 1, i0.y + 1);
+    return mix(mix(a, b, f.x), mix(c, d, f.x), f.y);
+}
+
+vec2 tri_uv(pc_tri_attr a, float u, float v)
+{
+    return a.uv01.xy * (1.0 - u - v) + a.uv01.zw * u + a.uv2.xy * v;
+}
+
+/* Alpha-mask test used by trace.glsl for triangles flagged PC_TRI_ALPHA_MASK. */
+bool trace_alpha_pass(pc_scene_refs s, uint tri, float u, float v)
+{
+    uint mat_index = floatBitsToUint(TriRef(s.tris).v[tri].v0.w);
+    pc_material m = MaterialRef(s.materials).v[mat_index];
+    float alpha = m.base_color.a;
+    if (m.tex.x != 0u) {
+        pc_tri_attr a = TriAttrRef(s.tri_attrs).v[tri];
+        alpha *= sample_texture(s, m.tex.x - 1u, tri_uv(a, u, v)).a;
+    }
+    return alpha >= m.params.x;
+}
+
+#include "trace.glsl"
+
+/* ---- surfaces ---------------------------------------------------------------------------- */
+
+struct pc_surface {
+    vec3 position;    /* world */
+    vec3 normal;      /* shading normal, facing the incoming ray's origin side */
+    vec3 geom_normal; /* geometric normal, same side */
+    vec3 albedo;      /* linear base colour */
+    vec3 emission;    /* emitted radiance (only from the front face or double-sided) */
+};
+
+vec3 xform_point(vec4 rows[3], vec3 p)
+{
+    vec4 h = vec4(p, 1.0);
+    return vec3(dot(rows[0], h), dot(rows[1], h), dot(rows[2], h));
+}
+
+/* Normal transform: (M^-1)^T n, with M^-1 given as rows. */
+vec3 xform_normal(vec4 inv_rows[3], vec3 n)
+{
+    return inv_rows[0].xyz * n.x + inv_rows[1].xyz * n.y + inv_rows[2].xyz * n.z;
+}
+
+/* Rebuilds the surface at a hit. The geometric normal follows the triangle's winding in world
+ * space (mirrored under a negative-determinant instance, as glTF specifies); both normals are
+ * then turned toward the side the ray came from. */
+pc_surface surface_at(pc_scene_refs s, pc_hit hit, vec3 ray_dir)
+{
+    pc_surface sf;
+    pc_tri t = TriRef(s.tris).v[hit.tri];
+    pc_tri_attr a = TriAttrRef(s.tri_attrs).v[hit.tri];
+    pc_instance inst = InstanceRef(s.instances).v[hit.instance];
+    float w = 1.0 - hit.u - hit.v;
+    vec3 p_obj = t.v0.xyz * w + t.v1.xyz * hit.u + t.v2.xyz * hit.v;
+    sf.position = xform_point(inst.object_to_world, p_obj);
+
+    vec3 ng = xform_normal(inst.world_to_object, cross(t.v1.xyz - t.v0.xyz, t.v2.xyz - t.v0.xyz));
+    if ((inst.info.z & PC_INST_NEG_DET) != 0u) ng = -ng;
+    float ng_len = length(ng);
+    ng = ng_len > 0.0 && !isinf(ng_len) ? ng / ng_len : -ray_dir;
+    vec3 ns = xform_normal(inst.world_to_object, a.n0.xyz * w + a.n1.xyz * hit.u + a.n2.xyz * hit.v);
+    float ns_len = length(ns);
+    ns = ns_len > 1e-20 && !isinf(ns_len) && !isnan(ns_len) ? ns / ns_len : ng;
+    if (dot(ns, ng) < 0.0) ns = -ns; /* vertex normals authored against the winding */
+    bool facing_away = dot(ng, ray_dir) > 0.0;
+    if (facing_away) {
+        ng = -ng;
+        ns = -ns;
+    }
+    sf.normal = ns;
+    sf.geom_normal = ng;
+
+    uint mat_index = floatBitsToUint(t.v0.w);
+    pc_material m = MaterialRef(s.materials).v[mat_index];
+    vec2 uv = tri_uv(a, hit.u, hit.v);
+    vec3 albedo = m.base_color.rgb;
+    if (m.tex.x != 0u) albedo *= sample_texture(s, m.tex.x - 1u, uv).rgb;
+    vec3 emission = m.emission.rgb;
+    if (m.tex.y != 0u && any(greaterThan(emission, vec3(0.0))))
+        emission *= sample_texture(s, m.tex.y - 1u, uv).rgb;
+    bool double_sided = m.tex.w != 0u;
+    sf.albedo = clamp(albedo, 0.0, 1.0);
+    sf.emission = (!hit.backface || double_sided) ? max(emission, vec3(0.0)) : vec3(0.0);
+    return sf;
+}
+
+/* ---- punctual lights (KHR_lights_punctual) --------------------------------------------- */
+
+/* Direction toward the light, distance to it (1e30 for directional) and the irradiance it
+ * delivers on a surface facing it (before the cosine term and visibility). */
+vec3 light_incident(pc_light l, vec3 p, out vec3 wi, out float dist)
+{
+    if (l.info.x == PC_LIGHT_DIRECTIONAL) {
+        wi = -l.direction.xyz;
+        dist = 1e30;
+        return l.radiance.rgb;
+    }
+    vec3 d = l.position_range.xyz - p;
+    float d2 = dot(d, d);
+    dist = sqrt(d2);
+    wi = dist > 0.0 ? d / dist : vec3(0.0, 0.0, 1.0);
+    float atten = 1.0 / max(d2, 1e-12);
+    float range = l.position_range.w;
+    if (range > 0.0) {
+        float r = dist / range;
+        atten *= clamp(1.0 - r * r * r * r, 0.0, 1.0);
+    }
+    if (l.info.x == PC_LIGHT_SPOT)
+        atten *= smoothstep(l.spot.x, l.spot.y, dot(l.direction.xyz, -wi));
+    return l.radiance.rgb * atten;
+}
+
+/* Direct irradiance-weighted radiance from all punctual lights at a surface: sum over lights of
+ * E_i * cos * visibility (multiply by albedo/pi for Lambertian outgoing radiance). Counts the
+ * shadow rays it traces into *rays. */
+vec3 direct_irradiance(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, inout uint rays)
+{
+    vec3 sum = vec3(0.0);
+    vec3 origin = offset_ray_origin(p, ng);
+    for (uint i = 0u; i < s.counts.y; i++) {
+        pc_light l = LightRef(s.lights).v[i];
+        vec3 wi;
+        float dist;
+        vec3 e = light_incident(l, p, wi, dist);
+        float cos_n = dot(n, wi);
+        if (cos_n <= 0.0 || dot(ng, wi) <= 0.0 || all(equal(e, vec3(0.0)))) continue;
+        pc_hit sh;
+        rays++;
+        if (trace_ray(s, origin, wi, 0.0, dist, PC_TRACE_ANY_HIT, sh)) continue;
+        sum += e * cos_n;
+    }
+    return sum;
+}
+
+/* Ray counting with one global atomic per workgroup. Every invocation of the workgroup must
+ * call both (no early return in between). which: 0 primary, 1 shadow, 2 probe, 3 path. */
+shared uint pc_wg_rays;
+void count_rays_begin()
+{
+    if (gl_LocalInvocationIndex == 0u) pc_wg_rays = 0u;
+    barrier();
+}
+void count_rays_end(uint64_t counters, uint which, uint rays)
+{
+    if (rays != 0u) atomicAdd(pc_wg_rays, rays);
+    barrier();
+    if (gl_LocalInvocationIndex == 0u && pc_wg_rays != 0u && counters != 0ul) {
+        CounterRef c = CounterRef(counters);
+        if (which == 0u) atomicAdd(c.c.primary_rays, pc_wg_rays);
+        else if (which == 1u) atomicAdd(c.c.shadow_rays, pc_wg_rays);
+        else if (which == 2u) atomicAdd(c.c.probe_rays, pc_wg_rays);
+        else atomicAdd(c.c.path_rays, pc_wg_rays);
+    }
+}
+
+/* Camera ray through the centre of pixel (x, y); y = 0 is the top row. */
+vec3 camera_dir(pc_view v, uvec2 px)
+{
+    vec2 ndc = vec2((2.0 * (float(px.x) + 0.5) / float(v.size.x)) - 1.0,
+                    1.0 - 2.0 * (float(px.y) + 0.5) / float(v.size.y));
+    return normalize(v.forward.xyz + ndc.x * v.right.xyz + ndc.y * v.up.xyz);
+}
+#endif

@@ -1,0 +1,278 @@
+/* gpu_types.h: every struct, constant and workgroup size that crosses the CPU/GPU boundary.
+ *
+ * Compiled by both C11 and glslang. GLSL sources define PC_GLSL before including it.
+ * Layout rules: scalars, vec4/uvec4 only (no vec3, no mat3, no enums, no bool);
+ * the std430 layout of every struct equals its C layout, and the C side checks
+ * sizes and member offsets with _Static_assert below.
+ *
+ * All scene and frame data is reached through buffer device addresses (uint64_t),
+ * so no descriptor sets are needed and no single binding is limited by
+ * maxStorageBufferRange (128 MiB on lavapipe).
+ */
+#ifndef PC_GPU_TYPES_H
+#define PC_GPU_TYPES_H
+
+#ifdef PC_GLSL
+#define PC_STRUCT(name) struct name
+#define PC_END(name)
+#define pc_vec4 vec4
+#define pc_uvec4 uvec4
+#define pc_u32 uint
+#define pc_f32 float
+#define pc_u64 uint64_t
+#else
+#include <stddef.h>
+#include <stdint.h>
+typedef struct pc_vec4 {
+    float x, y, z, w;
+} pc_vec4;
+typedef struct pc_uvec4 {
+    uint32_t x, y, z, w;
+} pc_uvec4;
+typedef uint32_t pc_u32;
+typedef float pc_f32;
+typedef uint64_t pc_u64;
+#define PC_STRUCT(name) typedef struct name
+#define PC_END(name) name
+#endif
+
+/* ---- workgroup sizes ------------------------------------------------------------------- */
+#define PC_WG_2D_X 8
+#define PC_WG_2D_Y 8
+#define PC_WG_1D 64
+
+/* ---- enumerations (plain constants: GLSL has no enums) ------------------------------- */
+#define PC_LIGHT_POINT 0u
+#define PC_LIGHT_SPOT 1u
+#define PC_LIGHT_DIRECTIONAL 2u
+
+#define PC_ALPHA_OPAQUE 0u
+#define PC_ALPHA_MASK 1u
+#define PC_ALPHA_BLEND 2u /* treated as opaque: no transparency in a diffuse renderer */
+
+#define PC_WRAP_REPEAT 0u
+#define PC_WRAP_CLAMP 1u
+#define PC_WRAP_MIRROR 2u
+
+/* pc_tri.v1.w flag bits (stored as uint bits) */
+#define PC_TRI_DOUBLE_SIDED 1u
+#define PC_TRI_ALPHA_MASK 2u
+
+/* pc_instance.info.z flag bits */
+#define PC_INST_NEG_DET 1u /* negative determinant: winding (front face) is mirrored */
+
+/* trace() flags */
+#define PC_TRACE_ANY_HIT 1u         /* stop at the first accepted hit (shadow rays) */
+#define PC_TRACE_CULL_BACKFACES 2u  /* ignore back faces of single-sided materials (primary rays) */
+
+#define PC_TONEMAP_ACES 0u
+#define PC_TONEMAP_CLAMP 1u
+
+#define PC_BVH_STACK_SIZE 64
+#define PC_INVALID 0xffffffffu
+
+/* ---- scene geometry ------------------------------------------------------------------ */
+
+/* One triangle of a bottom-level BVH, in object space, in BVH leaf order.
+ * v0.w: material index (uint bits); v1.w: PC_TRI_* flags (uint bits);
+ * v2.w: index of the triangle in its mesh before reordering (uint bits). */
+PC_STRUCT(pc_tri)
+{
+    pc_vec4 v0;
+    pc_vec4 v1;
+    pc_vec4 v2;
+}
+PC_END(pc_tri);
+
+/* Shading attributes of the triangle with the same index as in the pc_tri array.
+ * n0..n2: object-space vertex normals (xyz); uv01 = (u0, v0, u1, v1); uv2 = (u2, v2, -, -). */
+PC_STRUCT(pc_tri_attr)
+{
+    pc_vec4 n0;
+    pc_vec4 n1;
+    pc_vec4 n2;
+    pc_vec4 uv01;
+    pc_vec4 uv2;
+}
+PC_END(pc_tri_attr);
+
+/* BVH node (bottom and top level). bmin.w and bmax.w hold uint bits:
+ * count = bmax.w; count == 0: interior node, children at index bmin.w and bmin.w + 1;
+ * count  > 0: leaf with primitives [bmin.w, bmin.w + count) (triangles for a BLAS,
+ * entries of the TLAS instance index array for the TLAS). Indices are absolute. */
+PC_STRUCT(pc_bvh_node)
+{
+    pc_vec4 bmin;
+    pc_vec4 bmax;
+}
+PC_END(pc_bvh_node);
+
+/* A placed mesh. Affine transforms stored as three rows (x' = dot(row0, vec4(p, 1)) ...).
+ * info.x: root node of the mesh's BLAS (absolute), info.y: mesh index,
+ * info.z: PC_INST_* flags, info.w: scene node index. */
+PC_STRUCT(pc_instance)
+{
+    pc_vec4 object_to_world[3];
+    pc_vec4 world_to_object[3];
+    pc_uvec4 info;
+}
+PC_END(pc_instance);
+
+/* base_color: linear factor (a = alpha factor); emission: rgb = emissiveFactor * strength;
+ * tex.x/y: base colour / emissive texture index + 1 (0 = none); tex.z: PC_ALPHA_*;
+ * tex.w: 1 if double sided; params.x: alpha cutoff. */
+PC_STRUCT(pc_material)
+{
+    pc_vec4 base_color;
+    pc_vec4 emission;
+    pc_uvec4 tex;
+    pc_vec4 params;
+}
+PC_END(pc_material);
+
+/* An RGBA8 texture (sRGB-encoded colour, linear alpha) in the texel array.
+ * info.x: first texel (one uint per texel, R in the low byte), info.y: width, info.z: height,
+ * info.w: wrap_s | wrap_t << 4 | nearest << 8. */
+PC_STRUCT(pc_texture)
+{
+    pc_uvec4 info;
+}
+PC_END(pc_texture);
+
+/* KHR_lights_punctual light in world space.
+ * position_range: xyz position, w = range (0 = unlimited);
+ * direction_type: xyz = direction the light shines toward (unit), w unused;
+ * radiance: rgb = colour * intensity (candela for point/spot, lux for directional);
+ * spot: x = cos(outer cone angle), y = cos(inner cone angle); info.x: PC_LIGHT_*. */
+PC_STRUCT(pc_light)
+{
+    pc_vec4 position_range;
+    pc_vec4 direction;
+    pc_vec4 radiance;
+    pc_vec4 spot;
+    pc_uvec4 info;
+}
+PC_END(pc_light);
+
+/* Addresses and counts of the scene on the GPU. */
+PC_STRUCT(pc_scene_refs)
+{
+    pc_u64 tris;        /* pc_tri[]            */
+    pc_u64 tri_attrs;   /* pc_tri_attr[]       */
+    pc_u64 blas_nodes;  /* pc_bvh_node[]       */
+    pc_u64 tlas_nodes;  /* pc_bvh_node[]       */
+    pc_u64 tlas_index;  /* uint[]: TLAS leaf entry -> instance index */
+    pc_u64 instances;   /* pc_instance[]       */
+    pc_u64 materials;   /* pc_material[]       */
+    pc_u64 textures;    /* pc_texture[]        */
+    pc_u64 texels;      /* uint[]              */
+    pc_u64 lights;      /* pc_light[]          */
+    pc_uvec4 counts;    /* x: instances, y: lights, z: materials, w: textures */
+}
+PC_END(pc_scene_refs);
+
+/* Camera and output settings for one frame.
+ * eye: xyz position; forward/right/up: camera basis scaled so that a pixel's direction is
+ * forward + ndc.x * right + ndc.y * up with ndc in [-1, 1] (y up);
+ * size: x width, y height, z frame index, w seed; sky: rgb radiance of misses;
+ * tonemap: x exposure scale (2^EV), y PC_TONEMAP_* as float. */
+PC_STRUCT(pc_view)
+{
+    pc_vec4 eye;
+    pc_vec4 forward;
+    pc_vec4 right;
+    pc_vec4 up;
+    pc_uvec4 size;
+    pc_vec4 sky;
+    pc_vec4 tonemap;
+}
+PC_END(pc_view);
+
+/* Everything a pass reads, in one GPU buffer reached by address. */
+PC_STRUCT(pc_globals)
+{
+    pc_scene_refs scene;
+    pc_view view;
+}
+PC_END(pc_globals);
+
+/* Per-pixel surface record written by the primary pass.
+ * position: xyz world position, w = hit distance (< 0: miss);
+ * normal: xyz shading normal facing the viewer, w = instance index (uint bits);
+ * geom_normal: xyz geometric normal facing the viewer, w = triangle index (uint bits);
+ * albedo: rgb base colour (linear); emission: rgb emitted radiance. */
+PC_STRUCT(pc_gbuffer_texel)
+{
+    pc_vec4 position;
+    pc_vec4 normal;
+    pc_vec4 geom_normal;
+    pc_vec4 albedo;
+    pc_vec4 emission;
+}
+PC_END(pc_gbuffer_texel);
+
+/* Ray counters incremented by the passes (read back for --timings). */
+PC_STRUCT(pc_counters)
+{
+    pc_u32 primary_rays;
+    pc_u32 shadow_rays;
+    pc_u32 probe_rays;
+    pc_u32 path_rays;
+}
+PC_END(pc_counters);
+
+/* Push constants shared by all passes: address of pc_globals plus pass-specific words. */
+PC_STRUCT(pc_push)
+{
+    pc_u64 globals;  /* pc_globals  */
+    pc_u64 buf0;     /* pass-specific buffers */
+    pc_u64 buf1;
+    pc_u64 buf2;
+    pc_uvec4 params;
+}
+PC_END(pc_push);
+
+#ifndef PC_GLSL
+#define PC_CHECK(type, size) _Static_assert(sizeof(type) == (size), #type " size")
+#define PC_OFF(type, member, off)                                                               \
+    _Static_assert(offsetof(type, member) == (off), #type "." #member " offset")
+PC_CHECK(pc_tri, 48);
+PC_OFF(pc_tri, v1, 16);
+PC_OFF(pc_tri, v2, 32);
+PC_CHECK(pc_tri_attr, 80);
+PC_OFF(pc_tri_attr, uv01, 48);
+PC_OFF(pc_tri_attr, uv2, 64);
+PC_CHECK(pc_bvh_node, 32);
+PC_OFF(pc_bvh_node, bmax, 16);
+PC_CHECK(pc_instance, 112);
+PC_OFF(pc_instance, world_to_object, 48);
+PC_OFF(pc_instance, info, 96);
+PC_CHECK(pc_material, 64);
+PC_OFF(pc_material, emission, 16);
+PC_OFF(pc_material, tex, 32);
+PC_OFF(pc_material, params, 48);
+PC_CHECK(pc_texture, 16);
+PC_CHECK(pc_light, 80);
+PC_OFF(pc_light, direction, 16);
+PC_OFF(pc_light, radiance, 32);
+PC_OFF(pc_light, spot, 48);
+PC_OFF(pc_light, info, 64);
+PC_CHECK(pc_scene_refs, 96);
+PC_OFF(pc_scene_refs, lights, 72);
+PC_OFF(pc_scene_refs, counts, 80);
+PC_CHECK(pc_view, 112);
+PC_OFF(pc_view, size, 64);
+PC_OFF(pc_view, sky, 80);
+PC_OFF(pc_view, tonemap, 96);
+PC_CHECK(pc_globals, 208);
+PC_OFF(pc_globals, view, 96);
+PC_CHECK(pc_gbuffer_texel, 80);
+PC_OFF(pc_gbuffer_texel, albedo, 48);
+PC_CHECK(pc_counters, 16);
+PC_CHECK(pc_push, 48);
+PC_OFF(pc_push, params, 32);
+#undef PC_CHECK
+#undef PC_OFF
+#endif
+
+#endif /* PC_GPU_TYPES_H */

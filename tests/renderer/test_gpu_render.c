@@ -1,0 +1,164 @@
+/* GPU calibration of the direct-lighting renderer on lavapipe (validation layer on):
+ * radiometry against analytic values (point light over a plane, directional light),
+ * emission seen directly, hard shadows, and a clean validation log. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "renderer/procedural.h"
+#include "renderer/render.h"
+#include "test_util.h"
+
+#define W 48
+#define H 32
+
+static rd_vk vk;
+
+/* Renders builtin scene `name` from its first camera; returns linear RGB (caller frees). */
+static float *render(const char *name, pc_view *view_out)
+{
+    char err[512] = "";
+    rd_scene s;
+    if (!rd_procedural_build(name, &s, err, sizeof err)) {
+        fprintf(stderr, "%s\n", err);
+        CHECK(0);
+        return NULL;
+    }
+    rd_view_camera cam;
+    CHECK(rd_camera_for_scene(&s, -1, &cam, err, sizeof err));
+    rd_gpu_scene gs;
+    rd_renderer r;
+    float *rgb = calloc((size_t)W * H * 3, sizeof(float));
+    rd_frame_settings fs = {.width = W, .height = H};
+    rd_vk_result res = rd_gpu_scene_create(&vk, &gs, &s, err, sizeof err);
+    CHECKF(res == RD_VK_OK, "%s", err);
+    res = rd_renderer_create(&vk, &r, err, sizeof err);
+    CHECKF(res == RD_VK_OK, "%s", err);
+    res = rd_renderer_render(&r, &gs, &cam, &fs, err, sizeof err);
+    CHECKF(res == RD_VK_OK, "%s", err);
+    res = rd_renderer_read_hdr(&r, rgb, err, sizeof err);
+    CHECKF(res == RD_VK_OK, "%s", err);
+    CHECK(r.stats.rays.primary_rays == W * H);
+    rd_camera_to_view(&cam, W, H, view_out);
+    rd_renderer_destroy(&r);
+    rd_gpu_scene_destroy(&vk, &gs);
+    rd_scene_destroy(&s);
+    return rgb;
+}
+
+static void pixel_ray(const pc_view *v, int x, int y, double d[3])
+{
+    double nx = 2.0 * (x + 0.5) / W - 1.0, ny = 1.0 - 2.0 * (y + 0.5) / H;
+    d[0] = v->forward.x + nx * v->right.x + ny * v->up.x;
+    d[1] = v->forward.y + nx * v->right.y + ny * v->up.y;
+    d[2] = v->forward.z + nx * v->right.z + ny * v->up.z;
+    double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    for (int k = 0; k < 3; k++) d[k] /= len;
+}
+
+/* Does the segment a->b pass through the axis-aligned box? (slab test) */
+static int segment_hits_box(const double a[3], const double b[3], const double lo[3],
+                            const double hi[3])
+{
+    double t0 = 0, t1 = 1;
+    for (int k = 0; k < 3; k++) {
+        double d = b[k] - a[k];
+        if (fabs(d) < 1e-12) {
+            if (a[k] < lo[k] || a[k] > hi[k]) return 0;
+            continue;
+        }
+        double ta = (lo[k] - a[k]) / d, tb = (hi[k] - a[k]) / d;
+        if (ta > tb) { double t = ta; ta = tb; tb = t; }
+        if (ta > t0) t0 = ta;
+        if (tb < t1) t1 = tb;
+    }
+    return t0 <= t1;
+}
+
+/* Point light of 100 cd at (0,2,0) over a plane of albedo 0.5 (optionally with the
+ * occluder box of the "shadow" scene): every pixel that sees the plane must carry
+ * rho/pi * I * cos / r^2 within 1%, or exactly 0 when the box blocks the light. */
+static void test_point_light(const char *name, int occluder)
+{
+    pc_view v;
+    float *img = render(name, &v);
+    if (!img) return;
+    const double eye[3] = {v.eye.x, v.eye.y, v.eye.z}, light[3] = {0, 2, 0};
+    const double lo[3] = {-0.25, 0.9, -0.25}, hi[3] = {0.25, 1.1, 0.25};
+    int checked = 0, shadowed = 0, bad = 0;
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) {
+            double d[3];
+            pixel_ray(&v, x, y, d);
+            double t = -eye[1] / d[1];
+            double p[3] = {eye[0] + t * d[0], 0, eye[2] + t * d[2]};
+            if (fabs(p[0]) > 4.9 || fabs(p[2]) > 4.9) continue;
+            if (occluder && segment_hits_box(eye, p, lo, hi)) continue; /* sees the box */
+            double l[3] = {light[0] - p[0], light[1] - p[1], light[2] - p[2]};
+            double r2 = l[0] * l[0] + l[1] * l[1] + l[2] * l[2];
+            double expect = 0.5 / M_PI * 100.0 * (l[1] / sqrt(r2)) / r2;
+            int blocked = occluder && segment_hits_box(p, light, lo, hi);
+            const float *px = &img[(y * W + x) * 3];
+            checked++;
+            if (blocked) {
+                shadowed++;
+                if (px[0] != 0 || px[1] != 0 || px[2] != 0) bad++;
+            } else if (!test_close_rel(px[0], expect, 0.01) || !test_close_rel(px[1], expect, 0.01) ||
+                       !test_close_rel(px[2], expect, 0.01)) {
+                if (bad++ < 5)
+                    fprintf(stderr, "%s pixel %d,%d: %g, expected %g\n", name, x, y, px[0], expect);
+            }
+        }
+    CHECKF(bad == 0, "%s: %d of %d pixels off", name, bad, checked);
+    CHECK(checked > W * H / 2);
+    if (occluder) CHECKF(shadowed > 10, "only %d shadowed pixels", shadowed);
+    free(img);
+}
+
+static void test_directional(void)
+{
+    pc_view v;
+    float *img = render("plane-directional", &v);
+    if (!img) return;
+    double expect = 0.5 / M_PI * 3.0 * cos(60.0 * M_PI / 180.0);
+    int bad = 0;
+    for (int i = 0; i < W * H * 3; i++)
+        if (!test_close_rel(img[i], expect, 0.01)) bad++;
+    CHECKF(bad == 0, "%d channels differ from %g (e.g. %g)", bad, expect, img[0]);
+    free(img);
+}
+
+static void test_emissive(void)
+{
+    pc_view v;
+    float *img = render("emissive", &v);
+    if (!img) return;
+    /* The quad spans +-1 at distance 3 with a 30 degree field of view: it covers the view
+     * vertically (tan 15 deg * 3 = 0.80 < 1). Horizontally the centre columns see it. */
+    const float expect[3] = {2.0f, 1.0f, 0.5f};
+    int bad = 0;
+    for (int y = 0; y < H; y++)
+        for (int x = W / 4; x < 3 * W / 4; x++)
+            for (int c = 0; c < 3; c++)
+                if (img[(y * W + x) * 3 + c] != expect[c]) bad++;
+    CHECKF(bad == 0, "%d emissive channels differ", bad);
+    free(img);
+}
+
+int main(void)
+{
+    char err[512] = "";
+    rd_vk_options opt = {0};
+    rd_vk_result r = rd_vk_create(&vk, &opt, err, sizeof err);
+    CHECKF(r == RD_VK_OK, "%s", err);
+    if (r != RD_VK_OK) return test_finish();
+    printf("device: %s, validation %s\n", vk.device_name, vk.validation ? "on" : "off");
+    test_point_light("plane-point", 0);
+    test_point_light("shadow", 1);
+    test_directional();
+    test_emissive();
+    CHECKF(rd_vk_validation_messages(&vk) == 0, "%u validation messages",
+           rd_vk_validation_messages(&vk));
+    rd_vk_destroy(&vk);
+    return test_finish();
+}
