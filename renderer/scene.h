@@ -11,6 +11,10 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct rd_mesh {
     char *name;
     uint32_t tri_count;
@@ -131,5 +135,9 @@ bool rd_scene_update(rd_scene *s, char *err, size_t errlen);
 
 /* Node local matrix from TRS or matrix. */
 void rd_node_local_matrix(const rd_node *n, float out[16]);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -68,6 +68,10 @@ typedef uint64_t pc_u64;
 #define PC_TONEMAP_ACES 0u
 #define PC_TONEMAP_CLAMP 1u
 
+#define PC_VIEW_FINAL 0u      /* direct + indirect */
+#define PC_VIEW_IRRADIANCE 1u /* indirect irradiance only (E / pi, as if albedo were 1) */
+#define PC_VIEW_PROBES 2u     /* final image with probe spheres showing their irradiance */
+
 #define PC_BVH_STACK_SIZE 64
 #define PC_INVALID 0xffffffffu
 
@@ -175,7 +179,7 @@ PC_END(pc_scene_refs);
  * eye: xyz position; forward/right/up: camera basis scaled so that a pixel's direction is
  * forward + ndc.x * right + ndc.y * up with ndc in [-1, 1] (y up);
  * size: x width, y height, z frame index, w seed; sky: rgb radiance of misses;
- * tonemap: x exposure scale (2^EV), y PC_TONEMAP_* as float. */
+ * tonemap: x exposure scale (2^EV), y PC_TONEMAP_* as float, z PC_VIEW_* as float. */
 PC_STRUCT(pc_view)
 {
     pc_vec4 eye;
@@ -188,11 +192,49 @@ PC_STRUCT(pc_view)
 }
 PC_END(pc_view);
 
+/* ---- DDGI probe volume (Majercik et al. 2019) -------------------------------------------- */
+#define PC_GI_OFF 0u
+#define PC_GI_CLASSIC 1u /* irradiance probes, trilinear weights only (the paper's baseline) */
+#define PC_GI_DDGI 2u    /* + back-face wrap, Chebyshev visibility, weight crush */
+
+#define PC_DDGI_IRR_INTERIOR 8u   /* irradiance texels per side, without border */
+#define PC_DDGI_DIST_INTERIOR 16u /* distance texels per side, without border */
+#define PC_DDGI_MAX_RAYS 1024u
+#define PC_DDGI_PROBE_ACTIVE 1u   /* probe_data.w bit: probe outside geometry, sampled */
+
+/* origin: xyz position of probe (0,0,0), w = max ray distance for distance blending;
+ * spacing: xyz grid spacing, w = 1 / (1 - hysteresis) unused (0);
+ * counts: xyz probes per axis, w = rays per probe;
+ * rotation: rows of this update's random ray rotation (uniform on SO(3));
+ * params: x hysteresis, y bias scale (world units), z back-face ratio that deactivates a
+ *   probe, w = irradiance encoding exponent (5);
+ * info: x PC_GI_*, y updates done since reset (0 = next is the first), z atlas irradiance
+ *   tile side (interior + 2), w distance tile side (interior + 2);
+ * irradiance: uvec2[] per texel (packHalf2x16 of rgb^(1/5) and a written flag);
+ * distance: vec2[] per texel (mean, mean of squares);
+ * rays: vec4[] per probe ray (radiance, hit distance; < 0: back face);
+ * probes: vec4[] per probe (xyz offset, w = PC_DDGI_PROBE_* bits as float). */
+PC_STRUCT(pc_ddgi_volume)
+{
+    pc_vec4 origin;
+    pc_vec4 spacing;
+    pc_uvec4 counts;
+    pc_vec4 rotation[3];
+    pc_vec4 params;
+    pc_uvec4 info;
+    pc_u64 irradiance;
+    pc_u64 distance;
+    pc_u64 rays;
+    pc_u64 probes;
+}
+PC_END(pc_ddgi_volume);
+
 /* Everything a pass reads, in one GPU buffer reached by address. */
 PC_STRUCT(pc_globals)
 {
     pc_scene_refs scene;
     pc_view view;
+    pc_ddgi_volume ddgi;
 }
 PC_END(pc_globals);
 
@@ -264,8 +306,16 @@ PC_CHECK(pc_view, 112);
 PC_OFF(pc_view, size, 64);
 PC_OFF(pc_view, sky, 80);
 PC_OFF(pc_view, tonemap, 96);
-PC_CHECK(pc_globals, 208);
+PC_CHECK(pc_ddgi_volume, 160);
+PC_OFF(pc_ddgi_volume, counts, 32);
+PC_OFF(pc_ddgi_volume, rotation, 48);
+PC_OFF(pc_ddgi_volume, params, 96);
+PC_OFF(pc_ddgi_volume, info, 112);
+PC_OFF(pc_ddgi_volume, irradiance, 128);
+PC_OFF(pc_ddgi_volume, probes, 152);
+PC_CHECK(pc_globals, 368);
 PC_OFF(pc_globals, view, 96);
+PC_OFF(pc_globals, ddgi, 208);
 PC_CHECK(pc_gbuffer_texel, 80);
 PC_OFF(pc_gbuffer_texel, albedo, 48);
 PC_CHECK(pc_counters, 16);

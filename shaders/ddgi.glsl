@@ -1,0 +1,188 @@
+/* ddgi.glsl: the DDGI probe field (Majercik, Guertin, Nowrouzezahrai, McGuire, JCGT 2019):
+ * probe addressing, octahedral maps (Sec. 3, after Cigolle et al. 2014), spherical Fibonacci
+ * ray directions, and the irradiance query with visibility (Sec. 4-5). Included after
+ * common.glsl. Constants follow shared/notes/ddgi-reference.md. */
+#ifndef PC_DDGI_GLSL
+#define PC_DDGI_GLSL
+
+layout(buffer_reference, std430, buffer_reference_align = 8) buffer DdgiIrradianceRef { uvec2 v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 8) buffer DdgiDistanceRef { vec2 v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer DdgiRayRef { vec4 v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer DdgiProbeRef { vec4 v[]; };
+
+/* ---- octahedral mapping ------------------------------------------------------------- */
+vec2 sign_not_zero(vec2 v) { return vec2(v.x >= 0.0 ? 1.0 : -1.0, v.y >= 0.0 ? 1.0 : -1.0); }
+
+/* Unit direction -> [-1, 1]^2. */
+vec2 oct_encode(vec3 n)
+{
+    vec2 p = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
+    return n.z >= 0.0 ? p : (1.0 - abs(p.yx)) * sign_not_zero(p);
+}
+
+/* [-1, 1]^2 -> unit direction. */
+vec3 oct_decode(vec2 p)
+{
+    vec3 n = vec3(p, 1.0 - abs(p.x) - abs(p.y));
+    if (n.z < 0.0) n.xy = (1.0 - abs(n.yx)) * sign_not_zero(n.xy);
+    return normalize(n);
+}
+
+/* Direction at the centre of interior texel t (0..interior-1) of an octahedral tile. */
+vec3 oct_texel_dir(uvec2 t, uint interior)
+{
+    return oct_decode((vec2(t) + 0.5) / float(interior) * 2.0 - 1.0);
+}
+
+/* ---- rays: spherical Fibonacci set, rotated each update --------------------------------- */
+vec3 fibonacci_dir(uint i, uint n)
+{
+    const float golden = 0.61803398874989484820; /* sqrt(5) * 0.5 + 0.5 - 1 */
+    float phi = 2.0 * PC_PI * fract(float(i) * golden);
+    float cos_theta = 1.0 - (2.0 * float(i) + 1.0) / float(n);
+    float sin_theta = sqrt(clamp(1.0 - cos_theta * cos_theta, 0.0, 1.0));
+    return vec3(cos(phi) * sin_theta, sin(phi) * sin_theta, cos_theta);
+}
+
+vec3 ddgi_ray_dir(pc_ddgi_volume vol, uint i)
+{
+    vec3 d = fibonacci_dir(i, vol.counts.w);
+    return normalize(vec3(dot(vol.rotation[0].xyz, d), dot(vol.rotation[1].xyz, d),
+                          dot(vol.rotation[2].xyz, d)));
+}
+
+/* ---- probe addressing ---------------------------------------------------------------- */
+uint ddgi_probe_count(pc_ddgi_volume vol) { return vol.counts.x * vol.counts.y * vol.counts.z; }
+
+uint ddgi_probe_index(pc_ddgi_volume vol, ivec3 p)
+{
+    return uint(p.x) + vol.counts.x * (uint(p.y) + vol.counts.y * uint(p.z));
+}
+
+ivec3 ddgi_probe_coord(pc_ddgi_volume vol, uint index)
+{
+    return ivec3(index % vol.counts.x, (index / vol.counts.x) % vol.counts.y,
+                 index / (vol.counts.x * vol.counts.y));
+}
+
+vec3 ddgi_probe_position(pc_ddgi_volume vol, uint index)
+{
+    vec3 offset = DdgiProbeRef(vol.probes).v[index].xyz;
+    return vol.origin.xyz + vec3(ddgi_probe_coord(vol, index)) * vol.spacing.xyz + offset;
+}
+
+bool ddgi_probe_active(pc_ddgi_volume vol, uint index)
+{
+    return (uint(DdgiProbeRef(vol.probes).v[index].w) & PC_DDGI_PROBE_ACTIVE) != 0u;
+}
+
+/* Texel (x, y) of probe's tile (side = interior + 2, border included). */
+uint ddgi_texel(uint probe, uint side, uint x, uint y) { return (probe * side + y) * side + x; }
+
+/* ---- atlas sampling (manual bilinear inside one bordered tile) ------------------------ */
+vec3 ddgi_decode_irradiance(uvec2 packed, float exponent)
+{
+    vec3 enc = vec3(unpackHalf2x16(packed.x), unpackHalf2x16(packed.y).x);
+    return pow(max(enc, vec3(0.0)), vec3(exponent));
+}
+
+/* Tile coordinates (texel units, border included) of direction dir. */
+vec2 ddgi_tile_coord(vec3 dir, uint interior)
+{
+    return (oct_encode(dir) * 0.5 + 0.5) * float(interior) + 1.0;
+}
+
+/* Bilinear weights and the four texel indices around tile coordinate c. */
+void ddgi_bilinear(uint probe, uint side, vec2 c, out uvec4 idx, out vec4 w)
+{
+    vec2 p = clamp(c - 0.5, vec2(0.0), vec2(float(side) - 1.001));
+    uvec2 i0 = uvec2(floor(p));
+    vec2 f = p - vec2(i0);
+    uvec2 i1 = min(i0 + 1u, uvec2(side - 1u));
+    idx = uvec4(ddgi_texel(probe, side, i0.x, i0.y), ddgi_texel(probe, side, i1.x, i0.y),
+                ddgi_texel(probe, side, i0.x, i1.y), ddgi_texel(probe, side, i1.x, i1.y));
+    w = vec4((1.0 - f.x) * (1.0 - f.y), f.x * (1.0 - f.y), (1.0 - f.x) * f.y, f.x * f.y);
+}
+
+/* Stored mean cosine-weighted radiance (E / pi) of probe toward normal n, decoded. */
+vec3 ddgi_sample_irradiance(pc_ddgi_volume vol, uint probe, vec3 n)
+{
+    uvec4 idx;
+    vec4 w;
+    ddgi_bilinear(probe, vol.info.z, ddgi_tile_coord(n, PC_DDGI_IRR_INTERIOR), idx, w);
+    DdgiIrradianceRef a = DdgiIrradianceRef(vol.irradiance);
+    float e = vol.params.w;
+    return ddgi_decode_irradiance(a.v[idx.x], e) * w.x + ddgi_decode_irradiance(a.v[idx.y], e) * w.y +
+           ddgi_decode_irradiance(a.v[idx.z], e) * w.z + ddgi_decode_irradiance(a.v[idx.w], e) * w.w;
+}
+
+/* (mean distance, mean squared distance) of probe in direction dir. */
+vec2 ddgi_sample_distance(pc_ddgi_volume vol, uint probe, vec3 dir)
+{
+    uvec4 idx;
+    vec4 w;
+    ddgi_bilinear(probe, vol.info.w, ddgi_tile_coord(dir, PC_DDGI_DIST_INTERIOR), idx, w);
+    DdgiDistanceRef a = DdgiDistanceRef(vol.distance);
+    return a.v[idx.x] * w.x + a.v[idx.y] * w.y + a.v[idx.z] * w.z + a.v[idx.w] * w.w;
+}
+
+/* ---- the irradiance query ----------------------------------------------------------- */
+
+/* Irradiance E at surface point p with unit normal n, seen from direction v (unit, toward
+ * the viewer or the tracing probe). mode PC_GI_CLASSIC uses trilinear weights only;
+ * PC_GI_DDGI adds the back-face wrap, Chebyshev visibility and small-weight crush, with the
+ * sample point biased along n and v by a fraction of the probe spacing (2021 paper form).
+ * Outside the probe volume the result fades, over one spacing, to the sky's irradiance. */
+vec3 ddgi_irradiance(pc_ddgi_volume vol, vec3 sky, vec3 p, vec3 n, vec3 v)
+{
+    uint mode = vol.info.x;
+    vec3 sky_e = PC_PI * sky;
+    if (mode == PC_GI_OFF || vol.info.y == 0u) return vec3(0.0);
+    vec3 biased = p + (0.2 * n + 0.8 * v) * vol.params.y;
+    vec3 grid = (biased - vol.origin.xyz) / vol.spacing.xyz;
+    vec3 last = vec3(vol.counts.xyz) - 1.0;
+    /* fade: 1 inside the probe hull, 0 one spacing outside it */
+    vec3 outside = max(-grid, grid - last);
+    float fade = clamp(1.0 - max(outside.x, max(outside.y, outside.z)), 0.0, 1.0);
+    if (fade <= 0.0) return sky_e;
+    ivec3 base = clamp(ivec3(floor(grid)), ivec3(0), max(ivec3(vol.counts.xyz) - 2, ivec3(0)));
+    vec3 alpha = clamp(grid - vec3(base), 0.0, 1.0);
+    vec3 sum = vec3(0.0);
+    float wsum = 0.0;
+    for (uint i = 0u; i < 8u; i++) {
+        ivec3 off = ivec3(i & 1u, (i >> 1) & 1u, (i >> 2) & 1u);
+        ivec3 pc = min(base + off, ivec3(vol.counts.xyz) - 1);
+        uint probe = ddgi_probe_index(vol, pc);
+        if (!ddgi_probe_active(vol, probe)) continue;
+        vec3 tri = max(vec3(0.001), mix(1.0 - alpha, alpha, vec3(off)));
+        float trilinear = tri.x * tri.y * tri.z;
+        float w = 1.0;
+        if (mode == PC_GI_DDGI) {
+            vec3 probe_pos = ddgi_probe_position(vol, probe);
+            vec3 to_probe = probe_pos - p;
+            float len = length(to_probe);
+            vec3 dir_to_probe = len > 0.0 ? to_probe / len : n;
+            float wrap = (dot(dir_to_probe, n) + 1.0) * 0.5;
+            w *= wrap * wrap + 0.2;
+            vec3 probe_to_point = biased - probe_pos;
+            float r = length(probe_to_point);
+            vec3 dir = r > 0.0 ? probe_to_point / r : n;
+            vec2 moments = ddgi_sample_distance(vol, probe, dir);
+            float mean = moments.x;
+            if (r > mean) {
+                float variance = abs(moments.y - mean * mean);
+                float d = r - mean;
+                float cheb = variance / (variance + d * d);
+                w *= max(0.05, cheb * cheb * cheb);
+            }
+            w = max(1e-6, w);
+            if (w < 0.2) w *= w * w / 0.04;
+        }
+        w *= trilinear;
+        sum += w * ddgi_sample_irradiance(vol, probe, n);
+        wsum += w;
+    }
+    vec3 e = wsum > 0.0 ? PC_PI * sum / wsum : vec3(0.0);
+    return mix(sky_e, e, fade);
+}
+#endif
