@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "shaders/ddgi_sample.spv.h"
 #include "shaders/primary.spv.h"
 #include "shaders/shade.spv.h"
 #include "shaders/tonemap.spv.h"
@@ -25,6 +26,9 @@ rd_vk_result rd_renderer_create(rd_vk *vk, rd_renderer *r, char *err, size_t err
         res = rd_pipeline_create(vk, &r->tonemap, "tonemap", pc_spv_tonemap,
                                  sizeof pc_spv_tonemap, sizeof(pc_push), err, errlen);
     if (res == RD_VK_OK)
+        res = rd_pipeline_create(vk, &r->gi_sample, "gi sample", pc_spv_ddgi_sample,
+                                 sizeof pc_spv_ddgi_sample, sizeof(pc_push), err, errlen);
+    if (res == RD_VK_OK)
         res = rd_buffer_create(vk, &r->globals, sizeof(pc_globals), RD_MEMORY_UPLOAD, err, errlen);
     if (res == RD_VK_OK)
         res = rd_buffer_create(vk, &r->counters, sizeof(pc_counters), RD_MEMORY_READBACK, err,
@@ -37,6 +41,9 @@ rd_vk_result rd_renderer_create(rd_vk *vk, rd_renderer *r, char *err, size_t err
 void rd_renderer_destroy(rd_renderer *r)
 {
     if (!r->vk) return;
+    rd_ddgi_destroy(&r->ddgi);
+    r->gi = false;
+    rd_pipeline_destroy(r->vk, &r->gi_sample);
     rd_timer_destroy(r->vk, &r->timer);
     rd_buffer_destroy(r->vk, &r->rgba8);
     rd_buffer_destroy(r->vk, &r->radiance);
@@ -47,6 +54,25 @@ void rd_renderer_destroy(rd_renderer *r)
     rd_pipeline_destroy(r->vk, &r->shade);
     rd_pipeline_destroy(r->vk, &r->primary);
     r->width = r->height = 0;
+}
+
+rd_vk_result rd_renderer_configure_gi(rd_renderer *r, const float bmin[3], const float bmax[3],
+                                      const rd_ddgi_settings *gi, char *err, size_t errlen)
+{
+    r->gi = false;
+    if (gi->mode == PC_GI_OFF) {
+        rd_ddgi_destroy(&r->ddgi); /* model only what is used: no probe memory when off */
+        return RD_VK_OK;
+    }
+    if (gi->mode != PC_GI_CLASSIC && gi->mode != PC_GI_DDGI) {
+        snprintf(err, errlen, "unknown GI mode %u", gi->mode);
+        return RD_VK_ERR_UNSUPPORTED;
+    }
+    rd_vk_result res = RD_VK_OK;
+    if (!r->ddgi.vk) res = rd_ddgi_create(r->vk, &r->ddgi, err, errlen);
+    if (res == RD_VK_OK) res = rd_ddgi_configure(&r->ddgi, bmin, bmax, gi, err, errlen);
+    r->gi = res == RD_VK_OK;
+    return res;
 }
 
 /* (Re)creates the per-pixel buffers when the resolution changes. */
@@ -90,16 +116,37 @@ rd_vk_result rd_renderer_render(rd_renderer *r, const rd_gpu_scene *scene,
     rd_camera_to_view(camera, w, h, &g.view);
     g.view.size = (pc_uvec4){w, h, r->frame_index, fs->seed};
     g.view.sky = (pc_vec4){fs->sky[0], fs->sky[1], fs->sky[2], 0};
-    g.view.tonemap = (pc_vec4){exp2f(fs->exposure_ev), (float)fs->tonemap, 0, 0};
-    memcpy(r->globals.mapped, &g, sizeof g);
+    g.view.tonemap = (pc_vec4){exp2f(fs->exposure_ev), (float)fs->tonemap, (float)fs->view, 0};
     memset(r->counters.mapped, 0, sizeof(pc_counters));
 
+    /* All probe updates but the last run on their own; the last is recorded with the frame so
+     * that the frame's timings show every pass. */
+    unsigned updates = r->gi ? (fs->gi_updates ? fs->gi_updates : 1) : 0;
     rd_cmd cmd;
+    for (unsigned u = 0; u + 1 < updates; u++) {
+        rd_ddgi_begin_update(&r->ddgi);
+        g.ddgi = r->ddgi.vol;
+        memcpy(r->globals.mapped, &g, sizeof g);
+        res = rd_cmd_begin(r->vk, &cmd, err, errlen);
+        if (res != RD_VK_OK) return res;
+        rd_ddgi_record_update(&r->ddgi, &cmd, NULL, r->globals.address, r->counters.address);
+        res = rd_cmd_submit_wait(r->vk, &cmd, err, errlen);
+        if (res != RD_VK_OK) return res;
+        rd_ddgi_end_update(&r->ddgi);
+        memset(r->counters.mapped, 0, sizeof(pc_counters)); /* count the frame's rays only */
+    }
+    if (r->gi) {
+        rd_ddgi_begin_update(&r->ddgi);
+        g.ddgi = r->ddgi.vol;
+    }
+    memcpy(r->globals.mapped, &g, sizeof g);
+
     res = rd_cmd_begin(r->vk, &cmd, err, errlen);
     if (res != RD_VK_OK) return res;
     uint32_t gx = (w + PC_WG_2D_X - 1) / PC_WG_2D_X, gy = (h + PC_WG_2D_Y - 1) / PC_WG_2D_Y;
-    pc_push push = {.globals = r->globals.address, .buf1 = r->counters.address};
     rd_timer_begin(&cmd, &r->timer);
+    if (r->gi) rd_ddgi_record_update(&r->ddgi, &cmd, &r->timer, r->globals.address, r->counters.address);
+    pc_push push = {.globals = r->globals.address, .buf1 = r->counters.address};
     push.buf0 = r->gbuffer.address;
     rd_cmd_dispatch(&cmd, &r->primary, &push, gx, gy, 1);
     rd_cmd_barrier(&cmd);
@@ -108,6 +155,11 @@ rd_vk_result rd_renderer_render(rd_renderer *r, const rd_gpu_scene *scene,
     rd_cmd_dispatch(&cmd, &r->shade, &push, gx, gy, 1);
     rd_cmd_barrier(&cmd);
     rd_timer_mark(&cmd, &r->timer, "shade");
+    if (r->gi) {
+        rd_cmd_dispatch(&cmd, &r->gi_sample, &push, gx, gy, 1);
+        rd_cmd_barrier(&cmd);
+        rd_timer_mark(&cmd, &r->timer, "gi sample");
+    }
     push.buf0 = r->radiance.address;
     push.buf1 = r->rgba8.address;
     rd_cmd_dispatch(&cmd, &r->tonemap, &push, gx, gy, 1);
@@ -115,6 +167,7 @@ rd_vk_result rd_renderer_render(rd_renderer *r, const rd_gpu_scene *scene,
     rd_timer_mark(&cmd, &r->timer, "tonemap");
     res = rd_cmd_submit_wait(r->vk, &cmd, err, errlen);
     if (res != RD_VK_OK) return res;
+    if (r->gi) rd_ddgi_end_update(&r->ddgi);
     r->frame_index++;
 
     rd_frame_stats *st = &r->stats;

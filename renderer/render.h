@@ -1,11 +1,12 @@
-/* render.h: one frame = primary pass -> shade pass -> tone-map pass, with GPU timings and ray
- * counts. The renderer owns the per-resolution buffers and the pipelines; the scene is
+/* render.h: one frame = [probe updates] -> primary pass -> shade (direct) -> [GI sampling]
+ * -> tone map, with GPU timings and ray counts. The renderer owns the per-resolution buffers and the pipelines; the scene is
  * passed in (rd_gpu_scene) so one renderer can draw any uploaded scene.
  */
 #ifndef RD_RENDER_H
 #define RD_RENDER_H
 
 #include "camera.h"
+#include "ddgi.h"
 #include "gpu_scene.h"
 #include "vk_compute.h"
 
@@ -14,7 +15,9 @@ typedef struct rd_frame_settings {
     float sky[3];           /* radiance of rays that escape (default black) */
     float exposure_ev;      /* exposure in stops: radiance * 2^ev before tone mapping */
     unsigned tonemap;       /* PC_TONEMAP_* (0 = ACES fit) */
-    unsigned seed;
+    unsigned seed;          /* random streams of stochastic passes */
+    unsigned view;          /* PC_VIEW_* */
+    unsigned gi_updates;    /* probe updates before this frame is shaded (0 = 1) */
 } rd_frame_settings;
 
 typedef struct rd_frame_stats {
@@ -30,6 +33,9 @@ typedef struct rd_renderer {
     rd_pipeline primary, shade, tonemap;
     rd_buffer globals, counters, gbuffer, radiance, rgba8;
     rd_timer timer;
+    rd_ddgi ddgi;           /* created by rd_renderer_configure_gi */
+    bool gi;                /* a GI mode other than off is configured */
+    rd_pipeline gi_sample;
     unsigned width, height;
     unsigned frame_index;
     rd_frame_stats stats;
@@ -37,6 +43,10 @@ typedef struct rd_renderer {
 
 rd_vk_result rd_renderer_create(rd_vk *vk, rd_renderer *r, char *err, size_t errlen);
 void rd_renderer_destroy(rd_renderer *r); /* idempotent */
+/* Configures global illumination for a scene with the given bounds (mode PC_GI_OFF turns it
+ * off); resets the probe field. */
+rd_vk_result rd_renderer_configure_gi(rd_renderer *r, const float bmin[3], const float bmax[3],
+                                      const rd_ddgi_settings *gi, char *err, size_t errlen);
 /* Renders one frame of scene from camera into the renderer's buffers (blocking). */
 rd_vk_result rd_renderer_render(rd_renderer *r, const rd_gpu_scene *scene,
                                 const rd_view_camera *camera, const rd_frame_settings *settings,

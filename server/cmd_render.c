@@ -1,4 +1,5 @@
 /* probecast render: offline rendering of one scene to PNG/JPEG and/or linear PFM. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -27,6 +28,18 @@ static void render_usage(FILE *f)
             "  --tonemap aces|clamp   tone curve (default aces)\n"
             "  --sky R,G,B            radiance of rays that leave the scene (default 0,0,0)\n"
             "  --quality Q            JPEG quality 1..100 (default 92)\n"
+            "  --gi off|classic|ddgi  global illumination (default ddgi); classic = irradiance\n"
+            "                         probes without visibility (the paper's baseline)\n"
+            "  --probes X,Y,Z         probe counts (default: fitted to the scene bounds)\n"
+            "  --probe-spacing S      probe spacing in metres (default: from the scene size)\n"
+            "  --rays N               rays per probe per update (default 256)\n"
+            "  --frames N             probe updates before the image is taken (default 32)\n"
+            "  --hysteresis H         temporal blend weight of the old probe value (default 0.97)\n"
+            "  --seed S               seed of the probe ray rotations (same seed, same image)\n"
+            "  --view final|irradiance|probes  debug views: indirect irradiance only, or probe\n"
+            "                         spheres shaded with their stored irradiance\n"
+            "  --dump-probes PREFIX   write the probe atlases as PREFIX-irradiance.{pfm,png}\n"
+            "                         and PREFIX-distance.pfm\n"
             "  --timings              print BVH build time, per-pass GPU times and rays/s\n"
             "  --repeat N             frames to render and average for --timings (default 5)\n"
             "  --device INDEX|NAME    GPU to use (default: $PROBECAST_DEVICE, else a discrete\n"
@@ -37,8 +50,10 @@ static void render_usage(FILE *f)
 }
 
 typedef struct render_args {
-    const char *scene, *out, *hdr, *device;
+    const char *scene, *out, *hdr, *device, *dump;
     rd_frame_settings fs;
+    rd_ddgi_settings gi;
+    unsigned frames;
     int camera;
     unsigned quality, repeat;
     bool timings, list_devices;
@@ -53,6 +68,8 @@ static int parse(int argc, char **argv, render_args *a)
     a->repeat = 5;
     a->fs.width = 960;
     a->fs.height = 540;
+    a->gi.mode = PC_GI_DDGI;
+    a->frames = 32;
     for (int i = 1; i < argc; i++) {
         const char *o = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -106,6 +123,65 @@ static int parse(int argc, char **argv, render_args *a)
         } else if (strcmp(o, "--repeat") == 0) {
             NEED_VALUE
             if (!cli_parse_uint(o, v, 1, 1000, &a->repeat)) return 2;
+        } else if (strcmp(o, "--gi") == 0) {
+            NEED_VALUE
+            if (strcmp(v, "off") == 0) a->gi.mode = PC_GI_OFF;
+            else if (strcmp(v, "classic") == 0) a->gi.mode = PC_GI_CLASSIC;
+            else if (strcmp(v, "ddgi") == 0) a->gi.mode = PC_GI_DDGI;
+            else {
+                fprintf(stderr, "probecast render: --gi expects off, classic or ddgi\n");
+                return 2;
+            }
+        } else if (strcmp(o, "--probes") == 0) {
+            NEED_VALUE
+            float c[3];
+            if (!cli_parse_floats(o, v, c, 3)) return 2;
+            for (int k = 0; k < 3; k++) {
+                if (c[k] < 1 || c[k] > 256 || c[k] != (float)(unsigned)c[k]) {
+                    fprintf(stderr, "probecast render: --probes expects three integers in 1..256\n");
+                    return 2;
+                }
+                a->gi.counts[k] = (unsigned)c[k];
+            }
+        } else if (strcmp(o, "--probe-spacing") == 0) {
+            NEED_VALUE
+            float sp;
+            if (!cli_parse_float(o, v, &sp)) return 2;
+            if (!(sp > 0)) {
+                fprintf(stderr, "probecast render: --probe-spacing must be positive\n");
+                return 2;
+            }
+            a->gi.spacing[0] = a->gi.spacing[1] = a->gi.spacing[2] = sp;
+        } else if (strcmp(o, "--rays") == 0) {
+            NEED_VALUE
+            if (!cli_parse_uint(o, v, 1, PC_DDGI_MAX_RAYS, &a->gi.rays)) return 2;
+        } else if (strcmp(o, "--frames") == 0) {
+            NEED_VALUE
+            if (!cli_parse_uint(o, v, 1, 100000, &a->frames)) return 2;
+        } else if (strcmp(o, "--hysteresis") == 0) {
+            NEED_VALUE
+            if (!cli_parse_float(o, v, &a->gi.hysteresis)) return 2;
+            if (!(a->gi.hysteresis >= 0 && a->gi.hysteresis < 1)) {
+                fprintf(stderr, "probecast render: --hysteresis expects a value in [0, 1)\n");
+                return 2;
+            }
+            if (a->gi.hysteresis == 0) a->gi.hysteresis = 1e-9f; /* 0 means default */
+        } else if (strcmp(o, "--seed") == 0) {
+            NEED_VALUE
+            if (!cli_parse_uint(o, v, 0, 0xffffffffu, &a->gi.seed)) return 2;
+            a->fs.seed = a->gi.seed;
+        } else if (strcmp(o, "--view") == 0) {
+            NEED_VALUE
+            if (strcmp(v, "final") == 0) a->fs.view = PC_VIEW_FINAL;
+            else if (strcmp(v, "irradiance") == 0) a->fs.view = PC_VIEW_IRRADIANCE;
+            else if (strcmp(v, "probes") == 0) a->fs.view = PC_VIEW_PROBES;
+            else {
+                fprintf(stderr, "probecast render: --view expects final, irradiance or probes\n");
+                return 2;
+            }
+        } else if (strcmp(o, "--dump-probes") == 0) {
+            NEED_VALUE
+            a->dump = v;
         } else if (strcmp(o, "--device") == 0) {
             NEED_VALUE
             a->device = v;
@@ -125,6 +201,10 @@ static int parse(int argc, char **argv, render_args *a)
         return 2;
     }
     if (!a->out && !a->hdr) a->out = "render.png";
+    if (a->gi.mode == PC_GI_OFF && (a->fs.view != PC_VIEW_FINAL || a->dump)) {
+        fprintf(stderr, "probecast render: --view and --dump-probes need --gi classic or ddgi\n");
+        return 2;
+    }
     return -1;
 }
 
@@ -150,20 +230,51 @@ static void print_timings(const rd_vk *vk, const rd_scene *s, const rd_gpu_scene
         printf("(this device has no GPU timestamps)\n");
         return;
     }
-    printf("%-10s %10s %12s %12s\n", "pass", "GPU ms", "rays", "Mrays/s");
+    printf("%-17s %10s %12s %12s\n", "pass", "GPU ms", "rays", "Mrays/s");
     double total = 0;
     for (unsigned i = 0; i < avg->pass_count; i++) {
         double rays = 0;
         if (strcmp(avg->pass_name[i], "primary") == 0) rays = avg->rays.primary_rays;
-        if (strcmp(avg->pass_name[i], "shade") == 0) rays = avg->rays.shadow_rays;
+        if (strcmp(avg->pass_name[i], "shade") == 0 || strcmp(avg->pass_name[i], "probe shade") == 0)
+            rays = avg->rays.shadow_rays; /* shadow rays of both passes together */
+        if (strcmp(avg->pass_name[i], "probe trace") == 0) rays = avg->rays.probe_rays;
         total += avg->pass_ms[i];
         if (rays > 0)
-            printf("%-10s %10.3f %12.0f %12.1f\n", avg->pass_name[i], avg->pass_ms[i], rays,
+            printf("%-17s %10.3f %12.0f %12.1f\n", avg->pass_name[i], avg->pass_ms[i], rays,
                    avg->pass_ms[i] > 0 ? rays / (avg->pass_ms[i] * 1e3) : 0.0);
         else
-            printf("%-10s %10.3f %12s %12s\n", avg->pass_name[i], avg->pass_ms[i], "-", "-");
+            printf("%-17s %10.3f %12s %12s\n", avg->pass_name[i], avg->pass_ms[i], "-", "-");
     }
-    printf("%-10s %10.3f\n", "total", total);
+    printf("%-17s %10.3f\n", "total", total);
+}
+
+static rd_vk_result dump_probes(rd_renderer *r, const char *prefix, char *err, size_t errlen)
+{
+    float *irr = NULL, *dist = NULL;
+    unsigned iw, ih, dw, dh;
+    rd_vk_result vr = rd_ddgi_read_atlases(&r->ddgi, &irr, &iw, &ih, &dist, &dw, &dh, err, errlen);
+    if (vr != RD_VK_OK) return vr;
+    char path[1024];
+    uint8_t *rgba = malloc((size_t)iw * ih * 4);
+    if (!rgba) abort();
+    for (size_t i = 0; i < (size_t)iw * ih; i++) {
+        for (int c = 0; c < 3; c++) {
+            float v = irr[i * 3 + c] / (1.0f + irr[i * 3 + c]); /* Reinhard, for a quick look */
+            rgba[i * 4 + c] = (uint8_t)(255.0f * powf(v, 1 / 2.2f) + 0.5f);
+        }
+        rgba[i * 4 + 3] = 255;
+    }
+    bool ok = true;
+    snprintf(path, sizeof path, "%s-irradiance.pfm", prefix);
+    ok = ok && rd_image_write_pfm(path, irr, iw, ih, err, errlen) == RD_IMAGE_OK;
+    snprintf(path, sizeof path, "%s-irradiance.png", prefix);
+    ok = ok && rd_image_write_rgba8(path, rgba, iw, ih, 0, err, errlen) == RD_IMAGE_OK;
+    snprintf(path, sizeof path, "%s-distance.pfm", prefix);
+    ok = ok && rd_image_write_pfm(path, dist, dw, dh, err, errlen) == RD_IMAGE_OK;
+    free(rgba);
+    free(irr);
+    free(dist);
+    return ok ? RD_VK_OK : RD_VK_ERR_VULKAN;
 }
 
 int cli_render(int argc, char **argv)
@@ -208,9 +319,14 @@ int cli_render(int argc, char **argv)
     }
     vr = rd_gpu_scene_create(&vk, &gs, &scene, err, sizeof err);
     if (vr == RD_VK_OK) vr = rd_renderer_create(&vk, &r, err, sizeof err);
+    if (vr == RD_VK_OK)
+        vr = rd_renderer_configure_gi(&r, scene.bounds_min, scene.bounds_max, &a.gi, err,
+                                      sizeof err);
     unsigned frames = a.timings ? a.repeat : 1;
     rd_frame_stats sum = {0};
     for (unsigned f = 0; vr == RD_VK_OK && f < frames + (a.timings ? 1 : 0); f++) {
+        /* the first frame converges the probes; timed frames after it do one update each */
+        a.fs.gi_updates = f == 0 ? a.frames : 1;
         vr = rd_renderer_render(&r, &gs, &cam, &a.fs, err, sizeof err);
         if (vr != RD_VK_OK || (a.timings && f == 0)) continue; /* frame 0 warms up */
         const rd_frame_stats *st = &r.stats;
@@ -242,6 +358,7 @@ int cli_render(int argc, char **argv)
             vr = RD_VK_ERR_VULKAN;
         free(rgb);
     }
+    if (vr == RD_VK_OK && a.dump) vr = dump_probes(&r, a.dump, err, sizeof err);
     if (vr == RD_VK_OK && a.timings) {
         printf("scene load  %.1f ms\n", load_ms);
         print_timings(&vk, &scene, &gs, &sum, frames, a.fs.width, a.fs.height);

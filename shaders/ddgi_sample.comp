@@ -1,0 +1,51 @@
+#version 460
+/* GI sampling for the camera (paper Sec. 5): adds albedo/pi * E(P, n) from the probe field
+ * to each pixel's direct radiance, with v = the direction toward the camera. View modes:
+ * PC_VIEW_IRRADIANCE writes E/pi alone (the indirect light as if albedo were 1);
+ * PC_VIEW_PROBES draws every probe as a small sphere shaded with its stored irradiance
+ * (inactive probes dark red).
+ * push: globals, buf0 = pc_gbuffer_texel[], buf2 = vec4 radiance[]. */
+#extension GL_GOOGLE_include_directive : require
+#include "common.glsl"
+#include "ddgi.glsl"
+
+layout(local_size_x = PC_WG_2D_X, local_size_y = PC_WG_2D_Y) in;
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer GBufferRef { pc_gbuffer_texel v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer RadianceRef { vec4 v[]; };
+
+void main()
+{
+    pc_globals g = load_globals();
+    uvec2 px = gl_GlobalInvocationID.xy;
+    if (any(greaterThanEqual(px, g.view.size.xy))) return;
+    uint i = px.y * g.view.size.x + px.x;
+    pc_gbuffer_texel t = GBufferRef(pc.buf0).v[i];
+    uint view = uint(g.view.tonemap.z);
+    vec3 l = RadianceRef(pc.buf2).v[i].rgb;
+    if (t.position.w >= 0.0) {
+        vec3 p = t.position.xyz;
+        vec3 v = normalize(g.view.eye.xyz - p);
+        vec3 e = ddgi_irradiance(g.ddgi, g.view.sky.rgb, p, t.normal.xyz, v);
+        l = view == PC_VIEW_IRRADIANCE ? e / PC_PI : l + t.albedo.rgb / PC_PI * e;
+    } else if (view == PC_VIEW_IRRADIANCE) {
+        l = vec3(0.0);
+    }
+    if (view == PC_VIEW_PROBES) {
+        vec3 o = g.view.eye.xyz, d = camera_dir(g.view, px);
+        float tmax = t.position.w >= 0.0 ? t.position.w : 1e30;
+        float radius = 0.1 * min(g.ddgi.spacing.x, min(g.ddgi.spacing.y, g.ddgi.spacing.z));
+        uint n = ddgi_probe_count(g.ddgi);
+        for (uint k = 0u; k < n; k++) {
+            vec3 c = ddgi_probe_position(g.ddgi, k);
+            vec3 oc = o - c;
+            float b = dot(oc, d), q = dot(oc, oc) - radius * radius, disc = b * b - q;
+            if (disc < 0.0) continue;
+            float th = -b - sqrt(disc);
+            if (th <= 0.0 || th >= tmax) continue;
+            tmax = th;
+            vec3 nrm = normalize(o + th * d - c);
+            l = ddgi_probe_active(g.ddgi, k) ? ddgi_sample_irradiance(g.ddgi, k, nrm) : vec3(0.3, 0.0, 0.0);
+        }
+    }
+    RadianceRef(pc.buf2).v[i] = vec4(l, 1.0);
+}

@@ -1,0 +1,50 @@
+#version 460
+/* DDGI probe-ray shading (paper Sec. 4.1 and 5): radiance leaving each probe ray's hit toward
+ * the probe = emission + albedo/pi * direct irradiance (shadow rays) + min(albedo, 0.9)/pi *
+ * the previous update's irradiance at the hit. The last term carries light across updates,
+ * one more bounce per update; the 0.9 cap guards energy (production practice). Misses see
+ * the sky; back faces of single-sided surfaces carry no radiance.
+ * push: globals, buf0 = uvec4 hits[], buf1 = pc_counters, params.y = 1 when the probe field
+ * already holds an update (else no indirect term). */
+#extension GL_GOOGLE_include_directive : require
+#include "common.glsl"
+#include "ddgi.glsl"
+
+layout(local_size_x = PC_WG_1D) in;
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer HitRef { uvec4 v[]; };
+
+void main()
+{
+    count_rays_begin();
+    pc_globals g = load_globals();
+    pc_ddgi_volume vol = g.ddgi;
+    uint ray = gl_GlobalInvocationID.x, probe = gl_GlobalInvocationID.y;
+    uint shadow_rays = 0u;
+    if (ray < vol.counts.w && probe < ddgi_probe_count(vol)) {
+        uint slot = probe * vol.counts.w + ray;
+        vec4 r = DdgiRayRef(vol.rays).v[slot];
+        uvec4 rec = HitRef(pc.buf0).v[slot];
+        vec3 radiance = vec3(0.0);
+        if (rec.x == PC_INVALID) {
+            radiance = g.view.sky.rgb;
+        } else if (r.w >= 0.0) {
+            pc_hit hit;
+            hit.t = r.w;
+            hit.tri = rec.x;
+            hit.instance = rec.y;
+            hit.u = uintBitsToFloat(rec.z);
+            hit.v = uintBitsToFloat(rec.w);
+            hit.backface = false; /* a front hit, or a back hit of a double-sided surface */
+            vec3 dir = ddgi_ray_dir(vol, ray);
+            pc_surface sf = surface_at(g.scene, hit, dir);
+            vec3 e = direct_irradiance(g.scene, sf.position, sf.normal, sf.geom_normal, shadow_rays);
+            vec3 indirect = vec3(0.0);
+            if (pc.params.y != 0u)
+                indirect = ddgi_irradiance(vol, g.view.sky.rgb, sf.position, sf.normal, -dir);
+            radiance = sf.emission + sf.albedo / PC_PI * e + min(sf.albedo, vec3(0.9)) / PC_PI * indirect;
+        }
+        if (any(isnan(radiance)) || any(isinf(radiance))) radiance = vec3(0.0);
+        DdgiRayRef(vol.rays).v[slot] = vec4(radiance, r.w);
+    }
+    count_rays_end(pc.buf1, 1u, shadow_rays);
+}

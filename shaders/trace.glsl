@@ -1,0 +1,291 @@
+/* trace.glsl: the one ray traversal every pass uses (primary, shadow, probe and path rays).
+ *
+ * Include contract. The includer, before `#include "trace.glsl"`:
+ *   - enables GL_EXT_buffer_reference, GL_EXT_shader_explicit_arithmetic_types_int64 and
+ *     GL_GOOGLE_include_directive, defines PC_GLSL and includes "gpu_types.h";
+ *   - defines  bool trace_alpha_pass(pc_scene_refs scene, uint tri, float u, float v)
+ *     which is called for candidate hits on triangles flagged PC_TRI_ALPHA_MASK (tri is the
+ *     index into scene.tris, u/v the barycentrics of v1/v2); returning false ignores the hit
+ *     and traversal goes on. A pass without alpha-masked geometry may return true.
+ *
+ * Scene layout (see gpu_types.h and renderer/bvh.h): a TLAS over instances (leaves index
+ * scene.tlas_index, whose entries are instance indices) and one BLAS node array holding every
+ * mesh's BVH with absolute indices (instance.info.x is the mesh's root; leaves index
+ * scene.tris). Interior children are adjacent: first and first + 1.
+ *
+ * Traversal is two-level with one stack: TLAS entries below, the current BLAS's above. The ray
+ * enters an instance by the rows of world_to_object; the object-space direction is not
+ * normalised, so t stays the world t and hits of different instances compare directly.
+ * Nearest child first; popped nodes are re-tested against the closest hit so far.
+ * Stack: TLAS and BLAS depth are each at most RD_BVH_MAX_DEPTH (48) and a TLAS leaf adds at
+ * most RD_BVH_MAX_LEAF - 1 pending instances, so 2 * PC_BVH_STACK_SIZE entries never overflow
+ * (pushes beyond it are dropped rather than written out of bounds).
+ */
+#ifndef PC_TRACE_GLSL
+#define PC_TRACE_GLSL
+
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer TraceNodes { pc_bvh_node n[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer TraceTris { pc_tri t[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer TraceInstances { pc_instance i[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer TraceIndex { uint i[]; };
+
+struct pc_hit {
+    float t;
+    float u;        /* barycentric of v1 */
+    float v;        /* barycentric of v2 */
+    uint instance;  /* index into scene.instances */
+    uint tri;       /* index into scene.tris (BVH leaf order; v2.w holds the mesh's own index) */
+    bool backface;  /* the ray met the back (counter-clockwise front, mirrored by NEG_DET) */
+};
+
+#define TRACE_STACK_SIZE (2 * PC_BVH_STACK_SIZE)
+#define TRACE_ENTRY_INSTANCE 0x80000000u
+/* Ize, "Robust BVH Ray Traversal" (JCGT 2013): tfar * (1 + 2 gamma(3)) keeps the float slab
+ * test conservative. */
+#define TRACE_TFAR_SCALE 1.0000004
+/* Boxes are culled against the closest hit plus a relative slack: a triangle's computed t can
+ * lie ulps before the entry distance of its own box (coplanar overlapping triangles). */
+#define TRACE_CULL_SLACK (1.0 / 65536.0)
+
+/* Reciprocal direction with IEEE infinities for zero components (not left to 1/0), and the
+ * sign per axis that picks the near and far slab planes. */
+void trace_setup_box(vec3 d, out vec3 inv, out bvec3 neg)
+{
+    vec3 inf = uintBitsToFloat((floatBitsToUint(d) & 0x80000000u) | 0x7f800000u);
+    inv = mix(1.0 / d, inf, equal(d, vec3(0.0)));
+    neg = lessThan(inv, vec3(0.0));
+}
+
+/* Per-ray part of the watertight test (Woop, Benthin, Wald 2013, sec. 3): kz is the dominant
+ * axis of d, kx and ky swap when d[kz] < 0 to keep the winding, S shears the ray onto +z. */
+void trace_setup_shear(vec3 d, out uint kx, out uint ky, out uint kz, out vec3 S)
+{
+    vec3 a = abs(d);
+    kz = a.x >= a.y ? (a.x >= a.z ? 0u : 2u) : (a.y >= a.z ? 1u : 2u);
+    kx = kz == 2u ? 0u : kz + 1u;
+    ky = kx == 2u ? 0u : kx + 1u;
+    if (d[kz] < 0.0) {
+        uint k = kx;
+        kx = ky;
+        ky = k;
+    }
+    S = vec3(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
+}
+
+/* Slab test with near/far planes chosen by the direction sign (Williams et al. 2005), so the
+ * inverted empty boxes [+inf, -inf] of bvh.h are always rejected. A zero direction component
+ * can give 0 * inf = NaN only when the origin lies exactly on a box plane; the builder widens
+ * every box by an ulp, so nothing inside can be hit then, and dropping or propagating the
+ * NaN (GLSL leaves min/max with NaN undefined) is right either way. */
+bool trace_box(vec4 bmin, vec4 bmax, vec3 o, vec3 inv, bvec3 neg, float tmin, float tmax,
+               out float tnear)
+{
+    vec3 t0 = (mix(bmin.xyz, bmax.xyz, neg) - o) * inv;
+    vec3 t1 = (mix(bmax.xyz, bmin.xyz, neg) - o) * inv;
+    tnear = max(max(t0.x, t0.y), max(t0.z, tmin));
+    float tfar = min(min(min(t1.x, t1.y), t1.z) * TRACE_TFAR_SCALE, tmax);
+    return tnear <= tfar;
+}
+
+/* Watertight ray/triangle intersection: Woop, Benthin, Wald, "Watertight Ray/Triangle
+ * Intersection", JCGT 2(1), 2013. The same float arithmetic as rd_ray_triangle in
+ * renderer/bvh.c (`precise` forbids fused multiply-adds, which would make the edge functions
+ * of neighbouring triangles differ); the paper's double-precision recomputation of edge
+ * functions that are exactly 0 is omitted on the GPU. Accepts tmin < t < tmax; back is true
+ * when det < 0, i.e. dot(d, cross(p1 - p0, p2 - p0)) > 0. */
+bool trace_triangle(vec3 o, uint kx, uint ky, uint kz, vec3 S, vec3 p0, vec3 p1, vec3 p2,
+                    float tmin, float tmax, out float t, out float u, out float v, out bool back)
+{
+    precise vec3 A = p0 - o;
+    precise vec3 B = p1 - o;
+    precise vec3 C = p2 - o;
+    precise float Ax = A[kx] - S.x * A[kz];
+    precise float Ay = A[ky] - S.y * A[kz];
+    precise float Bx = B[kx] - S.x * B[kz];
+    precise float By = B[ky] - S.y * B[kz];
+    precise float Cx = C[kx] - S.x * C[kz];
+    precise float Cy = C[ky] - S.y * C[kz];
+    precise float U = Cx * By - Cy * Bx;
+    precise float V = Ax * Cy - Ay * Cx;
+    precise float W = Bx * Ay - By * Ax;
+    t = 0.0;
+    u = 0.0;
+    v = 0.0;
+    back = false;
+    if ((U < 0.0 || V < 0.0 || W < 0.0) && (U > 0.0 || V > 0.0 || W > 0.0)) return false;
+    precise float det = U + V + W;
+    if (det == 0.0 || !(abs(det) <= 3.40282347e38)) return false; /* also NaN/Inf vertices */
+    precise float T = U * (S.z * A[kz]) + V * (S.z * B[kz]) + W * (S.z * C[kz]);
+    float rcp = 1.0 / det;
+    t = T * rcp;
+    if (!(t > tmin && t < tmax)) return false;
+    u = V * rcp;
+    v = W * rcp;
+    back = det < 0.0;
+    return true;
+}
+
+/* Closest hit (or, with PC_TRACE_ANY_HIT, the first accepted hit) with tmin < t < tmax.
+ * hit is filled only when true is returned (hit.t = tmax, indices PC_INVALID otherwise). */
+bool trace_ray(pc_scene_refs scene, vec3 org, vec3 dir, float tmin, float tmax, uint flags,
+               out pc_hit hit)
+{
+    hit.t = tmax;
+    hit.u = 0.0;
+    hit.v = 0.0;
+    hit.instance = PC_INVALID;
+    hit.tri = PC_INVALID;
+    hit.backface = false;
+    /* A non-finite ray could pass every NaN-dropping box test and walk an empty BVH's
+     * self-referencing root forever. */
+    if (scene.counts.x == 0u || any(isnan(org)) || any(isinf(org)) || any(isnan(dir)) ||
+        any(isinf(dir)))
+        return false;
+
+    vec3 winv;
+    bvec3 wneg;
+    trace_setup_box(dir, winv, wneg);
+    /* The current ray: world space in the TLAS, object space in a BLAS. */
+    vec3 o = org, inv = winv;
+    bvec3 neg = wneg;
+    uint kx = 0u, ky = 1u, kz = 2u;
+    vec3 S = vec3(0.0);
+    uint64_t nodes = scene.tlas_nodes;
+    bool in_blas = false, inst_neg = false;
+    uint inst = 0u;
+    float t_best = tmax, t_cull = tmax; /* t_cull: t_best plus slack, for box tests */
+    bool found = false;
+
+    uint stack[TRACE_STACK_SIZE];
+    int sp = 0, blas_base = 0;
+    uint enter = PC_INVALID; /* TLAS leaf entry whose instance is entered next */
+
+    pc_bvh_node root = TraceNodes(nodes).n[0];
+    float tn;
+    if (!trace_box(root.bmin, root.bmax, o, inv, neg, tmin, t_best, tn)) return false;
+    uint first = floatBitsToUint(root.bmin.w), count = floatBitsToUint(root.bmax.w);
+    bool have = true; /* (first, count) describe a node whose box the ray enters */
+
+    for (;;) {
+        if (have) {
+            have = false;
+            if (count == 0u) {
+                TraceNodes nb = TraceNodes(nodes);
+                pc_bvh_node c0 = nb.n[first];
+                pc_bvh_node c1 = nb.n[first + 1u];
+                float t0, t1;
+                bool h0 = trace_box(c0.bmin, c0.bmax, o, inv, neg, tmin, t_cull, t0);
+                bool h1 = trace_box(c1.bmin, c1.bmax, o, inv, neg, tmin, t_cull, t1);
+                if (h0 || h1) {
+                    bool second = h1 && (!h0 || t1 < t0);
+                    if (h0 && h1 && sp < TRACE_STACK_SIZE) stack[sp++] = second ? first : first + 1u;
+                    first = floatBitsToUint(second ? c1.bmin.w : c0.bmin.w);
+                    count = floatBitsToUint(second ? c1.bmax.w : c0.bmax.w);
+                    have = true;
+                    continue;
+                }
+            } else if (in_blas) {
+                TraceTris tris = TraceTris(scene.tris);
+                for (uint i = first; i < first + count; i++) {
+                    pc_tri tr = tris.t[i];
+                    float t, u, v;
+                    bool back;
+                    if (!trace_triangle(o, kx, ky, kz, S, tr.v0.xyz, tr.v1.xyz, tr.v2.xyz, tmin,
+                                        t_best, t, u, v, back))
+                        continue;
+                    back = back != inst_neg;
+                    uint tf = floatBitsToUint(tr.v1.w);
+                    if ((flags & PC_TRACE_CULL_BACKFACES) != 0u && back &&
+                        (tf & PC_TRI_DOUBLE_SIDED) == 0u)
+                        continue;
+                    if ((tf & PC_TRI_ALPHA_MASK) != 0u && !trace_alpha_pass(scene, i, u, v))
+                        continue;
+                    t_best = t;
+                    t_cull = t + abs(t) * TRACE_CULL_SLACK;
+                    found = true;
+                    hit.t = t;
+                    hit.u = u;
+                    hit.v = v;
+                    hit.instance = inst;
+                    hit.tri = i;
+                    hit.backface = back;
+                    if ((flags & PC_TRACE_ANY_HIT) != 0u) return true;
+                }
+            } else {
+                /* TLAS leaf: the first instance is entered now, the others wait on the stack. */
+                for (uint k = first + 1u; k < first + count; k++)
+                    if (sp < TRACE_STACK_SIZE) stack[sp++] = k | TRACE_ENTRY_INSTANCE;
+                enter = first;
+            }
+        }
+
+        if (enter != PC_INVALID) {
+            inst = TraceIndex(scene.tlas_index).i[enter];
+            enter = PC_INVALID;
+            pc_instance in_ = TraceInstances(scene.instances).i[inst];
+            vec4 wo = vec4(org, 1.0);
+            o = vec3(dot(in_.world_to_object[0], wo), dot(in_.world_to_object[1], wo),
+                     dot(in_.world_to_object[2], wo));
+            vec3 d = vec3(dot(in_.world_to_object[0].xyz, dir), dot(in_.world_to_object[1].xyz, dir),
+                          dot(in_.world_to_object[2].xyz, dir));
+            inst_neg = (in_.info.z & PC_INST_NEG_DET) != 0u;
+            trace_setup_box(d, inv, neg);
+            trace_setup_shear(d, kx, ky, kz, S);
+            pc_bvh_node r = TraceNodes(scene.blas_nodes).n[in_.info.x];
+            bool finite = !any(isnan(o)) && !any(isinf(o)) && !any(isnan(d)) && !any(isinf(d));
+            if (finite && trace_box(r.bmin, r.bmax, o, inv, neg, tmin, t_cull, tn)) {
+                nodes = scene.blas_nodes;
+                in_blas = true;
+                blas_base = sp;
+                first = floatBitsToUint(r.bmin.w);
+                count = floatBitsToUint(r.bmax.w);
+                have = true;
+                continue;
+            }
+            o = org;
+            inv = winv;
+            neg = wneg;
+        }
+        if (in_blas && sp == blas_base) { /* this instance is done: back to the world ray */
+            in_blas = false;
+            nodes = scene.tlas_nodes;
+            o = org;
+            inv = winv;
+            neg = wneg;
+        }
+        if (sp == 0) break;
+        uint e = stack[--sp];
+        if (!in_blas && (e & TRACE_ENTRY_INSTANCE) != 0u) {
+            enter = e & ~TRACE_ENTRY_INSTANCE;
+            continue;
+        }
+        pc_bvh_node nd = TraceNodes(nodes).n[e];
+        if (trace_box(nd.bmin, nd.bmax, o, inv, neg, tmin, t_cull, tn)) {
+            first = floatBitsToUint(nd.bmin.w);
+            count = floatBitsToUint(nd.bmax.w);
+            have = true;
+        }
+    }
+    return found;
+}
+
+/* Wächter & Binder, "A Fast and Robust Method for Avoiding Self-Intersection", Ray Tracing
+ * Gems (2019), ch. 6: offsets a surface point p along its geometric normal n (unit, on the
+ * side the new ray leaves from) by an integer number of ulps per component, or by a fixed
+ * float step near the origin. The same arithmetic as rd_offset_ray_origin in bvh.c. */
+vec3 offset_ray_origin(vec3 p, vec3 n)
+{
+    const float origin = 1.0 / 32.0;
+    const float float_scale = 1.0 / 65536.0;
+    const float int_scale = 256.0;
+    vec3 s = int_scale * n;
+    ivec3 of_i = ivec3(mix(vec3(0.0), s, lessThan(abs(s), vec3(1e9)))); /* NaN -> 0 */
+    ivec3 bits = floatBitsToInt(p);
+    bits.x += p.x < 0.0 ? -of_i.x : of_i.x;
+    bits.y += p.y < 0.0 ? -of_i.y : of_i.y;
+    bits.z += p.z < 0.0 ? -of_i.z : of_i.z;
+    precise vec3 near0 = p + float_scale * n;
+    return mix(intBitsToFloat(bits), near0, lessThan(abs(p), vec3(origin)));
+}
+
+#endif
