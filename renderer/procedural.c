@@ -204,6 +204,53 @@ static void build_cornell(rd_scene *s)
     camera(s, eye, NEG_Z, UP_Y, 40);
 }
 
+/* Inward-facing box (a closed room seen from inside). */
+static void tl_room(tri_list *t, const float lo[3], const float hi[3], uint32_t mat)
+{
+    float v[8][3];
+    for (int i = 0; i < 8; i++) {
+        v[i][0] = (i & 1) ? hi[0] : lo[0];
+        v[i][1] = (i & 2) ? hi[1] : lo[1];
+        v[i][2] = (i & 4) ? hi[2] : lo[2];
+    }
+    tl_quad(t, v[0], v[2], v[6], v[4], mat); /* -x wall, faces +x */
+    tl_quad(t, v[1], v[5], v[7], v[3], mat); /* +x wall, faces -x */
+    tl_quad(t, v[0], v[4], v[5], v[1], mat); /* floor, faces +y */
+    tl_quad(t, v[2], v[3], v[7], v[6], mat); /* ceiling, faces -y */
+    tl_quad(t, v[0], v[1], v[3], v[2], mat); /* -z wall, faces +z */
+    tl_quad(t, v[4], v[6], v[7], v[5], mat); /* +z wall, faces -z */
+}
+
+/* Closed furnace: a 2 m cube seen from inside, every surface albedo 0.5 emitting 1 nit, no
+ * lights. Radiance everywhere converges to Le / (1 - albedo) = 2. */
+static void build_furnace(rd_scene *s)
+{
+    tri_list t = {0};
+    uint32_t m = material(s, "furnace", 0.5f, 0.5f, 0.5f, 1.0f, 1.0f, 1.0f);
+    const float lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
+    tl_room(&t, lo, hi, m);
+    tl_commit(&t, s, "furnace");
+    const float eye[3] = {0, 0, 0.5f};
+    camera(s, eye, NEG_Z, UP_Y, 60);
+}
+
+/* Two closed 2 x 2 x 2 m rooms sharing a 4 cm wall at x = 0. Room A (x < 0) holds a 20 cd
+ * point light; room B (x > 0) has no light and the camera, looking at the shared wall. With
+ * direct light only room B is black; its light can only come from leaks through the wall. */
+static void build_two_rooms(rd_scene *s)
+{
+    tri_list t = {0};
+    uint32_t white = material(s, "white", 0.8f, 0.8f, 0.8f, 0, 0, 0);
+    const float a_lo[3] = {-2.02f, 0, -1}, a_hi[3] = {-0.02f, 2, 1};
+    const float b_lo[3] = {0.02f, 0, -1}, b_hi[3] = {2.02f, 2, 1};
+    tl_room(&t, a_lo, a_hi, white);
+    tl_room(&t, b_lo, b_hi, white);
+    tl_commit(&t, s, "rooms");
+    point_light(s, -1.0f, 1.5f, 0.0f, 20.0f);
+    const float eye[3] = {1.9f, 1.0f, 0.0f}, fwd[3] = {-1, 0, 0};
+    camera(s, eye, fwd, UP_Y, 70);
+}
+
 /* Benchmark scene: floor, back wall and a grid of spheres with >= min_tris triangles. */
 static void build_spheres(rd_scene *s, uint64_t min_tris)
 {
@@ -242,7 +289,8 @@ static void build_spheres(rd_scene *s, uint64_t min_tris)
 
 const char *rd_procedural_names(void)
 {
-    return "cornell, plane-point, plane-directional, emissive, shadow, spheres[:TRIANGLES]";
+    return "cornell, plane-point, plane-directional, emissive, shadow, furnace, two-rooms, "
+           "spheres[:TRIANGLES]";
 }
 
 bool rd_procedural_build(const char *name, rd_scene *s, char *err, size_t errlen)
@@ -260,6 +308,8 @@ bool rd_procedural_build(const char *name, rd_scene *s, char *err, size_t errlen
     else if (IS("shadow")) build_plane_point(s, true);
     else if (IS("plane-directional")) build_plane_directional(s);
     else if (IS("emissive")) build_emissive(s);
+    else if (IS("furnace")) build_furnace(s);
+    else if (IS("two-rooms")) build_two_rooms(s);
     else if (IS("spheres")) {
         uint64_t n = 1000000;
         if (colon) {

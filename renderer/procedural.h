@@ -20,6 +20,10 @@
  *   emissive          a quad emitting (2, 1, 0.5) nits facing the camera: seen radiance equals it.
  *   shadow            plane-point with a floating occluder between light and the plane centre:
  *                     the centre is black (no sky, no other light).
+ *   furnace           closed 2 m cube seen from inside, albedo 0.5, emission 1, no lights:
+ *                     with global illumination the radiance converges to 1 / (1 - 0.5) = 2.
+ *   two-rooms         two closed rooms sharing a 4 cm wall; the lit one holds a point light,
+ *                     the camera looks at the wall from the dark one (a light-leak test).
  *   spheres[:N]       benchmark: a lit floor and walls plus a grid of tessellated spheres with at
  *                     least N triangles in all (default 1000000).
  * Returns false with a message for an unknown name or bad argument. */

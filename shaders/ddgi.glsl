@@ -132,7 +132,8 @@ vec2 ddgi_sample_distance(pc_ddgi_volume vol, uint probe, vec3 dir)
  * the viewer or the tracing probe). mode PC_GI_CLASSIC uses trilinear weights only;
  * PC_GI_DDGI adds the back-face wrap, Chebyshev visibility and small-weight crush, with the
  * sample point biased along n and v by a fraction of the probe spacing (2021 paper form).
- * Outside the probe volume the result fades, over one spacing, to the sky's irradiance.
+ * Beyond half a spacing outside the probe hull the result fades, over one spacing, to the
+ * sky's irradiance.
  * Callers make sure the field holds at least one update. */
 vec3 ddgi_irradiance(pc_ddgi_volume vol, vec3 sky, vec3 p, vec3 n, vec3 v)
 {
@@ -142,9 +143,10 @@ vec3 ddgi_irradiance(pc_ddgi_volume vol, vec3 sky, vec3 p, vec3 n, vec3 v)
     vec3 biased = p + (0.2 * n + 0.8 * v) * vol.params.y;
     vec3 grid = (biased - vol.origin.xyz) / vol.spacing.xyz;
     vec3 last = vec3(vol.counts.xyz) - 1.0;
-    /* fade: 1 inside the probe hull, 0 one spacing outside it */
+    /* fade: 1 up to half a spacing outside the probe hull (the default grid puts probes at
+     * cell centres, half a spacing inside the scene bounds), 0 one spacing further out */
     vec3 outside = max(-grid, grid - last);
-    float fade = clamp(1.0 - max(outside.x, max(outside.y, outside.z)), 0.0, 1.0);
+    float fade = clamp(1.5 - max(outside.x, max(outside.y, outside.z)), 0.0, 1.0);
     if (fade <= 0.0) return sky_e;
     ivec3 base = clamp(ivec3(floor(grid)), ivec3(0), max(ivec3(vol.counts.xyz) - 2, ivec3(0)));
     vec3 alpha = clamp(grid - vec3(base), 0.0, 1.0);
