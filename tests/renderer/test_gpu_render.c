@@ -5,8 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "renderer/procedural.h"
-#include "renderer/render.h"
+#include "test_render_util.h"
 #include "test_util.h"
 
 #define W 48
@@ -14,35 +13,13 @@
 
 static rd_vk vk;
 
-/* Renders builtin scene `name` from its first camera; returns linear RGB (caller frees). */
+/* Renders builtin scene `name` with direct light only; returns linear RGB (caller frees). */
 static float *render(const char *name, pc_view *view_out)
 {
-    char err[512] = "";
-    rd_scene s;
-    if (!rd_procedural_build(name, &s, err, sizeof err)) {
-        fprintf(stderr, "%s\n", err);
-        CHECK(0);
-        return NULL;
-    }
-    rd_view_camera cam;
-    CHECK(rd_camera_for_scene(&s, -1, &cam, err, sizeof err));
-    rd_gpu_scene gs;
-    rd_renderer r;
-    float *rgb = calloc((size_t)W * H * 3, sizeof(float));
-    rd_frame_settings fs = {.width = W, .height = H};
-    rd_vk_result res = rd_gpu_scene_create(&vk, &gs, &s, err, sizeof err);
-    CHECKF(res == RD_VK_OK, "%s", err);
-    res = rd_renderer_create(&vk, &r, err, sizeof err);
-    CHECKF(res == RD_VK_OK, "%s", err);
-    res = rd_renderer_render(&r, &gs, &cam, &fs, err, sizeof err);
-    CHECKF(res == RD_VK_OK, "%s", err);
-    res = rd_renderer_read_hdr(&r, rgb, err, sizeof err);
-    CHECKF(res == RD_VK_OK, "%s", err);
-    CHECK(r.stats.rays.primary_rays == W * H);
-    rd_camera_to_view(&cam, W, H, view_out);
-    rd_renderer_destroy(&r);
-    rd_gpu_scene_destroy(&vk, &gs);
-    rd_scene_destroy(&s);
+    test_render_desc d = {.scene = name, .width = W, .height = H};
+    rd_frame_stats st;
+    float *rgb = test_render(&vk, &d, view_out, &st);
+    if (rgb) CHECK(st.rays.primary_rays == W * H);
     return rgb;
 }
 

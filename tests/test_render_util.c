@@ -1,0 +1,58 @@
+#include "test_render_util.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+#include "renderer/procedural.h"
+#include "test_util.h"
+
+float *test_render(rd_vk *vk, const test_render_desc *d, pc_view *view_out,
+                   rd_frame_stats *stats_out)
+{
+    char err[512] = "";
+    rd_scene s;
+    if (!rd_procedural_build(d->scene, &s, err, sizeof err)) {
+        CHECKF(0, "%s", err);
+        return NULL;
+    }
+    rd_view_camera cam;
+    CHECK(rd_camera_for_scene(&s, -1, &cam, err, sizeof err));
+    rd_gpu_scene gs;
+    rd_renderer r;
+    float *rgb = calloc((size_t)d->width * d->height * 3, sizeof(float));
+    rd_frame_settings fs = {.width = d->width, .height = d->height, .view = d->view,
+                            .gi_updates = d->updates};
+    rd_vk_result res = rd_gpu_scene_create(vk, &gs, &s, err, sizeof err);
+    CHECKF(res == RD_VK_OK, "%s", err);
+    if (res == RD_VK_OK) res = rd_renderer_create(vk, &r, err, sizeof err);
+    CHECKF(res == RD_VK_OK, "%s", err);
+    if (res == RD_VK_OK)
+        res = rd_renderer_configure_gi(&r, s.bounds_min, s.bounds_max, &d->gi, err, sizeof err);
+    CHECKF(res == RD_VK_OK, "%s", err);
+    if (res == RD_VK_OK) res = rd_renderer_render(&r, &gs, &cam, &fs, err, sizeof err);
+    CHECKF(res == RD_VK_OK, "%s", err);
+    if (res == RD_VK_OK) res = rd_renderer_read_hdr(&r, rgb, err, sizeof err);
+    CHECKF(res == RD_VK_OK, "%s", err);
+    if (view_out) rd_camera_to_view(&cam, d->width, d->height, view_out);
+    if (stats_out) *stats_out = r.stats;
+    rd_renderer_destroy(&r);
+    rd_gpu_scene_destroy(vk, &gs);
+    rd_scene_destroy(&s);
+    if (res != RD_VK_OK) {
+        free(rgb);
+        return NULL;
+    }
+    return rgb;
+}
+
+double test_image_mean(const float *rgb, size_t floats, size_t *non_finite)
+{
+    double sum = 0;
+    size_t bad = 0;
+    for (size_t i = 0; i < floats; i++) {
+        if (!isfinite(rgb[i])) bad++;
+        else sum += rgb[i];
+    }
+    if (non_finite) *non_finite = bad;
+    return floats ? sum / floats : 0;
+}

@@ -1,0 +1,23 @@
+/* test_render_util.h: renders a builtin scene end to end (scene -> BVH -> GPU -> passes ->
+ * linear radiance) for GPU tests. */
+#ifndef PC_TEST_RENDER_UTIL_H
+#define PC_TEST_RENDER_UTIL_H
+
+#include "renderer/render.h"
+
+typedef struct test_render_desc {
+    const char *scene;      /* builtin scene name */
+    unsigned width, height;
+    rd_ddgi_settings gi;    /* mode 0 = no GI */
+    unsigned updates;       /* probe updates before the image */
+    unsigned view;          /* PC_VIEW_* */
+} test_render_desc;
+
+/* Returns width*height*3 linear floats (caller frees) or NULL after a failed CHECK.
+ * view_out (optional) receives the camera's pc_view; stats_out the frame statistics. */
+float *test_render(rd_vk *vk, const test_render_desc *d, pc_view *view_out,
+                   rd_frame_stats *stats_out);
+/* Mean of all channels; number of non-finite values. */
+double test_image_mean(const float *rgb, size_t floats, size_t *non_finite);
+
+#endif
