@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "shaders/ddgi_sample.spv.h"
+#include "shaders/pathtrace.spv.h"
 #include "shaders/primary.spv.h"
 #include "shaders/shade.spv.h"
 #include "shaders/tonemap.spv.h"
@@ -29,6 +30,9 @@ rd_vk_result rd_renderer_create(rd_vk *vk, rd_renderer *r, char *err, size_t err
         res = rd_pipeline_create(vk, &r->gi_sample, "gi sample", pc_spv_ddgi_sample,
                                  sizeof pc_spv_ddgi_sample, sizeof(pc_push), err, errlen);
     if (res == RD_VK_OK)
+        res = rd_pipeline_create(vk, &r->pathtrace, "path trace", pc_spv_pathtrace,
+                                 sizeof pc_spv_pathtrace, sizeof(pc_push), err, errlen);
+    if (res == RD_VK_OK)
         res = rd_buffer_create(vk, &r->globals, sizeof(pc_globals), RD_MEMORY_UPLOAD, err, errlen);
     if (res == RD_VK_OK)
         res = rd_buffer_create(vk, &r->counters, sizeof(pc_counters), RD_MEMORY_READBACK, err,
@@ -44,6 +48,7 @@ void rd_renderer_destroy(rd_renderer *r)
     rd_ddgi_destroy(&r->ddgi);
     r->gi = false;
     rd_pipeline_destroy(r->vk, &r->gi_sample);
+    rd_pipeline_destroy(r->vk, &r->pathtrace);
     rd_timer_destroy(r->vk, &r->timer);
     rd_buffer_destroy(r->vk, &r->rgba8);
     rd_buffer_destroy(r->vk, &r->radiance);
@@ -97,6 +102,66 @@ static rd_vk_result ensure_size(rd_renderer *r, unsigned w, unsigned h, char *er
     return res;
 }
 
+/* Copies the timer's sections into the frame statistics (accumulating over submits). */
+static rd_vk_result collect_times(rd_renderer *r, char *err, size_t errlen)
+{
+    rd_vk_result res = rd_timer_resolve(r->vk, &r->timer, err, errlen);
+    if (res != RD_VK_OK) return res;
+    rd_frame_stats *st = &r->stats;
+    st->timed = r->timer.valid;
+    for (uint32_t i = 1; i < r->timer.count && i < RD_TIMER_MAX; i++) {
+        unsigned k = 0;
+        while (k < st->pass_count && strcmp(st->pass_name[k], r->timer.names[i]) != 0) k++;
+        if (k == st->pass_count) {
+            if (k == RD_TIMER_MAX) continue;
+            st->pass_name[k] = r->timer.names[i];
+            st->pass_ms[k] = 0;
+            st->pass_count++;
+        }
+        st->pass_ms[k] += r->timer.ms[i];
+    }
+    return RD_VK_OK;
+}
+
+/* Reference path tracing: spp dispatches accumulate into the radiance buffer (w counts
+ * samples), submitted in batches so that no single submission runs for long. */
+static rd_vk_result render_pathtraced(rd_renderer *r, pc_globals *g, const rd_frame_settings *fs,
+                                      char *err, size_t errlen)
+{
+    memcpy(r->globals.mapped, g, sizeof *g);
+    memset(&r->stats, 0, sizeof r->stats);
+    uint32_t gx = (r->width + PC_WG_2D_X - 1) / PC_WG_2D_X;
+    uint32_t gy = (r->height + PC_WG_2D_Y - 1) / PC_WG_2D_Y;
+    unsigned batch = r->vk->is_cpu ? 1 : 16;
+    rd_vk_result res = RD_VK_OK;
+    for (unsigned s = 0; res == RD_VK_OK && s < fs->pathtrace_spp; s += batch) {
+        rd_cmd cmd;
+        res = rd_cmd_begin(r->vk, &cmd, err, errlen);
+        if (res != RD_VK_OK) return res;
+        rd_timer_begin(&cmd, &r->timer);
+        for (unsigned k = s; k < s + batch && k < fs->pathtrace_spp; k++) {
+            pc_push push = {.globals = r->globals.address, .buf0 = r->radiance.address,
+                            .buf1 = r->counters.address, .params = {k, fs->max_bounces, 0, 0}};
+            rd_cmd_dispatch(&cmd, &r->pathtrace, &push, gx, gy, 1);
+            rd_cmd_barrier(&cmd);
+        }
+        rd_timer_mark(&cmd, &r->timer, "path trace");
+        bool last = s + batch >= fs->pathtrace_spp;
+        if (last) {
+            pc_push push = {.globals = r->globals.address, .buf0 = r->radiance.address,
+                            .buf1 = r->rgba8.address};
+            rd_cmd_dispatch(&cmd, &r->tonemap, &push, gx, gy, 1);
+            rd_cmd_barrier(&cmd);
+            rd_timer_mark(&cmd, &r->timer, "tonemap");
+        }
+        res = rd_cmd_submit_wait(r->vk, &cmd, err, errlen);
+        if (res == RD_VK_OK) res = collect_times(r, err, errlen);
+    }
+    memcpy(&r->stats.rays, r->counters.mapped, sizeof r->stats.rays);
+    r->frame_index++;
+    return res;
+}
+
 rd_vk_result rd_renderer_render(rd_renderer *r, const rd_gpu_scene *scene,
                                 const rd_view_camera *camera, const rd_frame_settings *fs,
                                 char *err, size_t errlen)
@@ -118,6 +183,8 @@ rd_vk_result rd_renderer_render(rd_renderer *r, const rd_gpu_scene *scene,
     g.view.sky = (pc_vec4){fs->sky[0], fs->sky[1], fs->sky[2], 0};
     g.view.tonemap = (pc_vec4){exp2f(fs->exposure_ev), (float)fs->tonemap, (float)fs->view, 0};
     memset(r->counters.mapped, 0, sizeof(pc_counters));
+
+    if (fs->pathtrace_spp > 0) return render_pathtraced(r, &g, fs, err, errlen);
 
     /* All probe updates but the last run on their own; the last is recorded with the frame so
      * that the frame's timings show every pass. */
@@ -170,18 +237,9 @@ rd_vk_result rd_renderer_render(rd_renderer *r, const rd_gpu_scene *scene,
     if (r->gi) rd_ddgi_end_update(&r->ddgi);
     r->frame_index++;
 
-    rd_frame_stats *st = &r->stats;
-    memset(st, 0, sizeof *st);
-    memcpy(&st->rays, r->counters.mapped, sizeof st->rays);
-    res = rd_timer_resolve(r->vk, &r->timer, err, errlen);
-    if (res != RD_VK_OK) return res;
-    st->timed = r->timer.valid;
-    for (uint32_t i = 1; i < r->timer.count && i < RD_TIMER_MAX; i++) {
-        st->pass_name[st->pass_count] = r->timer.names[i];
-        st->pass_ms[st->pass_count] = r->timer.ms[i];
-        st->pass_count++;
-    }
-    return RD_VK_OK;
+    memset(&r->stats, 0, sizeof r->stats);
+    memcpy(&r->stats.rays, r->counters.mapped, sizeof r->stats.rays);
+    return collect_times(r, err, errlen);
 }
 
 rd_vk_result rd_renderer_read_rgba8(rd_renderer *r, uint8_t *out, char *err, size_t errlen)
@@ -197,9 +255,10 @@ rd_vk_result rd_renderer_read_hdr(rd_renderer *r, float *rgb, char *err, size_t 
     if (!rgba) abort();
     rd_vk_result res = rd_buffer_download(r->vk, &r->radiance, 0, rgba, px * 16, err, errlen);
     for (size_t i = 0; res == RD_VK_OK && i < px; i++) {
-        rgb[i * 3 + 0] = rgba[i * 4 + 0];
-        rgb[i * 3 + 1] = rgba[i * 4 + 1];
-        rgb[i * 3 + 2] = rgba[i * 4 + 2];
+        float n = rgba[i * 4 + 3] > 1 ? rgba[i * 4 + 3] : 1; /* accumulated samples */
+        rgb[i * 3 + 0] = rgba[i * 4 + 0] / n;
+        rgb[i * 3 + 1] = rgba[i * 4 + 1] / n;
+        rgb[i * 3 + 2] = rgba[i * 4 + 2] / n;
     }
     free(rgba);
     return res;

@@ -18,6 +18,9 @@ typedef struct rd_frame_settings {
     unsigned seed;          /* random streams of stochastic passes */
     unsigned view;          /* PC_VIEW_* */
     unsigned gi_updates;    /* probe updates before this frame is shaded (0 = 1) */
+    unsigned pathtrace_spp; /* > 0: reference path tracing with this many samples per pixel
+                               instead of direct light + probes */
+    unsigned max_bounces;   /* path tracing (0 = 64) */
 } rd_frame_settings;
 
 typedef struct rd_frame_stats {
@@ -35,7 +38,7 @@ typedef struct rd_renderer {
     rd_timer timer;
     rd_ddgi ddgi;           /* created by rd_renderer_configure_gi */
     bool gi;                /* a GI mode other than off is configured */
-    rd_pipeline gi_sample;
+    rd_pipeline gi_sample, pathtrace;
     unsigned width, height;
     unsigned frame_index;
     rd_frame_stats stats;

@@ -28,8 +28,11 @@ static void render_usage(FILE *f)
             "  --tonemap aces|clamp   tone curve (default aces)\n"
             "  --sky R,G,B            radiance of rays that leave the scene (default 0,0,0)\n"
             "  --quality Q            JPEG quality 1..100 (default 92)\n"
-            "  --gi off|classic|ddgi  global illumination (default ddgi); classic = irradiance\n"
-            "                         probes without visibility (the paper's baseline)\n"
+            "  --gi off|classic|ddgi|pathtrace  global illumination (default ddgi); classic =\n"
+            "                         irradiance probes without visibility (the paper's\n"
+            "                         baseline); pathtrace = unbiased reference path tracer\n"
+            "  --spp N                path-traced samples per pixel (default 256)\n"
+            "  --max-bounces N        path length limit (default 64; Russian roulette after 3)\n"
             "  --probes X,Y,Z         probe counts (default: fitted to the scene bounds)\n"
             "  --probe-spacing S      probe spacing in metres (default: from the scene size)\n"
             "  --rays N               rays per probe per update (default 256)\n"
@@ -53,7 +56,8 @@ typedef struct render_args {
     const char *scene, *out, *hdr, *device, *dump;
     rd_frame_settings fs;
     rd_ddgi_settings gi;
-    unsigned frames;
+    unsigned frames, spp;
+    bool pathtrace;
     int camera;
     unsigned quality, repeat;
     bool timings, list_devices;
@@ -70,6 +74,7 @@ static int parse(int argc, char **argv, render_args *a)
     a->fs.height = 540;
     a->gi.mode = PC_GI_DDGI;
     a->frames = 32;
+    a->spp = 256;
     for (int i = 1; i < argc; i++) {
         const char *o = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -128,8 +133,9 @@ static int parse(int argc, char **argv, render_args *a)
             if (strcmp(v, "off") == 0) a->gi.mode = PC_GI_OFF;
             else if (strcmp(v, "classic") == 0) a->gi.mode = PC_GI_CLASSIC;
             else if (strcmp(v, "ddgi") == 0) a->gi.mode = PC_GI_DDGI;
+            else if (strcmp(v, "pathtrace") == 0) a->pathtrace = true;
             else {
-                fprintf(stderr, "probecast render: --gi expects off, classic or ddgi\n");
+                fprintf(stderr, "probecast render: --gi expects off, classic, ddgi or pathtrace\n");
                 return 2;
             }
         } else if (strcmp(o, "--probes") == 0) {
@@ -152,6 +158,12 @@ static int parse(int argc, char **argv, render_args *a)
                 return 2;
             }
             a->gi.spacing[0] = a->gi.spacing[1] = a->gi.spacing[2] = sp;
+        } else if (strcmp(o, "--spp") == 0) {
+            NEED_VALUE
+            if (!cli_parse_uint(o, v, 1, 1u << 20, &a->spp)) return 2;
+        } else if (strcmp(o, "--max-bounces") == 0) {
+            NEED_VALUE
+            if (!cli_parse_uint(o, v, 1, 1024, &a->fs.max_bounces)) return 2;
         } else if (strcmp(o, "--rays") == 0) {
             NEED_VALUE
             if (!cli_parse_uint(o, v, 1, PC_DDGI_MAX_RAYS, &a->gi.rays)) return 2;
@@ -201,6 +213,10 @@ static int parse(int argc, char **argv, render_args *a)
         return 2;
     }
     if (!a->out && !a->hdr) a->out = "render.png";
+    if (a->pathtrace) {
+        a->gi.mode = PC_GI_OFF;
+        a->fs.pathtrace_spp = a->spp;
+    }
     if (a->gi.mode == PC_GI_OFF && (a->fs.view != PC_VIEW_FINAL || a->dump)) {
         fprintf(stderr, "probecast render: --view and --dump-probes need --gi classic or ddgi\n");
         return 2;
@@ -238,6 +254,7 @@ static void print_timings(const rd_vk *vk, const rd_scene *s, const rd_gpu_scene
         if (strcmp(avg->pass_name[i], "shade") == 0 || strcmp(avg->pass_name[i], "probe shade") == 0)
             rays = avg->rays.shadow_rays; /* shadow rays of both passes together */
         if (strcmp(avg->pass_name[i], "probe trace") == 0) rays = avg->rays.probe_rays;
+        if (strcmp(avg->pass_name[i], "path trace") == 0) rays = avg->rays.path_rays;
         total += avg->pass_ms[i];
         if (rays > 0)
             printf("%-17s %10.3f %12.0f %12.1f\n", avg->pass_name[i], avg->pass_ms[i], rays,

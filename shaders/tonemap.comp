@@ -20,7 +20,8 @@ void main()
     uvec2 px = gl_GlobalInvocationID.xy;
     if (any(greaterThanEqual(px, g.view.size.xy))) return;
     uint i = px.y * g.view.size.x + px.x;
-    vec3 c = RadianceRef(pc.buf0).v[i].rgb * g.view.tonemap.x;
+    vec4 acc = RadianceRef(pc.buf0).v[i]; /* w: samples accumulated (1 unless path traced) */
+    vec3 c = acc.rgb / max(acc.w, 1.0) * g.view.tonemap.x;
     vec3 mapped;
     if (any(isnan(c)) || any(isinf(c))) mapped = vec3(1.0, 0.0, 1.0);
     else if (uint(g.view.tonemap.y) == PC_TONEMAP_CLAMP) mapped = linear_to_srgb(c);
