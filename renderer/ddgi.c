@@ -51,6 +51,7 @@ void rd_ddgi_destroy(rd_ddgi *d)
     rd_pipeline_destroy(d->vk, &d->shade);
     rd_pipeline_destroy(d->vk, &d->trace);
     d->configured = false;
+    d->vk = NULL; /* destroyed: rd_ddgi_create must run again before use */
 }
 
 unsigned rd_ddgi_probe_count(const rd_ddgi *d)

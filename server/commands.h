@@ -1,0 +1,208 @@
+/* commands.h: what the network threads (HTTP, WebSocket) post to the render thread.
+ *
+ * Network threads parse and type-check client input into these plain structs (api_json.h)
+ * and post them as srv_cmd (render_loop.h); only the render thread applies them to the scene
+ * and the GPU, so every mutation happens between two frames and nothing else locks the scene.
+ * A patch carries a bit set `has` naming the fields it sets; everything else is left alone.
+ */
+#ifndef SRV_COMMANDS_H
+#define SRV_COMMANDS_H
+
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "renderer/scene.h"
+
+/* ---- camera ------------------------------------------------------------------------------ */
+
+/* The shared view's camera as the API describes it. */
+typedef struct srv_camera {
+    float position[3];
+    float forward[3];      /* unit */
+    float up[3];           /* unit, orthogonal to forward */
+    float fov_deg;         /* vertical field of view */
+    float target_distance; /* the reported target is position + forward * target_distance */
+} srv_camera;
+
+enum {
+    SRV_CAM_POSITION = 1u << 0,
+    SRV_CAM_TARGET = 1u << 1,
+    SRV_CAM_ORIENTATION = 1u << 2, /* quaternion x, y, z, w: camera looks down its -Z, up +Y */
+    SRV_CAM_FORWARD = 1u << 3,
+    SRV_CAM_UP = 1u << 4,
+    SRV_CAM_FOV = 1u << 5,
+};
+
+typedef struct srv_camera_patch {
+    unsigned has;
+    float position[3], target[3], orientation[4], forward[3], up[3];
+    float fov_deg;
+} srv_camera_patch;
+
+/* ---- lights --------------------------------------------------------------------------------- */
+
+enum {
+    SRV_LIGHT_TYPE = 1u << 0,
+    SRV_LIGHT_NAME = 1u << 1,
+    SRV_LIGHT_COLOR = 1u << 2,
+    SRV_LIGHT_INTENSITY = 1u << 3,
+    SRV_LIGHT_POSITION = 1u << 4,
+    SRV_LIGHT_DIRECTION = 1u << 5,
+    SRV_LIGHT_RANGE = 1u << 6,
+    SRV_LIGHT_INNER_CONE = 1u << 7,
+    SRV_LIGHT_OUTER_CONE = 1u << 8,
+};
+
+#define SRV_NAME_MAX 64
+
+typedef struct srv_light_patch {
+    unsigned has;
+    uint32_t type; /* RD_LIGHT_* */
+    char name[SRV_NAME_MAX];
+    float color[3], intensity, position[3], direction[3], range, inner_cone, outer_cone;
+} srv_light_patch;
+
+/* ---- nodes ---------------------------------------------------------------------------------- */
+
+enum {
+    SRV_NODE_TRANSLATION = 1u << 0,
+    SRV_NODE_ROTATION = 1u << 1,
+    SRV_NODE_SCALE = 1u << 2,
+};
+
+typedef struct srv_node_patch {
+    unsigned has;
+    float translation[3], rotation[4], scale[3];
+} srv_node_patch;
+
+/* ---- settings ------------------------------------------------------------------------------- */
+
+typedef struct srv_settings {
+    unsigned width, height;   /* render resolution in pixels */
+    unsigned max_pixels;      /* cap on width * height (viewer resize requests are clamped) */
+    unsigned max_fps;         /* frame pacing while something changes */
+    unsigned quality_interactive, quality_still; /* JPEG quality while input arrives / after */
+    unsigned still_delay_ms;  /* quiet time after the last input before the still frame */
+    float exposure_ev;
+    unsigned tonemap;         /* PC_TONEMAP_* */
+    float sky[3];
+    unsigned view;            /* PC_VIEW_* */
+    unsigned gi_mode;         /* PC_GI_* */
+    unsigned probe_counts[3]; /* 0 = fitted to the scene */
+    float probe_spacing;      /* 0 = derived */
+    unsigned rays_per_probe;
+    float hysteresis;
+    bool animate;             /* the demo's light animation (only while viewers watch) */
+} srv_settings;
+
+enum {
+    SRV_SET_WIDTH = 1u << 0,
+    SRV_SET_HEIGHT = 1u << 1,
+    SRV_SET_MAX_PIXELS = 1u << 2,
+    SRV_SET_MAX_FPS = 1u << 3,
+    SRV_SET_QUALITY_INTERACTIVE = 1u << 4,
+    SRV_SET_QUALITY_STILL = 1u << 5,
+    SRV_SET_STILL_DELAY = 1u << 6,
+    SRV_SET_EXPOSURE = 1u << 7,
+    SRV_SET_TONEMAP = 1u << 8,
+    SRV_SET_SKY = 1u << 9,
+    SRV_SET_VIEW = 1u << 10,
+    SRV_SET_GI_MODE = 1u << 11,
+    SRV_SET_PROBE_COUNTS = 1u << 12,
+    SRV_SET_PROBE_SPACING = 1u << 13,
+    SRV_SET_RAYS = 1u << 14,
+    SRV_SET_HYSTERESIS = 1u << 15,
+    SRV_SET_ANIMATE = 1u << 16,
+};
+#define SRV_SET_GI_FIELDS                                                                         \
+    (SRV_SET_GI_MODE | SRV_SET_PROBE_COUNTS | SRV_SET_PROBE_SPACING | SRV_SET_RAYS |              \
+     SRV_SET_HYSTERESIS)
+
+typedef struct srv_settings_patch {
+    unsigned has;
+    srv_settings v; /* the fields named in has */
+} srv_settings_patch;
+
+/* ---- viewer messages (WebSocket text frames) -------------------------------------------- */
+
+typedef enum srv_viewer_msg_type {
+    SRV_VIEWER_CAMERA = 1,
+    SRV_VIEWER_RESIZE,
+    SRV_VIEWER_ACK,
+} srv_viewer_msg_type;
+
+typedef struct srv_viewer_msg {
+    srv_viewer_msg_type type;
+    uint32_t seq;             /* camera */
+    srv_camera_patch camera;  /* camera */
+    unsigned width, height;   /* resize: CSS pixels */
+    float dpr;                /* resize: device pixel ratio (default 1) */
+    uint64_t frame;           /* ack */
+} srv_viewer_msg;
+
+/* ---- errors ----------------------------------------------------------------------------- */
+
+/* An API error: HTTP status, a stable code and one sentence. */
+typedef struct srv_api_error {
+    int status;
+    const char *code; /* static string */
+    char message[256];
+} srv_api_error;
+
+#if defined(__GNUC__)
+__attribute__((format(printf, 4, 5)))
+#endif
+void srv_api_fail(srv_api_error *e, int status, const char *code, const char *fmt, ...);
+
+/* ---- commands --------------------------------------------------------------------------- */
+
+typedef enum srv_cmd_kind {
+    SRV_CMD_GET_SCENE = 1,
+    SRV_CMD_REPLACE_SCENE,
+    SRV_CMD_GET_CAMERA,
+    SRV_CMD_SET_CAMERA, /* PATCH, or PUT when replace */
+    SRV_CMD_GET_LIGHTS,
+    SRV_CMD_ADD_LIGHT,
+    SRV_CMD_GET_LIGHT,
+    SRV_CMD_PATCH_LIGHT,
+    SRV_CMD_DELETE_LIGHT,
+    SRV_CMD_GET_NODE,
+    SRV_CMD_PATCH_NODE,
+    SRV_CMD_GET_SETTINGS,
+    SRV_CMD_PATCH_SETTINGS,
+    SRV_CMD_VIEWER_CAMERA, /* from the stream; no reply */
+    SRV_CMD_VIEWER_RESIZE, /* from the stream; no reply */
+} srv_cmd_kind;
+
+/* The render thread's answer: an HTTP status and a JSON body (malloc'd, may be NULL). */
+typedef struct srv_reply {
+    int status;
+    char *body;
+    uint64_t scene_generation; /* REPLACE_SCENE: the generation the scene was given */
+} srv_reply;
+
+typedef struct srv_cmd {
+    srv_cmd_kind kind;
+    uint32_t id;   /* light or node id */
+    bool replace;  /* SET_CAMERA: PUT (position and a direction are required) */
+    srv_camera_patch camera;
+    srv_light_patch light;
+    srv_node_patch node;
+    srv_settings_patch settings;
+    unsigned width, height; /* VIEWER_RESIZE: device pixels */
+    rd_scene *scene;        /* REPLACE_SCENE: validated scene, owned by the command */
+    char source[128];       /* REPLACE_SCENE: where it came from ("upload", "builtin:...") */
+
+    /* Owned by render_loop.c. */
+    uint64_t ticket; /* input order (see srv_render_post) */
+    srv_reply reply;
+    atomic_int refs;
+    bool done;
+    pthread_mutex_t mu;
+    pthread_cond_t cv;
+    struct srv_cmd *next;
+} srv_cmd;
+
+#endif
