@@ -21,11 +21,11 @@ typedef struct rd_bvh {
     uint32_t node_count;
     uint32_t *prim_index; /* leaf order -> original primitive index */
     uint32_t prim_count;
-    uint32_t depth;       /* levels below the root */
+    uint32_t depth; /* levels below the root */
 } rd_bvh;
 
 typedef struct rd_bvh_options {
-    uint32_t bins;     /* 0 = 16 */
+    uint32_t bins;     /* 0 = 16, clamped to [2, 64] */
     uint32_t max_leaf; /* 0 = 4, at most RD_BVH_MAX_LEAF */
 } rd_bvh_options;
 

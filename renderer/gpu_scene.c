@@ -202,6 +202,12 @@ static void world_box(const float m[16], const float *b, float *lo, float *hi)
             if (w[k] > hi[k]) hi[k] = w[k];
         }
     }
+    /* the corners were rounded once: widen by a relative margin so no grazing hit is culled */
+    for (int k = 0; k < 3; k++) {
+        float pad = 1e-6f * fmaxf(fabsf(lo[k]), fabsf(hi[k])) + 1e-30f;
+        lo[k] -= pad;
+        hi[k] += pad;
+    }
 }
 
 static void rows3(pc_vec4 out[3], const float m[16])

@@ -16,7 +16,7 @@
  * Traversal is two-level with one stack: TLAS entries below, the current BLAS's above. The ray
  * enters an instance by the rows of world_to_object; the object-space direction is not
  * normalised, so t stays the world t and hits of different instances compare directly.
- * Nearest child first; popped nodes are re-tested against the closest hit so far.
+ * Nearest child first.
  * Stack: TLAS and BLAS depth are each at most RD_BVH_MAX_DEPTH (48) and a TLAS leaf adds at
  * most RD_BVH_MAX_LEAF - 1 pending instances, so 2 * PC_BVH_STACK_SIZE entries never overflow
  * (pushes beyond it are dropped rather than written out of bounds).
@@ -39,7 +39,7 @@ struct pc_hit {
 };
 
 #define TRACE_STACK_SIZE (2 * PC_BVH_STACK_SIZE)
-#define TRACE_ENTRY_INSTANCE 0x80000000u
+#define TRACE_ENTRY_INSTANCE 0xffffffffu /* stack entry count of a waiting instance */
 /* Ize, "Robust BVH Ray Traversal" (JCGT 2013): tfar * (1 + 2 gamma(3)) keeps the float slab
  * test conservative. */
 #define TRACE_TFAR_SCALE 1.0000004
@@ -56,6 +56,12 @@ void trace_setup_box(vec3 d, out vec3 inv, out bvec3 neg)
     neg = lessThan(inv, vec3(0.0));
 }
 
+/* v[k] as explicit selects: dynamic vector indexing may put the vector in scratch memory. */
+float trace_comp(vec3 v, uint k)
+{
+    return k == 0u ? v.x : (k == 1u ? v.y : v.z);
+}
+
 /* Per-ray part of the watertight test (Woop, Benthin, Wald 2013, sec. 3): kz is the dominant
  * axis of d, kx and ky swap when d[kz] < 0 to keep the winding, S shears the ray onto +z. */
 void trace_setup_shear(vec3 d, out uint kx, out uint ky, out uint kz, out vec3 S)
@@ -64,12 +70,13 @@ void trace_setup_shear(vec3 d, out uint kx, out uint ky, out uint kz, out vec3 S
     kz = a.x >= a.y ? (a.x >= a.z ? 0u : 2u) : (a.y >= a.z ? 1u : 2u);
     kx = kz == 2u ? 0u : kz + 1u;
     ky = kx == 2u ? 0u : kx + 1u;
-    if (d[kz] < 0.0) {
+    float dz = trace_comp(d, kz);
+    if (dz < 0.0) {
         uint k = kx;
         kx = ky;
         ky = k;
     }
-    S = vec3(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
+    S = vec3(trace_comp(d, kx) / dz, trace_comp(d, ky) / dz, 1.0 / dz);
 }
 
 /* Slab test with near/far planes chosen by the direction sign (Williams et al. 2005), so the
@@ -99,12 +106,13 @@ bool trace_triangle(vec3 o, uint kx, uint ky, uint kz, vec3 S, vec3 p0, vec3 p1,
     precise vec3 A = p0 - o;
     precise vec3 B = p1 - o;
     precise vec3 C = p2 - o;
-    precise float Ax = A[kx] - S.x * A[kz];
-    precise float Ay = A[ky] - S.y * A[kz];
-    precise float Bx = B[kx] - S.x * B[kz];
-    precise float By = B[ky] - S.y * B[kz];
-    precise float Cx = C[kx] - S.x * C[kz];
-    precise float Cy = C[ky] - S.y * C[kz];
+    float Az = trace_comp(A, kz), Bz = trace_comp(B, kz), Cz = trace_comp(C, kz);
+    precise float Ax = trace_comp(A, kx) - S.x * Az;
+    precise float Ay = trace_comp(A, ky) - S.y * Az;
+    precise float Bx = trace_comp(B, kx) - S.x * Bz;
+    precise float By = trace_comp(B, ky) - S.y * Bz;
+    precise float Cx = trace_comp(C, kx) - S.x * Cz;
+    precise float Cy = trace_comp(C, ky) - S.y * Cz;
     precise float U = Cx * By - Cy * Bx;
     precise float V = Ax * Cy - Ay * Cx;
     precise float W = Bx * Ay - By * Ax;
@@ -115,7 +123,7 @@ bool trace_triangle(vec3 o, uint kx, uint ky, uint kz, vec3 S, vec3 p0, vec3 p1,
     if ((U < 0.0 || V < 0.0 || W < 0.0) && (U > 0.0 || V > 0.0 || W > 0.0)) return false;
     precise float det = U + V + W;
     if (det == 0.0 || !(abs(det) <= 3.40282347e38)) return false; /* also NaN/Inf vertices */
-    precise float T = U * (S.z * A[kz]) + V * (S.z * B[kz]) + W * (S.z * C[kz]);
+    precise float T = U * (S.z * Az) + V * (S.z * Bz) + W * (S.z * Cz);
     float rcp = 1.0 / det;
     t = T * rcp;
     if (!(t > tmin && t < tmax)) return false;
@@ -126,7 +134,11 @@ bool trace_triangle(vec3 o, uint kx, uint ky, uint kz, vec3 S, vec3 p0, vec3 p1,
 }
 
 /* Closest hit (or, with PC_TRACE_ANY_HIT, the first accepted hit) with tmin < t < tmax.
- * hit is filled only when true is returned (hit.t = tmax, indices PC_INVALID otherwise). */
+ * hit is filled only when true is returned (hit.t = tmax, indices PC_INVALID otherwise).
+ * Structure: Aila & Laine's "while-while" (HPG 2009): an inner loop walks interior nodes and
+ * pops within the current level; leaves, instance entry and the return to the world ray run
+ * once per outer iteration, so the rare, heavy code stays out of the hot inner loop (which
+ * matters on SIMD-predicated CPUs such as lavapipe as much as on GPUs). */
 bool trace_ray(pc_scene_refs scene, vec3 org, vec3 dir, float tmin, float tmax, uint flags,
                out pc_hit hit)
 {
@@ -156,35 +168,54 @@ bool trace_ray(pc_scene_refs scene, vec3 org, vec3 dir, float tmin, float tmax, 
     float t_best = tmax, t_cull = tmax; /* t_cull: t_best plus slack, for box tests */
     bool found = false;
 
-    uint stack[TRACE_STACK_SIZE];
+    /* Entries: (first, count) of a node whose box the ray enters, so a pop needs no load;
+     * count == TRACE_ENTRY_INSTANCE marks a TLAS leaf slot whose instance waits. Popped
+     * nodes are not re-culled against the closest hit: keeping entry distances on the stack
+     * for that measured 12% slower on an H200 (the children's box tests cull them anyway). */
+    uvec2 stack[TRACE_STACK_SIZE];
     int sp = 0, blas_base = 0;
-    uint enter = PC_INVALID; /* TLAS leaf entry whose instance is entered next */
 
     pc_bvh_node root = TraceNodes(nodes).n[0];
     float tn;
-    if (!trace_box(root.bmin, root.bmax, o, inv, neg, tmin, t_best, tn)) return false;
+    if (!trace_box(root.bmin, root.bmax, o, inv, neg, tmin, t_cull, tn)) return false;
     uint first = floatBitsToUint(root.bmin.w), count = floatBitsToUint(root.bmax.w);
     bool have = true; /* (first, count) describe a node whose box the ray enters */
 
     for (;;) {
-        if (have) {
-            have = false;
-            if (count == 0u) {
+        /* Interior nodes, nearest child first; pops stay within the current level. */
+        for (;;) {
+            if (have) {
+                if (count != 0u) break; /* a leaf */
                 TraceNodes nb = TraceNodes(nodes);
                 pc_bvh_node c0 = nb.n[first];
                 pc_bvh_node c1 = nb.n[first + 1u];
                 float t0, t1;
                 bool h0 = trace_box(c0.bmin, c0.bmax, o, inv, neg, tmin, t_cull, t0);
                 bool h1 = trace_box(c1.bmin, c1.bmax, o, inv, neg, tmin, t_cull, t1);
-                if (h0 || h1) {
-                    bool second = h1 && (!h0 || t1 < t0);
-                    if (h0 && h1 && sp < TRACE_STACK_SIZE) stack[sp++] = second ? first : first + 1u;
-                    first = floatBitsToUint(second ? c1.bmin.w : c0.bmin.w);
-                    count = floatBitsToUint(second ? c1.bmax.w : c0.bmax.w);
-                    have = true;
-                    continue;
+                if (h0 && h1 && sp < TRACE_STACK_SIZE) {
+                    bool far1 = t0 <= t1;
+                    stack[sp] = far1 ? uvec2(floatBitsToUint(c1.bmin.w), floatBitsToUint(c1.bmax.w))
+                                     : uvec2(floatBitsToUint(c0.bmin.w), floatBitsToUint(c0.bmax.w));
+                    sp++;
                 }
-            } else if (in_blas) {
+                bool take1 = h1 && (!h0 || t1 < t0);
+                first = floatBitsToUint(take1 ? c1.bmin.w : c0.bmin.w);
+                count = floatBitsToUint(take1 ? c1.bmax.w : c0.bmax.w);
+                have = h0 || h1;
+                if (have) continue;
+            }
+            if (sp == (in_blas ? blas_base : 0)) break; /* this level is done */
+            if (stack[sp - 1].y == TRACE_ENTRY_INSTANCE) break;
+            sp--;
+            first = stack[sp].x;
+            count = stack[sp].y;
+            have = true;
+        }
+
+        uint enter = PC_INVALID; /* TLAS leaf slot whose instance is entered now */
+        if (have) {
+            have = false;
+            if (in_blas) {
                 TraceTris tris = TraceTris(scene.tris);
                 for (uint i = first; i < first + count; i++) {
                     pc_tri tr = tris.t[i];
@@ -211,58 +242,53 @@ bool trace_ray(pc_scene_refs scene, vec3 org, vec3 dir, float tmin, float tmax, 
                     hit.backface = back;
                     if ((flags & PC_TRACE_ANY_HIT) != 0u) return true;
                 }
-            } else {
-                /* TLAS leaf: the first instance is entered now, the others wait on the stack. */
-                for (uint k = first + 1u; k < first + count; k++)
-                    if (sp < TRACE_STACK_SIZE) stack[sp++] = k | TRACE_ENTRY_INSTANCE;
-                enter = first;
-            }
-        }
-
-        if (enter != PC_INVALID) {
-            inst = TraceIndex(scene.tlas_index).i[enter];
-            enter = PC_INVALID;
-            pc_instance in_ = TraceInstances(scene.instances).i[inst];
-            vec4 wo = vec4(org, 1.0);
-            o = vec3(dot(in_.world_to_object[0], wo), dot(in_.world_to_object[1], wo),
-                     dot(in_.world_to_object[2], wo));
-            vec3 d = vec3(dot(in_.world_to_object[0].xyz, dir), dot(in_.world_to_object[1].xyz, dir),
-                          dot(in_.world_to_object[2].xyz, dir));
-            inst_neg = (in_.info.z & PC_INST_NEG_DET) != 0u;
-            trace_setup_box(d, inv, neg);
-            trace_setup_shear(d, kx, ky, kz, S);
-            pc_bvh_node r = TraceNodes(scene.blas_nodes).n[in_.info.x];
-            bool finite = !any(isnan(o)) && !any(isinf(o)) && !any(isnan(d)) && !any(isinf(d));
-            if (finite && trace_box(r.bmin, r.bmax, o, inv, neg, tmin, t_cull, tn)) {
-                nodes = scene.blas_nodes;
-                in_blas = true;
-                blas_base = sp;
-                first = floatBitsToUint(r.bmin.w);
-                count = floatBitsToUint(r.bmax.w);
-                have = true;
                 continue;
             }
-            o = org;
-            inv = winv;
-            neg = wneg;
-        }
-        if (in_blas && sp == blas_base) { /* this instance is done: back to the world ray */
+            /* TLAS leaf: the first instance is entered now, the others wait on the stack. */
+            for (uint k = first + 1u; k < first + count; k++) {
+                if (sp < TRACE_STACK_SIZE) {
+                    stack[sp] = uvec2(k, TRACE_ENTRY_INSTANCE);
+                    sp++;
+                }
+            }
+            enter = first;
+        } else if (in_blas) { /* the instance is done: back to the world ray */
             in_blas = false;
             nodes = scene.tlas_nodes;
             o = org;
             inv = winv;
             neg = wneg;
-        }
-        if (sp == 0) break;
-        uint e = stack[--sp];
-        if (!in_blas && (e & TRACE_ENTRY_INSTANCE) != 0u) {
-            enter = e & ~TRACE_ENTRY_INSTANCE;
             continue;
+        } else if (sp == 0) {
+            break;
+        } else {
+            enter = stack[--sp].x; /* a waiting instance */
         }
-        pc_bvh_node nd = TraceNodes(nodes).n[e];
-        if (trace_box(nd.bmin, nd.bmax, o, inv, neg, tmin, t_cull, tn)) {
-            first = floatBitsToUint(nd.bmin.w);
-            count = floatBitsToUint(nd.bmax.w);
+
+        /* Enter an instance: the ray goes to object space through world_to_object. */
+        inst = TraceIndex(scene.tlas_index).i[enter];
+        pc_instance in_ = TraceInstances(scene.instances).i[inst];
+        vec4 wo = vec4(org, 1.0);
+        vec3 oo = vec3(dot(in_.world_to_object[0], wo), dot(in_.world_to_object[1], wo),
+                       dot(in_.world_to_object[2], wo));
+        vec3 d = vec3(dot(in_.world_to_object[0].xyz, dir), dot(in_.world_to_object[1].xyz, dir),
+                      dot(in_.world_to_object[2].xyz, dir));
+        vec3 oinv;
+        bvec3 oneg;
+        trace_setup_box(d, oinv, oneg);
+        pc_bvh_node r = TraceNodes(scene.blas_nodes).n[in_.info.x];
+        bool finite = !any(isnan(oo)) && !any(isinf(oo)) && !any(isnan(d)) && !any(isinf(d));
+        if (finite && trace_box(r.bmin, r.bmax, oo, oinv, oneg, tmin, t_cull, tn)) {
+            o = oo;
+            inv = oinv;
+            neg = oneg;
+            trace_setup_shear(d, kx, ky, kz, S);
+            inst_neg = (in_.info.z & PC_INST_NEG_DET) != 0u;
+            nodes = scene.blas_nodes;
+            in_blas = true;
+            blas_base = sp;
+            first = floatBitsToUint(r.bmin.w);
+            count = floatBitsToUint(r.bmax.w);
             have = true;
         }
     }

@@ -1,12 +1,15 @@
 /* test_gpu_trace.c: shaders/trace.glsl on the device against a CPU brute force in world space.
  *
  * Two meshes (a random soup and a subdivided cube) are placed by four instances: rotated and
- * non-uniformly scaled, mirrored (negative determinant), rotated and scaled uniformly, and
- * turned by a two-axis negative scale (positive determinant). Their BLASes share one node and
- * one triangle array with absolute indices, as the renderer uploads them. Two TLASes are
- * traced: one built by rd_bvh_build (one instance per leaf) and a single leaf holding all
- * four instances. Each is traced with closest hit, any hit, back-face culling and both.
- * Runs with PROBECAST_VALIDATION=1 PROBECAST_DEVICE=llvmpipe under ctest. */
+ * non-uniformly scaled, mirrored (negative determinant), rotated and scaled uniformly,
+ * turned by a two-axis negative scale (positive determinant), and only translated (exactly).
+ * Rays with zero direction components run exactly along the last one's edges and through its
+ * vertices: there the GPU must agree with the CPU exactly (watertight, and the slab test's
+ * 0 * inf cases); elsewhere hits within EDGE_EPS of an edge may go either way. Their BLASes share
+ * one node and one triangle array with absolute indices, as the renderer uploads them. Two TLASes
+ * are traced: one built by rd_bvh_build (one instance per leaf) and a single leaf holding all four
+ * instances. Each is traced with closest hit, any hit, back-face culling and both. Runs with
+ * PROBECAST_VALIDATION=1 PROBECAST_DEVICE=llvmpipe under ctest. */
 #include "renderer/bvh.h"
 #include "renderer/vk_buffer.h"
 #include "renderer/vk_compute.h"
@@ -20,7 +23,7 @@
 #include <string.h>
 
 #define MESHES 2
-#define INSTANCES 4
+#define INSTANCES 5
 #define RAYS 1024
 #define ALPHA_CUT 0.3f /* test_trace.comp keeps u > 0.3 on alpha-masked triangles */
 #define EDGE_EPS 1e-4f /* hits closer than this to an edge or the cut may go either way */
@@ -69,6 +72,7 @@ typedef struct instance {
     double m[3][4]; /* object to world rows */
     double inv[3][4];
     bool neg_det;
+    bool exact;   /* a translation by dyadic numbers: object and world arithmetic agree */
     float *world; /* the mesh's triangles in world space */
 } instance;
 
@@ -83,7 +87,8 @@ static void make_soup(mesh *m, uint32_t n)
         float c[3] = {rng_range(-1, 1), rng_range(-1, 1), rng_range(-1, 1)};
         for (int k = 0; k < 9; k++)
             m->pos[9 * i + k] = c[k % 3] + rng_range(-0.3f, 0.3f);
-        m->flags[i] = (i % 3 == 0 ? PC_TRI_DOUBLE_SIDED : 0u) | (i % 5 == 0 ? PC_TRI_ALPHA_MASK : 0u);
+        m->flags[i] =
+            (i % 3 == 0 ? PC_TRI_DOUBLE_SIDED : 0u) | (i % 5 == 0 ? PC_TRI_ALPHA_MASK : 0u);
     }
 }
 
@@ -135,18 +140,20 @@ static void make_transform(instance *in, const double axis[3], double angle, con
             in->m[i][j] = r[i][j] * s[j];
         in->m[i][3] = t[i];
     }
-    double (*a)[4] = in->m;
+    double(*a)[4] = in->m;
     double det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
                  a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
                  a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
     in->neg_det = det < 0;
-    double inv[3][3] = {
-        {(a[1][1] * a[2][2] - a[1][2] * a[2][1]) / det, (a[0][2] * a[2][1] - a[0][1] * a[2][2]) / det,
-         (a[0][1] * a[1][2] - a[0][2] * a[1][1]) / det},
-        {(a[1][2] * a[2][0] - a[1][0] * a[2][2]) / det, (a[0][0] * a[2][2] - a[0][2] * a[2][0]) / det,
-         (a[0][2] * a[1][0] - a[0][0] * a[1][2]) / det},
-        {(a[1][0] * a[2][1] - a[1][1] * a[2][0]) / det, (a[0][1] * a[2][0] - a[0][0] * a[2][1]) / det,
-         (a[0][0] * a[1][1] - a[0][1] * a[1][0]) / det}};
+    double inv[3][3] = {{(a[1][1] * a[2][2] - a[1][2] * a[2][1]) / det,
+                         (a[0][2] * a[2][1] - a[0][1] * a[2][2]) / det,
+                         (a[0][1] * a[1][2] - a[0][2] * a[1][1]) / det},
+                        {(a[1][2] * a[2][0] - a[1][0] * a[2][2]) / det,
+                         (a[0][0] * a[2][2] - a[0][2] * a[2][0]) / det,
+                         (a[0][2] * a[1][0] - a[0][0] * a[1][2]) / det},
+                        {(a[1][0] * a[2][1] - a[1][1] * a[2][0]) / det,
+                         (a[0][1] * a[2][0] - a[0][0] * a[2][1]) / det,
+                         (a[0][0] * a[1][1] - a[0][1] * a[1][0]) / det}};
     for (int i = 0; i < 3; i++) {
         for (int j = 0; j < 3; j++)
             in->inv[i][j] = inv[i][j];
@@ -174,8 +181,7 @@ static bool accepted(uint32_t tri_flags, bool back, float u, uint32_t flags)
 {
     if ((flags & PC_TRACE_CULL_BACKFACES) && back && !(tri_flags & PC_TRI_DOUBLE_SIDED))
         return false;
-    if ((tri_flags & PC_TRI_ALPHA_MASK) && !(u > ALPHA_CUT))
-        return false;
+    if ((tri_flags & PC_TRI_ALPHA_MASK) && !(u > ALPHA_CUT)) return false;
     return true;
 }
 
@@ -190,10 +196,8 @@ static cpu_hit cpu_trace(const mesh *meshes, const instance *inst, const float o
             const float *w = inst[k].world + 9 * i;
             float t, u, v;
             bool back;
-            if (!rd_ray_triangle(o, d, w, w + 3, w + 6, tmin, best.t, &t, &u, &v, &back))
-                continue;
-            if (!accepted(m->flags[i], back, u, flags))
-                continue;
+            if (!rd_ray_triangle(o, d, w, w + 3, w + 6, tmin, best.t, &t, &u, &v, &back)) continue;
+            if (!accepted(m->flags[i], back, u, flags)) continue;
             best = (cpu_hit){true, t, u, v, k, i, back};
         }
     }
@@ -203,7 +207,8 @@ static cpu_hit cpu_trace(const mesh *meshes, const instance *inst, const float o
 /* A hit whose barycentrics lie within EDGE_EPS of an edge or of the alpha cut. */
 static bool ambiguous_uv(float u, float v)
 {
-    return u < EDGE_EPS || v < EDGE_EPS || 1.0f - u - v < EDGE_EPS || fabsf(u - ALPHA_CUT) < EDGE_EPS;
+    return u < EDGE_EPS || v < EDGE_EPS || 1.0f - u - v < EDGE_EPS ||
+           fabsf(u - ALPHA_CUT) < EDGE_EPS;
 }
 
 /* ---- test -------------------------------------------------------------------------------- */
@@ -222,7 +227,8 @@ static void make_rays(float *rays, const instance *inst, const mesh *meshes)
         float tgt[3];
         if (r % 8 < 6) { /* aimed at a random point of a random world triangle */
             const instance *in = &inst[r % INSTANCES];
-            const float *w = in->world + 9 * ((uint32_t)(rng_f() * meshes[in->mesh].n) % meshes[in->mesh].n);
+            const float *w =
+                in->world + 9 * ((uint32_t)(rng_f() * meshes[in->mesh].n) % meshes[in->mesh].n);
             float w1 = rng_f(), w2 = rng_f() * (1 - w1), w0 = 1 - w1 - w2;
             for (int k = 0; k < 3; k++)
                 tgt[k] = w0 * w[k] + w1 * w[3 + k] + w2 * w[6 + k];
@@ -232,12 +238,20 @@ static void make_rays(float *rays, const instance *inst, const mesh *meshes)
         }
         for (int k = 0; k < 3; k++)
             b[k] = tgt[k] - a[k];
-        if (r % 16 == 7) { /* zero direction components */
-            b[0] = b[1] = 0.0f;
-            b[2] = r % 32 == 7 ? 1.0f : -1.0f;
-            a[0] = inst[3].world[0];
-            a[1] = rng_range(-4, -2);
-            a[2] = r % 32 == 7 ? -8.0f : 8.0f;
+        if (r % 8 == 7) {
+            /* along the exact cube's grid lines: zero direction components, origins on the
+             * BVH's box planes, hits on edges and vertices */
+            const float grid[5] = {-1.0f, -0.5f, 0.0f, 0.5f, 1.0f};
+            int axis = (int)(r / 8) % 3;
+            float sign = (r / 24) % 2 ? 1.0f : -1.0f;
+            for (int k = 0; k < 3; k++) {
+                a[k] = inst[4].m[k][3] + grid[(uint32_t)(rng_f() * 5) % 5];
+                b[k] = 0.0f;
+            }
+            a[axis] = (float)inst[4].m[axis][3] - 10.0f * sign;
+            b[axis] = sign * ((r / 48) % 2 ? 1.0f : 0.25f);
+            if (r % 64 == 15) /* diagonal through vertices */
+                b[(axis + 1) % 3] = b[axis];
         }
         a[3] = (r % 3 == 0) ? 0.0f : 1e-3f;
         b[3] = (r % 4 == 0) ? INFINITY : 100.0f;
@@ -270,7 +284,8 @@ static uint32_t compare(const char *what, const float *rays, const gpu_hit *g, c
         }
         hits += c.hit;
         const char *problem = NULL;
-        bool amb = (c.hit && ambiguous_uv(c.u, c.v)) || (gh && ambiguous_uv(gu, gv));
+        bool amb = (c.hit && !inst[c.instance].exact && ambiguous_uv(c.u, c.v)) ||
+                   (gh && valid_index && !inst[g[r].instance].exact && ambiguous_uv(gu, gv));
         if (!valid_index) {
             problem = "bad instance/triangle index";
             amb = false;
@@ -292,12 +307,12 @@ static uint32_t compare(const char *what, const float *rays, const gpu_hit *g, c
             bool same = g[r].instance == c.instance && gtri == c.tri;
             if (!same && !test_close_rel(gt, c.t, 1e-4))
                 problem = "different closest hit";
-            else if (same && (!test_close_rel(gt, c.t, 1e-4) || (g[r].backface != 0) != c.backface ||
-                              fabsf(gu - c.u) > 1e-3f || fabsf(gv - c.v) > 1e-3f))
+            else if (same &&
+                     (!test_close_rel(gt, c.t, 1e-4) || (g[r].backface != 0) != c.backface ||
+                      fabsf(gu - c.u) > 1e-3f || fabsf(gv - c.v) > 1e-3f))
                 problem = "hit record differs";
         }
-        if (!problem)
-            continue;
+        if (!problem) continue;
         if (amb) {
             ambiguous++;
             continue;
@@ -317,12 +332,11 @@ static uint32_t compare(const char *what, const float *rays, const gpu_hit *g, c
     return ambiguous;
 }
 
-#define VK_CHECK(call)                                                                          \
-    do {                                                                                        \
-        rd_vk_result rc_ = (call);                                                              \
-        CHECKF(rc_ == RD_VK_OK, "%s: %s", #call, err);                                          \
-        if (rc_ != RD_VK_OK)                                                                    \
-            goto done;                                                                          \
+#define VK_CHECK(call)                                                                             \
+    do {                                                                                           \
+        rd_vk_result rc_ = (call);                                                                 \
+        CHECKF(rc_ == RD_VK_OK, "%s: %s", #call, err);                                             \
+        if (rc_ != RD_VK_OK) goto done;                                                            \
     } while (0)
 
 int main(void)
@@ -330,8 +344,7 @@ int main(void)
     rd_vk vk;
     rd_vk_result rc = rd_vk_create(&vk, NULL, err, sizeof err);
     CHECKF(rc == RD_VK_OK, "%s", err);
-    if (rc != RD_VK_OK)
-        return test_finish();
+    if (rc != RD_VK_OK) return test_finish();
     fprintf(stderr, "device: %s\n", vk.device_name);
 
     /* meshes and BLASes in one node / triangle array, indices made absolute */
@@ -379,6 +392,10 @@ int main(void)
     make_transform(&inst[3], (double[3]){0, 0, 1}, 0.2, (double[3]){-0.9, -1.1, 1},
                    (double[3]){0.5, -3, -0.5});
     inst[3].mesh = 1;
+    make_transform(&inst[4], (double[3]){0, 0, 1}, 0.0, (double[3]){1, 1, 1},
+                   (double[3]){4, 4.5, -4});
+    inst[4].mesh = 1;
+    inst[4].exact = true;
     CHECK(inst[1].neg_det && !inst[0].neg_det && !inst[3].neg_det);
 
     pc_instance gi[INSTANCES];
@@ -404,7 +421,8 @@ int main(void)
             thi[3 * k + a] = -INFINITY;
         }
         for (int c = 0; c < 8; c++) {
-            float p[3] = {(c & 1) ? root->bmax.x : root->bmin.x, (c & 2) ? root->bmax.y : root->bmin.y,
+            float p[3] = {(c & 1) ? root->bmax.x : root->bmin.x,
+                          (c & 2) ? root->bmax.y : root->bmin.y,
                           (c & 4) ? root->bmax.z : root->bmin.z};
             float w[3];
             xform(inst[k].m, p, w);
@@ -422,7 +440,7 @@ int main(void)
     pc_bvh_node one_leaf = tlas_bvh.nodes[0];
     one_leaf.bmin.w = u2f(0);
     one_leaf.bmax.w = u2f(INSTANCES);
-    const uint32_t identity[INSTANCES] = {0, 1, 2, 3};
+    const uint32_t identity[INSTANCES] = {0, 1, 2, 3, 4};
 
     float *rays = malloc(RAYS * 8 * sizeof(float));
     gpu_hit *res = malloc(RAYS * sizeof *res);
@@ -444,8 +462,8 @@ int main(void)
     VK_CHECK(rd_buffer_create(&vk, &b_rays, RAYS * 8 * sizeof(float), RD_MEMORY_DEVICE, err,
                               sizeof err));
     VK_CHECK(rd_buffer_upload(&vk, &b_rays, 0, rays, RAYS * 8 * sizeof(float), err, sizeof err));
-    VK_CHECK(rd_buffer_create(&vk, &b_res, RAYS * sizeof *res, RD_MEMORY_READBACK, err,
-                              sizeof err));
+    VK_CHECK(
+        rd_buffer_create(&vk, &b_res, RAYS * sizeof *res, RD_MEMORY_READBACK, err, sizeof err));
     for (int v = 0; v < 2; v++) {
         const pc_bvh_node *tn = v == 0 ? tlas_bvh.nodes : &one_leaf;
         uint32_t tn_count = v == 0 ? tlas_bvh.node_count : 1;
@@ -453,8 +471,8 @@ int main(void)
         VK_CHECK(rd_buffer_create(&vk, &b_tlas[v], tn_count * sizeof *tn, RD_MEMORY_DEVICE, err,
                                   sizeof err));
         VK_CHECK(rd_buffer_upload(&vk, &b_tlas[v], 0, tn, tn_count * sizeof *tn, err, sizeof err));
-        VK_CHECK(rd_buffer_create(&vk, &b_index[v], sizeof identity, RD_MEMORY_DEVICE, err,
-                                  sizeof err));
+        VK_CHECK(
+            rd_buffer_create(&vk, &b_index[v], sizeof identity, RD_MEMORY_DEVICE, err, sizeof err));
         VK_CHECK(rd_buffer_upload(&vk, &b_index[v], 0, index, sizeof identity, err, sizeof err));
         pc_globals g = {0};
         g.scene.tris = b_tris.address;
