@@ -228,13 +228,15 @@ rd_vk_result rd_gpu_scene_update_instances(rd_vk *vk, rd_gpu_scene *gs, const rd
     float *lo = xcalloc(n, 3 * sizeof(float)), *hi = xcalloc(n, 3 * sizeof(float));
     for (uint32_t i = 0; i < n; i++) {
         const rd_instance *in = &s->instances[i];
-        const float *world = s->nodes[in->node].world;
+        /* floating origin: the GPU sees positions relative to origin_shift */
+        float world[16];
+        memcpy(world, s->nodes[in->node].world, sizeof world);
+        for (int k = 0; k < 3; k++) world[12 + k] -= gs->origin_shift[k];
         float inv[16];
         bool invertible = rd_mat4_inverse(inv, world);
         rows3(inst[i].object_to_world, world);
         rows3(inst[i].world_to_object, invertible ? inv : world);
-        uint32_t flags = rd_mat4_det3(world) < 0 ? PC_INST_NEG_DET : 0;
-        inst[i].info = (pc_uvec4){gs->mesh_root[in->mesh], in->mesh, flags, in->node};
+        inst[i].info = (pc_uvec4){gs->mesh_root[in->mesh], in->mesh, 0, in->node};
         if (invertible) {
             world_box(world, &gs->mesh_bounds[in->mesh * 6], &lo[i * 3], &hi[i * 3]);
         } else { /* a singular transform flattens the mesh: it cannot be hit */
@@ -298,7 +300,10 @@ rd_vk_result rd_gpu_scene_update_lights(rd_vk *vk, rd_gpu_scene *gs, const rd_sc
         float dir[3];
         const float down[3] = {0, 0, -1};
         rd_vec3_normalize(dir, l->direction, down);
-        lights[i].position_range = v4(l->position, l->range > 0 ? l->range : 0);
+        const float pos[3] = {l->position[0] - gs->origin_shift[0],
+                              l->position[1] - gs->origin_shift[1],
+                              l->position[2] - gs->origin_shift[2]};
+        lights[i].position_range = v4(pos, l->range > 0 ? l->range : 0);
         lights[i].direction = v4(dir, 0);
         lights[i].radiance = (pc_vec4){l->color[0] * l->intensity, l->color[1] * l->intensity,
                                        l->color[2] * l->intensity, l->intensity};
@@ -322,6 +327,10 @@ rd_vk_result rd_gpu_scene_create(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
                                  size_t errlen)
 {
     memset(gs, 0, sizeof *gs);
+    for (int k = 0; k < 3; k++) {
+        float c = 0.5f * (s->bounds_min[k] + s->bounds_max[k]);
+        gs->origin_shift[k] = isfinite(c) ? c : 0.0f;
+    }
     rd_vk_result r = build_blas(vk, gs, s, err, errlen);
     if (r == RD_VK_OK) r = rd_gpu_scene_update_instances(vk, gs, s, err, errlen);
     if (r == RD_VK_OK) r = upload_materials(vk, gs, s, err, errlen);

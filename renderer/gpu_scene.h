@@ -15,6 +15,10 @@ typedef struct rd_gpu_scene {
     rd_buffer tris, tri_attrs, blas_nodes, tlas_nodes, tlas_index, instances;
     rd_buffer materials, textures, texels, lights;
     pc_scene_refs refs;      /* addresses and counts, ready for pc_globals */
+    /* Floating origin: the GPU holds world positions minus this (the scene's centre), so that
+     * a scene far from the origin keeps full float precision near its geometry and ray
+     * offsets stay small. Cameras and probe grids are shifted the same way when rendering. */
+    float origin_shift[3];
     uint32_t mesh_count;
     uint32_t *mesh_root;     /* absolute BLAS root node per mesh */
     float *mesh_bounds;      /* 6 floats per mesh: object-space min, max */

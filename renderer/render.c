@@ -102,6 +102,16 @@ static rd_vk_result ensure_size(rd_renderer *r, unsigned w, unsigned h, char *er
     return res;
 }
 
+/* The probe volume as the GPU sees it: its origin moved by the scene's floating origin. */
+static pc_ddgi_volume shifted_volume(const rd_ddgi *d, const rd_gpu_scene *scene)
+{
+    pc_ddgi_volume v = d->vol;
+    v.origin.x -= scene->origin_shift[0];
+    v.origin.y -= scene->origin_shift[1];
+    v.origin.z -= scene->origin_shift[2];
+    return v;
+}
+
 /* Copies the timer's sections into the frame statistics (accumulating over submits). */
 static rd_vk_result collect_times(rd_renderer *r, char *err, size_t errlen)
 {
@@ -178,7 +188,9 @@ rd_vk_result rd_renderer_render(rd_renderer *r, const rd_gpu_scene *scene,
     pc_globals g;
     memset(&g, 0, sizeof g);
     g.scene = scene->refs;
-    rd_camera_to_view(camera, w, h, &g.view);
+    rd_view_camera shifted = *camera;
+    for (int k = 0; k < 3; k++) shifted.eye[k] -= scene->origin_shift[k];
+    rd_camera_to_view(&shifted, w, h, &g.view);
     g.view.size = (pc_uvec4){w, h, r->frame_index, fs->seed};
     g.view.sky = (pc_vec4){fs->sky[0], fs->sky[1], fs->sky[2], 0};
     g.view.tonemap = (pc_vec4){exp2f(fs->exposure_ev), (float)fs->tonemap, (float)fs->view, 0};
@@ -192,7 +204,7 @@ rd_vk_result rd_renderer_render(rd_renderer *r, const rd_gpu_scene *scene,
     rd_cmd cmd;
     for (unsigned u = 0; u + 1 < updates; u++) {
         rd_ddgi_begin_update(&r->ddgi);
-        g.ddgi = r->ddgi.vol;
+        g.ddgi = shifted_volume(&r->ddgi, scene);
         memcpy(r->globals.mapped, &g, sizeof g);
         res = rd_cmd_begin(r->vk, &cmd, err, errlen);
         if (res != RD_VK_OK) return res;
@@ -204,7 +216,7 @@ rd_vk_result rd_renderer_render(rd_renderer *r, const rd_gpu_scene *scene,
     }
     if (r->gi) {
         rd_ddgi_begin_update(&r->ddgi);
-        g.ddgi = r->ddgi.vol;
+        g.ddgi = shifted_volume(&r->ddgi, scene);
     }
     memcpy(r->globals.mapped, &g, sizeof g);
 

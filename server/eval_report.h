@@ -10,7 +10,7 @@
 
 typedef struct eval_row {
     char scene[48];
-    char expect[160];
+    char expect[256];
     char config[64]; /* e.g. "ddgi 8x8x8 r128 u32" */
     char mode[16];   /* direct, classic, ddgi */
     unsigned probes[3], rays, updates;

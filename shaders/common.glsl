@@ -124,9 +124,10 @@ vec3 xform_normal(vec4 inv_rows[3], vec3 n)
     return inv_rows[0].xyz * n.x + inv_rows[1].xyz * n.y + inv_rows[2].xyz * n.z;
 }
 
-/* Rebuilds the surface at a hit. The geometric normal follows the triangle's winding in world
- * space (mirrored under a negative-determinant instance, as glTF specifies); both normals are
- * then turned toward the side the ray came from. */
+/* Rebuilds the surface at a hit. The geometric normal is the object-space front normal
+ * carried by the inverse transpose, so a mirroring node (negative determinant) keeps the
+ * front side glTF gives it (the winding flips with the determinant); both normals are then
+ * turned toward the side the ray came from. */
 pc_surface surface_at(pc_scene_refs s, pc_hit hit, vec3 ray_dir)
 {
     pc_surface sf;
@@ -138,7 +139,6 @@ pc_surface surface_at(pc_scene_refs s, pc_hit hit, vec3 ray_dir)
     sf.position = xform_point(inst.object_to_world, p_obj);
 
     vec3 ng = xform_normal(inst.world_to_object, cross(t.v1.xyz - t.v0.xyz, t.v2.xyz - t.v0.xyz));
-    if ((inst.info.z & PC_INST_NEG_DET) != 0u) ng = -ng;
     float ng_len = length(ng);
     ng = ng_len > 0.0 && !isinf(ng_len) ? ng / ng_len : -ray_dir;
     vec3 ns = xform_normal(inst.world_to_object, a.n0.xyz * w + a.n1.xyz * hit.u + a.n2.xyz * hit.v);

@@ -58,8 +58,6 @@ typedef uint64_t pc_u64;
 #define PC_TRI_DOUBLE_SIDED 1u
 #define PC_TRI_ALPHA_MASK 2u
 
-/* pc_instance.info.z flag bits */
-#define PC_INST_NEG_DET 1u /* negative determinant: winding (front face) is mirrored */
 
 /* trace() flags */
 #define PC_TRACE_ANY_HIT 1u         /* stop at the first accepted hit (shadow rays) */
@@ -112,8 +110,9 @@ PC_STRUCT(pc_bvh_node)
 PC_END(pc_bvh_node);
 
 /* A placed mesh. Affine transforms stored as three rows (x' = dot(row0, vec4(p, 1)) ...).
- * info.x: root node of the mesh's BLAS (absolute), info.y: mesh index,
- * info.z: PC_INST_* flags, info.w: scene node index. */
+ * info.x: root node of the mesh's BLAS (absolute), info.y: mesh index, info.z: 0,
+ * info.w: scene node index. Front faces are decided in object space: glTF flips the
+ * winding of a mirroring (negative-determinant) node, which keeps the object's front side. */
 PC_STRUCT(pc_instance)
 {
     pc_vec4 object_to_world[3];

@@ -35,7 +35,7 @@ struct pc_hit {
     float v;        /* barycentric of v2 */
     uint instance;  /* index into scene.instances */
     uint tri;       /* index into scene.tris (BVH leaf order; v2.w holds the mesh's own index) */
-    bool backface;  /* the ray met the back (counter-clockwise front, mirrored by NEG_DET) */
+    bool backface;  /* the ray met the back (counter-clockwise front in object space) */
 };
 
 #define TRACE_STACK_SIZE (2 * PC_BVH_STACK_SIZE)
@@ -163,7 +163,7 @@ bool trace_ray(pc_scene_refs scene, vec3 org, vec3 dir, float tmin, float tmax, 
     uint kx = 0u, ky = 1u, kz = 2u;
     vec3 S = vec3(0.0);
     uint64_t nodes = scene.tlas_nodes;
-    bool in_blas = false, inst_neg = false;
+    bool in_blas = false;
     uint inst = 0u;
     float t_best = tmax, t_cull = tmax; /* t_cull: t_best plus slack, for box tests */
     bool found = false;
@@ -224,7 +224,6 @@ bool trace_ray(pc_scene_refs scene, vec3 org, vec3 dir, float tmin, float tmax, 
                     if (!trace_triangle(o, kx, ky, kz, S, tr.v0.xyz, tr.v1.xyz, tr.v2.xyz, tmin,
                                         t_best, t, u, v, back))
                         continue;
-                    back = back != inst_neg;
                     uint tf = floatBitsToUint(tr.v1.w);
                     if ((flags & PC_TRACE_CULL_BACKFACES) != 0u && back &&
                         (tf & PC_TRI_DOUBLE_SIDED) == 0u)
@@ -283,7 +282,6 @@ bool trace_ray(pc_scene_refs scene, vec3 org, vec3 dir, float tmin, float tmax, 
             inv = oinv;
             neg = oneg;
             trace_setup_shear(d, kx, ky, kz, S);
-            inst_neg = (in_.info.z & PC_INST_NEG_DET) != 0u;
             nodes = scene.blas_nodes;
             in_blas = true;
             blas_base = sp;

@@ -21,7 +21,8 @@ float *test_render(rd_vk *vk, const test_render_desc *d, pc_view *view_out,
     rd_renderer r;
     float *rgb = calloc((size_t)d->width * d->height * 3, sizeof(float));
     rd_frame_settings fs = {.width = d->width, .height = d->height, .view = d->view,
-                            .gi_updates = d->updates};
+                            .gi_updates = d->updates, .pathtrace_spp = d->pathtrace_spp,
+                            .max_bounces = d->max_bounces, .seed = d->seed};
     rd_vk_result res = rd_gpu_scene_create(vk, &gs, &s, err, sizeof err);
     CHECKF(res == RD_VK_OK, "%s", err);
     if (res == RD_VK_OK) res = rd_renderer_create(vk, &r, err, sizeof err);

@@ -11,6 +11,9 @@ typedef struct test_render_desc {
     rd_ddgi_settings gi;    /* mode 0 = no GI */
     unsigned updates;       /* probe updates before the image */
     unsigned view;          /* PC_VIEW_* */
+    unsigned pathtrace_spp; /* > 0: path-traced reference instead */
+    unsigned max_bounces;
+    unsigned seed;
 } test_render_desc;
 
 /* Returns width*height*3 linear floats (caller frees) or NULL after a failed CHECK.

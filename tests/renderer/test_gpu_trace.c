@@ -197,6 +197,7 @@ static cpu_hit cpu_trace(const mesh *meshes, const instance *inst, const float o
             float t, u, v;
             bool back;
             if (!rd_ray_triangle(o, d, w, w + 3, w + 6, tmin, best.t, &t, &u, &v, &back)) continue;
+            back = back != inst[k].neg_det; /* glTF: a mirroring node keeps the object's front */
             if (!accepted(m->flags[i], back, u, flags)) continue;
             best = (cpu_hit){true, t, u, v, k, i, back};
         }
@@ -412,7 +413,7 @@ int main(void)
                 (pc_vec4){(float)inst[k].inv[r][0], (float)inst[k].inv[r][1],
                           (float)inst[k].inv[r][2], (float)inst[k].inv[r][3]};
         }
-        gi[k].info = (pc_uvec4){m->node_base, inst[k].mesh, inst[k].neg_det ? PC_INST_NEG_DET : 0u,
+        gi[k].info = (pc_uvec4){m->node_base, inst[k].mesh, 0u,
                                 (uint32_t)k};
         /* world box of the BLAS root box's corners, widened for the float transform */
         const pc_bvh_node *root = &m->bvh.nodes[0];
