@@ -1,0 +1,1561 @@
+/* gltf_loader.cpp: glTF 2.0 -> rd_scene through tinygltf (the project's only C++ file).
+ *
+ * Untrusted input passes three gates:
+ *   1. our own checks of the GLB container and a pre-scan of the JSON (nesting depth, asset
+ *      version, extensionsRequired, buffers, buffer views and image buffer views), because
+ *      tinygltf 2.7 trusts some of those values (image buffer views, the BIN chunk length);
+ *   2. tinygltf parses the JSON and loads buffers through file callbacks that only open
+ *      regular files below the base folder; images are decoded by our callback (PNG/JPEG via
+ *      stb_image, always to 8-bit RGBA, with size limits);
+ *   3. conversion validates every index, accessor range and value before reading a byte.
+ * Errors unwind as a C++ exception (LoadError) caught at the C boundary with everything else.
+ */
+#include "gltf_loader.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cfloat>
+#include <climits>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream> /* tiny_gltf.h 2.7 needs it even with TINYGLTF_NO_FS */
+#include <initializer_list>
+#include <map>
+#include <new>
+#include <string>
+#include <vector>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wunused-function"
+#pragma GCC diagnostic ignored "-Wunused-parameter"
+#pragma GCC diagnostic ignored "-Wsign-compare"
+#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
+#pragma GCC diagnostic ignored "-Wimplicit-fallthrough"
+#pragma GCC diagnostic ignored "-Wtype-limits"
+#pragma GCC diagnostic ignored "-Wunused-but-set-variable"
+#define STB_IMAGE_IMPLEMENTATION
+#define STB_IMAGE_STATIC
+#define STBI_ONLY_PNG
+#define STBI_ONLY_JPEG
+#define STBI_NO_STDIO
+#define STBI_MAX_DIMENSIONS 16384
+#include <stb/stb_image.h>
+#define TINYGLTF_IMPLEMENTATION
+#define TINYGLTF_NO_STB_IMAGE       /* our callback decodes (decode_image below) */
+#define TINYGLTF_NO_STB_IMAGE_WRITE /* we never write glTF */
+#define TINYGLTF_NO_EXTERNAL_IMAGE  /* external images are read by us, under our rules */
+#define TINYGLTF_NO_FS              /* no default host file access: only our callbacks */
+#include <tiny_gltf.h>
+#pragma GCC diagnostic pop
+
+extern "C" {
+#include "xform.h"
+}
+
+namespace
+{
+
+using njson = nlohmann::json;
+using tinygltf::Model;
+
+const uint64_t kDefaultMaxTriangles = 50000000ull;
+const int kMaxJsonDepth = 100;
+const int kMaxImageDim = 16384;
+const uint64_t kMaxImagePixels = 1ull << 26;     /* 256 MiB as RGBA8 */
+const uint64_t kMaxDecodedBytes = 2ull << 30;    /* all images together */
+const uint64_t kMaxExternalFile = 0xffffffffull; /* tinygltf sizes are 32-bit */
+const char *const kSupportedExtensions[] = {"KHR_lights_punctual",
+                                            "KHR_materials_emissive_strength"};
+
+struct LoadError {
+    rd_gltf_result code;
+    std::string msg;
+};
+
+std::string vfmt(const char *fmt, va_list ap)
+{
+    va_list ap2;
+    va_copy(ap2, ap);
+    int n = vsnprintf(nullptr, 0, fmt, ap2);
+    va_end(ap2);
+    std::string s(n > 0 ? (size_t)n : 0, '\0');
+    if (n > 0) vsnprintf(&s[0], (size_t)n + 1, fmt, ap);
+    return s;
+}
+
+std::string fmt(const char *f, ...) __attribute__((format(printf, 1, 2)));
+std::string fmt(const char *f, ...)
+{
+    va_list ap;
+    va_start(ap, f);
+    std::string s = vfmt(f, ap);
+    va_end(ap);
+    return s;
+}
+
+[[noreturn]] void fail(rd_gltf_result code, const char *f, ...)
+    __attribute__((format(printf, 2, 3)));
+[[noreturn]] void fail(rd_gltf_result code, const char *f, ...)
+{
+    va_list ap;
+    va_start(ap, f);
+    LoadError e{code, vfmt(f, ap)};
+    va_end(ap);
+    throw e;
+}
+
+/* "mesh 3" or "mesh 3 'Cube'" (names shortened; control bytes are cleaned at the end). */
+/* A file's string made safe for a message: at most `max` bytes, control and non-ASCII bytes
+ * (which could break a JSON reply or a terminal) replaced with '?'. */
+std::string clean(const std::string &s, size_t max = 64)
+{
+    std::string r = s.size() > max ? s.substr(0, max - 3) + "..." : s;
+    for (char &ch : r)
+        if ((unsigned char)ch < 0x20 || (unsigned char)ch >= 0x7f) ch = '?';
+    return r;
+}
+
+/* "mesh 3" or "mesh 3 'Cube'". */
+std::string label(const char *kind, size_t index, const std::string &name)
+{
+    if (name.empty()) return fmt("%s %zu", kind, index);
+    return fmt("%s %zu '%s'", kind, index, clean(name).c_str());
+}
+
+std::string errno_text(int e)
+{
+    char buf[256];
+    return strerror_r(e, buf, sizeof buf); /* GNU variant returns the text */
+}
+
+bool to_float(double d, float *out)
+{
+    if (!std::isfinite(d) || std::fabs(d) > (double)FLT_MAX) return false;
+    *out = (float)d;
+    return true;
+}
+
+/* ---- files ------------------------------------------------------------------------------ */
+
+struct FileRules {
+    bool allowed = false; /* false: loading from memory without a base folder */
+    std::string base;     /* folder that external URIs resolve against */
+    std::string prefix;   /* base with exactly one trailing '/' */
+    std::string last_refusal;
+};
+
+/* Why a decoded relative URI may not be opened, or "" when it may. */
+std::string uri_refusal(const FileRules &rules, const std::string &rel)
+{
+    if (!rules.allowed) return "external files are not allowed when loading from memory";
+    if (rel.empty()) return "the URI is empty";
+    if (rel.find('\0') != std::string::npos) return "the URI contains a NUL character";
+    if (rel.compare(0, 5, "data:") == 0)
+        return "only base64 data: URIs of a known media type are supported";
+    if (rel[0] == '/') return "absolute paths are not allowed";
+    if (rel.find("://") != std::string::npos) return "only relative file paths are allowed";
+    size_t start = 0;
+    for (;;) {
+        size_t end = rel.find('/', start);
+        if (rel.compare(start, end == std::string::npos ? std::string::npos : end - start, "..") ==
+            0)
+            return "the URI leaves the asset folder (it contains '..')";
+        if (end == std::string::npos) break;
+        start = end + 1;
+    }
+    return "";
+}
+
+/* Reads a whole regular file (never a FIFO or device). */
+bool read_file(const std::string &path, uint64_t max_size, std::vector<unsigned char> *out,
+               std::string *why, bool *too_large)
+{
+    *too_large = false;
+    int fd = open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK);
+    if (fd < 0) {
+        *why = errno_text(errno);
+        return false;
+    }
+    struct stat st;
+    bool ok = false;
+    if (fstat(fd, &st) != 0) {
+        *why = errno_text(errno);
+    } else if (!S_ISREG(st.st_mode)) {
+        *why = "it is not a regular file";
+    } else if ((uint64_t)st.st_size > max_size) {
+        *why = fmt("it is too large (%lld bytes)", (long long)st.st_size);
+        *too_large = true;
+    } else {
+        out->resize((size_t)st.st_size);
+        size_t done = 0;
+        while (done < out->size()) {
+            ssize_t n = read(fd, out->data() + done, out->size() - done);
+            if (n < 0 && errno == EINTR) continue;
+            if (n <= 0) {
+                *why = n < 0 ? errno_text(errno) : "it shrank while being read";
+                break;
+            }
+            done += (size_t)n;
+        }
+        ok = done == out->size();
+    }
+    close(fd);
+    return ok;
+}
+
+/* tinygltf passes JoinPath(base, uri) (and "./uri" as a fallback): accept only paths made from
+ * our base folder and a URI that passes uri_refusal(). */
+bool rules_check_path(FileRules *rules, const std::string &path, std::string *rel)
+{
+    if (!rules->allowed || path.compare(0, rules->prefix.size(), rules->prefix) != 0) {
+        if (rules->last_refusal.empty()) rules->last_refusal = uri_refusal(*rules, path);
+        return false;
+    }
+    *rel = path.substr(rules->prefix.size());
+    std::string why = uri_refusal(*rules, *rel);
+    if (!why.empty()) {
+        rules->last_refusal = why;
+        return false;
+    }
+    return true;
+}
+
+bool fs_file_exists(const std::string &path, void *user)
+{
+    FileRules *rules = static_cast<FileRules *>(user);
+    std::string rel;
+    if (!rules_check_path(rules, path, &rel)) return false;
+    struct stat st;
+    return stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+}
+
+std::string fs_expand(const std::string &path, void *)
+{
+    return path; /* no ~ or $VAR expansion */
+}
+
+bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::string &path, void *user)
+{
+    FileRules *rules = static_cast<FileRules *>(user);
+    std::string rel, why;
+    bool too_large;
+    if (!rules_check_path(rules, path, &rel)) {
+        *err = rules->last_refusal;
+        return false;
+    }
+    if (!read_file(path, kMaxExternalFile, out, &why, &too_large)) {
+        *err = why;
+        rules->last_refusal = why;
+        return false;
+    }
+    return true;
+}
+
+bool fs_write(std::string *err, const std::string &, const std::vector<unsigned char> &, void *)
+{
+    *err = "writing is disabled";
+    return false;
+}
+
+/* ---- images ----------------------------------------------------------------------------- */
+
+struct ImageFailure {
+    rd_gltf_result code;
+    std::string why;
+};
+
+struct LoadContext {
+    FileRules rules;
+    std::map<int, ImageFailure> image_failures; /* decode failures, by image index */
+    uint64_t decoded_bytes = 0;
+};
+
+/* PNG or JPEG (any channel count, 8 or 16 bit) -> 8-bit RGBA. */
+bool decode_image(LoadContext *ctx, const unsigned char *bytes, size_t size,
+                  std::vector<unsigned char> *rgba, int *w, int *h, ImageFailure *f)
+{
+    int comp = 0;
+    f->code = RD_GLTF_ERR_INVALID;
+    if (size == 0 || size > (size_t)INT_MAX) {
+        f->why = size ? "its data is too large" : "its data is empty";
+        return false;
+    }
+    if (!stbi_info_from_memory(bytes, (int)size, w, h, &comp)) {
+        const char *r = stbi_failure_reason();
+        f->why = fmt("it is not a PNG or JPEG image stb_image can read (%s)", r ? r : "unknown");
+        return false;
+    }
+    if (*w < 1 || *h < 1 || *w > kMaxImageDim || *h > kMaxImageDim ||
+        (uint64_t)*w * (uint64_t)*h > kMaxImagePixels) {
+        f->code = RD_GLTF_ERR_TOO_LARGE;
+        f->why = fmt("its size %dx%d exceeds the limit", *w, *h);
+        return false;
+    }
+    uint64_t bytes_out = (uint64_t)*w * (uint64_t)*h * 4;
+    if (ctx->decoded_bytes + bytes_out > kMaxDecodedBytes) {
+        f->code = RD_GLTF_ERR_TOO_LARGE;
+        f->why = fmt("all decoded images together would exceed %llu MiB",
+                     (unsigned long long)(kMaxDecodedBytes >> 20));
+        return false;
+    }
+    int w2 = 0, h2 = 0;
+    unsigned char *px = stbi_load_from_memory(bytes, (int)size, &w2, &h2, &comp, 4);
+    if (!px || w2 != *w || h2 != *h) {
+        const char *r = stbi_failure_reason();
+        f->why = fmt("it could not be decoded (%s)", r ? r : "unknown");
+        stbi_image_free(px);
+        return false;
+    }
+    rgba->assign(px, px + bytes_out);
+    stbi_image_free(px);
+    ctx->decoded_bytes += bytes_out;
+    return true;
+}
+
+/* tinygltf image callback (data URIs and buffer views; ranges were checked in prescan).
+ * Never fails the whole load: a broken image is an error only if a material uses it. */
+bool image_callback(tinygltf::Image *image, const int index, std::string *, std::string *, int, int,
+                    const unsigned char *bytes, int size, void *user)
+{
+    LoadContext *ctx = static_cast<LoadContext *>(user);
+    ImageFailure f;
+    int w = 0, h = 0;
+    image->image.clear();
+    if (size < 0 ||
+        !decode_image(ctx, bytes, (size_t)(size < 0 ? 0 : size), &image->image, &w, &h, &f)) {
+        ctx->image_failures[index] = f;
+        return true;
+    }
+    image->width = w;
+    image->height = h;
+    image->component = 4;
+    image->bits = 8;
+    image->pixel_type = TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE;
+    return true;
+}
+
+/* ---- container and JSON pre-scan ---------------------------------------------------- */
+
+struct Container {
+    bool glb = false;
+    const char *json = nullptr;
+    size_t json_size = 0;
+    size_t bin_size = 0; /* 0: no BIN chunk */
+};
+
+uint32_t le32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+Container parse_container(const unsigned char *data, size_t size)
+{
+    Container c;
+    if (size == 0) fail(RD_GLTF_ERR_PARSE, "the file is empty");
+    if (size >= 4 && memcmp(data, "glTF", 4) == 0) {
+        c.glb = true;
+        if (size < 12)
+            fail(RD_GLTF_ERR_PARSE, "the GLB file is truncated: its 12-byte header is incomplete");
+        uint32_t version = le32(data + 4), length = le32(data + 8);
+        if (version != 2)
+            fail(RD_GLTF_ERR_UNSUPPORTED, "GLB version %u is not supported (only 2)", version);
+        if (length > size)
+            fail(RD_GLTF_ERR_PARSE,
+                 "the GLB file is truncated: its header declares %u bytes but only %zu are "
+                 "present",
+                 length, size);
+        if (length < 20) fail(RD_GLTF_ERR_PARSE, "the GLB file is truncated: it has no JSON chunk");
+        uint32_t json_len = le32(data + 12), json_type = le32(data + 16);
+        if (json_type != 0x4E4F534Au)
+            fail(RD_GLTF_ERR_PARSE, "the first chunk of the GLB file is not its JSON chunk");
+        if (json_len == 0 || json_len % 4 != 0)
+            fail(RD_GLTF_ERR_PARSE, "the GLB JSON chunk length %u is not a positive multiple of 4",
+                 json_len);
+        if ((uint64_t)json_len > (uint64_t)length - 20)
+            fail(RD_GLTF_ERR_PARSE,
+                 "the GLB file is truncated: its JSON chunk needs %u bytes but only %u remain",
+                 json_len, length - 20);
+        c.json = (const char *)data + 20;
+        c.json_size = json_len;
+        uint64_t at = 20ull + json_len;
+        if (at < length) {
+            if (length - at < 12)
+                fail(RD_GLTF_ERR_PARSE, "the GLB file is truncated inside its BIN chunk header");
+            uint32_t bin_len = le32(data + at), bin_type = le32(data + at + 4);
+            if (bin_type != 0x004E4942u)
+                fail(RD_GLTF_ERR_PARSE, "the second chunk of the GLB file is not a BIN chunk");
+            if (bin_len < 4 || bin_len % 4 != 0)
+                fail(RD_GLTF_ERR_PARSE,
+                     "the GLB BIN chunk length %u is not a positive multiple of 4", bin_len);
+            if ((uint64_t)bin_len > length - at - 8)
+                fail(RD_GLTF_ERR_PARSE,
+                     "the GLB file is truncated: its BIN chunk needs %u bytes but only %llu "
+                     "remain",
+                     bin_len, (unsigned long long)(length - at - 8));
+            c.bin_size = bin_len;
+        }
+    } else {
+        c.json = (const char *)data;
+        c.json_size = size;
+    }
+    return c;
+}
+
+/* Nesting depth of JSON text (tinygltf converts extras/extensions recursively). */
+void check_json_depth(const char *s, size_t n)
+{
+    int depth = 0;
+    bool in_string = false, escaped = false;
+    for (size_t i = 0; i < n; i++) {
+        char ch = s[i];
+        if (in_string) {
+            if (escaped)
+                escaped = false;
+            else if (ch == '\\')
+                escaped = true;
+            else if (ch == '"')
+                in_string = false;
+        } else if (ch == '"') {
+            in_string = true;
+        } else if (ch == '[' || ch == '{') {
+            if (++depth > kMaxJsonDepth)
+                fail(RD_GLTF_ERR_PARSE, "the glTF JSON nests deeper than %d levels", kMaxJsonDepth);
+        } else if (ch == ']' || ch == '}') {
+            depth--;
+        }
+    }
+}
+
+bool json_uint(const njson &o, const char *key, uint64_t *out, bool required)
+{
+    auto it = o.find(key);
+    if (it == o.end()) return !required;
+    if (!it->is_number_unsigned()) return false;
+    *out = it->get<uint64_t>();
+    return true;
+}
+
+/* Index-valued member that must lie in [0, count). */
+bool json_index(const njson &o, const char *key, size_t count, size_t *out)
+{
+    auto it = o.find(key);
+    if (it == o.end() || !it->is_number_unsigned()) return false;
+    uint64_t v = it->get<uint64_t>();
+    if (v >= count) return false;
+    *out = (size_t)v;
+    return true;
+}
+
+/* Bytes a tinygltf data URI decodes to (its base64 decoder stops at '=' or a foreign
+ * character), or -1 when tinygltf does not recognise the URI as data. */
+long long data_uri_size(const std::string &uri)
+{
+    if (!tinygltf::IsDataURI(uri)) return -1;
+    size_t comma = uri.find(',');
+    size_t n = 0;
+    for (size_t i = comma + 1; i < uri.size(); i++) {
+        unsigned char ch = (unsigned char)uri[i];
+        if (ch == '=' || !(isalnum(ch) || ch == '+' || ch == '/')) break;
+        n++;
+    }
+    return (long long)(n / 4 * 3 + (n % 4 ? n % 4 - 1 : 0));
+}
+
+bool is_supported_extension(const std::string &name)
+{
+    for (const char *s : kSupportedExtensions)
+        if (name == s) return true;
+    return false;
+}
+
+/* Checks what tinygltf would use unchecked, with messages that name the culprit. */
+void prescan(const Container &c, LoadContext *ctx)
+{
+    check_json_depth(c.json, c.json_size);
+    njson::parser_callback_t keep = [](int depth, njson::parse_event_t ev, njson &v) {
+        if (depth != 1 || ev != njson::parse_event_t::key || !v.is_string()) return true;
+        const std::string &k = v.get_ref<const std::string &>();
+        return k == "asset" || k == "buffers" || k == "bufferViews" || k == "images" ||
+               k == "extensionsRequired";
+    };
+    njson doc;
+    try {
+        doc = njson::parse(c.json, c.json + c.json_size, keep, true, false);
+    } catch (const njson::exception &e) {
+        std::string what = e.what();
+        size_t close = what.find("] ");
+        if (what.compare(0, 1, "[") == 0 && close != std::string::npos)
+            what = what.substr(close + 2);
+        fail(RD_GLTF_ERR_PARSE, "the glTF JSON could not be parsed: %s", what.c_str());
+    }
+    if (!doc.is_object()) fail(RD_GLTF_ERR_PARSE, "the glTF JSON is not an object");
+
+    auto asset = doc.find("asset");
+    if (asset == doc.end() || !asset->is_object() || !asset->contains("version") ||
+        !(*asset)["version"].is_string())
+        fail(RD_GLTF_ERR_INVALID, "the file has no asset.version, so it is not a glTF file");
+    const std::string &version = (*asset)["version"].get_ref<const std::string &>();
+    if (version.compare(0, 2, "2.") != 0)
+        fail(RD_GLTF_ERR_UNSUPPORTED, "glTF version '%.16s' is not supported (only 2.x)",
+             version.c_str());
+
+    auto req = doc.find("extensionsRequired");
+    if (req != doc.end()) {
+        if (!req->is_array()) fail(RD_GLTF_ERR_INVALID, "extensionsRequired is not an array");
+        for (const njson &e : *req) {
+            if (!e.is_string())
+                fail(RD_GLTF_ERR_INVALID, "extensionsRequired holds a value that is not a name");
+            const std::string &name = e.get_ref<const std::string &>();
+            if (!is_supported_extension(name))
+                fail(RD_GLTF_ERR_UNSUPPORTED,
+                     "the file requires extension %.80s, which is not supported", name.c_str());
+        }
+    }
+
+    static const njson empty = njson::array();
+    auto member = [&](const char *key) -> const njson & {
+        auto it = doc.find(key);
+        if (it == doc.end()) return empty;
+        if (!it->is_array()) fail(RD_GLTF_ERR_INVALID, "%s is not an array", key);
+        return *it;
+    };
+    const njson &buffers = member("buffers");
+    const njson &views = member("bufferViews");
+    const njson &images = member("images");
+
+    std::vector<uint64_t> buffer_len;
+    for (size_t i = 0; i < buffers.size(); i++) {
+        const njson &b = buffers[i];
+        uint64_t len = 0;
+        if (!b.is_object() || !json_uint(b, "byteLength", &len, true) || len == 0)
+            fail(RD_GLTF_ERR_INVALID, "buffer %zu has no valid byteLength", i);
+        buffer_len.push_back(len);
+        auto uri_it = b.find("uri");
+        if (uri_it == b.end() || !uri_it->is_string()) {
+            if (!c.glb) fail(RD_GLTF_ERR_INVALID, "buffer %zu has no uri", i);
+            if (c.bin_size == 0)
+                fail(RD_GLTF_ERR_INVALID, "buffer %zu has no uri and the GLB file has no BIN chunk",
+                     i);
+            if (len > c.bin_size)
+                fail(RD_GLTF_ERR_INVALID,
+                     "buffer %zu needs %llu bytes but the GLB BIN chunk holds only %zu", i,
+                     (unsigned long long)len, c.bin_size);
+            continue;
+        }
+        const std::string &uri = uri_it->get_ref<const std::string &>();
+        long long n = data_uri_size(uri);
+        if (n >= 0) {
+            if ((uint64_t)n != len)
+                fail(RD_GLTF_ERR_INVALID,
+                     "buffer %zu: its data URI holds %lld bytes but byteLength is %llu", i, n,
+                     (unsigned long long)len);
+            continue;
+        }
+        std::string shown = uri.size() > 64 ? uri.substr(0, 61) + "..." : uri;
+        if (uri.compare(0, 5, "data:") == 0)
+            fail(RD_GLTF_ERR_UNSUPPORTED,
+                 "buffer %zu has a data URI that is not base64 of a known media type", i);
+        std::string rel = tinygltf::dlib::urldecode(uri);
+        std::string why = uri_refusal(ctx->rules, rel);
+        struct stat st;
+        if (why.empty() && stat((ctx->rules.prefix + rel).c_str(), &st) != 0)
+            why = errno_text(errno);
+        else if (why.empty() && !S_ISREG(st.st_mode))
+            why = "it is not a regular file";
+        if (!why.empty())
+            fail(RD_GLTF_ERR_IO, "buffer %zu '%s' could not be loaded: %s", i, shown.c_str(),
+                 why.c_str());
+        if ((uint64_t)st.st_size != len)
+            fail(RD_GLTF_ERR_INVALID, "buffer %zu '%s' has %lld bytes but byteLength is %llu", i,
+                 shown.c_str(), (long long)st.st_size, (unsigned long long)len);
+    }
+
+    std::vector<uint64_t> view_len;
+    for (size_t i = 0; i < views.size(); i++) {
+        const njson &v = views[i];
+        size_t b = 0;
+        uint64_t off = 0, len = 0;
+        if (!v.is_object() || !json_index(v, "buffer", buffers.size(), &b))
+            fail(RD_GLTF_ERR_INVALID, "buffer view %zu does not refer to an existing buffer", i);
+        if (!json_uint(v, "byteOffset", &off, false) || !json_uint(v, "byteLength", &len, true) ||
+            len == 0)
+            fail(RD_GLTF_ERR_INVALID, "buffer view %zu has an invalid byteOffset or byteLength", i);
+        if (off > buffer_len[b] || len > buffer_len[b] - off)
+            fail(RD_GLTF_ERR_INVALID,
+                 "buffer view %zu (offset %llu, length %llu) does not fit in buffer %zu (%llu "
+                 "bytes)",
+                 i, (unsigned long long)off, (unsigned long long)len, b,
+                 (unsigned long long)buffer_len[b]);
+        view_len.push_back(len);
+    }
+
+    for (size_t i = 0; i < images.size(); i++) {
+        const njson &im = images[i];
+        if (!im.is_object() || !im.contains("bufferView")) continue;
+        size_t v = 0;
+        if (!json_index(im, "bufferView", views.size(), &v))
+            fail(RD_GLTF_ERR_INVALID, "image %zu does not refer to an existing buffer view", i);
+        if (view_len[v] > (uint64_t)INT_MAX)
+            fail(RD_GLTF_ERR_TOO_LARGE, "image %zu is larger than 2 GiB", i);
+    }
+}
+
+/* ---- accessors ---------------------------------------------------------------------- */
+
+size_t component_size(int type)
+{
+    switch (type) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+        return 1;
+    case TINYGLTF_COMPONENT_TYPE_SHORT:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
+        return 2;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+    case TINYGLTF_COMPONENT_TYPE_FLOAT:
+        return 4;
+    default:
+        return 0;
+    }
+}
+
+const char *type_name(int type)
+{
+    switch (type) {
+    case TINYGLTF_TYPE_SCALAR:
+        return "SCALAR";
+    case TINYGLTF_TYPE_VEC2:
+        return "VEC2";
+    case TINYGLTF_TYPE_VEC3:
+        return "VEC3";
+    case TINYGLTF_TYPE_VEC4:
+        return "VEC4";
+    case TINYGLTF_TYPE_MAT2:
+        return "MAT2";
+    case TINYGLTF_TYPE_MAT3:
+        return "MAT3";
+    case TINYGLTF_TYPE_MAT4:
+        return "MAT4";
+    default:
+        return "unknown";
+    }
+}
+
+/* A validated accessor: element i lies at data + i * stride (or is zero when data is null),
+ * unless sparse substitution applies. */
+struct Accessor {
+    int index = -1;
+    const unsigned char *data = nullptr;
+    size_t stride = 0, count = 0, elem = 0;
+    int ctype = 0, ncomp = 0;
+    bool normalized = false;
+    std::vector<uint32_t> sparse_index;
+    const unsigned char *sparse_values = nullptr;
+};
+
+/* Start of `bytes` bytes at `offset` inside buffer view `view`, or null when out of range. */
+const unsigned char *view_range(const Model &m, int view, uint64_t offset, uint64_t bytes,
+                                int accessor, const char *what)
+{
+    if (view < 0 || (size_t)view >= m.bufferViews.size())
+        fail(RD_GLTF_ERR_INVALID,
+             "accessor %d (%s) refers to buffer view %d, but there are only %zu buffer views",
+             accessor, what, view, m.bufferViews.size());
+    const tinygltf::BufferView &bv = m.bufferViews[(size_t)view];
+    if (bv.buffer < 0 || (size_t)bv.buffer >= m.buffers.size())
+        fail(RD_GLTF_ERR_INVALID, "buffer view %d refers to buffer %d, which does not exist", view,
+             bv.buffer);
+    const std::vector<unsigned char> &data = m.buffers[(size_t)bv.buffer].data;
+    if (bv.byteOffset > data.size() || bv.byteLength > data.size() - bv.byteOffset)
+        fail(RD_GLTF_ERR_INVALID, "buffer view %d does not fit in buffer %d", view, bv.buffer);
+    if (offset > bv.byteLength || bytes > bv.byteLength - offset)
+        fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) reads past the end of buffer view %d", accessor,
+             what, view);
+    return data.data() + bv.byteOffset + offset;
+}
+
+/* Validates accessor `index` for use as `what` (type and allowed component types). */
+Accessor make_accessor(const Model &m, int index, const std::string &what_s, int type,
+                       std::initializer_list<int> ctypes)
+{
+    const char *what = what_s.c_str();
+    if (index < 0 || (size_t)index >= m.accessors.size())
+        fail(RD_GLTF_ERR_INVALID, "%s refers to accessor %d, but there are only %zu accessors",
+             what, index, m.accessors.size());
+    const tinygltf::Accessor &a = m.accessors[(size_t)index];
+    Accessor r;
+    r.index = index;
+    if (a.type != type)
+        fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has type %s, expected %s", index, what,
+             type_name(a.type), type_name(type));
+    if (std::find(ctypes.begin(), ctypes.end(), a.componentType) == ctypes.end())
+        fail(RD_GLTF_ERR_INVALID,
+             "accessor %d (%s) has component type %d, which is not allowed "
+             "here",
+             index, what, a.componentType);
+    if (a.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT && type != TINYGLTF_TYPE_SCALAR &&
+        !a.normalized)
+        fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) holds integers but is not normalized", index,
+             what);
+    if (a.count == 0) fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has count 0", index, what);
+    r.ctype = a.componentType;
+    r.ncomp = type == TINYGLTF_TYPE_SCALAR ? 1 : type == TINYGLTF_TYPE_VEC2 ? 2 : 3;
+    r.elem = component_size(a.componentType) * (size_t)r.ncomp;
+    r.count = a.count;
+    r.normalized = a.normalized;
+    if (a.bufferView < -1)
+        fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has buffer view %d", index, what, a.bufferView);
+    if (a.bufferView >= 0) {
+        const tinygltf::BufferView *bv = (size_t)a.bufferView < m.bufferViews.size()
+                                             ? &m.bufferViews[(size_t)a.bufferView]
+                                             : nullptr;
+        r.stride = bv && bv->byteStride ? bv->byteStride : r.elem;
+        if (r.stride < r.elem)
+            fail(RD_GLTF_ERR_INVALID,
+                 "buffer view %d has byteStride %zu, smaller than the %zu-byte elements of "
+                 "accessor %d",
+                 a.bufferView, r.stride, r.elem, index);
+        uint64_t span;
+        if (__builtin_mul_overflow((uint64_t)r.stride, (uint64_t)(r.count - 1), &span) ||
+            __builtin_add_overflow(span, (uint64_t)r.elem, &span))
+            fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) reads past the end of buffer view %d",
+                 index, what, a.bufferView);
+        r.data = view_range(m, a.bufferView, a.byteOffset, span, index, what);
+    }
+    if (a.sparse.isSparse) {
+        size_t n = a.sparse.count > 0 ? (size_t)a.sparse.count : 0;
+        if (n == 0 || n > r.count)
+            fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has an invalid sparse count %d", index,
+                 what, a.sparse.count);
+        int ict = a.sparse.indices.componentType;
+        if (ict != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
+            ict != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+            ict != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+            fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has sparse indices of component type %d",
+                 index, what, ict);
+        if (a.sparse.indices.byteOffset < 0 || a.sparse.values.byteOffset < 0)
+            fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has a negative sparse byteOffset", index,
+                 what);
+        size_t isz = component_size(ict);
+        const unsigned char *ip =
+            view_range(m, a.sparse.indices.bufferView, (uint64_t)a.sparse.indices.byteOffset,
+                       (uint64_t)n * isz, index, what);
+        r.sparse_values =
+            view_range(m, a.sparse.values.bufferView, (uint64_t)a.sparse.values.byteOffset,
+                       (uint64_t)n * r.elem, index, what);
+        r.sparse_index.resize(n);
+        for (size_t i = 0; i < n; i++) {
+            uint32_t v = 0;
+            if (isz == 1) {
+                v = ip[i];
+            } else if (isz == 2) {
+                uint16_t s;
+                memcpy(&s, ip + i * 2, 2);
+                v = s;
+            } else {
+                memcpy(&v, ip + i * 4, 4);
+            }
+            if (v >= r.count || (i > 0 && v <= r.sparse_index[i - 1]))
+                fail(RD_GLTF_ERR_INVALID,
+                     "the sparse indices of accessor %d (%s) are out of range or not increasing",
+                     index, what);
+            r.sparse_index[i] = v;
+        }
+    }
+    return r;
+}
+
+/* Bytes of element i (null: zeros). */
+const unsigned char *element(const Accessor &a, size_t i)
+{
+    if (!a.sparse_index.empty()) {
+        auto it = std::lower_bound(a.sparse_index.begin(), a.sparse_index.end(), (uint32_t)i);
+        if (it != a.sparse_index.end() && *it == i)
+            return a.sparse_values + (size_t)(it - a.sparse_index.begin()) * a.elem;
+    }
+    return a.data ? a.data + i * a.stride : nullptr;
+}
+
+void read_floats(const Accessor &a, size_t i, float *out)
+{
+    const unsigned char *p = element(a, i);
+    for (int c = 0; c < a.ncomp; c++) {
+        if (!p) {
+            out[c] = 0.0f;
+        } else if (a.ctype == TINYGLTF_COMPONENT_TYPE_FLOAT) {
+            memcpy(&out[c], p + c * 4, 4);
+        } else if (a.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) {
+            out[c] = p[c] / 255.0f;
+        } else { /* normalized unsigned short */
+            uint16_t s;
+            memcpy(&s, p + c * 2, 2);
+            out[c] = s / 65535.0f;
+        }
+    }
+}
+
+uint32_t read_index(const Accessor &a, size_t i)
+{
+    const unsigned char *p = element(a, i);
+    if (!p) return 0;
+    if (a.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) return p[0];
+    if (a.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT) {
+        uint16_t s;
+        memcpy(&s, p, 2);
+        return s;
+    }
+    uint32_t v;
+    memcpy(&v, p, 4);
+    return v;
+}
+
+/* ---- conversion --------------------------------------------------------------------- */
+
+struct Primitive {
+    int mode = TINYGLTF_MODE_TRIANGLES;
+    Accessor pos, nrm, uv, idx;
+    bool has_nrm = false, has_uv = false, has_idx = false;
+    uint64_t tris = 0;
+    uint32_t material = 0;
+};
+
+class Converter
+{
+  public:
+    Converter(const Model &m, LoadContext *ctx, uint64_t max_tris, rd_scene *out)
+        : m_(m), ctx_(ctx), max_tris_(max_tris), s_(out)
+    {
+    }
+    void run();
+
+  private:
+    void hierarchy();
+    void materials();
+    int32_t texture(int index, int tex_coord, size_t material, const char *slot);
+    void meshes();
+    std::vector<Primitive> plan_mesh(size_t mesh);
+    void fill_mesh(size_t mesh, const std::vector<Primitive> &prims, rd_mesh *out);
+    void node_transform(size_t index, rd_node *n);
+    void lights_and_cameras();
+    void warnings();
+
+    const Model &m_;
+    LoadContext *ctx_;
+    uint64_t max_tris_;
+    rd_scene *s_;
+    std::vector<int> parent_;        /* glTF parent of each glTF node */
+    std::vector<size_t> order_;      /* reachable glTF nodes, parents first */
+    std::vector<int32_t> node_map_;  /* glTF node -> rd node (-1: not in the scene) */
+    std::vector<int32_t> mesh_map_;  /* glTF mesh -> rd mesh (-1: unused or empty) */
+    std::map<int, int32_t> tex_map_; /* glTF texture -> rd texture */
+};
+
+void Converter::run()
+{
+    warnings();
+    hierarchy();
+    materials();
+    meshes();
+    node_map_.assign(m_.nodes.size(), -1);
+    for (size_t gi : order_) {
+        const tinygltf::Node &gn = m_.nodes[gi];
+        rd_node n;
+        memset(&n, 0, sizeof n);
+        n.name = gn.name.empty() ? nullptr : const_cast<char *>(gn.name.c_str());
+        n.parent = parent_[gi] >= 0 ? node_map_[(size_t)parent_[gi]] : -1;
+        n.mesh = gn.mesh >= 0 ? mesh_map_[(size_t)gn.mesh] : -1;
+        node_transform(gi, &n);
+        node_map_[gi] = (int32_t)rd_scene_add_node(s_, &n);
+    }
+    lights_and_cameras();
+    char err[256];
+    if (!rd_scene_update(s_, err, sizeof err)) fail(RD_GLTF_ERR_INVALID, "%s", err);
+}
+
+void Converter::warnings()
+{
+    for (const std::string &e : m_.extensionsUsed)
+        if (!e.empty() && !is_supported_extension(e))
+            rd_scene_warn(s_, "extension %s is not supported and was ignored",
+                          clean(e, 80).c_str());
+    if (!m_.skins.empty())
+        rd_scene_warn(s_,
+                      "the file has %zu skin(s); skinning is not supported, skinned meshes "
+                      "are drawn unskinned",
+                      m_.skins.size());
+}
+
+void Converter::hierarchy()
+{
+    size_t count = m_.nodes.size();
+    if (count > (size_t)INT32_MAX) fail(RD_GLTF_ERR_TOO_LARGE, "the file has too many nodes");
+    parent_.assign(count, -1);
+    for (size_t i = 0; i < count; i++) {
+        for (int c : m_.nodes[i].children) {
+            if (c < 0 || (size_t)c >= count)
+                fail(RD_GLTF_ERR_INVALID, "node %zu lists child %d, but there are only %zu nodes",
+                     i, c, count);
+            if ((size_t)c == i) fail(RD_GLTF_ERR_INVALID, "node %zu is its own child (a cycle)", i);
+            if (parent_[(size_t)c] >= 0)
+                fail(RD_GLTF_ERR_INVALID, "node %d has two parents (nodes %d and %zu)", c,
+                     parent_[(size_t)c], i);
+            parent_[(size_t)c] = (int)i;
+        }
+    }
+    /* with single parents, a cycle is a parent chain that returns to itself */
+    std::vector<uint8_t> state(count, 0);
+    std::vector<size_t> chain;
+    for (size_t i = 0; i < count; i++) {
+        chain.clear();
+        int j = (int)i;
+        while (j >= 0 && state[(size_t)j] == 0) {
+            state[(size_t)j] = 1;
+            chain.push_back((size_t)j);
+            j = parent_[(size_t)j];
+        }
+        if (j >= 0 && state[(size_t)j] == 1)
+            fail(RD_GLTF_ERR_INVALID, "the node hierarchy contains a cycle through node %d", j);
+        for (size_t k : chain)
+            state[k] = 2;
+    }
+
+    std::vector<int> roots;
+    if (!m_.scenes.empty()) {
+        size_t scene = 0;
+        if (m_.defaultScene >= 0 && (size_t)m_.defaultScene < m_.scenes.size())
+            scene = (size_t)m_.defaultScene;
+        else if (m_.defaultScene != -1)
+            fail(RD_GLTF_ERR_INVALID, "the default scene %d does not exist", m_.defaultScene);
+        roots = m_.scenes[scene].nodes;
+        for (int r : roots) {
+            if (r < 0 || (size_t)r >= count)
+                fail(RD_GLTF_ERR_INVALID, "scene %zu lists node %d, but there are only %zu nodes",
+                     scene, r, count);
+            if (parent_[(size_t)r] >= 0)
+                fail(RD_GLTF_ERR_INVALID,
+                     "scene %zu lists node %d as a root, but it is a child of node %d", scene, r,
+                     parent_[(size_t)r]);
+        }
+    } else {
+        for (size_t i = 0; i < count; i++)
+            if (parent_[i] < 0) roots.push_back((int)i);
+    }
+    std::vector<uint8_t> seen(count, 0);
+    std::vector<size_t> stack;
+    for (auto it = roots.rbegin(); it != roots.rend(); ++it)
+        stack.push_back((size_t)*it);
+    while (!stack.empty()) {
+        size_t n = stack.back();
+        stack.pop_back();
+        if (seen[n]) continue;
+        seen[n] = 1;
+        order_.push_back(n);
+        const std::vector<int> &ch = m_.nodes[n].children;
+        for (auto it = ch.rbegin(); it != ch.rend(); ++it)
+            stack.push_back((size_t)*it);
+    }
+}
+
+void Converter::node_transform(size_t index, rd_node *n)
+{
+    const tinygltf::Node &g = m_.nodes[index];
+    bool ok = true;
+    if (!g.matrix.empty()) {
+        if (g.matrix.size() != 16)
+            fail(RD_GLTF_ERR_INVALID, "node %zu has a matrix with %zu values instead of 16", index,
+                 g.matrix.size());
+        n->has_matrix = true;
+        for (int k = 0; k < 16; k++)
+            ok = ok && to_float(g.matrix[(size_t)k], &n->matrix[k]);
+    } else {
+        n->has_matrix = false;
+    }
+    float t[3] = {0, 0, 0}, r[4] = {0, 0, 0, 1}, sc[3] = {1, 1, 1};
+    struct {
+        const std::vector<double> *v;
+        float *dst;
+        size_t n;
+        const char *name;
+    } parts[] = {{&g.translation, t, 3, "translation"},
+                 {&g.rotation, r, 4, "rotation"},
+                 {&g.scale, sc, 3, "scale"}};
+    for (auto &p : parts) {
+        if (p.v->empty()) continue;
+        if (p.v->size() != p.n)
+            fail(RD_GLTF_ERR_INVALID, "node %zu has a %s with %zu values instead of %zu", index,
+                 p.name, p.v->size(), p.n);
+        for (size_t k = 0; k < p.n; k++)
+            ok = ok && to_float((*p.v)[k], &p.dst[k]);
+    }
+    if (!ok) fail(RD_GLTF_ERR_INVALID, "node %zu has a transform that is not finite", index);
+    memcpy(n->translation, t, sizeof t);
+    memcpy(n->rotation, r, sizeof r);
+    memcpy(n->scale, sc, sizeof sc);
+    if (!n->has_matrix) rd_mat4_identity(n->matrix);
+}
+
+int32_t Converter::texture(int index, int tex_coord, size_t material, const char *slot)
+{
+    if (index < 0) return -1;
+    if ((size_t)index >= m_.textures.size())
+        fail(RD_GLTF_ERR_INVALID,
+             "material %zu refers to texture %d, but there are only %zu "
+             "textures",
+             material, index, m_.textures.size());
+    if (tex_coord != 0) {
+        rd_scene_warn(s_,
+                      "material %zu reads its %s texture with TEXCOORD_%d; only TEXCOORD_0 "
+                      "is supported, so the texture is ignored",
+                      material, slot, tex_coord);
+        return -1;
+    }
+    auto found = tex_map_.find(index);
+    if (found != tex_map_.end()) return found->second;
+
+    const tinygltf::Texture &t = m_.textures[(size_t)index];
+    if (t.source < 0 || (size_t)t.source >= m_.images.size())
+        fail(RD_GLTF_ERR_INVALID, "texture %d refers to image %d, but there are only %zu images",
+             index, t.source, m_.images.size());
+    const tinygltf::Image &img = m_.images[(size_t)t.source];
+    std::string what = label("image", (size_t)t.source, img.name);
+    if (img.name.empty() && !img.uri.empty() && img.uri.compare(0, 5, "data:") != 0)
+        what = label("image", (size_t)t.source, img.uri);
+
+    std::vector<unsigned char> external;
+    const std::vector<unsigned char> *rgba = &img.image;
+    int w = img.width, h = img.height;
+    auto failed = ctx_->image_failures.find(t.source);
+    if (failed != ctx_->image_failures.end())
+        fail(failed->second.code, "%s could not be decoded: %s", what.c_str(),
+             failed->second.why.c_str());
+    if (img.image.empty()) {
+        if (img.uri.empty()) fail(RD_GLTF_ERR_INVALID, "%s has no data", what.c_str());
+        /* an external file (tinygltf keeps only its URI) */
+        if (img.uri.compare(0, 5, "data:") == 0)
+            fail(RD_GLTF_ERR_UNSUPPORTED, "%s has a data URI that is not base64 PNG or JPEG data",
+                 what.c_str());
+        std::string rel = tinygltf::dlib::urldecode(img.uri), why = uri_refusal(ctx_->rules, rel);
+        std::vector<unsigned char> file;
+        bool too_large = false;
+        if (why.empty() &&
+            !read_file(ctx_->rules.prefix + rel, kMaxExternalFile, &file, &why, &too_large))
+            fail(too_large ? RD_GLTF_ERR_TOO_LARGE : RD_GLTF_ERR_IO, "%s could not be loaded: %s",
+                 what.c_str(), why.c_str());
+        if (!why.empty())
+            fail(RD_GLTF_ERR_IO, "%s could not be loaded: %s", what.c_str(), why.c_str());
+        ImageFailure f;
+        if (!decode_image(ctx_, file.data(), file.size(), &external, &w, &h, &f))
+            fail(f.code, "%s could not be decoded: %s", what.c_str(), f.why.c_str());
+        rgba = &external;
+    }
+    if (w < 1 || h < 1 || rgba->size() != (size_t)w * (size_t)h * 4)
+        fail(RD_GLTF_ERR_INVALID, "%s has inconsistent decoded data", what.c_str());
+
+    rd_texture rt;
+    memset(&rt, 0, sizeof rt);
+    rt.width = (uint32_t)w;
+    rt.height = (uint32_t)h;
+    rt.wrap_s = rt.wrap_t = RD_WRAP_REPEAT;
+    if (t.sampler >= 0) {
+        if ((size_t)t.sampler >= m_.samplers.size())
+            fail(RD_GLTF_ERR_INVALID,
+                 "texture %d refers to sampler %d, but there are only %zu samplers", index,
+                 t.sampler, m_.samplers.size());
+        const tinygltf::Sampler &smp = m_.samplers[(size_t)t.sampler];
+        auto wrap = [&](int mode) -> uint32_t {
+            switch (mode) {
+            case TINYGLTF_TEXTURE_WRAP_REPEAT:
+                return RD_WRAP_REPEAT;
+            case TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE:
+                return RD_WRAP_CLAMP;
+            case TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT:
+                return RD_WRAP_MIRROR;
+            default:
+                fail(RD_GLTF_ERR_INVALID, "sampler %d has an invalid wrap mode %d", t.sampler,
+                     mode);
+            }
+        };
+        rt.wrap_s = wrap(smp.wrapS);
+        rt.wrap_t = wrap(smp.wrapT);
+        rt.nearest = smp.magFilter == TINYGLTF_TEXTURE_FILTER_NEAREST;
+    }
+    rt.rgba = static_cast<uint8_t *>(malloc(rgba->size()));
+    if (!rt.rgba) {
+        fprintf(stderr, "probecast: out of memory (%zu bytes)\n", rgba->size());
+        abort();
+    }
+    memcpy(rt.rgba, rgba->data(), rgba->size());
+    int32_t out = (int32_t)rd_scene_add_texture(s_, &rt);
+    tex_map_[index] = out;
+    return out;
+}
+
+void Converter::materials()
+{
+    for (size_t i = 0; i < m_.materials.size(); i++) {
+        const tinygltf::Material &g = m_.materials[i];
+        rd_material mt;
+        memset(&mt, 0, sizeof mt);
+        mt.name = g.name.empty() ? nullptr : const_cast<char *>(g.name.c_str());
+        const std::vector<double> &bc = g.pbrMetallicRoughness.baseColorFactor;
+        const std::vector<double> &em = g.emissiveFactor;
+        if (bc.size() != 4 || em.size() != 3)
+            fail(RD_GLTF_ERR_INVALID, "material %zu has a malformed colour factor", i);
+        bool ok = true;
+        for (int k = 0; k < 4; k++) {
+            ok = ok && to_float(bc[(size_t)k], &mt.base_color[k]);
+            mt.base_color[k] = std::min(std::max(mt.base_color[k], 0.0f), 1.0f);
+        }
+        float strength = 1.0f;
+        auto ext = g.extensions.find("KHR_materials_emissive_strength");
+        if (ext != g.extensions.end() && ext->second.Has("emissiveStrength")) {
+            const tinygltf::Value &v = ext->second.Get("emissiveStrength");
+            if (!v.IsNumber() || !to_float(v.GetNumberAsDouble(), &strength) || strength < 0.0f)
+                fail(RD_GLTF_ERR_INVALID, "material %zu has an invalid emissiveStrength", i);
+        }
+        for (int k = 0; k < 3; k++) {
+            ok = ok && to_float(em[(size_t)k], &mt.emission[k]);
+            mt.emission[k] = std::max(mt.emission[k], 0.0f) * strength;
+            ok = ok && std::isfinite(mt.emission[k]);
+        }
+        ok = ok && to_float(g.alphaCutoff, &mt.alpha_cutoff);
+        if (!ok)
+            fail(RD_GLTF_ERR_INVALID, "material %zu has a factor that is not a finite number", i);
+        mt.alpha_cutoff = std::max(mt.alpha_cutoff, 0.0f);
+        if (g.alphaMode == "OPAQUE") {
+            mt.alpha_mode = RD_ALPHA_OPAQUE;
+        } else if (g.alphaMode == "MASK") {
+            mt.alpha_mode = RD_ALPHA_MASK;
+        } else if (g.alphaMode == "BLEND") {
+            mt.alpha_mode = RD_ALPHA_BLEND;
+        } else {
+            rd_scene_warn(s_, "material %zu has an unknown alphaMode '%s'; OPAQUE is used", i,
+                          clean(g.alphaMode, 32).c_str());
+            mt.alpha_mode = RD_ALPHA_OPAQUE;
+        }
+        mt.double_sided = g.doubleSided;
+        mt.base_color_texture =
+            texture(g.pbrMetallicRoughness.baseColorTexture.index,
+                    g.pbrMetallicRoughness.baseColorTexture.texCoord, i, "base colour");
+        mt.emissive_texture =
+            texture(g.emissiveTexture.index, g.emissiveTexture.texCoord, i, "emissive");
+        rd_scene_add_material(s_, &mt); /* index 1 + i: materials[0] is the default */
+    }
+}
+
+/* Validates a mesh's primitives and counts its triangles without reading vertex data. */
+std::vector<Primitive> Converter::plan_mesh(size_t mesh)
+{
+    const tinygltf::Mesh &gm = m_.meshes[mesh];
+    std::vector<Primitive> out;
+    bool morph = false;
+    for (size_t p = 0; p < gm.primitives.size(); p++) {
+        const tinygltf::Primitive &gp = gm.primitives[p];
+        std::string where = fmt("mesh %zu primitive %zu", mesh, p);
+        Primitive pr;
+        pr.mode = gp.mode < 0 ? TINYGLTF_MODE_TRIANGLES : gp.mode;
+        morph = morph || !gp.targets.empty();
+        if (pr.mode >= TINYGLTF_MODE_POINTS && pr.mode <= TINYGLTF_MODE_LINE_STRIP) {
+            rd_scene_warn(s_,
+                          "%s draws points or lines (mode %d), which are not supported; it "
+                          "is skipped",
+                          where.c_str(), pr.mode);
+            continue;
+        }
+        if (pr.mode > TINYGLTF_MODE_TRIANGLE_FAN)
+            fail(RD_GLTF_ERR_INVALID, "%s has an invalid mode %d", where.c_str(), pr.mode);
+        auto pos = gp.attributes.find("POSITION");
+        if (pos == gp.attributes.end())
+            fail(RD_GLTF_ERR_INVALID, "%s has no POSITION attribute", where.c_str());
+        pr.pos = make_accessor(m_, pos->second, "POSITION of " + where, TINYGLTF_TYPE_VEC3,
+                               {TINYGLTF_COMPONENT_TYPE_FLOAT});
+        auto nrm = gp.attributes.find("NORMAL");
+        if (nrm != gp.attributes.end()) {
+            pr.nrm = make_accessor(m_, nrm->second, "NORMAL of " + where, TINYGLTF_TYPE_VEC3,
+                                   {TINYGLTF_COMPONENT_TYPE_FLOAT});
+            pr.has_nrm = true;
+        }
+        auto uv = gp.attributes.find("TEXCOORD_0");
+        if (uv != gp.attributes.end()) {
+            pr.uv =
+                make_accessor(m_, uv->second, "TEXCOORD_0 of " + where, TINYGLTF_TYPE_VEC2,
+                              {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
+                               TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT});
+            pr.has_uv = true;
+        }
+        if ((pr.has_nrm && pr.nrm.count != pr.pos.count) ||
+            (pr.has_uv && pr.uv.count != pr.pos.count))
+            fail(RD_GLTF_ERR_INVALID, "the attributes of %s have different vertex counts",
+                 where.c_str());
+        size_t n = pr.pos.count;
+        if (gp.indices >= 0) {
+            pr.idx = make_accessor(m_, gp.indices, "indices of " + where, TINYGLTF_TYPE_SCALAR,
+                                   {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
+                                    TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
+                                    TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT});
+            pr.has_idx = true;
+            n = pr.idx.count;
+        }
+        if (pr.mode == TINYGLTF_MODE_TRIANGLES) {
+            pr.tris = n / 3;
+            if (n % 3 != 0)
+                rd_scene_warn(s_,
+                              "%s has %zu vertices, not a multiple of 3; the last %zu are "
+                              "ignored",
+                              where.c_str(), n, n % 3);
+        } else {
+            pr.tris = n >= 3 ? n - 2 : 0;
+        }
+        if (gp.material >= 0 && (size_t)gp.material >= m_.materials.size())
+            fail(RD_GLTF_ERR_INVALID, "%s refers to material %d, but there are only %zu materials",
+                 where.c_str(), gp.material, m_.materials.size());
+        pr.material = gp.material >= 0 ? (uint32_t)gp.material + 1 : 0;
+        if (pr.tris > 0) out.push_back(std::move(pr));
+    }
+    if (morph)
+        rd_scene_warn(s_, "%s has morph targets, which are not supported; its base shape is used",
+                      label("mesh", mesh, gm.name).c_str());
+    return out;
+}
+
+void Converter::fill_mesh(size_t mesh, const std::vector<Primitive> &prims, rd_mesh *out)
+{
+    size_t t_out = 0;
+    for (size_t p = 0; p < prims.size(); p++) {
+        const Primitive &pr = prims[p];
+        for (uint64_t t = 0; t < pr.tris; t++, t_out++) {
+            size_t v[3];
+            if (pr.mode == TINYGLTF_MODE_TRIANGLES) {
+                v[0] = (size_t)t * 3, v[1] = (size_t)t * 3 + 1, v[2] = (size_t)t * 3 + 2;
+            } else if (pr.mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+                size_t odd = (size_t)(t % 2);
+                v[0] = (size_t)t, v[1] = (size_t)t + 1 + odd, v[2] = (size_t)t + 2 - odd;
+            } else { /* fan */
+                v[0] = (size_t)t + 1, v[1] = (size_t)t + 2, v[2] = 0;
+            }
+            for (int k = 0; k < 3; k++) {
+                size_t vi = v[k];
+                if (pr.has_idx) {
+                    uint32_t ix = read_index(pr.idx, vi);
+                    if (ix >= pr.pos.count)
+                        fail(RD_GLTF_ERR_INVALID,
+                             "index %zu of mesh %zu primitive %zu is %u, out of range for %zu "
+                             "vertices",
+                             vi, mesh, p, ix, pr.pos.count);
+                    vi = ix;
+                }
+                float *pos = &out->positions[t_out * 9 + (size_t)k * 3];
+                read_floats(pr.pos, vi, pos);
+                if (!rd_vec3_isfinite(pos))
+                    fail(RD_GLTF_ERR_INVALID,
+                         "POSITION of mesh %zu primitive %zu contains NaN or infinity (vertex "
+                         "%zu)",
+                         mesh, p, vi);
+                float *nrm = &out->normals[t_out * 9 + (size_t)k * 3];
+                if (pr.has_nrm) {
+                    float n[3];
+                    read_floats(pr.nrm, vi, n);
+                    if (!rd_vec3_normalize(nrm, n, nullptr))
+                        rd_vec3_set(nrm, 0, 0, 0); /* filled with the flat normal below */
+                }
+                float *uv = &out->uvs[t_out * 6 + (size_t)k * 2];
+                if (pr.has_uv) {
+                    read_floats(pr.uv, vi, uv);
+                    for (int c = 0; c < 2; c++)
+                        if (!std::isfinite(uv[c])) uv[c] = 0.0f;
+                }
+            }
+            out->material[t_out] = pr.material;
+        }
+    }
+    rd_mesh_fill_flat_normals(out);
+}
+
+void Converter::meshes()
+{
+    std::vector<uint8_t> used(m_.meshes.size(), 0);
+    for (size_t gi : order_) {
+        int mesh = m_.nodes[gi].mesh;
+        if (mesh < -1 || (mesh >= 0 && (size_t)mesh >= m_.meshes.size()))
+            fail(RD_GLTF_ERR_INVALID, "node %zu refers to mesh %d, but there are only %zu meshes",
+                 gi, mesh, m_.meshes.size());
+        if (mesh >= 0) used[(size_t)mesh] = 1;
+    }
+    std::vector<std::vector<Primitive>> plans(m_.meshes.size());
+    uint64_t total = 0;
+    for (size_t i = 0; i < m_.meshes.size(); i++) {
+        if (!used[i]) continue;
+        plans[i] = plan_mesh(i);
+        uint64_t tris = 0;
+        for (const Primitive &p : plans[i])
+            tris += p.tris;
+        if (tris > UINT32_MAX)
+            fail(RD_GLTF_ERR_TOO_LARGE, "mesh %zu has %llu triangles, more than a mesh can hold", i,
+                 (unsigned long long)tris);
+        total += tris;
+        if (total > max_tris_)
+            fail(RD_GLTF_ERR_TOO_LARGE,
+                 "the scene has more than %llu triangles (the limit), counting meshes up to "
+                 "mesh %zu",
+                 (unsigned long long)max_tris_, i);
+    }
+    mesh_map_.assign(m_.meshes.size(), -1);
+    for (size_t i = 0; i < m_.meshes.size(); i++) {
+        uint64_t tris = 0;
+        for (const Primitive &p : plans[i])
+            tris += p.tris;
+        if (tris == 0) continue; /* unused, or nothing but points and lines */
+        const std::string &name = m_.meshes[i].name;
+        uint32_t idx = rd_scene_add_mesh(s_, name.empty() ? nullptr : name.c_str(), (uint32_t)tris);
+        fill_mesh(i, plans[i], &s_->meshes[idx]);
+        mesh_map_[i] = (int32_t)idx;
+    }
+}
+
+void Converter::lights_and_cameras()
+{
+    std::vector<uint8_t> ortho_warned(m_.cameras.size(), 0);
+    for (size_t gi : order_) {
+        const tinygltf::Node &gn = m_.nodes[gi];
+        int32_t node = node_map_[gi];
+        if (gn.camera >= 0 || gn.camera < -1) {
+            if (gn.camera < 0 || (size_t)gn.camera >= m_.cameras.size())
+                fail(RD_GLTF_ERR_INVALID,
+                     "node %zu refers to camera %d, but there are only %zu cameras", gi, gn.camera,
+                     m_.cameras.size());
+            size_t ci = (size_t)gn.camera;
+            const tinygltf::Camera &gc = m_.cameras[ci];
+            if (gc.type != "perspective") {
+                if (!ortho_warned[ci])
+                    rd_scene_warn(s_, "%s is %s, which is not supported; it is ignored",
+                                  label("camera", ci, gc.name).c_str(), clean(gc.type, 16).c_str());
+                ortho_warned[ci] = 1;
+            } else {
+                rd_camera c;
+                memset(&c, 0, sizeof c);
+                c.name = gc.name.empty() ? nullptr : const_cast<char *>(gc.name.c_str());
+                const tinygltf::PerspectiveCamera &p = gc.perspective;
+                if (!to_float(p.yfov, &c.yfov) || !(c.yfov > 0.0f) || !(c.yfov < 3.14159f) ||
+                    !to_float(p.znear, &c.znear) || !(c.znear > 0.0f) ||
+                    !to_float(p.aspectRatio, &c.aspect) || c.aspect < 0.0f)
+                    fail(RD_GLTF_ERR_INVALID,
+                         "camera %zu has an invalid yfov, znear or aspectRatio", ci);
+                c.node = node;
+                rd_scene_add_camera(s_, &c);
+            }
+        }
+        auto ext = gn.extensions.find("KHR_lights_punctual");
+        if (ext == gn.extensions.end()) continue;
+        const tinygltf::Value &li = ext->second.Get("light");
+        if (!li.IsInt() || li.GetNumberAsInt() < 0 ||
+            (size_t)li.GetNumberAsInt() >= m_.lights.size())
+            fail(RD_GLTF_ERR_INVALID,
+                 "node %zu refers to a KHR_lights_punctual light that does "
+                 "not exist (there are %zu lights)",
+                 gi, m_.lights.size());
+        size_t index = (size_t)li.GetNumberAsInt();
+        const tinygltf::Light &gl = m_.lights[index];
+        rd_light l;
+        memset(&l, 0, sizeof l);
+        l.name = gl.name.empty() ? nullptr : const_cast<char *>(gl.name.c_str());
+        if (gl.type == "point") {
+            l.type = RD_LIGHT_POINT;
+        } else if (gl.type == "spot") {
+            l.type = RD_LIGHT_SPOT;
+        } else if (gl.type == "directional") {
+            l.type = RD_LIGHT_DIRECTIONAL;
+        } else {
+            rd_scene_warn(s_, "light %zu has an unknown type '%s'; it is ignored", index,
+                          clean(gl.type, 32).c_str());
+            continue;
+        }
+        bool ok = true;
+        l.color[0] = l.color[1] = l.color[2] = 1.0f;
+        if (!gl.color.empty()) {
+            ok = gl.color.size() == 3;
+            for (size_t k = 0; ok && k < 3; k++)
+                ok = to_float(gl.color[k], &l.color[k]) && l.color[k] >= 0.0f;
+        }
+        ok = ok && to_float(gl.intensity, &l.intensity) && l.intensity >= 0.0f;
+        ok = ok && to_float(gl.range, &l.range) && l.range >= 0.0f;
+        if (!ok)
+            fail(RD_GLTF_ERR_INVALID, "light %zu has an invalid color, intensity or range", index);
+        if (l.type == RD_LIGHT_DIRECTIONAL) l.range = 0.0f;
+        if (l.type == RD_LIGHT_SPOT) {
+            if (!to_float(gl.spot.innerConeAngle, &l.inner_cone) ||
+                !to_float(gl.spot.outerConeAngle, &l.outer_cone) || l.inner_cone < 0.0f ||
+                !(l.inner_cone < l.outer_cone) || l.outer_cone > 1.5707964f)
+                fail(RD_GLTF_ERR_INVALID,
+                     "light %zu has invalid spot cone angles (inner %g, outer %g)", index,
+                     gl.spot.innerConeAngle, gl.spot.outerConeAngle);
+        }
+        l.node = node;
+        rd_vec3_set(l.direction, 0.0f, 0.0f, -1.0f);
+        rd_scene_add_light(s_, &l);
+    }
+}
+
+/* One readable line, no control or non-ASCII bytes (messages may end up in JSON or logs). */
+void write_message(const std::string &msg, char *err, size_t errlen)
+{
+    if (!err || errlen == 0) return;
+    size_t n = std::min(msg.size(), errlen - 1);
+    for (size_t i = 0; i < n; i++) {
+        unsigned char ch = (unsigned char)msg[i];
+        err[i] = (ch < 0x20 || ch >= 0x7f) ? '?' : (char)ch;
+    }
+    err[n] = '\0';
+}
+
+/* tinygltf's error text: its first non-empty line, shortened. */
+std::string first_line(const std::string &text)
+{
+    size_t start = 0;
+    while (start < text.size()) {
+        size_t end = text.find('\n', start);
+        if (end == std::string::npos) end = text.size();
+        if (end > start) {
+            std::string line = text.substr(start, std::min<size_t>(end - start, 160));
+            return line;
+        }
+        start = end + 1;
+    }
+    return "unknown error";
+}
+
+void load(const unsigned char *data, size_t size, const char *base_dir, const rd_gltf_options *opt,
+          rd_scene *out)
+{
+    if (size > 0xffffffffull) fail(RD_GLTF_ERR_TOO_LARGE, "the file is larger than 4 GiB");
+    LoadContext ctx;
+    if (base_dir) {
+        ctx.rules.allowed = true;
+        ctx.rules.base = base_dir[0] ? base_dir : ".";
+        ctx.rules.prefix = ctx.rules.base;
+        if (ctx.rules.prefix.back() != '/') ctx.rules.prefix += '/';
+    }
+    Container c = parse_container(data, size);
+    prescan(c, &ctx);
+
+    tinygltf::TinyGLTF gltf;
+    tinygltf::FsCallbacks fs = {&fs_file_exists, &fs_expand, &fs_read, &fs_write, &ctx.rules};
+    gltf.SetFsCallbacks(fs);
+    gltf.SetImageLoader(&image_callback, &ctx);
+    Model model;
+    std::string terr, twarn;
+    bool ok;
+    if (c.glb)
+        ok = gltf.LoadBinaryFromMemory(&model, &terr, &twarn, data, (unsigned int)size,
+                                       ctx.rules.base);
+    else
+        ok = gltf.LoadASCIIFromString(&model, &terr, &twarn, c.json, (unsigned int)c.json_size,
+                                      ctx.rules.base);
+    if (!ok) {
+        if (!ctx.rules.last_refusal.empty())
+            fail(RD_GLTF_ERR_IO, "an external file could not be loaded: %s (%s)",
+                 ctx.rules.last_refusal.c_str(), first_line(terr).c_str());
+        fail(RD_GLTF_ERR_INVALID, "the glTF file is invalid: %s", first_line(terr).c_str());
+    }
+    uint64_t max_tris = opt && opt->max_triangles ? opt->max_triangles : kDefaultMaxTriangles;
+    Converter(model, &ctx, max_tris, out).run();
+}
+
+rd_gltf_result guarded(const unsigned char *data, size_t size, const char *base_dir,
+                       const rd_gltf_options *opt, rd_scene *out, char *err, size_t errlen)
+{
+    rd_gltf_result code = RD_GLTF_OK;
+    std::string msg;
+    try {
+        if (!data && size > 0) fail(RD_GLTF_ERR_INVALID, "no data was given");
+        load(data, size, base_dir, opt, out);
+    } catch (const LoadError &e) {
+        code = e.code;
+        msg = e.msg;
+    } catch (const std::bad_alloc &) {
+        code = RD_GLTF_ERR_TOO_LARGE;
+        msg = "the file needs more memory than is available";
+    } catch (const std::exception &e) {
+        code = RD_GLTF_ERR_INVALID;
+        msg = std::string("the glTF file is invalid: ") + e.what();
+    } catch (...) {
+        code = RD_GLTF_ERR_INVALID;
+        msg = "the glTF file is invalid (unexpected error)";
+    }
+    if (code != RD_GLTF_OK) rd_scene_destroy(out);
+    write_message(msg, err, errlen);
+    return code;
+}
+
+} // namespace
+
+extern "C" const char *rd_gltf_strerror(rd_gltf_result r)
+{
+    switch (r) {
+    case RD_GLTF_OK:
+        return "ok";
+    case RD_GLTF_ERR_IO:
+        return "io error";
+    case RD_GLTF_ERR_PARSE:
+        return "parse error";
+    case RD_GLTF_ERR_INVALID:
+        return "invalid glTF";
+    case RD_GLTF_ERR_UNSUPPORTED:
+        return "unsupported glTF feature";
+    case RD_GLTF_ERR_TOO_LARGE:
+        return "too large";
+    }
+    return "unknown error";
+}
+
+extern "C" rd_gltf_result rd_gltf_load_memory(const void *data, size_t size, const char *base_dir,
+                                              const rd_gltf_options *opt, rd_scene *out, char *err,
+                                              size_t errlen)
+{
+    if (!out) {
+        write_message("no output scene was given", err, errlen);
+        return RD_GLTF_ERR_INVALID;
+    }
+    rd_scene_init(out);
+    return guarded(static_cast<const unsigned char *>(data), size, base_dir, opt, out, err, errlen);
+}
+
+extern "C" rd_gltf_result rd_gltf_load_file(const char *path, const rd_gltf_options *opt,
+                                            rd_scene *out, char *err, size_t errlen)
+{
+    if (!out) {
+        write_message("no output scene was given", err, errlen);
+        return RD_GLTF_ERR_INVALID;
+    }
+    rd_scene_init(out);
+    rd_gltf_result code;
+    std::string msg;
+    try {
+        if (!path || !path[0]) fail(RD_GLTF_ERR_IO, "no file name was given");
+        std::vector<unsigned char> data;
+        std::string why;
+        bool too_large = false;
+        if (!read_file(path, 0xffffffffull, &data, &why, &too_large))
+            fail(too_large ? RD_GLTF_ERR_TOO_LARGE : RD_GLTF_ERR_IO, "'%s' could not be read: %s",
+                 path, why.c_str());
+        std::string p = path, base;
+        size_t slash = p.find_last_of('/');
+        base = slash == std::string::npos ? "." : slash == 0 ? "/" : p.substr(0, slash);
+        return guarded(data.data(), data.size(), base.c_str(), opt, out, err, errlen);
+    } catch (const LoadError &e) {
+        code = e.code;
+        msg = e.msg;
+    } catch (...) {
+        code = RD_GLTF_ERR_TOO_LARGE;
+        msg = "the file needs more memory than is available";
+    }
+    rd_scene_destroy(out);
+    write_message(msg, err, errlen);
+    return code;
+}
