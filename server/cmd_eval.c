@@ -26,6 +26,8 @@ typedef struct eval_args {
     float density[8];
     unsigned ndensity;
     unsigned probes[8][3], nprobes; /* explicit probe counts (replace densities) */
+    float hysteresis[8];
+    unsigned nhysteresis;
     bool noise_floor, list;
 } eval_args;
 
@@ -44,9 +46,11 @@ static void eval_usage(FILE *f)
             "  --rays A,B,...         rays per probe to sweep (default 64,128,256)\n"
             "  --updates A,B,...      probe updates before the image (default 8,32)\n"
             "  --density A,B,...      probe density factors over the fitted grid (default 0.5,1,2)\n"
+            "  --hysteresis A,B,...   probe hysteresis values (default 0.85,0.97)\n"
             "  --probes X,Y,Z[;...]   explicit probe grids instead of densities\n"
             "  --no-noise-floor       skip the second reference (seed 2) that measures its noise\n"
-            "  --timing-frames N      steady-state frames timed per setting (default 3)\n"
+            "  --timing-frames N      steady-state frames timed per setting, after two warm-up\n"
+            "                         frames; the median is reported (default 7)\n"
             "  --out DIR              where eval.csv, eval.json, eval.svg go (default eval-out)\n"
             "  --cache DIR            reference cache (default DIR-of-out/cache)\n"
             "  --device INDEX|NAME    Vulkan device\n"
@@ -68,7 +72,8 @@ static bool parse_uint_list(const char *opt, const char *s, unsigned *out, unsig
 static int parse(int argc, char **argv, eval_args *a)
 {
     memset(a, 0, sizeof *a);
-    a->width = 320, a->height = 180, a->ref_spp = 1024, a->timing_frames = 3;
+    a->width = 320, a->height = 180, a->ref_spp = 1024, a->timing_frames = 7;
+    a->hysteresis[0] = 0.85f, a->hysteresis[1] = 0.97f, a->nhysteresis = 2;
     a->rays[0] = 64, a->rays[1] = 128, a->rays[2] = 256, a->nrays = 3;
     a->updates[0] = 8, a->updates[1] = 32, a->nupdates = 2;
     a->density[0] = 0.5f, a->density[1] = 1, a->density[2] = 2, a->ndensity = 3;
@@ -126,6 +131,19 @@ static int parse(int argc, char **argv, eval_args *a)
                     return 2;
                 }
                 a->ndensity++;
+            }
+            i++;
+        } else if (strcmp(o, "--hysteresis") == 0) {
+            a->nhysteresis = 0;
+            char buf[256];
+            snprintf(buf, sizeof buf, "%s", v);
+            for (char *t = strtok(buf, ","); t; t = strtok(NULL, ",")) {
+                float h;
+                if (a->nhysteresis == 8 || !cli_parse_float(o, t, &h) || !(h > 0 && h < 1)) {
+                    fprintf(stderr, "probecast eval: --hysteresis expects values in (0, 1)\n");
+                    return 2;
+                }
+                a->hysteresis[a->nhysteresis++] = h;
             }
             i++;
         } else if (strcmp(o, "--probes") == 0) {
@@ -269,13 +287,21 @@ static bool run_setting(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene
     }
     rd_image_compare(img, ref, px, &row->err);
     free(img);
+    /* GPU clocks ramp up under load: two warm-up frames, then the median frame */
     fs.gi_updates = 1;
-    double total = 0;
-    for (unsigned f = 0; f < a->timing_frames; f++) {
+    double times[100];
+    for (unsigned f = 0; f < a->timing_frames + 2; f++) {
         if (rd_renderer_render(&c->r, gs, cam, &fs, c->err, sizeof c->err) != RD_VK_OK) return false;
+        double total = 0;
         for (unsigned i = 0; i < c->r.stats.pass_count; i++) total += c->r.stats.pass_ms[i];
+        if (f >= 2) times[f - 2] = total;
     }
-    row->gpu_ms = total / a->timing_frames;
+    for (unsigned i = 1; i < a->timing_frames; i++) /* insertion sort: a handful of values */
+        for (unsigned j = i; j > 0 && times[j] < times[j - 1]; j--) {
+            double t = times[j];
+            times[j] = times[j - 1], times[j - 1] = t;
+        }
+    row->gpu_ms = times[a->timing_frames / 2];
     if (gi->mode != PC_GI_OFF) {
         row->probes[0] = c->r.ddgi.vol.counts.x;
         row->probes[1] = c->r.ddgi.vol.counts.y;
@@ -340,7 +366,8 @@ int cli_eval(int argc, char **argv)
         return 1;
     }
     unsigned ngrids = a.nprobes ? a.nprobes : a.ndensity;
-    unsigned per_case = 2 + ngrids * a.nrays * a.nupdates + (a.noise_floor ? 1 : 0) + 1;
+    unsigned sweep = ngrids * a.nrays * a.nupdates * a.nhysteresis;
+    unsigned per_case = 2 + sweep + (a.noise_floor ? 1 : 0) + 1;
     unsigned selected = 0;
     for (unsigned i = 0; i < ncases; i++) selected += case_selected(a.cases, cases[i].name);
     unsigned total = selected * per_case, done = 0, nrows = 0;
@@ -391,7 +418,7 @@ int cli_eval(int argc, char **argv)
         if (rc == 0 && rd_renderer_configure_gi(&c.r, s.bounds_min, s.bounds_max, &fit, c.err, sizeof c.err) == RD_VK_OK) {
             fitted[0] = c.r.ddgi.vol.counts.x, fitted[1] = c.r.ddgi.vol.counts.y, fitted[2] = c.r.ddgi.vol.counts.z;
         }
-        for (unsigned k = 0; rc == 0 && k < 2 + ngrids * a.nrays * a.nupdates; k++) {
+        for (unsigned k = 0; rc == 0 && k < 2 + sweep; k++) {
             eval_row *row = &rows[nrows];
             memset(row, 0, sizeof *row);
             snprintf(row->scene, sizeof row->scene, "%s", name);
@@ -406,10 +433,11 @@ int cli_eval(int argc, char **argv)
                 gi.rays = a.rays[a.nrays - 1];
                 snprintf(row->mode, sizeof row->mode, "classic");
             } else {
-                unsigned j = k - 2, g = j / (a.nrays * a.nupdates);
+                unsigned j = k - 2, g = j / (a.nrays * a.nupdates * a.nhysteresis);
                 gi.mode = PC_GI_DDGI;
-                gi.rays = a.rays[(j / a.nupdates) % a.nrays];
-                updates = a.updates[j % a.nupdates];
+                gi.rays = a.rays[(j / (a.nupdates * a.nhysteresis)) % a.nrays];
+                updates = a.updates[(j / a.nhysteresis) % a.nupdates];
+                gi.hysteresis = a.hysteresis[j % a.nhysteresis];
                 for (int ax = 0; ax < 3; ax++) {
                     double n = a.nprobes ? a.probes[g][ax] : fmax(1.0, round(fitted[ax] * a.density[g]));
                     gi.counts[ax] = (unsigned)fmin(n, 256.0);
@@ -421,9 +449,11 @@ int cli_eval(int argc, char **argv)
                 rc = 1;
                 break;
             }
+            row->hysteresis = gi.hysteresis > 0 ? gi.hysteresis : 0.97f;
             if (k >= 1)
-                snprintf(row->config, sizeof row->config, "%s %ux%ux%u r%u u%u", row->mode,
-                         row->probes[0], row->probes[1], row->probes[2], row->rays, row->updates);
+                snprintf(row->config, sizeof row->config, "%s %ux%ux%u r%u u%u h%.2f", row->mode,
+                         row->probes[0], row->probes[1], row->probes[2], row->rays, row->updates,
+                         row->hysteresis);
             row->ref_ms = ref_ms;
             row->noise_rel_mse = noise;
             nrows++;

@@ -20,13 +20,13 @@ bool eval_write_csv(const char *path, const eval_row *rows, unsigned n)
 {
     FILE *f = fopen(path, "w");
     if (!f) return false;
-    fprintf(f, "scene,config,mode,probes_x,probes_y,probes_z,rays,updates,gpu_ms,rmse,rel_mse,"
+    fprintf(f, "scene,config,mode,probes_x,probes_y,probes_z,rays,updates,hysteresis,gpu_ms,rmse,rel_mse,"
                "smape,mean_lum_bias,p99_abs,non_finite,reference_noise_rel_mse,reference_ms,pareto\n");
     for (unsigned i = 0; i < n; i++) {
         const eval_row *r = &rows[i];
-        fprintf(f, "%s,%s,%s,%u,%u,%u,%u,%u,%.4f,%.6g,%.6g,%.6g,%.6g,%.6g,%zu,%.6g,%.3f,%d\n",
+        fprintf(f, "%s,%s,%s,%u,%u,%u,%u,%u,%.2f,%.4f,%.6g,%.6g,%.6g,%.6g,%.6g,%zu,%.6g,%.3f,%d\n",
                 r->scene, r->config, r->mode, r->probes[0], r->probes[1], r->probes[2], r->rays,
-                r->updates, r->gpu_ms, r->err.rmse, r->err.rel_mse, r->err.smape,
+                r->updates, r->hysteresis, r->gpu_ms, r->err.rmse, r->err.rel_mse, r->err.smape,
                 r->err.mean_lum_bias, r->err.p99_abs, r->err.non_finite, r->noise_rel_mse,
                 r->ref_ms, r->pareto ? 1 : 0);
     }
@@ -70,8 +70,9 @@ bool eval_write_json(const char *path, const eval_row *rows, unsigned n, const c
         json_str(f, r->config);
         fprintf(f, ", \"mode\": ");
         json_str(f, r->mode);
-        fprintf(f, ", \"probes\": [%u, %u, %u], \"rays\": %u, \"updates\": %u, \"gpu_ms\": ",
-                r->probes[0], r->probes[1], r->probes[2], r->rays, r->updates);
+        fprintf(f, ", \"probes\": [%u, %u, %u], \"rays\": %u, \"updates\": %u, "
+                   "\"hysteresis\": %.2f, \"gpu_ms\": ",
+                r->probes[0], r->probes[1], r->probes[2], r->rays, r->updates, r->hysteresis);
         json_num(f, r->gpu_ms);
         const double vals[] = {r->err.rmse, r->err.rel_mse, r->err.smape, r->err.mean_lum_bias,
                                r->err.p99_abs, r->noise_rel_mse, r->ref_ms};
@@ -90,11 +91,11 @@ bool eval_write_json(const char *path, const eval_row *rows, unsigned n, const c
 
 void eval_print_table(FILE *f, const eval_row *rows, unsigned n)
 {
-    fprintf(f, "%-14s %-24s %9s %11s %10s %9s %9s %6s\n", "scene", "config", "GPU ms", "relMSE",
+    fprintf(f, "%-14s %-30s %9s %11s %10s %9s %9s %6s\n", "scene", "config", "GPU ms", "relMSE",
             "RMSE", "bias", "p99", "front");
     for (unsigned i = 0; i < n; i++) {
         const eval_row *r = &rows[i];
-        fprintf(f, "%-14s %-24s %9.3f %11.4g %10.4g %+8.1f%% %9.4g %6s\n", r->scene, r->config,
+        fprintf(f, "%-14s %-30s %9.3f %11.4g %10.4g %+8.1f%% %9.4g %6s\n", r->scene, r->config,
                 r->gpu_ms, r->err.rel_mse, r->err.rmse, 100 * r->err.mean_lum_bias, r->err.p99_abs,
                 r->pareto ? "*" : "");
     }

@@ -14,6 +14,7 @@ typedef struct eval_row {
     char config[64]; /* e.g. "ddgi 8x8x8 r128 u32" */
     char mode[16];   /* direct, classic, ddgi */
     unsigned probes[3], rays, updates;
+    float hysteresis;
     double gpu_ms;   /* GPU time of one steady-state frame (one probe update + shading) */
     double ref_ms;   /* GPU time of the reference render */
     double noise_rel_mse; /* relMSE between two references of different seeds */

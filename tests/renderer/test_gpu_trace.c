@@ -298,7 +298,9 @@ static uint32_t compare(const char *what, const float *rays, const gpu_hit *g, c
             const mesh *m = &meshes[inst[g[r].instance].mesh];
             float t, u, v;
             bool back;
-            if (!rd_ray_triangle(a, b, w, w + 3, w + 6, a[3], b[3], &t, &u, &v, &back))
+            bool hit = rd_ray_triangle(a, b, w, w + 3, w + 6, a[3], b[3], &t, &u, &v, &back);
+            back = back != inst[g[r].instance].neg_det; /* the object's front, as glTF keeps it */
+            if (!hit)
                 problem = "any-hit triangle not hit on the CPU";
             else if (!accepted(m->flags[gtri], back, u, flags))
                 problem = "any-hit triangle rejected on the CPU";
