@@ -216,7 +216,8 @@ vec3 direct_irradiance(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, inout uint rays
 }
 
 /* Ray counting with one global atomic per workgroup. Every invocation of the workgroup must
- * call both (no early return in between). which: 0 primary, 1 shadow, 2 probe, 3 path. */
+ * call both (no early return in between). which: 0 primary, 1 shadow, 2 probe, 3 path,
+ * 4 probe shadow. */
 shared uint pc_wg_rays;
 void count_rays_begin()
 {
@@ -232,7 +233,8 @@ void count_rays_end(uint64_t counters, uint which, uint rays)
         if (which == 0u) atomicAdd(c.c.primary_rays, pc_wg_rays);
         else if (which == 1u) atomicAdd(c.c.shadow_rays, pc_wg_rays);
         else if (which == 2u) atomicAdd(c.c.probe_rays, pc_wg_rays);
-        else atomicAdd(c.c.path_rays, pc_wg_rays);
+        else if (which == 3u) atomicAdd(c.c.path_rays, pc_wg_rays);
+        else atomicAdd(c.c.probe_shadow_rays, pc_wg_rays);
     }
 }
 

@@ -46,5 +46,5 @@ void main()
         if (any(isnan(radiance)) || any(isinf(radiance))) radiance = vec3(0.0);
         DdgiRayRef(vol.rays).v[slot] = vec4(radiance, r.w);
     }
-    count_rays_end(pc.buf1, 1u, shadow_rays);
+    count_rays_end(pc.buf1, 4u, shadow_rays);
 }

@@ -256,9 +256,11 @@ PC_END(pc_gbuffer_texel);
 PC_STRUCT(pc_counters)
 {
     pc_u32 primary_rays;
-    pc_u32 shadow_rays;
+    pc_u32 shadow_rays;       /* from camera-visible surfaces */
     pc_u32 probe_rays;
-    pc_u32 path_rays;
+    pc_u32 path_rays;         /* path-traced rays, shadow rays included */
+    pc_u32 probe_shadow_rays; /* from probe-ray hits */
+    pc_u32 pad[3];
 }
 PC_END(pc_counters);
 
@@ -317,7 +319,8 @@ PC_OFF(pc_globals, view, 96);
 PC_OFF(pc_globals, ddgi, 208);
 PC_CHECK(pc_gbuffer_texel, 80);
 PC_OFF(pc_gbuffer_texel, albedo, 48);
-PC_CHECK(pc_counters, 16);
+PC_CHECK(pc_counters, 32);
+PC_OFF(pc_counters, probe_shadow_rays, 16);
 PC_CHECK(pc_push, 48);
 PC_OFF(pc_push, params, 32);
 #undef PC_CHECK

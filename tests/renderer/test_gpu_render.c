@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "renderer/procedural.h"
 #include "test_render_util.h"
 #include "test_util.h"
 
@@ -122,6 +123,72 @@ static void test_emissive(void)
     free(img);
 }
 
+/* Textures are sampled on the GPU: an emissive quad whose emissive texture is 2x2 texels
+ * (nearest filtering) shows each texel's sRGB-decoded colour times the factor, in the right
+ * quadrant; with repeat wrapping and UVs 0..2 the pattern tiles twice. */
+static void test_texture(void)
+{
+    char err[512];
+    rd_scene s;
+    CHECK(rd_procedural_build("emissive", &s, err, sizeof err));
+    rd_texture t = {.width = 2, .height = 2, .wrap_s = RD_WRAP_REPEAT, .wrap_t = RD_WRAP_REPEAT,
+                    .nearest = true};
+    const uint8_t texels[16] = {255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 188, 188, 188, 255};
+    t.rgba = malloc(16);
+    memcpy(t.rgba, texels, 16);
+    uint32_t tex = rd_scene_add_texture(&s, &t);
+    rd_material *m = &s.materials[s.meshes[0].material[0]];
+    m->emissive_texture = (int32_t)tex;
+    m->emission[0] = m->emission[1] = m->emission[2] = 1.0f;
+    /* the quad (-1,-1)..(1,1) at z = 0: u along x, v downward, from 0 to 2 */
+    rd_mesh *mesh = &s.meshes[0];
+    for (uint32_t i = 0; i < mesh->tri_count * 3; i++) {
+        const float *p = &mesh->positions[i * 3];
+        mesh->uvs[i * 2] = p[0] + 1.0f;
+        mesh->uvs[i * 2 + 1] = 1.0f - p[1];
+    }
+    CHECK(rd_scene_update(&s, err, sizeof err));
+    rd_view_camera cam;
+    CHECK(rd_camera_for_scene(&s, -1, &cam, err, sizeof err));
+    cam.eye[2] = 1.0f; /* close enough that the quad fills the view */
+    rd_gpu_scene gs;
+    rd_renderer r;
+    float *img = calloc((size_t)W * H * 3, sizeof(float));
+    rd_frame_settings fs = {.width = W, .height = H};
+    CHECK(rd_gpu_scene_create(&vk, &gs, &s, err, sizeof err) == RD_VK_OK);
+    CHECK(rd_renderer_create(&vk, &r, err, sizeof err) == RD_VK_OK);
+    CHECK(rd_renderer_render(&r, &gs, &cam, &fs, err, sizeof err) == RD_VK_OK);
+    CHECK(rd_renderer_read_hdr(&r, img, err, sizeof err) == RD_VK_OK);
+    pc_view v;
+    rd_camera_to_view(&cam, W, H, &v);
+    double grey = pow((188 / 255.0 + 0.055) / 1.055, 2.4); /* sRGB decode */
+    const double expect[4][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {grey, grey, grey}};
+    int bad = 0, checked = 0;
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) {
+            double d[3];
+            pixel_ray(&v, x, y, d);
+            double t = -cam.eye[2] / d[2];
+            double px = cam.eye[0] + t * d[0], py = cam.eye[1] + t * d[1];
+            double u = px + 1, vv = 1 - py; /* texel coordinates: fraction * 2 texels */
+            double fu = (u - floor(u)) * 2, fv = (vv - floor(vv)) * 2;
+            if (fabs(px) > 0.98 || fabs(py) > 0.98 || fabs(fu - 1) < 0.05 || fabs(fv - 1) < 0.05 ||
+                fu < 0.05 || fv < 0.05 || fu > 1.95 || fv > 1.95)
+                continue; /* stay away from texel edges */
+            int texel = (fv >= 1) * 2 + (fu >= 1);
+            const float *p = &img[(y * W + x) * 3];
+            checked++;
+            for (int c = 0; c < 3; c++)
+                if (fabs(p[c] - expect[texel][c]) > 1e-3) bad++;
+        }
+    CHECKF(checked > W * H / 4, "only %d pixels checked", checked);
+    CHECKF(bad == 0, "%d texture channels differ", bad);
+    free(img);
+    rd_renderer_destroy(&r);
+    rd_gpu_scene_destroy(&vk, &gs);
+    rd_scene_destroy(&s);
+}
+
 int main(void)
 {
     char err[512] = "";
@@ -134,6 +201,7 @@ int main(void)
     test_point_light("shadow", 1);
     test_directional();
     test_emissive();
+    test_texture();
     CHECKF(rd_vk_validation_messages(&vk) == 0, "%u validation messages",
            rd_vk_validation_messages(&vk));
     rd_vk_destroy(&vk);

@@ -2,10 +2,10 @@
 # GPU benchmark: BVH build, primary/shadow ray throughput (issue 2) and the DDGI per-pass
 # times at 32x8x32 probes x 64/128/256 rays (issue 3, the paper's Table 2 setting) on a
 # procedurally built scene. Prints the tables and writes them under OUT_DIR (default
-# bench/results). Usage: bench/gpu_passes.sh [PROBECAST_BINARY]
+# tests/bench/results). Usage: tests/bench/gpu_passes.sh [PROBECAST_BINARY]
 set -euo pipefail
 bin="${1:-build/probecast}"
-out="${OUT_DIR:-bench/results}"
+out="${OUT_DIR:-tests/bench/results}"
 tris="${BENCH_TRIANGLES:-1000000}"
 width="${BENCH_WIDTH:-1920}"
 height="${BENCH_HEIGHT:-1080}"
