@@ -29,6 +29,7 @@ typedef struct eval_args {
     float hysteresis[8];
     unsigned nhysteresis;
     bool noise_floor, list;
+    const char *replot;
 } eval_args;
 
 static void eval_usage(FILE *f)
@@ -54,7 +55,8 @@ static void eval_usage(FILE *f)
             "  --out DIR              where eval.csv, eval.json, eval.svg go (default eval-out)\n"
             "  --cache DIR            reference cache (default DIR-of-out/cache)\n"
             "  --device INDEX|NAME    Vulkan device\n"
-            "  --list                 list the suite with each case's expectation\n");
+            "  --list                 list the suite with each case's expectation\n"
+            "  --replot DIR           redraw DIR/eval.svg and the table from DIR/eval.csv\n");
 }
 
 static bool parse_uint_list(const char *opt, const char *s, unsigned *out, unsigned *n)
@@ -96,6 +98,8 @@ static int parse(int argc, char **argv, eval_args *a)
             a->noise_floor = false;
         } else if (strcmp(o, "--cases") == 0) {
             a->cases = v, i++;
+        } else if (strcmp(o, "--replot") == 0) {
+            a->replot = v, i++;
         } else if (strcmp(o, "--out") == 0) {
             a->out_dir = v, i++;
         } else if (strcmp(o, "--cache") == 0) {
@@ -328,6 +332,33 @@ int cli_eval(int argc, char **argv)
     if (status >= 0) return status;
     unsigned ncases;
     const rd_hard_case *cases = rd_hard_cases(&ncases);
+    if (a.replot) {
+        char path[1024];
+        eval_row *rows = NULL;
+        unsigned n = 0;
+        snprintf(path, sizeof path, "%s/eval.csv", a.replot);
+        if (!eval_read_csv(path, &rows, &n)) {
+            fprintf(stderr, "probecast eval: cannot read '%s'\n", path);
+            return 1;
+        }
+        eval_print_table(stdout, rows, n);
+        snprintf(path, sizeof path, "%s/eval.svg", a.replot);
+        char device[128] = "unknown device";
+        snprintf(path, sizeof path, "%s/eval.json", a.replot);
+        FILE *jf = fopen(path, "r");
+        char head[512] = "";
+        if (jf) {
+            size_t got = fread(head, 1, sizeof head - 1, jf);
+            head[got] = '\0';
+            fclose(jf);
+            const char *d = strstr(head, "\"device\": \"");
+            if (d) sscanf(d + 11, "%127[^\"]", device);
+        }
+        snprintf(path, sizeof path, "%s/eval.svg", a.replot);
+        bool ok = eval_write_svg(path, rows, n, device);
+        free(rows);
+        return ok ? 0 : 1;
+    }
     if (a.list) {
         for (unsigned i = 0; i < ncases; i++) printf("%-14s %s\n", cases[i].name, cases[i].expect);
         return 0;

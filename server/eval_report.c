@@ -1,6 +1,7 @@
 #include "eval_report.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 void eval_mark_pareto(eval_row *rows, unsigned n)
@@ -186,6 +187,7 @@ bool eval_write_svg(const char *path, const eval_row *rows, unsigned n, const ch
             for (unsigned i = 0; i < n; i++)
                 if (strcmp(rows[i].scene, scenes[s]) == 0 && rows[i].noise_rel_mse > 0) {
                     double y = PY(rows[i].noise_rel_mse);
+                    if (y < y1 || y > y0) break; /* outside this panel's range */
                     fprintf(f, "<line x1=\"%d\" x2=\"%d\" y1=\"%.1f\" y2=\"%.1f\" stroke=\"#d62728\" stroke-dasharray=\"4 3\"><title>reference noise floor</title></line>\n",
                             x0, x1, y, y);
                     break;
@@ -196,4 +198,41 @@ bool eval_write_svg(const char *path, const eval_row *rows, unsigned n, const ch
     }
     fprintf(f, "</svg>\n");
     return fclose(f) == 0;
+}
+
+bool eval_read_csv(const char *path, eval_row **rows_out, unsigned *n_out)
+{
+    FILE *f = fopen(path, "r");
+    if (!f) return false;
+    char line[1024];
+    unsigned n = 0, cap = 0;
+    eval_row *rows = NULL;
+    bool ok = fgets(line, sizeof line, f) != NULL; /* header */
+    while (ok && fgets(line, sizeof line, f)) {
+        if (n == cap) {
+            cap = cap ? cap * 2 : 64;
+            rows = realloc(rows, cap * sizeof *rows);
+            if (!rows) abort();
+        }
+        eval_row *r = &rows[n];
+        memset(r, 0, sizeof *r);
+        int pareto = 0;
+        int got = sscanf(line,
+                         "%47[^,],%63[^,],%15[^,],%u,%u,%u,%u,%u,%f,%lf,%lf,%lf,%lf,%lf,%lf,%zu,%lf,%lf,%d",
+                         r->scene, r->config, r->mode, &r->probes[0], &r->probes[1], &r->probes[2],
+                         &r->rays, &r->updates, &r->hysteresis, &r->gpu_ms, &r->err.rmse,
+                         &r->err.rel_mse, &r->err.smape, &r->err.mean_lum_bias, &r->err.p99_abs,
+                         &r->err.non_finite, &r->noise_rel_mse, &r->ref_ms, &pareto);
+        if (got != 19) ok = false;
+        r->pareto = pareto != 0;
+        n++;
+    }
+    fclose(f);
+    if (!ok) {
+        free(rows);
+        return false;
+    }
+    *rows_out = rows;
+    *n_out = n;
+    return true;
 }

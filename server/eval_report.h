@@ -29,5 +29,8 @@ bool eval_write_json(const char *path, const eval_row *rows, unsigned n, const c
                      unsigned width, unsigned height, unsigned ref_spp);
 bool eval_write_svg(const char *path, const eval_row *rows, unsigned n, const char *device);
 void eval_print_table(FILE *f, const eval_row *rows, unsigned n);
+/* Reads a CSV written by eval_write_csv (to redraw the chart); *rows is malloc'd.
+ * Returns false on a malformed file. */
+bool eval_read_csv(const char *path, eval_row **rows, unsigned *n);
 
 #endif
