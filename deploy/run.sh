@@ -1,11 +1,9 @@
 #!/usr/bin/env bash
-# The main job: install dependencies, build, and render the bundled demo scene.
-# Usage: deploy/run.sh [extra render options...]
+# The main job: install dependencies, build, and run the daemon in the foreground with the
+# bundled demo scene. Open the printed http:// address in a browser; stop with Ctrl-C.
+# Usage: deploy/run.sh [extra serve options...]   (e.g. --http 0.0.0.0:8080 --token T)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 "$root/deploy/install-deps.sh"
 "$root/deploy/build.sh"
-out="${OUT_IMAGE:-$root/out/demo.png}"
-mkdir -p "$(dirname "$out")"
-"$root/build/probecast" render builtin:cornell -o "$out" --timings "$@"
-echo "wrote $out"
+exec "${BUILD_DIR:-$root/build}/probecast" serve "$@"

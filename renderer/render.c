@@ -84,6 +84,9 @@ rd_vk_result rd_renderer_configure_gi(rd_renderer *r, const float bmin[3], const
 static rd_vk_result ensure_size(rd_renderer *r, unsigned w, unsigned h, char *err, size_t errlen)
 {
     if (w == r->width && h == r->height) return RD_VK_OK;
+    /* Work submitted elsewhere (a frame readback copying rgba8) may still read these buffers:
+     * resizes are rare, so wait for the device before freeing them. */
+    if (r->width || r->height) vkDeviceWaitIdle(r->vk->device);
     rd_buffer_destroy(r->vk, &r->gbuffer);
     rd_buffer_destroy(r->vk, &r->radiance);
     rd_buffer_destroy(r->vk, &r->rgba8);

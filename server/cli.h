@@ -8,6 +8,7 @@
 
 /* Each returns the process exit status. */
 int cli_render(int argc, char **argv);
+int cli_serve(int argc, char **argv);
 int cli_eval(int argc, char **argv);
 
 /* Option value parsers: return false and print one message to stderr on bad input. */

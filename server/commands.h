@@ -80,13 +80,13 @@ typedef struct srv_node_patch {
 /* ---- settings ------------------------------------------------------------------------------- */
 
 typedef struct srv_settings {
-    unsigned width, height;   /* render resolution in pixels */
-    unsigned max_pixels;      /* cap on width * height (viewer resize requests are clamped) */
-    unsigned max_fps;         /* frame pacing while something changes */
+    unsigned width, height; /* render resolution in pixels */
+    unsigned max_pixels;    /* cap on width * height (viewer resize requests are clamped) */
+    unsigned max_fps;       /* frame pacing while something changes */
     unsigned quality_interactive, quality_still; /* JPEG quality while input arrives / after */
-    unsigned still_delay_ms;  /* quiet time after the last input before the still frame */
+    unsigned still_delay_ms; /* quiet time after the last input before the still frame */
     float exposure_ev;
-    unsigned tonemap;         /* PC_TONEMAP_* */
+    unsigned tonemap; /* PC_TONEMAP_* */
     float sky[3];
     unsigned view;            /* PC_VIEW_* */
     unsigned gi_mode;         /* PC_GI_* */
@@ -94,7 +94,7 @@ typedef struct srv_settings {
     float probe_spacing;      /* 0 = derived */
     unsigned rays_per_probe;
     float hysteresis;
-    bool animate;             /* the demo's light animation (only while viewers watch) */
+    bool animate; /* the demo's light animation (only while viewers watch) */
 } srv_settings;
 
 enum {
@@ -116,8 +116,8 @@ enum {
     SRV_SET_HYSTERESIS = 1u << 15,
     SRV_SET_ANIMATE = 1u << 16,
 };
-#define SRV_SET_GI_FIELDS                                                                         \
-    (SRV_SET_GI_MODE | SRV_SET_PROBE_COUNTS | SRV_SET_PROBE_SPACING | SRV_SET_RAYS |              \
+#define SRV_SET_GI_FIELDS                                                                          \
+    (SRV_SET_GI_MODE | SRV_SET_PROBE_COUNTS | SRV_SET_PROBE_SPACING | SRV_SET_RAYS |               \
      SRV_SET_HYSTERESIS)
 
 typedef struct srv_settings_patch {
@@ -135,11 +135,11 @@ typedef enum srv_viewer_msg_type {
 
 typedef struct srv_viewer_msg {
     srv_viewer_msg_type type;
-    uint32_t seq;             /* camera */
-    srv_camera_patch camera;  /* camera */
-    unsigned width, height;   /* resize: CSS pixels */
-    float dpr;                /* resize: device pixel ratio (default 1) */
-    uint64_t frame;           /* ack */
+    uint32_t seq;            /* camera */
+    srv_camera_patch camera; /* camera */
+    unsigned width, height;  /* resize: CSS pixels */
+    float dpr;               /* resize: device pixel ratio (default 1) */
+    uint64_t frame;          /* ack */
 } srv_viewer_msg;
 
 /* ---- errors ----------------------------------------------------------------------------- */
@@ -185,8 +185,8 @@ typedef struct srv_reply {
 
 typedef struct srv_cmd {
     srv_cmd_kind kind;
-    uint32_t id;   /* light or node id */
-    bool replace;  /* SET_CAMERA: PUT (position and a direction are required) */
+    uint32_t id;  /* light or node id */
+    bool replace; /* SET_CAMERA: PUT (position and a direction are required) */
     srv_camera_patch camera;
     srv_light_patch light;
     srv_node_patch node;
@@ -200,6 +200,7 @@ typedef struct srv_cmd {
     srv_reply reply;
     atomic_int refs;
     bool done;
+    bool abandoned; /* the caller stopped waiting */
     pthread_mutex_t mu;
     pthread_cond_t cv;
     struct srv_cmd *next;

@@ -9,9 +9,15 @@
 
 static atomic_int g_level = SRV_LOG_INFO;
 
-void srv_log_set_level(srv_log_level level) { atomic_store(&g_level, (int)level); }
+void srv_log_set_level(srv_log_level level)
+{
+    atomic_store(&g_level, (int)level);
+}
 
-srv_log_level srv_log_get_level(void) { return (srv_log_level)atomic_load(&g_level); }
+srv_log_level srv_log_get_level(void)
+{
+    return (srv_log_level)atomic_load(&g_level);
+}
 
 bool srv_log_parse_level(const char *s, srv_log_level *out)
 {
@@ -38,7 +44,7 @@ void srv_log(srv_log_level level, const char *module, const char *fmt, ...)
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    fprintf(stderr, "%04d-%02d-%02dT%02d:%02d:%02d.%03ldZ probecast[%s] %s: %s\n", tm.tm_year + 1900,
-            tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec, ts.tv_nsec / 1000000,
-            tags[level], module, msg);
+    fprintf(stderr, "%04d-%02d-%02dT%02d:%02d:%02d.%03ldZ probecast[%s] %s: %s\n",
+            tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec,
+            ts.tv_nsec / 1000000, tags[level], module, msg);
 }

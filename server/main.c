@@ -11,6 +11,7 @@ static void usage(FILE *f)
             "\n"
             "Commands:\n"
             "  render SCENE   render a glTF scene (or builtin:NAME) to an image\n"
+            "  serve          run the daemon: HTTP API, WebSocket frame stream, browser viewer\n"
             "  eval           speed against error of GI settings on the hard-case suite\n"
             "\n"
             "Options:\n"
@@ -34,6 +35,7 @@ int main(int argc, char **argv)
         return 0;
     }
     if (strcmp(cmd, "render") == 0) return cli_render(argc - 1, argv + 1);
+    if (strcmp(cmd, "serve") == 0) return cli_serve(argc - 1, argv + 1);
     if (strcmp(cmd, "eval") == 0) return cli_eval(argc - 1, argv + 1);
     fprintf(stderr, "probecast: unknown command '%s' (try probecast --help)\n", cmd);
     return 2;

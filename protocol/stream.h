@@ -1,0 +1,70 @@
+/* stream.h: the binary frame message of the WebSocket stream (/v1/stream), version 1.
+ *
+ * Every binary message the server sends is one frame: a little-endian header of
+ * header_size bytes (64 in version 1) followed by exactly jpeg_size bytes of baseline JPEG.
+ * Readers skip header_size bytes, so later versions may append fields without breaking them;
+ * the version changes only when a field's meaning does. protocol/stream.md is the prose spec.
+ *
+ *   offset size field
+ *        0    4 magic        "PCFR" (0x50 0x43 0x46 0x52)
+ *        4    2 version      1
+ *        6    2 header_size  64
+ *        8    8 frame_id     increases by one per frame the server produces (per view)
+ *       16    8 capture_us   when rendering of the frame began (Unix time, microseconds)
+ *       24    8 encode_us    when its JPEG encoding finished (Unix time, microseconds)
+ *       32    8 send_us      when the server began sending it (Unix time, microseconds)
+ *       40    4 view_id      the view the frame shows (0: the shared view)
+ *       44    4 width        pixels
+ *       48    4 height       pixels
+ *       52    4 input_seq    the last "seq" of this client's camera messages that the frame
+ *                            reflects (0 before the first one)
+ *       56    4 jpeg_size    bytes of JPEG after the header
+ *       60    1 quality      JPEG quality 1..100
+ *       61    1 flags        bit 0: still (full quality, input has stopped)
+ *       62    2 reserved     0
+ */
+#ifndef PROTO_STREAM_H
+#define PROTO_STREAM_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#define PROTO_STREAM_MAGIC "PCFR"
+#define PROTO_STREAM_VERSION 1u
+#define PROTO_STREAM_HEADER_SIZE 64u
+#define PROTO_STREAM_FLAG_STILL 1u
+
+typedef struct proto_frame_header {
+    uint16_t version;
+    uint16_t header_size;
+    uint64_t frame_id;
+    uint64_t capture_us, encode_us, send_us;
+    uint32_t view_id;
+    uint32_t width, height;
+    uint32_t input_seq;
+    uint32_t jpeg_size;
+    uint8_t quality;
+    uint8_t flags;
+} proto_frame_header;
+
+typedef enum proto_result {
+    PROTO_OK = 0,
+    PROTO_ERR_SHORT,       /* fewer bytes than the header (or than header + jpeg_size) */
+    PROTO_ERR_MAGIC,       /* not a probecast frame */
+    PROTO_ERR_VERSION,     /* a version this code does not read */
+    PROTO_ERR_HEADER_SIZE, /* header_size smaller than version 1's */
+} proto_result;
+
+const char *proto_strerror(proto_result r);
+
+/* Writes the version-1 header (PROTO_STREAM_HEADER_SIZE bytes) for h into out; the version
+ * and header_size fields of h are ignored (always 1 and 64). */
+void proto_frame_header_pack(const proto_frame_header *h, uint8_t out[PROTO_STREAM_HEADER_SIZE]);
+
+/* Reads a frame message of len bytes. On success fills h and points *jpeg at the JPEG bytes
+ * inside msg (h->jpeg_size of them). jpeg may be NULL. */
+proto_result proto_frame_header_unpack(const uint8_t *msg, size_t len, proto_frame_header *h,
+                                       const uint8_t **jpeg);
+
+#endif

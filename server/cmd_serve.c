@@ -1,0 +1,486 @@
+/* probecast serve: the daemon. Parses options, restores saved state, starts the render thread,
+ * the encoder pool, the frame stream and the HTTP API, waits for SIGINT/SIGTERM and shuts
+ * everything down in order. */
+#include <arpa/inet.h>
+#include <errno.h>
+#include <limits.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "cli.h"
+#include "encoder_pool.h"
+#include "http_api.h"
+#include "log.h"
+#include "persist.h"
+#include "render_loop.h"
+#include "renderer/gltf_loader.h"
+#include "renderer/procedural.h"
+#include "scene_state.h"
+#include "ws_stream.h"
+
+#define DEMO_SCENE "builtin:cornell"
+
+static void serve_usage(FILE *f)
+{
+    fprintf(
+        f,
+        "usage: probecast serve [OPTIONS]\n"
+        "\n"
+        "Runs the daemon: renders a scene with global illumination and streams it to browsers.\n"
+        "Open the printed http:// address in a browser. Stop with Ctrl-C (SIGINT) or SIGTERM.\n"
+        "\n"
+        "Options:\n"
+        "  --scene FILE|builtin:NAME  scene at start-up (default: the demo, builtin:cornell,\n"
+        "                         whose light circles slowly while someone watches)\n"
+        "  --http ADDR:PORT       HTTP API and viewer (default 127.0.0.1:8080; port 0 = any)\n"
+        "  --ws ADDR:PORT         WebSocket frame stream (default 127.0.0.1:8081)\n"
+        "  --token T              require 'Authorization: Bearer T' for changes, frames and the\n"
+        "                         stream (default: $PROBECAST_TOKEN; needed off loopback)\n"
+        "  --data-dir DIR         keep the last uploaded scene, camera, lights and settings\n"
+        "                         in DIR and restore them at start-up (a saved upload is\n"
+        "                         used instead of --scene)\n"
+        "  --max-upload BYTES     largest scene upload, with optional K, M or G suffix\n"
+        "                         (default 256M)\n"
+        "  --max-viewers N        stream connections in all (default 100)\n"
+        "  --max-viewers-per-ip N stream connections per client address (default 64)\n"
+        "  --http-connections N   HTTP connections in all (default 64; 16 per address)\n"
+        "  --web-dir DIR          viewer files served at / (default: web/ of the source tree)\n"
+        "  --encoders N           JPEG encoder threads (default 2)\n"
+        "  --width W, --height H  render resolution (default 960 x 540; 512 x 288 on a CPU "
+        "device)\n"
+        "  --max-fps N            frame rate cap while something changes (default 30; 15 on CPU)\n"
+        "  --quality-interactive Q, --quality-still Q  JPEG qualities (default 60 and 90)\n"
+        "  --gi off|classic|ddgi  global illumination (default ddgi)\n"
+        "  --probes X,Y,Z         probe counts (default: fitted to the scene)\n"
+        "  --probe-spacing S      probe spacing in metres\n"
+        "  --rays N               rays per probe per update (default 256; 64 on CPU)\n"
+        "  --hysteresis H         probe blend weight of the old value (default 0.97)\n"
+        "  --exposure EV          exposure in stops (default 0)\n"
+        "  --sky R,G,B            sky radiance (default 0,0,0)\n"
+        "  --animate, --no-animate  the light animation (default: on for the demo scene only)\n"
+        "  --device INDEX|NAME    Vulkan device (default: $PROBECAST_DEVICE, else the best)\n"
+        "  --log-level L          error, warn, info (default) or debug ($PROBECAST_LOG)\n"
+        "  --help                 this text\n");
+}
+
+typedef struct serve_args {
+    const char *scene, *http, *ws, *token, *data_dir, *web_dir, *device;
+    size_t max_upload;
+    unsigned max_viewers, max_per_ip, http_connections, encoders;
+    srv_settings settings;
+    unsigned given; /* SRV_SET_* chosen on the command line */
+    int animate;    /* -1 default, 0 off, 1 on */
+} serve_args;
+
+static bool parse_size(const char *opt, const char *v, size_t *out)
+{
+    char *end = NULL;
+    errno = 0;
+    unsigned long long n = strtoull(v, &end, 10);
+    unsigned long long mul = 1;
+    if (end && *end) {
+        if (strcmp(end, "K") == 0 || strcmp(end, "k") == 0)
+            mul = 1ull << 10;
+        else if (strcmp(end, "M") == 0 || strcmp(end, "m") == 0)
+            mul = 1ull << 20;
+        else if (strcmp(end, "G") == 0 || strcmp(end, "g") == 0)
+            mul = 1ull << 30;
+        else
+            mul = 0;
+    }
+    if (!*v || v[0] == '-' || errno || mul == 0 || n == 0 || n > (1ull << 40) / mul) {
+        fprintf(stderr,
+                "probecast: %s expects a size in bytes such as 268435456 or 256M, got '%s'\n", opt,
+                v);
+        return false;
+    }
+    *out = (size_t)(n * mul);
+    return true;
+}
+
+/* "ADDR:PORT" or "[ADDR6]:PORT" with a numeric address ("localhost" means 127.0.0.1). */
+static bool parse_addr(const char *opt, const char *v, char *host, size_t hostlen, unsigned *port)
+{
+    const char *colon = NULL;
+    size_t hl;
+    const char *h = v;
+    if (v[0] == '[') {
+        const char *rb = strchr(v, ']');
+        if (!rb || rb[1] != ':') goto bad;
+        h = v + 1;
+        hl = (size_t)(rb - v - 1);
+        colon = rb + 1;
+    } else {
+        colon = strrchr(v, ':');
+        if (!colon) goto bad;
+        hl = (size_t)(colon - v);
+    }
+    if (hl == 0 || hl >= hostlen) goto bad;
+    memcpy(host, h, hl);
+    host[hl] = 0;
+    if (strcmp(host, "localhost") == 0) snprintf(host, hostlen, "127.0.0.1");
+    unsigned char buf[16];
+    if (inet_pton(AF_INET, host, buf) != 1 && inet_pton(AF_INET6, host, buf) != 1) goto bad;
+    if (!cli_parse_uint(opt, colon + 1, 0, 65535, port)) return false;
+    return true;
+bad:
+    fprintf(
+        stderr,
+        "probecast: %s expects ADDR:PORT with a numeric address (e.g. 127.0.0.1:8080), got '%s'\n",
+        opt, v);
+    return false;
+}
+
+static bool is_loopback(const char *host)
+{
+    return strncmp(host, "127.", 4) == 0 || strcmp(host, "::1") == 0;
+}
+
+/* Returns -1 when parsing succeeded, else the exit status to use. */
+static int parse(int argc, char **argv, serve_args *a)
+{
+    memset(a, 0, sizeof *a);
+    a->http = "127.0.0.1:8080";
+    a->ws = "127.0.0.1:8081";
+    a->animate = -1;
+    srv_settings_defaults(&a->settings);
+    srv_settings *s = &a->settings;
+    for (int i = 1; i < argc; i++) {
+        const char *o = argv[i];
+        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
+#define NEED_VALUE                                                                                 \
+    if (!v) {                                                                                      \
+        fprintf(stderr, "probecast serve: %s needs a value\n", o);                                 \
+        return 2;                                                                                  \
+    }                                                                                              \
+    i++;
+#define IS(name) (strcmp(o, name) == 0)
+        if (IS("--help") || IS("-h")) {
+            serve_usage(stdout);
+            return 0;
+        } else if (IS("--animate")) {
+            a->animate = 1;
+        } else if (IS("--no-animate")) {
+            a->animate = 0;
+        } else if (IS("--scene")) {
+            NEED_VALUE a->scene = v;
+        } else if (IS("--http")) {
+            NEED_VALUE a->http = v;
+        } else if (IS("--ws")) {
+            NEED_VALUE a->ws = v;
+        } else if (IS("--token")) {
+            NEED_VALUE a->token = v;
+        } else if (IS("--data-dir")) {
+            NEED_VALUE a->data_dir = v;
+        } else if (IS("--web-dir")) {
+            NEED_VALUE a->web_dir = v;
+        } else if (IS("--device")) {
+            NEED_VALUE a->device = v;
+        } else if (IS("--max-upload")) {
+            NEED_VALUE if (!parse_size(o, v, &a->max_upload)) return 2;
+        } else if (IS("--max-viewers")) {
+            NEED_VALUE if (!cli_parse_uint(o, v, 1, 10000, &a->max_viewers)) return 2;
+        } else if (IS("--max-viewers-per-ip")) {
+            NEED_VALUE if (!cli_parse_uint(o, v, 1, 10000, &a->max_per_ip)) return 2;
+        } else if (IS("--http-connections")) {
+            NEED_VALUE if (!cli_parse_uint(o, v, 1, 10000, &a->http_connections)) return 2;
+        } else if (IS("--encoders")) {
+            NEED_VALUE if (!cli_parse_uint(o, v, 1, 64, &a->encoders)) return 2;
+        } else if (IS("--width")) {
+            NEED_VALUE if (!cli_parse_uint(o, v, 16, 4096, &s->width)) return 2;
+            a->given |= SRV_SET_WIDTH;
+        } else if (IS("--height")) {
+            NEED_VALUE if (!cli_parse_uint(o, v, 16, 4096, &s->height)) return 2;
+            a->given |= SRV_SET_HEIGHT;
+        } else if (IS("--max-fps")) {
+            NEED_VALUE if (!cli_parse_uint(o, v, 1, 240, &s->max_fps)) return 2;
+            a->given |= SRV_SET_MAX_FPS;
+        } else if (IS("--quality-interactive")) {
+            NEED_VALUE if (!cli_parse_uint(o, v, 1, 100, &s->quality_interactive)) return 2;
+        } else if (IS("--quality-still")) {
+            NEED_VALUE if (!cli_parse_uint(o, v, 1, 100, &s->quality_still)) return 2;
+        } else if (IS("--gi")) {
+            NEED_VALUE
+            if (strcmp(v, "off") == 0)
+                s->gi_mode = PC_GI_OFF;
+            else if (strcmp(v, "classic") == 0)
+                s->gi_mode = PC_GI_CLASSIC;
+            else if (strcmp(v, "ddgi") == 0)
+                s->gi_mode = PC_GI_DDGI;
+            else {
+                fprintf(stderr, "probecast serve: --gi expects off, classic or ddgi\n");
+                return 2;
+            }
+        } else if (IS("--probes")) {
+            NEED_VALUE
+            float c[3];
+            if (!cli_parse_floats(o, v, c, 3)) return 2;
+            for (int k = 0; k < 3; k++) {
+                if (c[k] < 1 || c[k] > 256 || c[k] != (float)(unsigned)c[k]) {
+                    fprintf(stderr, "probecast serve: --probes expects three integers in 1..256\n");
+                    return 2;
+                }
+                s->probe_counts[k] = (unsigned)c[k];
+            }
+        } else if (IS("--probe-spacing")) {
+            NEED_VALUE if (!cli_parse_float(o, v, &s->probe_spacing)) return 2;
+            if (!(s->probe_spacing > 0)) {
+                fprintf(stderr, "probecast serve: --probe-spacing must be positive\n");
+                return 2;
+            }
+        } else if (IS("--rays")) {
+            NEED_VALUE if (!cli_parse_uint(o, v, 1, PC_DDGI_MAX_RAYS, &s->rays_per_probe)) return 2;
+            a->given |= SRV_SET_RAYS;
+        } else if (IS("--hysteresis")) {
+            NEED_VALUE if (!cli_parse_float(o, v, &s->hysteresis)) return 2;
+            if (!(s->hysteresis >= 0 && s->hysteresis <= 0.999f)) {
+                fprintf(stderr, "probecast serve: --hysteresis expects a value in [0, 0.999]\n");
+                return 2;
+            }
+        } else if (IS("--exposure")) {
+            NEED_VALUE if (!cli_parse_float(o, v, &s->exposure_ev)) return 2;
+        } else if (IS("--sky")) {
+            NEED_VALUE if (!cli_parse_floats(o, v, s->sky, 3)) return 2;
+        } else if (IS("--log-level")) {
+            NEED_VALUE
+            srv_log_level lv;
+            if (!srv_log_parse_level(v, &lv)) {
+                fprintf(stderr,
+                        "probecast serve: --log-level expects error, warn, info or debug\n");
+                return 2;
+            }
+            srv_log_set_level(lv);
+        } else {
+            fprintf(stderr, "probecast serve: unknown option '%s' (see --help)\n", o);
+            return 2;
+        }
+#undef NEED_VALUE
+#undef IS
+    }
+    if ((uint64_t)s->width * s->height > s->max_pixels) s->max_pixels = s->width * s->height;
+    return -1;
+}
+
+/* A file next to the executable's folder (the source tree when run from build/), else in the
+ * working folder; NULL when neither exists. */
+static const char *find_resource(const char *rel, char *out, size_t outlen)
+{
+    char exe[PATH_MAX];
+    ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+    struct stat sb;
+    if (n > 0) {
+        exe[n] = 0;
+        char *slash = strrchr(exe, '/');
+        if (slash) {
+            *slash = 0;
+            int k = snprintf(out, outlen, "%s/../%s", exe, rel);
+            if (k > 0 && (size_t)k < outlen && stat(out, &sb) == 0) return out;
+            k = snprintf(out, outlen, "%s/%s", exe, rel);
+            if (k > 0 && (size_t)k < outlen && stat(out, &sb) == 0) return out;
+        }
+    }
+    snprintf(out, outlen, "%s", rel);
+    return stat(out, &sb) == 0 ? out : NULL;
+}
+
+/* The start-up scene: the saved upload when there is one, else --scene, else the demo. */
+static bool load_start_scene(const serve_args *a, srv_saved *saved, rd_scene *scene, char *source,
+                             size_t sourcelen, uint64_t *generation)
+{
+    if (saved->scene) {
+        char err[512];
+        if (rd_gltf_load_memory(saved->scene, saved->scene_size, NULL, NULL, scene, err,
+                                sizeof err) == RD_GLTF_OK) {
+            snprintf(source, sourcelen, "upload");
+            *generation = saved->scene_generation;
+            srv_info("serve", "restored the uploaded scene (generation %llu) from %s%s",
+                     (unsigned long long)*generation, a->data_dir,
+                     a->scene ? "; --scene is ignored" : "");
+            return true;
+        }
+        srv_warn("serve", "the saved scene no longer loads (%s); using %s", err,
+                 a->scene ? a->scene : DEMO_SCENE);
+    }
+    const char *spec = a->scene ? a->scene : DEMO_SCENE;
+    if (!cli_load_scene(spec, scene)) return false;
+    snprintf(source, sourcelen, "%s", spec);
+    *generation = 0;
+    return true;
+}
+
+int cli_serve(int argc, char **argv)
+{
+    serve_args a;
+    int status = parse(argc, argv, &a);
+    if (status >= 0) return status;
+    srv_log_level lv;
+    const char *env_log = getenv("PROBECAST_LOG");
+    if (env_log && srv_log_parse_level(env_log, &lv)) srv_log_set_level(lv);
+    if (!a.token) a.token = getenv("PROBECAST_TOKEN");
+    if (a.token && !*a.token) a.token = NULL;
+    if (a.token) {
+        for (const char *p = a.token; *p; p++) {
+            if (!((*p >= 'A' && *p <= 'Z') || (*p >= 'a' && *p <= 'z') ||
+                  (*p >= '0' && *p <= '9') || strchr("-._~", *p)) ||
+                strlen(a.token) > 200) {
+                fprintf(
+                    stderr,
+                    "probecast serve: the token may hold only A-Z a-z 0-9 - . _ ~ (at most 200)\n");
+                return 2;
+            }
+        }
+    }
+    char http_host[64], ws_host[64];
+    unsigned http_port, ws_port;
+    if (!parse_addr("--http", a.http, http_host, sizeof http_host, &http_port) ||
+        !parse_addr("--ws", a.ws, ws_host, sizeof ws_host, &ws_port))
+        return 2;
+    if ((!is_loopback(http_host) || !is_loopback(ws_host)) && !a.token)
+        srv_warn("serve",
+                 "listening beyond loopback without --token: anyone who reaches this host can "
+                 "change the scene and watch the stream");
+
+    /* Every thread created from here on inherits this mask; the main thread takes the signals
+     * with sigwait. */
+    sigset_t sigs;
+    sigemptyset(&sigs);
+    sigaddset(&sigs, SIGINT);
+    sigaddset(&sigs, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &sigs, NULL);
+    signal(SIGPIPE, SIG_IGN);
+
+    char err[512] = "";
+    srv_persist *persist = NULL;
+    srv_saved saved;
+    memset(&saved, 0, sizeof saved);
+    if (a.data_dir) {
+        persist = srv_persist_open(a.data_dir, err, sizeof err);
+        if (!persist) {
+            fprintf(stderr, "probecast serve: %s\n", err);
+            return 1;
+        }
+        srv_persist_load(persist, &saved);
+    }
+    rd_scene scene;
+    char source[128];
+    uint64_t generation = 0;
+    if (!load_start_scene(&a, &saved, &scene, source, sizeof source, &generation)) {
+        srv_persist_close(persist);
+        srv_saved_free(&saved);
+        return 1;
+    }
+    const cJSON *state = NULL;
+    if (saved.state && saved.state_generation == generation &&
+        strcmp(saved.state_source, source) == 0)
+        state = saved.state;
+    else if (saved.state)
+        srv_info("serve",
+                 "the saved camera, lights and settings belong to another scene; not applied");
+    if (a.animate < 0) a.animate = strcmp(source, DEMO_SCENE) == 0;
+    a.settings.animate = a.animate == 1;
+
+    int rc = 1;
+    srv_encoder_pool *enc = NULL;
+    srv_render_loop *loop = NULL;
+    srv_ws_stream *ws = NULL;
+    srv_http *http = NULL;
+    enc = srv_encoder_pool_create(a.encoders ? a.encoders : 2);
+    if (!enc) {
+        fprintf(stderr, "probecast serve: cannot start the JPEG encoders\n");
+        rd_scene_destroy(&scene);
+        goto out;
+    }
+    srv_render_config rc_cfg = {
+        .device = a.device,
+        .settings = a.settings,
+        .encoders = enc,
+        .persist = persist,
+        .generation_base = saved.scene_generation,
+        .adapt_to_cpu = true,
+        .settings_given = a.given,
+    };
+    loop = srv_render_loop_create(&rc_cfg, &scene, source, generation, state, err, sizeof err);
+    if (!loop) {
+        fprintf(stderr, "probecast serve: %s\n", err);
+        goto out;
+    }
+    srv_ws_config ws_cfg = {
+        .address = ws_host,
+        .port = ws_port,
+        .token = a.token,
+        .http_host = http_host,
+        .max_viewers = a.max_viewers,
+        .max_per_ip = a.max_per_ip,
+        .loop = loop,
+        .encoders = enc,
+    };
+    ws = srv_ws_create(&ws_cfg, err, sizeof err);
+    if (!ws) {
+        fprintf(stderr, "probecast serve: %s\n", err);
+        goto out;
+    }
+    char web_buf[PATH_MAX], api_buf[PATH_MAX];
+    srv_http_config http_cfg = {
+        .address = http_host,
+        .port = http_port,
+        .token = a.token,
+        .max_upload = a.max_upload,
+        .max_connections = a.http_connections,
+        .web_dir = a.web_dir ? a.web_dir : find_resource("web", web_buf, sizeof web_buf),
+        .openapi_path = find_resource("protocol/openapi.yaml", api_buf, sizeof api_buf),
+        .loop = loop,
+        .encoders = enc,
+        .ws = ws,
+        .persist = persist,
+    };
+    http = srv_http_start(&http_cfg, err, sizeof err);
+    if (!http) {
+        fprintf(stderr, "probecast serve: %s\n", err);
+        goto out;
+    }
+    srv_ws_set_http_port(ws, srv_http_port(http));
+    srv_encoder_pool_set_listener(enc, srv_ws_frame_ready, ws);
+    if (!srv_render_loop_start(loop) || !srv_ws_start(ws)) {
+        fprintf(stderr, "probecast serve: cannot start threads\n");
+        goto out;
+    }
+    const char *hb = strchr(http_host, ':') ? "[" : "", *he = strchr(http_host, ':') ? "]" : "";
+    const char *wb = strchr(ws_host, ':') ? "[" : "", *we = strchr(ws_host, ':') ? "]" : "";
+    printf("probecast serving http=%s%s%s:%u ws=%s%s%s:%u\n", hb, http_host, he,
+           srv_http_port(http), wb, ws_host, we, srv_ws_port(ws));
+    printf("open http://%s%s%s:%u/%s in a browser (stream: ws://%s%s%s:%u/v1/stream)\n", hb,
+           strcmp(http_host, "0.0.0.0") == 0 ? "127.0.0.1" : http_host, he, srv_http_port(http),
+           a.token ? "?token=..." : "", wb, ws_host, we, srv_ws_port(ws));
+    fflush(stdout);
+    srv_info("serve", "serving %s on http %s:%u, stream %s:%u", source, http_host,
+             srv_http_port(http), ws_host, srv_ws_port(ws));
+
+    int sig = 0;
+    sigwait(&sigs, &sig);
+    srv_info("serve", "%s received: shutting down", sig == SIGINT ? "SIGINT" : "SIGTERM");
+    rc = 0;
+
+out:
+    /* stop accepting; stop producing frames; close viewers; finish HTTP requests (they get 503
+     * from the stopped render loop); drain encoders; flush the disk; then the GPU */
+    srv_http_quiesce(http);
+    srv_render_loop_stop(loop);
+    if (enc) srv_encoder_pool_set_listener(enc, NULL, NULL);
+    srv_ws_destroy(ws);
+    srv_http_stop(http);
+    srv_encoder_pool_destroy(enc);
+    srv_persist_close(persist);
+    unsigned validation = srv_render_loop_validation_messages(loop);
+    srv_render_loop_destroy(loop);
+    if (validation > 0 && rc == 0) {
+        srv_error("serve", "%u Vulkan validation message(s) during this run", validation);
+        rc = 1;
+    }
+    srv_saved_free(&saved);
+    if (rc == 0) srv_info("serve", "stopped cleanly");
+    return rc;
+}

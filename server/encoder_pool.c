@@ -1,0 +1,307 @@
+/* encoder_pool.c: JPEG encoder threads with latest-frame-wins publication. */
+#include "encoder_pool.h"
+
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <turbojpeg.h>
+
+#include "log.h"
+
+static void *xcalloc(size_t n, size_t size)
+{
+    void *p = calloc(n, size);
+    if (!p) abort(); /* out of memory */
+    return p;
+}
+
+static double mono_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
+
+static uint64_t unix_us(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    return (uint64_t)ts.tv_sec * 1000000u + (uint64_t)ts.tv_nsec / 1000u;
+}
+
+/* ---- images and frames ----------------------------------------------------------------------- */
+
+srv_image *srv_image_new(unsigned width, unsigned height)
+{
+    srv_image *img = xcalloc(1, sizeof *img);
+    atomic_init(&img->refs, 1);
+    img->width = width;
+    img->height = height;
+    img->rgba = malloc((size_t)width * height * 4);
+    if (!img->rgba) abort();
+    return img;
+}
+
+srv_image *srv_image_ref(srv_image *img)
+{
+    atomic_fetch_add(&img->refs, 1);
+    return img;
+}
+
+void srv_image_unref(srv_image *img)
+{
+    if (img && atomic_fetch_sub(&img->refs, 1) == 1) {
+        free(img->rgba);
+        free(img);
+    }
+}
+
+srv_frame *srv_frame_ref(srv_frame *f)
+{
+    atomic_fetch_add(&f->refs, 1);
+    return f;
+}
+
+void srv_frame_unref(srv_frame *f)
+{
+    if (!f || atomic_fetch_sub(&f->refs, 1) != 1) return;
+    for (unsigned i = 0; i < f->variant_count; i++)
+        if (f->variants[i].data) tjFree(f->variants[i].data);
+    srv_image_unref(f->image);
+    free(f);
+}
+
+const srv_jpeg *srv_frame_pick(const srv_frame *f, unsigned quality)
+{
+    const srv_jpeg *best = &f->variants[0];
+    for (unsigned i = 0; i < f->variant_count; i++)
+        if (f->variants[i].quality <= quality) best = &f->variants[i];
+    return best;
+}
+
+const srv_jpeg *srv_frame_best(const srv_frame *f)
+{
+    return &f->variants[f->variant_count - 1];
+}
+
+/* ---- the pool ------------------------------------------------------------------------------- */
+
+typedef struct job {
+    srv_frame *frame;
+    unsigned variant;
+    struct job *next;
+} job;
+
+struct srv_encoder_pool {
+    pthread_mutex_t mu;
+    pthread_cond_t cv;
+    job *head, *tail;
+    bool stop;
+    unsigned thread_count;
+    pthread_t *threads;
+    uint32_t caps;
+    srv_frame *latest;
+    srv_frame_listener listener;
+    void *listener_user;
+    srv_encoder_stats stats;
+};
+
+/* One variant of a frame is finished (or dropped); the last one publishes or frees the frame.
+ * Called with p->mu held. */
+static void variant_done(srv_encoder_pool *p, srv_frame *f)
+{
+    if (--f->remaining > 0) return;
+    srv_image_unref(f->image);
+    f->image = NULL;
+    bool ok = !f->abandoned;
+    for (unsigned i = 0; ok && i < f->variant_count; i++)
+        ok = f->variants[i].data != NULL;
+    if (ok && (!p->latest || f->info.frame_id > p->latest->info.frame_id)) {
+        f->encode_us = unix_us();
+        srv_frame_unref(p->latest);
+        p->latest = f; /* the pool's reference moves to latest */
+        p->stats.frames_published++;
+        if (p->listener) p->listener(p->listener_user);
+    } else {
+        p->stats.frames_dropped++;
+        srv_frame_unref(f);
+    }
+}
+
+static void *encoder_main(void *arg)
+{
+    srv_encoder_pool *p = arg;
+    tjhandle tj = tjInitCompress();
+    if (!tj) srv_error("encoder", "tjInitCompress failed: %s", tjGetErrorStr());
+    pthread_mutex_lock(&p->mu);
+    for (;;) {
+        while (!p->stop && !p->head)
+            pthread_cond_wait(&p->cv, &p->mu);
+        if (p->stop) break;
+        job *j = p->head;
+        p->head = j->next;
+        if (!p->head) p->tail = NULL;
+        pthread_mutex_unlock(&p->mu);
+
+        srv_frame *f = j->frame;
+        srv_jpeg *v = &f->variants[j->variant];
+        const srv_image *img = f->image;
+        unsigned char *out = NULL;
+        unsigned long size = 0;
+        double t0 = mono_ms();
+        int rc = tj ? tjCompress2(tj, img->rgba, (int)img->width, 0, (int)img->height, TJPF_RGBA,
+                                  &out, &size, TJSAMP_420, (int)v->quality, TJFLAG_FASTDCT)
+                    : -1;
+        double ms = mono_ms() - t0;
+        if (rc != 0) {
+            srv_error("encoder", "JPEG encoding failed: %s",
+                      tj ? tjGetErrorStr2(tj) : "no encoder");
+            if (out) tjFree(out);
+            out = NULL;
+        }
+        free(j);
+
+        pthread_mutex_lock(&p->mu);
+        if (out) {
+            v->data = out;
+            v->size = size;
+            p->stats.jpegs_encoded++;
+            p->stats.bytes_encoded += size;
+            p->stats.encode_ms_last = ms;
+            p->stats.encode_ms_avg =
+                p->stats.jpegs_encoded == 1 ? ms : 0.9 * p->stats.encode_ms_avg + 0.1 * ms;
+        }
+        variant_done(p, f);
+    }
+    pthread_mutex_unlock(&p->mu);
+    if (tj) tjDestroy(tj);
+    return NULL;
+}
+
+srv_encoder_pool *srv_encoder_pool_create(unsigned threads)
+{
+    srv_encoder_pool *p = xcalloc(1, sizeof *p);
+    pthread_mutex_init(&p->mu, NULL);
+    pthread_cond_init(&p->cv, NULL);
+    p->threads = xcalloc(threads ? threads : 2, sizeof *p->threads);
+    unsigned want = threads ? threads : 2;
+    for (unsigned i = 0; i < want; i++) {
+        if (pthread_create(&p->threads[i], NULL, encoder_main, p) != 0) {
+            srv_error("encoder", "cannot start encoder thread %u", i);
+            srv_encoder_pool_destroy(p);
+            return NULL;
+        }
+        p->thread_count++;
+    }
+    return p;
+}
+
+void srv_encoder_pool_destroy(srv_encoder_pool *p)
+{
+    if (!p) return;
+    pthread_mutex_lock(&p->mu);
+    p->stop = true;
+    p->listener = NULL;
+    pthread_cond_broadcast(&p->cv);
+    pthread_mutex_unlock(&p->mu);
+    for (unsigned i = 0; i < p->thread_count; i++)
+        pthread_join(p->threads[i], NULL);
+    /* jobs never started: drop them (frames are freed with their last variant) */
+    while (p->head) {
+        job *j = p->head;
+        p->head = j->next;
+        j->frame->abandoned = true;
+        variant_done(p, j->frame);
+        free(j);
+    }
+    srv_frame_unref(p->latest);
+    free(p->threads);
+    pthread_cond_destroy(&p->cv);
+    pthread_mutex_destroy(&p->mu);
+    free(p);
+}
+
+void srv_encoder_pool_set_listener(srv_encoder_pool *p, srv_frame_listener fn, void *user)
+{
+    pthread_mutex_lock(&p->mu);
+    p->listener = fn;
+    p->listener_user = user;
+    pthread_mutex_unlock(&p->mu);
+}
+
+void srv_encoder_set_caps(srv_encoder_pool *p, uint32_t mask)
+{
+    pthread_mutex_lock(&p->mu);
+    p->caps = mask;
+    pthread_mutex_unlock(&p->mu);
+}
+
+void srv_encoder_submit(srv_encoder_pool *p, srv_image *img, const srv_frame_info *info,
+                        unsigned base_quality)
+{
+    srv_frame *f = xcalloc(1, sizeof *f);
+    atomic_init(&f->refs, 1);
+    f->info = *info;
+    f->width = img->width;
+    f->height = img->height;
+    f->image = srv_image_ref(img);
+
+    pthread_mutex_lock(&p->mu);
+    /* qualities: base, and min(base, cap) per cap, ascending and unique */
+    unsigned q[SRV_MAX_VARIANTS], n = 0;
+    for (unsigned i = 0; i < SRV_CAP_STEPS; i++) {
+        if (!(p->caps & (1u << i))) continue;
+        unsigned c = SRV_CAP_MIN + 10 * i;
+        unsigned v = c < base_quality ? c : base_quality;
+        if (n == 0 || q[n - 1] != v) q[n++] = v;
+    }
+    if (n == 0 || q[n - 1] != base_quality) q[n++] = base_quality;
+    f->variant_count = n;
+    f->remaining = n;
+    for (unsigned i = 0; i < n; i++)
+        f->variants[i].quality = q[i];
+
+    /* latest frame wins: jobs of older frames that no thread has started are dropped */
+    job **link = &p->head;
+    p->tail = NULL;
+    while (*link) {
+        job *j = *link;
+        if (j->frame->info.frame_id < info->frame_id) {
+            *link = j->next;
+            j->frame->abandoned = true;
+            variant_done(p, j->frame);
+            free(j);
+        } else {
+            p->tail = j;
+            link = &j->next;
+        }
+    }
+    for (unsigned i = 0; i < n; i++) {
+        job *j = xcalloc(1, sizeof *j);
+        j->frame = f;
+        j->variant = i;
+        if (p->tail)
+            p->tail->next = j;
+        else
+            p->head = j;
+        p->tail = j;
+    }
+    pthread_cond_broadcast(&p->cv);
+    pthread_mutex_unlock(&p->mu);
+}
+
+srv_frame *srv_encoder_latest(srv_encoder_pool *p)
+{
+    pthread_mutex_lock(&p->mu);
+    srv_frame *f = p->latest ? srv_frame_ref(p->latest) : NULL;
+    pthread_mutex_unlock(&p->mu);
+    return f;
+}
+
+void srv_encoder_get_stats(srv_encoder_pool *p, srv_encoder_stats *out)
+{
+    pthread_mutex_lock(&p->mu);
+    *out = p->stats;
+    pthread_mutex_unlock(&p->mu);
+}

@@ -1,0 +1,95 @@
+/* encoder_pool.h: TurboJPEG encoder threads between the render thread and the senders.
+ *
+ * The render thread submits each read-back image with its frame info; the pool encodes it at
+ * the frame's base quality and at the lower qualities the viewers' lag calls for (one job per
+ * quality, spread over the threads), and publishes the frame once all its variants are done
+ * and only if it is newer than the published one: latest frame wins. Jobs of older frames that
+ * have not started are dropped when a newer frame arrives, so a slow encoder never builds a
+ * queue. Encoders see only CPU memory: never a GPU object.
+ */
+#ifndef SRV_ENCODER_POOL_H
+#define SRV_ENCODER_POOL_H
+
+#include <stdatomic.h>
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#define SRV_MAX_VARIANTS 8
+/* Lag-driven quality caps are multiples of ten in [30, 90]: bit i of a cap mask is 30 + 10 i. */
+#define SRV_CAP_MIN 30u
+#define SRV_CAP_STEPS 7u
+
+/* A tone-mapped RGBA8 image on the CPU, shared read-only (reference counted). */
+typedef struct srv_image {
+    atomic_int refs;
+    unsigned width, height;
+    uint8_t *rgba; /* width * height * 4 bytes, top row first */
+} srv_image;
+
+srv_image *srv_image_new(unsigned width, unsigned height);
+srv_image *srv_image_ref(srv_image *img);
+void srv_image_unref(srv_image *img); /* NULL is fine */
+
+typedef struct srv_frame_info {
+    uint64_t frame_id;
+    uint32_t view_id;
+    uint64_t capture_us;   /* Unix time when rendering began */
+    uint64_t input_ticket; /* every input command with a ticket up to this one is reflected */
+    bool still;            /* produced after input stopped (full quality) */
+} srv_frame_info;
+
+typedef struct srv_jpeg {
+    unsigned quality;
+    uint8_t *data;
+    size_t size;
+} srv_jpeg;
+
+/* One frame encoded at one or more qualities, shared read-only by the senders. */
+typedef struct srv_frame {
+    atomic_int refs;
+    srv_frame_info info;
+    unsigned width, height;
+    uint64_t encode_us; /* Unix time when its last variant was done */
+    unsigned variant_count;
+    srv_jpeg variants[SRV_MAX_VARIANTS]; /* ascending quality */
+    /* encoder-private */
+    srv_image *image;
+    unsigned remaining;
+    bool abandoned;
+} srv_frame;
+
+srv_frame *srv_frame_ref(srv_frame *f);
+void srv_frame_unref(srv_frame *f); /* NULL is fine */
+/* The variant of highest quality <= quality, else the lowest one. */
+const srv_jpeg *srv_frame_pick(const srv_frame *f, unsigned quality);
+/* The highest-quality variant. */
+const srv_jpeg *srv_frame_best(const srv_frame *f);
+
+typedef struct srv_encoder_stats {
+    uint64_t frames_published, frames_dropped, jpegs_encoded, bytes_encoded;
+    double encode_ms_avg; /* exponential moving average per JPEG */
+    double encode_ms_last;
+} srv_encoder_stats;
+
+/* Called (from an encoder thread) after a frame is published. Must be quick and thread-safe. */
+typedef void (*srv_frame_listener)(void *user);
+
+typedef struct srv_encoder_pool srv_encoder_pool;
+
+/* Starts threads encoders (0 = 2). Returns NULL when a thread cannot be started. */
+srv_encoder_pool *srv_encoder_pool_create(unsigned threads);
+/* Stops and joins the threads, drops pending jobs, frees everything (NULL is fine). */
+void srv_encoder_pool_destroy(srv_encoder_pool *p);
+void srv_encoder_pool_set_listener(srv_encoder_pool *p, srv_frame_listener fn, void *user);
+/* Encodes img (a reference is taken) as frame info at base_quality and at
+ * min(base_quality, cap) for each cap in the current cap mask. */
+void srv_encoder_submit(srv_encoder_pool *p, srv_image *img, const srv_frame_info *info,
+                        unsigned base_quality);
+/* Sets the lag-driven caps the viewers currently need (see SRV_CAP_*). */
+void srv_encoder_set_caps(srv_encoder_pool *p, uint32_t mask);
+/* The newest published frame (a new reference) or NULL. */
+srv_frame *srv_encoder_latest(srv_encoder_pool *p);
+void srv_encoder_get_stats(srv_encoder_pool *p, srv_encoder_stats *out);
+
+#endif

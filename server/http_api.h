@@ -1,0 +1,50 @@
+/* http_api.h: the HTTP API v1 (protocol/openapi.yaml) and the viewer's static files, on
+ * libmicrohttpd with one thread per connection.
+ *
+ * A connection's thread parses and validates the request (JSON bodies, glTF uploads), posts a
+ * command to the render thread and waits for its reply, so nothing here touches the scene or
+ * the GPU. Limits are applied before a body is read: the token (401), the media type (415) and
+ * Content-Length against the upload cap (413); bodies without a length are counted as they
+ * arrive. Every error answers {"error": code, "message": sentence}.
+ */
+#ifndef SRV_HTTP_API_H
+#define SRV_HTTP_API_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "encoder_pool.h"
+#include "persist.h"
+#include "render_loop.h"
+#include "ws_stream.h"
+
+typedef struct srv_http_config {
+    const char *address;      /* numeric IP to listen on */
+    unsigned port;            /* 0 = any free port */
+    const char *token;        /* NULL or "" = no token */
+    size_t max_upload;        /* bytes of a scene upload (0 = 256 MiB) */
+    unsigned max_connections; /* 0 = 64 */
+    unsigned max_per_ip;      /* 0 = 16 */
+    unsigned timeout_s;       /* idle connection timeout (0 = 30) */
+    const char *web_dir;      /* viewer files, may be NULL */
+    const char *openapi_path; /* protocol/openapi.yaml, may be NULL */
+    srv_render_loop *loop;
+    srv_encoder_pool *encoders;
+    srv_ws_stream *ws;
+    srv_persist *persist; /* may be NULL */
+} srv_http_config;
+
+typedef struct srv_http srv_http;
+
+/* Starts listening and serving. NULL with a message on failure. */
+srv_http *srv_http_start(const srv_http_config *cfg, char *err, size_t errlen);
+unsigned srv_http_port(const srv_http *h);
+/* Stops accepting new connections (requests in progress go on). */
+void srv_http_quiesce(srv_http *h);
+/* Stops, waits for the connection threads and frees h (NULL is fine). */
+void srv_http_stop(srv_http *h);
+
+/* The HTML served at / when the web folder has no index.html: a minimal viewer. */
+const char *srv_placeholder_page(void);
+
+#endif

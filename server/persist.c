@@ -1,0 +1,318 @@
+/* persist.c: atomic files in --data-dir written by a background thread. */
+#include "persist.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <libgen.h>
+#include <pthread.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "log.h"
+
+#define STATE_INTERVAL_MS 250
+
+struct srv_persist {
+    char dir[1024];
+    pthread_mutex_t mu;
+    pthread_cond_t cv;
+    pthread_t thread;
+    bool stop;
+    /* pending writes */
+    uint8_t *scene;
+    size_t scene_size;
+    uint64_t scene_generation;
+    cJSON *state;
+    uint64_t state_generation;
+    char state_source[128];
+};
+
+static int write_all(int fd, const void *data, size_t size)
+{
+    const char *p = data;
+    while (size > 0) {
+        ssize_t n = write(fd, p, size);
+        if (n < 0) {
+            if (errno == EINTR) continue;
+            return errno;
+        }
+        p += n;
+        size -= (size_t)n;
+    }
+    return 0;
+}
+
+int srv_write_file_atomic(const char *path, const void *data, size_t size)
+{
+    char tmp[1100];
+    snprintf(tmp, sizeof tmp, "%s.tmp", path);
+    int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd < 0) return errno;
+    int rc = write_all(fd, data, size);
+    if (rc == 0 && fsync(fd) != 0) rc = errno;
+    if (close(fd) != 0 && rc == 0) rc = errno;
+    if (rc == 0 && rename(tmp, path) != 0) rc = errno;
+    if (rc != 0) {
+        unlink(tmp);
+        return rc;
+    }
+    char dircopy[1100];
+    snprintf(dircopy, sizeof dircopy, "%s", path);
+    int dfd = open(dirname(dircopy), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (dfd < 0) return errno;
+    if (fsync(dfd) != 0) rc = errno;
+    close(dfd);
+    return rc;
+}
+
+static void path_of(const srv_persist *p, const char *name, char *out, size_t outlen)
+{
+    snprintf(out, outlen, "%s/%s", p->dir, name);
+}
+
+static void write_scene(srv_persist *p, uint64_t gen, const uint8_t *bytes, size_t size)
+{
+    char path[1100];
+    path_of(p, "scene.bin", path, sizeof path);
+    int rc = srv_write_file_atomic(path, bytes, size);
+    if (rc == 0) {
+        char meta[128];
+        int n = snprintf(meta, sizeof meta, "{\"generation\":%llu,\"size\":%zu}\n",
+                         (unsigned long long)gen, size);
+        path_of(p, "scene.json", path, sizeof path);
+        rc = srv_write_file_atomic(path, meta, (size_t)n);
+    }
+    if (rc != 0)
+        srv_error("persist", "cannot save the scene in %s: %s", p->dir, strerror(rc));
+    else
+        srv_info("persist", "saved scene generation %llu (%zu bytes)", (unsigned long long)gen,
+                 size);
+}
+
+static void write_state(srv_persist *p, uint64_t gen, const char *source, cJSON *state)
+{
+    cJSON *doc = cJSON_CreateObject();
+    cJSON_AddNumberToObject(doc, "version", 1);
+    cJSON_AddNumberToObject(doc, "generation", (double)gen);
+    cJSON_AddStringToObject(doc, "source", source);
+    cJSON_AddItemToObject(doc, "state", state);
+    char *text = cJSON_Print(doc);
+    cJSON_Delete(doc);
+    if (!text) abort();
+    char path[1100];
+    path_of(p, "state.json", path, sizeof path);
+    int rc = srv_write_file_atomic(path, text, strlen(text));
+    free(text);
+    if (rc != 0)
+        srv_error("persist", "cannot save the state in %s: %s", p->dir, strerror(rc));
+    else
+        srv_debug("persist", "saved state (generation %llu)", (unsigned long long)gen);
+}
+
+static void *persist_main(void *arg)
+{
+    srv_persist *p = arg;
+    pthread_mutex_lock(&p->mu);
+    for (;;) {
+        while (!p->stop && !p->scene && !p->state)
+            pthread_cond_wait(&p->cv, &p->mu);
+        uint8_t *scene = p->scene;
+        size_t scene_size = p->scene_size;
+        uint64_t scene_gen = p->scene_generation;
+        p->scene = NULL;
+        cJSON *state = p->state;
+        uint64_t state_gen = p->state_generation;
+        char source[128];
+        memcpy(source, p->state_source, sizeof source);
+        p->state = NULL;
+        bool stop = p->stop;
+        pthread_mutex_unlock(&p->mu);
+        if (scene) {
+            write_scene(p, scene_gen, scene, scene_size);
+            free(scene);
+        }
+        if (state) write_state(p, state_gen, source, state);
+        if (stop) {
+            pthread_mutex_lock(&p->mu);
+            if (!p->scene && !p->state) break;
+            continue;
+        }
+        /* coalesce state documents: the newest of the next interval wins */
+        struct timespec ts = {0, STATE_INTERVAL_MS * 1000000L};
+        nanosleep(&ts, NULL);
+        pthread_mutex_lock(&p->mu);
+    }
+    pthread_mutex_unlock(&p->mu);
+    return NULL;
+}
+
+srv_persist *srv_persist_open(const char *dir, char *err, size_t errlen)
+{
+    if (strlen(dir) >= 1000) {
+        snprintf(err, errlen, "the data folder path is too long");
+        return NULL;
+    }
+    if (mkdir(dir, 0755) != 0 && errno != EEXIST) {
+        snprintf(err, errlen, "cannot create the data folder %s: %s", dir, strerror(errno));
+        return NULL;
+    }
+    struct stat sb;
+    if (stat(dir, &sb) != 0 || !S_ISDIR(sb.st_mode) || access(dir, W_OK) != 0) {
+        snprintf(err, errlen, "%s is not a writable folder", dir);
+        return NULL;
+    }
+    srv_persist *p = calloc(1, sizeof *p);
+    if (!p) abort();
+    snprintf(p->dir, sizeof p->dir, "%s", dir);
+    pthread_mutex_init(&p->mu, NULL);
+    pthread_cond_init(&p->cv, NULL);
+    if (pthread_create(&p->thread, NULL, persist_main, p) != 0) {
+        snprintf(err, errlen, "cannot start the persistence thread");
+        pthread_cond_destroy(&p->cv);
+        pthread_mutex_destroy(&p->mu);
+        free(p);
+        return NULL;
+    }
+    return p;
+}
+
+void srv_persist_close(srv_persist *p)
+{
+    if (!p) return;
+    pthread_mutex_lock(&p->mu);
+    p->stop = true;
+    pthread_cond_signal(&p->cv);
+    pthread_mutex_unlock(&p->mu);
+    pthread_join(p->thread, NULL);
+    free(p->scene);
+    cJSON_Delete(p->state);
+    pthread_cond_destroy(&p->cv);
+    pthread_mutex_destroy(&p->mu);
+    free(p);
+}
+
+void srv_persist_post_scene(srv_persist *p, uint64_t generation, uint8_t *bytes, size_t size)
+{
+    if (!p) {
+        free(bytes);
+        return;
+    }
+    pthread_mutex_lock(&p->mu);
+    if (p->scene && p->scene_generation > generation) {
+        free(bytes); /* an older upload arriving late */
+    } else {
+        free(p->scene);
+        p->scene = bytes;
+        p->scene_size = size;
+        p->scene_generation = generation;
+    }
+    pthread_cond_signal(&p->cv);
+    pthread_mutex_unlock(&p->mu);
+}
+
+void srv_persist_post_state(srv_persist *p, uint64_t generation, const char *source, cJSON *doc)
+{
+    if (!p) {
+        cJSON_Delete(doc);
+        return;
+    }
+    pthread_mutex_lock(&p->mu);
+    cJSON_Delete(p->state);
+    p->state = doc;
+    p->state_generation = generation;
+    snprintf(p->state_source, sizeof p->state_source, "%s", source ? source : "");
+    pthread_cond_signal(&p->cv);
+    pthread_mutex_unlock(&p->mu);
+}
+
+/* Reads a whole file (at most max bytes); NULL when missing or unreadable. */
+static uint8_t *read_file(const char *path, size_t max, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return NULL;
+    uint8_t *buf = NULL;
+    size_t len = 0, cap = 0;
+    for (;;) {
+        if (len == cap) {
+            cap = cap ? cap * 2 : 65536;
+            uint8_t *nb = realloc(buf, cap + 1);
+            if (!nb) abort();
+            buf = nb;
+        }
+        size_t n = fread(buf + len, 1, cap - len, f);
+        len += n;
+        if (n == 0 || len > max) break;
+    }
+    bool bad = ferror(f) || len > max;
+    fclose(f);
+    if (bad) {
+        free(buf);
+        return NULL;
+    }
+    buf[len] = 0;
+    *size = len;
+    return buf;
+}
+
+void srv_persist_load(srv_persist *p, srv_saved *out)
+{
+    memset(out, 0, sizeof *out);
+    if (!p) return;
+    char path[1100];
+    size_t size;
+    path_of(p, "scene.json", path, sizeof path);
+    uint8_t *meta = read_file(path, 4096, &size);
+    if (meta) {
+        cJSON *m = cJSON_ParseWithLength((const char *)meta, size);
+        const cJSON *g = cJSON_GetObjectItemCaseSensitive(m, "generation");
+        const cJSON *s = cJSON_GetObjectItemCaseSensitive(m, "size");
+        path_of(p, "scene.bin", path, sizeof path);
+        size_t scene_size = 0;
+        uint8_t *scene = cJSON_IsNumber(g) && cJSON_IsNumber(s)
+                             ? read_file(path, (size_t)s->valuedouble, &scene_size)
+                             : NULL;
+        if (scene && scene_size == (size_t)s->valuedouble) {
+            out->scene = scene;
+            out->scene_size = scene_size;
+            out->scene_generation = (uint64_t)g->valuedouble;
+        } else {
+            free(scene);
+            srv_warn("persist", "%s/scene.bin is missing or does not match scene.json; ignored",
+                     p->dir);
+        }
+        cJSON_Delete(m);
+        free(meta);
+    }
+    path_of(p, "state.json", path, sizeof path);
+    uint8_t *text = read_file(path, 64u << 20, &size);
+    if (text) {
+        cJSON *doc = cJSON_ParseWithLength((const char *)text, size);
+        const cJSON *v = cJSON_GetObjectItemCaseSensitive(doc, "version");
+        const cJSON *g = cJSON_GetObjectItemCaseSensitive(doc, "generation");
+        const cJSON *src = cJSON_GetObjectItemCaseSensitive(doc, "source");
+        cJSON *state = cJSON_DetachItemFromObjectCaseSensitive(doc, "state");
+        if (cJSON_IsNumber(v) && v->valuedouble == 1 && cJSON_IsNumber(g) && cJSON_IsString(src) &&
+            cJSON_IsObject(state)) {
+            out->state = state;
+            out->state_generation = (uint64_t)g->valuedouble;
+            snprintf(out->state_source, sizeof out->state_source, "%s", src->valuestring);
+        } else {
+            cJSON_Delete(state);
+            srv_warn("persist", "%s/state.json is not a saved state; ignored", p->dir);
+        }
+        cJSON_Delete(doc);
+        free(text);
+    }
+}
+
+void srv_saved_free(srv_saved *s)
+{
+    free(s->scene);
+    cJSON_Delete(s->state);
+    memset(s, 0, sizeof *s);
+}

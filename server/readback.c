@@ -1,0 +1,146 @@
+/* readback.c: asynchronous frame readback through a ring of fenced copies. */
+#include "readback.h"
+
+#include <string.h>
+
+void srv_readback_init(srv_readback *rb, rd_vk *vk)
+{
+    memset(rb, 0, sizeof *rb);
+    rb->vk = vk;
+}
+
+static void slot_release_cmd(rd_vk *vk, srv_readback_slot *s)
+{
+    if (s->cmd.fence) vkDestroyFence(vk->device, s->cmd.fence, NULL);
+    if (s->cmd.cb) vkFreeCommandBuffers(vk->device, vk->command_pool, 1, &s->cmd.cb);
+    s->cmd.fence = VK_NULL_HANDLE;
+    s->cmd.cb = VK_NULL_HANDLE;
+    s->busy = false;
+}
+
+void srv_readback_dispose(srv_readback *rb)
+{
+    if (!rb->vk) return;
+    for (int i = 0; i < SRV_READBACK_SLOTS; i++) {
+        srv_readback_slot *s = &rb->slots[i];
+        if (s->busy && s->cmd.fence && !rb->vk->device_lost)
+            vkWaitForFences(rb->vk->device, 1, &s->cmd.fence, VK_TRUE, UINT64_MAX);
+        slot_release_cmd(rb->vk, s);
+        rd_buffer_destroy(rb->vk, &s->buffer);
+    }
+    rb->vk = NULL;
+}
+
+bool srv_readback_has_free(const srv_readback *rb)
+{
+    for (int i = 0; i < SRV_READBACK_SLOTS; i++)
+        if (!rb->slots[i].busy) return true;
+    return false;
+}
+
+unsigned srv_readback_busy(const srv_readback *rb)
+{
+    unsigned n = 0;
+    for (int i = 0; i < SRV_READBACK_SLOTS; i++)
+        n += rb->slots[i].busy;
+    return n;
+}
+
+rd_vk_result srv_readback_submit(srv_readback *rb, const rd_buffer *src, unsigned width,
+                                 unsigned height, const srv_frame_info *info, char *err,
+                                 size_t errlen)
+{
+    srv_readback_slot *s = NULL;
+    for (int i = 0; i < SRV_READBACK_SLOTS && !s; i++)
+        if (!rb->slots[i].busy) s = &rb->slots[i];
+    if (!s) {
+        rd_vk_errorf(err, errlen, "No free readback slot.");
+        return RD_VK_ERR_VULKAN;
+    }
+    VkDeviceSize bytes = (VkDeviceSize)width * height * 4;
+    if (bytes > src->size) {
+        rd_vk_errorf(err, errlen, "Readback of %llu bytes from a %llu-byte buffer.",
+                     (unsigned long long)bytes, (unsigned long long)src->size);
+        return RD_VK_ERR_VULKAN;
+    }
+    if (s->buffer.buffer == VK_NULL_HANDLE || s->buffer.size != bytes) {
+        rd_buffer_destroy(rb->vk, &s->buffer);
+        rd_vk_result r =
+            rd_buffer_create(rb->vk, &s->buffer, bytes, RD_MEMORY_READBACK, err, errlen);
+        if (r != RD_VK_OK) return r;
+    }
+    rd_vk_result r = rd_cmd_begin(rb->vk, &s->cmd, err, errlen);
+    if (r != RD_VK_OK) return r;
+    VkBufferCopy region = {.srcOffset = 0, .dstOffset = 0, .size = bytes};
+    vkCmdCopyBuffer(s->cmd.cb, src->buffer, s->buffer.buffer, 1, &region);
+    /* the copy's writes become visible to the host; and every later command (the next frame's
+     * passes writing src) waits for the copy to have read src */
+    VkMemoryBarrier mb = {
+        .sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER,
+        .srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT,
+        .dstAccessMask = VK_ACCESS_HOST_READ_BIT,
+    };
+    vkCmdPipelineBarrier(s->cmd.cb, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                         VK_PIPELINE_STAGE_HOST_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT |
+                             VK_PIPELINE_STAGE_TRANSFER_BIT,
+                         0, 1, &mb, 0, NULL, 0, NULL);
+    VkResult vr = vkEndCommandBuffer(s->cmd.cb);
+    if (vr == VK_SUCCESS) {
+        VkSubmitInfo si = {
+            .sType = VK_STRUCTURE_TYPE_SUBMIT_INFO,
+            .commandBufferCount = 1,
+            .pCommandBuffers = &s->cmd.cb,
+        };
+        vr = vkQueueSubmit(rb->vk->queue, 1, &si, s->cmd.fence);
+    }
+    if (vr != VK_SUCCESS) {
+        slot_release_cmd(rb->vk, s);
+        return rd_vk_fail(rb->vk, vr, "readback submit", err, errlen);
+    }
+    s->busy = true;
+    s->seq = rb->next_seq++;
+    s->width = width;
+    s->height = height;
+    s->info = *info;
+    return RD_VK_OK;
+}
+
+static srv_readback_slot *oldest(srv_readback *rb)
+{
+    srv_readback_slot *o = NULL;
+    for (int i = 0; i < SRV_READBACK_SLOTS; i++) {
+        srv_readback_slot *s = &rb->slots[i];
+        if (s->busy && (!o || s->seq < o->seq)) o = s;
+    }
+    return o;
+}
+
+rd_vk_result srv_readback_poll(srv_readback *rb, uint64_t timeout_ns, srv_readback_fn fn,
+                               void *user, char *err, size_t errlen)
+{
+    for (srv_readback_slot *s = oldest(rb); s; s = oldest(rb)) {
+        VkResult vr = timeout_ns
+                          ? vkWaitForFences(rb->vk->device, 1, &s->cmd.fence, VK_TRUE, timeout_ns)
+                          : vkGetFenceStatus(rb->vk->device, s->cmd.fence);
+        timeout_ns = 0;
+        if (vr == VK_NOT_READY || vr == VK_TIMEOUT) return RD_VK_OK;
+        if (vr != VK_SUCCESS) {
+            slot_release_cmd(rb->vk, s);
+            return rd_vk_fail(rb->vk, vr, "readback fence", err, errlen);
+        }
+        slot_release_cmd(rb->vk, s);
+        if (!(s->buffer.memory_flags & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT)) {
+            VkMappedMemoryRange range = {
+                .sType = VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE,
+                .memory = s->buffer.memory,
+                .offset = 0,
+                .size = VK_WHOLE_SIZE,
+            };
+            vr = vkInvalidateMappedMemoryRanges(rb->vk->device, 1, &range);
+            if (vr != VK_SUCCESS)
+                return rd_vk_fail(rb->vk, vr, "vkInvalidateMappedMemoryRanges", err, errlen);
+        }
+        fn(user, &s->info, s->width, s->height, (const uint8_t *)s->buffer.mapped);
+    }
+    return RD_VK_OK;
+}

@@ -1,0 +1,491 @@
+/* scene_state.c: the render thread's scene, camera and settings, and API patches applied to
+ * them (validated first, then applied whole). */
+#include "scene_state.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "api_json.h"
+#include "renderer/xform.h"
+
+#define BAD(...) (srv_api_fail(e, 400, SRV_ERR_INVALID_FIELD, __VA_ARGS__), false)
+
+void srv_settings_defaults(srv_settings *s)
+{
+    memset(s, 0, sizeof *s);
+    s->width = 960;
+    s->height = 540;
+    s->max_pixels = 1920 * 1080;
+    s->max_fps = 30;
+    s->quality_interactive = 60;
+    s->quality_still = 90;
+    s->still_delay_ms = 150;
+    s->tonemap = PC_TONEMAP_ACES;
+    s->view = PC_VIEW_FINAL;
+    s->gi_mode = PC_GI_DDGI;
+    s->rays_per_probe = 256;
+    s->hysteresis = 0.97f;
+}
+
+void srv_state_init(srv_scene_state *st)
+{
+    memset(st, 0, sizeof *st);
+    rd_scene_init(&st->scene);
+    srv_settings_defaults(&st->settings);
+}
+
+void srv_state_dispose(srv_scene_state *st)
+{
+    rd_scene_destroy(&st->scene);
+    free(st->light_ids);
+    free(st->node_moved);
+    st->light_ids = NULL;
+    st->node_moved = NULL;
+    st->loaded = false;
+}
+
+static void *xcalloc(size_t n, size_t size)
+{
+    void *p = calloc(n ? n : 1, size);
+    if (!p) abort(); /* out of memory is the one fatal error */
+    return p;
+}
+
+void srv_state_set_scene(srv_scene_state *st, rd_scene *scene, const char *source,
+                         uint64_t generation)
+{
+    rd_scene_destroy(&st->scene);
+    free(st->light_ids);
+    free(st->node_moved);
+    st->scene = *scene;
+    memset(scene, 0, sizeof *scene);
+    st->light_ids = xcalloc(st->scene.light_count, sizeof *st->light_ids);
+    for (uint32_t i = 0; i < st->scene.light_count; i++)
+        st->light_ids[i] = st->next_light_id++;
+    st->node_moved = xcalloc(st->scene.node_count, sizeof *st->node_moved);
+    snprintf(st->source, sizeof st->source, "%s", source ? source : "");
+    st->generation = generation;
+    st->loaded = true;
+
+    rd_view_camera v;
+    char err[256];
+    if (!rd_camera_for_scene(&st->scene, -1, &v, err, sizeof err))
+        rd_camera_frame_bounds(st->scene.bounds_min, st->scene.bounds_max, 0.7f, &v);
+    float c[3], d[3];
+    for (int i = 0; i < 3; i++)
+        c[i] = 0.5f * (st->scene.bounds_min[i] + st->scene.bounds_max[i]);
+    rd_vec3_sub(d, c, v.eye);
+    float dist = rd_vec3_dot(d, v.forward);
+    srv_camera_from_view(&v, dist > 1e-3f ? dist : 1.0f, &st->camera);
+}
+
+int srv_state_light_index(const srv_scene_state *st, uint32_t id)
+{
+    for (uint32_t i = 0; i < st->scene.light_count; i++)
+        if (st->light_ids[i] == id) return (int)i;
+    return -1;
+}
+
+/* ---- camera -----------------------------------------------------------------------------------
+ */
+
+void srv_camera_from_view(const rd_view_camera *v, float target_distance, srv_camera *c)
+{
+    memcpy(c->position, v->eye, sizeof c->position);
+    memcpy(c->forward, v->forward, sizeof c->forward);
+    memcpy(c->up, v->up, sizeof c->up);
+    c->fov_deg = v->yfov * 180.0f / (float)M_PI;
+    c->target_distance = target_distance;
+}
+
+void srv_camera_to_view(const srv_camera *c, rd_view_camera *v)
+{
+    memcpy(v->eye, c->position, sizeof v->eye);
+    memcpy(v->forward, c->forward, sizeof v->forward);
+    memcpy(v->up, c->up, sizeof v->up);
+    v->yfov = c->fov_deg * (float)M_PI / 180.0f;
+}
+
+static void quat_rotate(const float q[4], const float v[3], float out[3])
+{
+    /* v' = v + 2 w (u x v) + 2 u x (u x v), q = (u, w) normalised */
+    float u[3] = {q[0], q[1], q[2]}, t[3], t2[3];
+    rd_vec3_cross(t, u, v);
+    rd_vec3_scale(t, t, 2);
+    rd_vec3_cross(t2, u, t);
+    for (int i = 0; i < 3; i++)
+        out[i] = v[i] + q[3] * t[i] + t2[i];
+}
+
+static void quat_normalize(const float in[4], float out[4])
+{
+    double n = sqrt((double)in[0] * in[0] + (double)in[1] * in[1] + (double)in[2] * in[2] +
+                    (double)in[3] * in[3]);
+    for (int i = 0; i < 4; i++)
+        out[i] = (float)(in[i] / n);
+}
+
+bool srv_state_camera_apply(srv_camera *cam, const srv_camera_patch *p, bool replace,
+                            srv_api_error *e)
+{
+    const unsigned dir = SRV_CAM_TARGET | SRV_CAM_FORWARD | SRV_CAM_ORIENTATION;
+    if (replace && (!(p->has & SRV_CAM_POSITION) || !(p->has & dir)))
+        return BAD("PUT /v1/camera needs 'position' and one of 'target', 'forward' and "
+                   "'orientation'.");
+    srv_camera c = *cam;
+    if (replace && !(p->has & SRV_CAM_UP)) rd_vec3_set(c.up, 0, 1, 0);
+    if (p->has & SRV_CAM_POSITION) memcpy(c.position, p->position, sizeof c.position);
+    if (p->has & SRV_CAM_TARGET) {
+        float d[3];
+        rd_vec3_sub(d, p->target, c.position);
+        float len = rd_vec3_length(d);
+        if (!(len > 1e-6f)) return BAD("The camera target must differ from its position.");
+        rd_vec3_scale(c.forward, d, 1.0f / len);
+        c.target_distance = len;
+    }
+    if (p->has & SRV_CAM_FORWARD) rd_vec3_normalize(c.forward, p->forward, NULL);
+    if (p->has & SRV_CAM_ORIENTATION) {
+        float q[4];
+        const float nz[3] = {0, 0, -1}, y[3] = {0, 1, 0};
+        quat_normalize(p->orientation, q);
+        quat_rotate(q, nz, c.forward);
+        quat_rotate(q, y, c.up);
+    }
+    if (p->has & SRV_CAM_UP) rd_vec3_normalize(c.up, p->up, NULL);
+    if (p->has & SRV_CAM_FOV) c.fov_deg = p->fov_deg;
+    float right[3];
+    rd_vec3_cross(right, c.forward, c.up);
+    if (rd_vec3_length(right) < 1e-4f) {
+        if (p->has & SRV_CAM_UP)
+            return BAD("The camera's 'up' must not be parallel to its view direction.");
+        /* the old up happens to be parallel to the new direction: pick another */
+        const float alt[3] = {0, 0, 1}, alt2[3] = {1, 0, 0};
+        rd_vec3_cross(right, c.forward, fabsf(c.forward[2]) < 0.9f ? alt : alt2);
+    }
+    rd_vec3_normalize(right, right, NULL);
+    rd_vec3_cross(c.up, right, c.forward);
+    rd_vec3_normalize(c.up, c.up, NULL);
+    if (!rd_vec3_isfinite(c.forward) || !rd_vec3_isfinite(c.up) || !rd_vec3_isfinite(c.position))
+        return BAD("The camera would not be finite.");
+    *cam = c;
+    return true;
+}
+
+/* ---- lights -----------------------------------------------------------------------------------
+ */
+
+bool srv_state_light_apply(rd_light *l, const srv_light_patch *p, srv_api_error *e)
+{
+    rd_light n = *l;
+    if (p->has & SRV_LIGHT_TYPE) n.type = p->type;
+    if (p->has & SRV_LIGHT_COLOR) memcpy(n.color, p->color, sizeof n.color);
+    if (p->has & SRV_LIGHT_INTENSITY) n.intensity = p->intensity;
+    if (p->has & SRV_LIGHT_POSITION) memcpy(n.position, p->position, sizeof n.position);
+    if (p->has & SRV_LIGHT_DIRECTION) rd_vec3_normalize(n.direction, p->direction, NULL);
+    if (p->has & SRV_LIGHT_RANGE) n.range = p->range;
+    if (p->has & SRV_LIGHT_INNER_CONE) n.inner_cone = p->inner_cone;
+    if (p->has & SRV_LIGHT_OUTER_CONE) n.outer_cone = p->outer_cone;
+    if (n.type == RD_LIGHT_SPOT && !(n.inner_cone < n.outer_cone))
+        return BAD("A spot light needs inner_cone_angle < outer_cone_angle (got %g and %g).",
+                   (double)n.inner_cone, (double)n.outer_cone);
+    if (p->has & (SRV_LIGHT_POSITION | SRV_LIGHT_DIRECTION))
+        n.node = -1; /* now placed in world space */
+    if (p->has & SRV_LIGHT_NAME) {
+        char *name = strdup(p->name);
+        if (!name) abort();
+        free(n.name);
+        n.name = name;
+    }
+    *l = n;
+    return true;
+}
+
+bool srv_state_light_add(srv_scene_state *st, const srv_light_patch *p, uint32_t *id,
+                         srv_api_error *e)
+{
+    if (!(p->has & SRV_LIGHT_TYPE))
+        return BAD("A new light needs 'type' (point, spot or directional).");
+    rd_light l = {.name = NULL,
+                  .type = p->type,
+                  .color = {1, 1, 1},
+                  .intensity = 1,
+                  .outer_cone = (float)M_PI / 4,
+                  .node = -1,
+                  .direction = {0, -1, 0}};
+    if (!srv_state_light_apply(&l, p, e)) return false;
+    if (!l.name) {
+        char fallback[32];
+        snprintf(fallback, sizeof fallback, "light-%u", st->next_light_id);
+        l.name = strdup(fallback);
+        if (!l.name) abort();
+    }
+    uint32_t idx = rd_scene_add_light(&st->scene, &l); /* copies the name */
+    free(l.name);
+    uint32_t *ids = realloc(st->light_ids, st->scene.light_count * sizeof *ids);
+    if (!ids) abort();
+    st->light_ids = ids;
+    st->light_ids[idx] = st->next_light_id++;
+    *id = st->light_ids[idx];
+    return true;
+}
+
+bool srv_state_light_delete(srv_scene_state *st, uint32_t id, srv_api_error *e)
+{
+    int i = srv_state_light_index(st, id);
+    if (i < 0) {
+        srv_api_fail(e, 404, SRV_ERR_NOT_FOUND, "There is no light with id %u.", id);
+        return false;
+    }
+    free(st->scene.lights[i].name);
+    uint32_t rest = st->scene.light_count - (uint32_t)i - 1;
+    memmove(&st->scene.lights[i], &st->scene.lights[i + 1], rest * sizeof *st->scene.lights);
+    memmove(&st->light_ids[i], &st->light_ids[i + 1], rest * sizeof *st->light_ids);
+    st->scene.light_count--;
+    return true;
+}
+
+/* ---- nodes ------------------------------------------------------------------------------------
+ */
+
+/* TRS of an affine matrix without shear (glTF's rule for animated nodes). */
+static void decompose(const float m[16], float t[3], float q[4], float s[3])
+{
+    t[0] = m[12], t[1] = m[13], t[2] = m[14];
+    float cols[3][3];
+    for (int c = 0; c < 3; c++) {
+        for (int r = 0; r < 3; r++)
+            cols[c][r] = m[c * 4 + r];
+        s[c] = rd_vec3_length(cols[c]);
+    }
+    if (rd_mat4_det3(m) < 0) s[0] = -s[0];
+    for (int c = 0; c < 3; c++)
+        for (int r = 0; r < 3; r++)
+            cols[c][r] = s[c] != 0 ? cols[c][r] / s[c] : (c == r);
+    float m00 = cols[0][0], m01 = cols[1][0], m02 = cols[2][0];
+    float m10 = cols[0][1], m11 = cols[1][1], m12 = cols[2][1];
+    float m20 = cols[0][2], m21 = cols[1][2], m22 = cols[2][2];
+    float tr = m00 + m11 + m22;
+    if (tr > 0) {
+        float k = sqrtf(tr + 1.0f) * 2;
+        q[3] = 0.25f * k, q[0] = (m21 - m12) / k, q[1] = (m02 - m20) / k, q[2] = (m10 - m01) / k;
+    } else if (m00 > m11 && m00 > m22) {
+        float k = sqrtf(1.0f + m00 - m11 - m22) * 2;
+        q[3] = (m21 - m12) / k, q[0] = 0.25f * k, q[1] = (m01 + m10) / k, q[2] = (m02 + m20) / k;
+    } else if (m11 > m22) {
+        float k = sqrtf(1.0f + m11 - m00 - m22) * 2;
+        q[3] = (m02 - m20) / k, q[0] = (m01 + m10) / k, q[1] = 0.25f * k, q[2] = (m12 + m21) / k;
+    } else {
+        float k = sqrtf(1.0f + m22 - m00 - m11) * 2;
+        q[3] = (m10 - m01) / k, q[0] = (m02 + m20) / k, q[1] = (m12 + m21) / k, q[2] = 0.25f * k;
+    }
+}
+
+bool srv_state_node_apply(srv_scene_state *st, uint32_t id, const srv_node_patch *p,
+                          srv_api_error *e)
+{
+    if (id >= st->scene.node_count) {
+        srv_api_fail(e, 404, SRV_ERR_NOT_FOUND, "There is no node with id %u (the scene has %u).",
+                     id, st->scene.node_count);
+        return false;
+    }
+    rd_node *n = &st->scene.nodes[id];
+    rd_node old = *n;
+    if (n->has_matrix) {
+        decompose(n->matrix, n->translation, n->rotation, n->scale);
+        n->has_matrix = false;
+    }
+    if (p->has & SRV_NODE_TRANSLATION)
+        memcpy(n->translation, p->translation, sizeof n->translation);
+    if (p->has & SRV_NODE_ROTATION) quat_normalize(p->rotation, n->rotation);
+    if (p->has & SRV_NODE_SCALE) memcpy(n->scale, p->scale, sizeof n->scale);
+    char err[256];
+    if (!rd_scene_update(&st->scene, err, sizeof err)) {
+        *n = old;
+        rd_scene_update(&st->scene, err, sizeof err);
+        srv_api_fail(e, 400, SRV_ERR_INVALID_FIELD, "The node cannot be moved: %s", err);
+        return false;
+    }
+    st->node_moved[id] = true;
+    return true;
+}
+
+/* ---- settings ---------------------------------------------------------------------------------
+ */
+
+bool srv_state_settings_apply(srv_settings *s, const srv_settings_patch *p, srv_api_error *e)
+{
+    srv_settings n = *s;
+    const srv_settings *v = &p->v;
+    unsigned h = p->has;
+    if (h & SRV_SET_WIDTH) n.width = v->width;
+    if (h & SRV_SET_HEIGHT) n.height = v->height;
+    if (h & SRV_SET_MAX_PIXELS) n.max_pixels = v->max_pixels;
+    if (h & SRV_SET_MAX_FPS) n.max_fps = v->max_fps;
+    if (h & SRV_SET_QUALITY_INTERACTIVE) n.quality_interactive = v->quality_interactive;
+    if (h & SRV_SET_QUALITY_STILL) n.quality_still = v->quality_still;
+    if (h & SRV_SET_STILL_DELAY) n.still_delay_ms = v->still_delay_ms;
+    if (h & SRV_SET_EXPOSURE) n.exposure_ev = v->exposure_ev;
+    if (h & SRV_SET_TONEMAP) n.tonemap = v->tonemap;
+    if (h & SRV_SET_SKY) memcpy(n.sky, v->sky, sizeof n.sky);
+    if (h & SRV_SET_VIEW) n.view = v->view;
+    if (h & SRV_SET_GI_MODE) n.gi_mode = v->gi_mode;
+    if (h & SRV_SET_PROBE_COUNTS) memcpy(n.probe_counts, v->probe_counts, sizeof n.probe_counts);
+    if (h & SRV_SET_PROBE_SPACING) n.probe_spacing = v->probe_spacing;
+    if (h & SRV_SET_RAYS) n.rays_per_probe = v->rays_per_probe;
+    if (h & SRV_SET_HYSTERESIS) n.hysteresis = v->hysteresis;
+    if (h & SRV_SET_ANIMATE) n.animate = v->animate;
+    if ((uint64_t)n.width * n.height > n.max_pixels)
+        return BAD("%ux%u is more than max_pixels (%u).", n.width, n.height, n.max_pixels);
+    if (n.view != PC_VIEW_FINAL && n.gi_mode == PC_GI_OFF)
+        return BAD("The irradiance and probes views need gi_mode classic or ddgi.");
+    uint64_t probes = (uint64_t)n.probe_counts[0] * n.probe_counts[1] * n.probe_counts[2];
+    if (probes > 65535)
+        return BAD("At most 65535 probes (probe_counts give %llu).", (unsigned long long)probes);
+    *s = n;
+    return true;
+}
+
+void srv_settings_to_gi(const srv_settings *s, rd_ddgi_settings *gi)
+{
+    memset(gi, 0, sizeof *gi);
+    gi->mode = s->gi_mode;
+    memcpy(gi->counts, s->probe_counts, sizeof gi->counts);
+    gi->spacing[0] = gi->spacing[1] = gi->spacing[2] = s->probe_spacing;
+    gi->rays = s->rays_per_probe;
+    gi->hysteresis = s->hysteresis > 0 ? s->hysteresis : 1e-9f; /* 0 means default there */
+}
+
+/* ---- persistence document --------------------------------------------------------------- */
+
+cJSON *srv_state_to_json(const srv_scene_state *st)
+{
+    cJSON *j = cJSON_CreateObject();
+    cJSON_AddItemToObject(j, "camera", srv_json_camera(&st->camera));
+    cJSON_AddItemToObject(j, "settings", srv_json_settings(&st->settings));
+    cJSON *lights = cJSON_AddArrayToObject(j, "lights");
+    for (uint32_t i = 0; i < st->scene.light_count; i++)
+        cJSON_AddItemToArray(lights, srv_json_light(st->light_ids[i], &st->scene.lights[i]));
+    cJSON *nodes = cJSON_AddArrayToObject(j, "nodes");
+    for (uint32_t i = 0; i < st->scene.node_count; i++) {
+        if (!st->node_moved[i]) continue;
+        const rd_node *n = &st->scene.nodes[i];
+        cJSON *o = cJSON_CreateObject();
+        cJSON_AddNumberToObject(o, "id", i);
+        srv_json_add_floats(o, "translation", n->translation, 3);
+        srv_json_add_floats(o, "rotation", n->rotation, 4);
+        srv_json_add_floats(o, "scale", n->scale, 3);
+        cJSON_AddItemToArray(nodes, o);
+    }
+    return j;
+}
+
+/* A copy of obj without the named read-only members, for the patch parsers. */
+static cJSON *without(const cJSON *obj, const char *a, const char *b)
+{
+    cJSON *c = cJSON_Duplicate(obj, 1);
+    if (c && a) cJSON_DeleteItemFromObjectCaseSensitive(c, a);
+    if (c && b) cJSON_DeleteItemFromObjectCaseSensitive(c, b);
+    return c;
+}
+
+static bool vec_member(const cJSON *o, const char *name, int n, float *out)
+{
+    const cJSON *a = cJSON_GetObjectItemCaseSensitive(o, name);
+    if (!cJSON_IsArray(a) || cJSON_GetArraySize(a) != n) return false;
+    int i = 0;
+    const cJSON *x;
+    cJSON_ArrayForEach(x, a)
+    {
+        if (!cJSON_IsNumber(x) || !isfinite(x->valuedouble)) return false;
+        out[i++] = (float)x->valuedouble;
+    }
+    return true;
+}
+
+bool srv_state_restore(srv_scene_state *st, const cJSON *doc, srv_api_error *e)
+{
+    e->message[0] = '\0';
+    if (!cJSON_IsObject(doc)) return BAD("The saved state is not a JSON object.");
+    const cJSON *cam = cJSON_GetObjectItemCaseSensitive(doc, "camera");
+    const cJSON *settings = cJSON_GetObjectItemCaseSensitive(doc, "settings");
+    const cJSON *lights = cJSON_GetObjectItemCaseSensitive(doc, "lights");
+    const cJSON *nodes = cJSON_GetObjectItemCaseSensitive(doc, "nodes");
+    srv_api_error ignored;
+    if (cJSON_IsObject(settings)) {
+        srv_settings_patch sp;
+        if (srv_json_settings_patch(settings, &sp, e))
+            srv_state_settings_apply(&st->settings, &sp, &ignored);
+        else
+            return false;
+    }
+    if (cJSON_IsObject(cam)) {
+        srv_camera_patch cp = {.has =
+                                   SRV_CAM_POSITION | SRV_CAM_FORWARD | SRV_CAM_UP | SRV_CAM_FOV};
+        float target[3];
+        const cJSON *fov = cJSON_GetObjectItemCaseSensitive(cam, "fov");
+        if (!vec_member(cam, "position", 3, cp.position) ||
+            !vec_member(cam, "forward", 3, cp.forward) || !vec_member(cam, "up", 3, cp.up) ||
+            !cJSON_IsNumber(fov) || !(fov->valuedouble >= 1) || !(fov->valuedouble <= 170))
+            return BAD("The saved camera is incomplete.");
+        cp.fov_deg = (float)fov->valuedouble;
+        if (!srv_state_camera_apply(&st->camera, &cp, true, e)) return false;
+        if (vec_member(cam, "target", 3, target)) {
+            float d[3];
+            rd_vec3_sub(d, target, st->camera.position);
+            float len = rd_vec3_length(d);
+            if (len > 1e-6f) st->camera.target_distance = len;
+        }
+    }
+    if (cJSON_IsArray(lights)) {
+        /* the saved lights replace the scene's */
+        for (uint32_t i = 0; i < st->scene.light_count; i++)
+            free(st->scene.lights[i].name);
+        st->scene.light_count = 0;
+        const cJSON *l;
+        uint32_t max_id = 0;
+        bool any = false;
+        cJSON_ArrayForEach(l, lights)
+        {
+            const cJSON *idj = cJSON_GetObjectItemCaseSensitive(l, "id");
+            const cJSON *nodej = cJSON_GetObjectItemCaseSensitive(l, "node");
+            cJSON *c = without(l, "id", "node");
+            srv_light_patch lp;
+            uint32_t id;
+            bool ok = c && cJSON_IsNumber(idj) && srv_json_light_patch(c, &lp, e) &&
+                      srv_state_light_add(st, &lp, &id, e);
+            cJSON_Delete(c);
+            if (!ok) {
+                snprintf(e->message, sizeof e->message, "a saved light was skipped");
+                continue;
+            }
+            uint32_t idx = st->scene.light_count - 1;
+            st->light_ids[idx] = (uint32_t)idj->valuedouble;
+            if (cJSON_IsNumber(nodej) && nodej->valuedouble >= 0 &&
+                nodej->valuedouble < st->scene.node_count)
+                st->scene.lights[idx].node = (int32_t)nodej->valuedouble;
+            if (!any || st->light_ids[idx] > max_id) max_id = st->light_ids[idx];
+            any = true;
+        }
+        if (any && max_id + 1 > st->next_light_id) st->next_light_id = max_id + 1;
+    }
+    if (cJSON_IsArray(nodes)) {
+        const cJSON *n;
+        cJSON_ArrayForEach(n, nodes)
+        {
+            const cJSON *idj = cJSON_GetObjectItemCaseSensitive(n, "id");
+            cJSON *c = without(n, "id", NULL);
+            srv_node_patch np;
+            srv_api_error ne;
+            bool ok = c && cJSON_IsNumber(idj) && idj->valuedouble >= 0 &&
+                      srv_json_node_patch(c, &np, &ne) &&
+                      srv_state_node_apply(st, (uint32_t)idj->valuedouble, &np, &ne);
+            cJSON_Delete(c);
+            if (!ok) snprintf(e->message, sizeof e->message, "a saved node was skipped");
+        }
+    }
+    char err[256];
+    rd_scene_update(&st->scene, err, sizeof err); /* places node-attached lights */
+    return true;
+}

@@ -1,0 +1,163 @@
+/* stats_report.c: the numbers of /v1/stats and /metrics. */
+#include "stats_report.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "api_json.h"
+
+cJSON *srv_stats_json(const srv_stats_snapshot *s)
+{
+    const srv_render_stats *r = &s->render;
+    cJSON *j = cJSON_CreateObject();
+    cJSON_AddStringToObject(j, "device", r->device);
+    cJSON_AddBoolToObject(j, "device_lost", r->device_lost);
+    cJSON_AddStringToObject(j, "last_error", r->last_error);
+    cJSON_AddNumberToObject(j, "uptime_s", (double)(uint64_t)(s->uptime_s * 1000) / 1000);
+    cJSON_AddBoolToObject(j, "rendering", r->rendering);
+    cJSON_AddNumberToObject(j, "fps", r->fps);
+    cJSON_AddNumberToObject(j, "frames_rendered", (double)r->frames_rendered);
+    cJSON_AddNumberToObject(j, "stills_reencoded", (double)r->stills_reencoded);
+    cJSON_AddNumberToObject(j, "commands_applied", (double)r->commands_applied);
+    cJSON *res = cJSON_AddArrayToObject(j, "resolution");
+    cJSON_AddItemToArray(res, cJSON_CreateNumber(r->width));
+    cJSON_AddItemToArray(res, cJSON_CreateNumber(r->height));
+    cJSON_AddNumberToObject(j, "frame_ms", r->frame_ms_last);
+    cJSON *gpu = cJSON_AddObjectToObject(j, "gpu_ms");
+    for (unsigned i = 0; i < r->pass_count; i++)
+        cJSON_AddNumberToObject(gpu, r->pass_name[i], r->pass_ms[i]);
+    cJSON_AddNumberToObject(j, "gpu_ms_total", r->gpu_ms_last);
+    cJSON_AddNumberToObject(j, "rays_last_frame", (double)r->rays_last);
+    cJSON_AddNumberToObject(j, "rays_per_second", r->rays_per_second);
+    cJSON *enc = cJSON_AddObjectToObject(j, "encoder");
+    cJSON_AddNumberToObject(enc, "encode_ms", s->encoder.encode_ms_avg);
+    cJSON_AddNumberToObject(enc, "encode_ms_last", s->encoder.encode_ms_last);
+    cJSON_AddNumberToObject(enc, "jpegs_encoded", (double)s->encoder.jpegs_encoded);
+    cJSON_AddNumberToObject(enc, "frames_published", (double)s->encoder.frames_published);
+    cJSON_AddNumberToObject(enc, "frames_dropped", (double)s->encoder.frames_dropped);
+    cJSON *p = cJSON_AddObjectToObject(j, "probes");
+    cJSON_AddStringToObject(p, "mode", srv_gi_mode_name(r->gi_mode));
+    cJSON *c = cJSON_AddArrayToObject(p, "counts");
+    for (int i = 0; i < 3; i++)
+        cJSON_AddItemToArray(c, cJSON_CreateNumber(r->probe_counts[i]));
+    cJSON_AddNumberToObject(p, "total", r->probes);
+    cJSON_AddNumberToObject(p, "rays_per_probe", r->rays_per_probe);
+    cJSON_AddNumberToObject(p, "updates_since_change", r->gi_updates);
+    cJSON_AddNumberToObject(p, "updates_to_converge", r->gi_converge_updates);
+    cJSON_AddBoolToObject(p, "converged",
+                          r->gi_mode == 0 || r->gi_updates >= r->gi_converge_updates);
+    cJSON *st = cJSON_AddObjectToObject(j, "stream");
+    cJSON_AddNumberToObject(st, "viewers", s->stream.viewers);
+    cJSON_AddNumberToObject(st, "bandwidth_bps", s->stream.bandwidth_bps);
+    cJSON_AddNumberToObject(st, "bytes_sent", (double)s->stream.bytes_sent);
+    cJSON_AddNumberToObject(st, "frames_sent", (double)s->stream.frames_sent);
+    cJSON_AddNumberToObject(st, "frames_skipped", (double)s->stream.frames_skipped);
+    cJSON_AddNumberToObject(st, "messages_received", (double)s->stream.messages_received);
+    cJSON_AddNumberToObject(st, "lag_ms_max", s->stream.lag_ms_max);
+    cJSON_AddNumberToObject(st, "connections_rejected", (double)s->stream.connections_rejected);
+    cJSON_AddNumberToObject(st, "connections_closed_for_abuse",
+                            (double)s->stream.connections_closed_for_abuse);
+    cJSON *h = cJSON_AddObjectToObject(j, "http");
+    cJSON_AddNumberToObject(h, "requests", (double)s->http.requests);
+    cJSON_AddNumberToObject(h, "status_2xx", (double)s->http.status_2xx);
+    cJSON_AddNumberToObject(h, "status_4xx", (double)s->http.status_4xx);
+    cJSON_AddNumberToObject(h, "status_5xx", (double)s->http.status_5xx);
+    cJSON_AddNumberToObject(h, "uploads_accepted", (double)s->http.uploads_accepted);
+    cJSON_AddNumberToObject(h, "uploads_rejected", (double)s->http.uploads_rejected);
+    cJSON *scene = cJSON_AddObjectToObject(j, "scene");
+    cJSON_AddNumberToObject(scene, "generation", (double)r->scene_generation);
+    cJSON_AddNumberToObject(scene, "triangles", (double)r->triangles);
+    return j;
+}
+
+typedef struct text {
+    char *buf;
+    size_t len, cap;
+} text;
+
+#if defined(__GNUC__)
+__attribute__((format(printf, 2, 3)))
+#endif
+static void
+put(text *t, const char *fmt, ...)
+{
+    for (;;) {
+        va_list ap;
+        va_start(ap, fmt);
+        int n = vsnprintf(t->buf + t->len, t->cap - t->len, fmt, ap);
+        va_end(ap);
+        if (n >= 0 && (size_t)n < t->cap - t->len) {
+            t->len += (size_t)n;
+            return;
+        }
+        t->cap = t->cap * 2 + (size_t)(n > 0 ? n : 0) + 256;
+        t->buf = realloc(t->buf, t->cap);
+        if (!t->buf) abort();
+    }
+}
+
+static void metric(text *t, const char *name, const char *type, const char *help, double v)
+{
+    put(t, "# HELP %s %s\n# TYPE %s %s\n%s %.17g\n", name, help, name, type, name, v);
+}
+
+char *srv_stats_prometheus(const srv_stats_snapshot *s)
+{
+    text t = {.cap = 4096};
+    t.buf = malloc(t.cap);
+    if (!t.buf) abort();
+    t.buf[0] = 0;
+    const srv_render_stats *r = &s->render;
+    metric(&t, "probecast_up", "gauge", "1 while the GPU device works.", r->device_lost ? 0 : 1);
+    metric(&t, "probecast_uptime_seconds", "gauge", "Seconds since the server started.",
+           s->uptime_s);
+    metric(&t, "probecast_rendering", "gauge", "1 while something changes and frames are rendered.",
+           r->rendering);
+    metric(&t, "probecast_fps", "gauge", "Frames rendered in the last second.", r->fps);
+    metric(&t, "probecast_frames_rendered_total", "counter", "Frames rendered.",
+           (double)r->frames_rendered);
+    metric(&t, "probecast_frame_gpu_milliseconds", "gauge", "GPU time of the last frame.",
+           r->gpu_ms_last);
+    put(&t, "# HELP probecast_pass_gpu_milliseconds GPU time of each pass of the last frame.\n"
+            "# TYPE probecast_pass_gpu_milliseconds gauge\n");
+    for (unsigned i = 0; i < r->pass_count; i++) {
+        char label[SRV_PASS_NAME_MAX];
+        snprintf(label, sizeof label, "%s", r->pass_name[i]);
+        for (char *q = label; *q; q++)
+            if (*q == '"' || *q == '\\' || *q == '\n') *q = '_';
+        put(&t, "probecast_pass_gpu_milliseconds{pass=\"%s\"} %.17g\n", label, r->pass_ms[i]);
+    }
+    metric(&t, "probecast_rays_per_second", "gauge",
+           "Rays per second of GPU time in the last frame.", r->rays_per_second);
+    metric(&t, "probecast_probes", "gauge", "DDGI probes.", r->probes);
+    metric(&t, "probecast_probe_updates_since_change", "gauge",
+           "Probe updates since the lighting changed.", r->gi_updates);
+    metric(&t, "probecast_encode_milliseconds", "gauge", "Mean JPEG encoding time.",
+           s->encoder.encode_ms_avg);
+    metric(&t, "probecast_jpegs_encoded_total", "counter", "JPEG images encoded.",
+           (double)s->encoder.jpegs_encoded);
+    metric(&t, "probecast_frames_published_total", "counter", "Frames published to viewers.",
+           (double)s->encoder.frames_published);
+    metric(&t, "probecast_viewers", "gauge", "Connected viewers.", s->stream.viewers);
+    metric(&t, "probecast_stream_bandwidth_bits_per_second", "gauge",
+           "Bits per second sent to viewers.", s->stream.bandwidth_bps);
+    metric(&t, "probecast_stream_bytes_total", "counter", "Bytes sent to viewers.",
+           (double)s->stream.bytes_sent);
+    metric(&t, "probecast_stream_frames_sent_total", "counter", "Frames sent to viewers.",
+           (double)s->stream.frames_sent);
+    metric(&t, "probecast_stream_frames_skipped_total", "counter",
+           "Frames viewers skipped (latest frame wins).", (double)s->stream.frames_skipped);
+    metric(&t, "probecast_stream_lag_milliseconds_max", "gauge", "Largest smoothed viewer lag.",
+           s->stream.lag_ms_max);
+    put(&t,
+        "# HELP probecast_http_responses_total HTTP responses by status class.\n"
+        "# TYPE probecast_http_responses_total counter\n"
+        "probecast_http_responses_total{class=\"2xx\"} %llu\n"
+        "probecast_http_responses_total{class=\"4xx\"} %llu\n"
+        "probecast_http_responses_total{class=\"5xx\"} %llu\n",
+        (unsigned long long)s->http.status_2xx, (unsigned long long)s->http.status_4xx,
+        (unsigned long long)s->http.status_5xx);
+    return t.buf;
+}

@@ -1,0 +1,59 @@
+/* ws_stream.h: the WebSocket frame stream (/v1/stream, protocol/stream.md) on libwebsockets.
+ *
+ * One service thread owns every connection. Encoder threads only signal it (a frame was
+ * published: lws_cancel_service); it then asks each idle viewer's socket for writability and
+ * sends the newest frame, fragmented, at the quality the viewer's lag allows. Each viewer has
+ * at most one frame in flight and the newest one pending (never a queue), so a slow viewer
+ * only skips frames: it never slows the renderer or the other viewers. Viewer text messages
+ * (camera, resize, ack) are validated, size- and rate-capped, and posted to the render thread.
+ */
+#ifndef SRV_WS_STREAM_H
+#define SRV_WS_STREAM_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "encoder_pool.h"
+#include "render_loop.h"
+
+typedef struct srv_ws_config {
+    const char *address;   /* numeric IP to listen on */
+    unsigned port;         /* 0 = any free port */
+    const char *token;     /* NULL or "" = no token required */
+    const char *http_host; /* the HTTP API's address, for the Origin check */
+    unsigned http_port;
+    unsigned max_viewers; /* 0 = 100 */
+    unsigned max_per_ip;  /* 0 = 64 */
+    srv_render_loop *loop;
+    srv_encoder_pool *encoders;
+} srv_ws_config;
+
+typedef struct srv_ws_stats {
+    unsigned viewers;
+    uint64_t frames_sent, frames_skipped, bytes_sent, messages_received;
+    uint64_t connections_rejected, connections_closed_for_abuse;
+    double bandwidth_bps; /* bits per second sent over the last second */
+    double lag_ms_max;    /* largest smoothed viewer lag */
+} srv_ws_stats;
+
+typedef struct srv_ws_stream srv_ws_stream;
+
+/* Binds the listening socket. NULL with a message on failure. */
+srv_ws_stream *srv_ws_create(const srv_ws_config *cfg, char *err, size_t errlen);
+unsigned srv_ws_port(const srv_ws_stream *ws);
+/* The HTTP API's port for the Origin check, once it is known (before srv_ws_start). */
+void srv_ws_set_http_port(srv_ws_stream *ws, unsigned port);
+bool srv_ws_start(srv_ws_stream *ws);
+/* Closes every viewer (1001 going away), stops the thread and frees ws (NULL is fine). */
+void srv_ws_destroy(srv_ws_stream *ws);
+/* The encoder pool's listener: a new frame was published (any thread). */
+void srv_ws_frame_ready(void *ws);
+void srv_ws_get_stats(srv_ws_stream *ws, srv_ws_stats *out);
+
+/* The checks the handshake applies, exposed for tests. */
+bool srv_ws_origin_allowed(const char *origin, const char *http_host, unsigned http_port,
+                           const char *request_host);
+bool srv_token_equal(const char *given, size_t given_len, const char *token);
+
+#endif

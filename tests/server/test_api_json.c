@@ -1,0 +1,208 @@
+/* Strict parsing of API bodies and viewer messages, and patches applied to the scene state
+ * (plain CPU code: no daemon, no GPU). */
+#include <math.h>
+#include <string.h>
+
+#include "server/api_json.h"
+#include "server/scene_state.h"
+#include "test_util.h"
+
+static bool parse_camera(const char *text, srv_camera_patch *p, srv_api_error *e)
+{
+    cJSON *j = srv_json_parse_object(text, strlen(text), e);
+    if (!j) return false;
+    bool ok = srv_json_camera_patch(j, p, e);
+    cJSON_Delete(j);
+    return ok;
+}
+
+static bool parse_light(const char *text, srv_light_patch *p, srv_api_error *e)
+{
+    cJSON *j = srv_json_parse_object(text, strlen(text), e);
+    if (!j) return false;
+    bool ok = srv_json_light_patch(j, p, e);
+    cJSON_Delete(j);
+    return ok;
+}
+
+static bool parse_settings(const char *text, srv_settings_patch *p, srv_api_error *e)
+{
+    cJSON *j = srv_json_parse_object(text, strlen(text), e);
+    if (!j) return false;
+    bool ok = srv_json_settings_patch(j, p, e);
+    cJSON_Delete(j);
+    return ok;
+}
+
+static void test_bodies(void)
+{
+    srv_api_error e;
+    srv_camera_patch cp;
+    /* malformed JSON and non-objects */
+    const char *malformed[] = {"", "{", "[1,2]", "42", "{\"a\":1} x", "{\"a\":}", "nul"};
+    for (size_t i = 0; i < sizeof malformed / sizeof *malformed; i++) {
+        CHECKF(!parse_camera(malformed[i], &cp, &e), "'%s'", malformed[i]);
+        CHECKF(e.status == 400 && strcmp(e.code, SRV_ERR_MALFORMED_JSON) == 0, "'%s' -> %s",
+               malformed[i], e.code);
+    }
+    /* wrong types, ranges, unknown and duplicate fields */
+    const char *invalid[] = {
+        "{\"position\":\"x\"}",
+        "{\"position\":[1,2]}",
+        "{\"position\":[1,2,\"3\"]}",
+        "{\"fov\":0}",
+        "{\"fov\":200}",
+        "{\"fov\":\"40\"}",
+        "{\"up\":[0,0,0]}",
+        "{\"zoom\":1}",
+        "{\"position\":[1e999,0,0]}",
+        "{\"target\":[0,0,0],\"forward\":[0,0,1]}",
+        "{\"orientation\":[0,0,0,1],\"up\":[0,1,0]}",
+        "{\"fov\":40,\"fov\":50}",
+        "{\"orientation\":[0,0,0,0]}",
+    };
+    for (size_t i = 0; i < sizeof invalid / sizeof *invalid; i++) {
+        CHECKF(!parse_camera(invalid[i], &cp, &e), "'%s' was accepted", invalid[i]);
+        CHECKF(e.status == 400 && strcmp(e.code, SRV_ERR_INVALID_FIELD) == 0, "'%s' -> %s",
+               invalid[i], e.code);
+    }
+    CHECK(parse_camera("{\"position\":[0,1,5],\"target\":[0,1,0],\"fov\":45}", &cp, &e));
+    CHECK(cp.has == (SRV_CAM_POSITION | SRV_CAM_TARGET | SRV_CAM_FOV) && cp.fov_deg == 45);
+
+    srv_light_patch lp;
+    CHECK(parse_light("{\"type\":\"spot\",\"color\":[1,0.5,0],\"intensity\":10,\"range\":null}",
+                      &lp, &e));
+    CHECK(lp.type == RD_LIGHT_SPOT && lp.range == 0 && lp.color[1] == 0.5f);
+    CHECK(!parse_light("{\"type\":\"area\"}", &lp, &e) && e.status == 400);
+    CHECK(!parse_light("{\"intensity\":-1}", &lp, &e));
+    CHECK(!parse_light("{\"id\":3}", &lp, &e));
+    CHECK(!parse_light("{\"direction\":[0,0,0]}", &lp, &e));
+    CHECK(!parse_light("{\"name\":5}", &lp, &e));
+
+    srv_settings_patch sp;
+    CHECK(parse_settings("{\"width\":64,\"height\":48,\"gi_mode\":\"off\",\"probe_counts\":[2,2,2],"
+                         "\"animate\":false}",
+                         &sp, &e));
+    CHECK(sp.v.width == 64 && sp.v.gi_mode == 0 && sp.v.probe_counts[2] == 2);
+    CHECK(!parse_settings("{\"width\":64.5}", &sp, &e));
+    CHECK(!parse_settings("{\"width\":8}", &sp, &e));
+    CHECK(!parse_settings("{\"probe_counts\":[0,2,2]}", &sp, &e));
+    CHECK(!parse_settings("{\"gi_mode\":\"full\"}", &sp, &e));
+    CHECK(!parse_settings("{\"animate\":1}", &sp, &e));
+    CHECK(!parse_settings("{\"quality_still\":101}", &sp, &e));
+}
+
+static void test_viewer_messages(void)
+{
+    srv_viewer_msg m;
+    srv_api_error e;
+    const char *cam = "{\"type\":\"camera\",\"seq\":12,\"position\":[1,2,3],\"target\":[0,0,0]}";
+    CHECK(srv_json_viewer_msg(cam, strlen(cam), &m, &e));
+    CHECK(m.type == SRV_VIEWER_CAMERA && m.seq == 12 && (m.camera.has & SRV_CAM_TARGET));
+    const char *rs = "{\"type\":\"resize\",\"width\":800,\"height\":600,\"dpr\":2}";
+    CHECK(srv_json_viewer_msg(rs, strlen(rs), &m, &e) && m.width == 800 && m.dpr == 2);
+    const char *ack = "{\"type\":\"ack\",\"frame\":99}";
+    CHECK(srv_json_viewer_msg(ack, strlen(ack), &m, &e) && m.type == SRV_VIEWER_ACK &&
+          m.frame == 99);
+    const char *bad[] = {
+        "{\"type\":\"camera\",\"position\":[1,2,3]}",    /* no seq */
+        "{\"type\":\"camera\",\"seq\":-1}",              /* negative seq */
+        "{\"type\":\"camera\",\"seq\":1,\"evil\":true}", /* unknown field */
+        "{\"type\":\"resize\",\"width\":800}",           /* no height */
+        "{\"type\":\"resize\",\"width\":800,\"height\":600,\"dpr\":100}",
+        "{\"type\":\"ack\"}",
+        "{\"type\":\"ack\",\"frame\":1.5}",
+        "{\"type\":\"hello\"}",
+        "{\"seq\":1}",
+        "[]",
+        "{",
+        "",
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof *bad; i++)
+        CHECKF(!srv_json_viewer_msg(bad[i], strlen(bad[i]), &m, &e), "'%s' was accepted", bad[i]);
+    char big[SRV_VIEWER_MSG_MAX + 10];
+    memset(big, ' ', sizeof big);
+    memcpy(big, "{\"type\":\"ack\",\"frame\":1}", 24);
+    CHECK(!srv_json_viewer_msg(big, sizeof big, &m, &e));
+}
+
+static void test_state(void)
+{
+    srv_scene_state st;
+    srv_state_init(&st);
+    rd_scene s;
+    rd_scene_init(&s);
+    rd_node n = {
+        .name = "box", .parent = -1, .mesh = -1, .rotation = {0, 0, 0, 1}, .scale = {1, 1, 1}};
+    rd_scene_add_node(&s, &n);
+    rd_light l = {
+        .name = "l", .type = RD_LIGHT_POINT, .color = {1, 1, 1}, .intensity = 5, .node = -1};
+    rd_scene_add_light(&s, &l);
+    char err[128];
+    CHECK(rd_scene_update(&s, err, sizeof err));
+    srv_state_set_scene(&st, &s, "test", 1);
+    CHECK(st.scene.light_count == 1 && st.light_ids[0] == 0);
+
+    srv_api_error e;
+    /* camera: target sets the direction; up parallel to it is refused */
+    srv_camera_patch cp = {
+        .has = SRV_CAM_POSITION | SRV_CAM_TARGET, .position = {0, 0, 5}, .target = {0, 0, 0}};
+    CHECK(srv_state_camera_apply(&st.camera, &cp, true, &e));
+    CHECK(fabsf(st.camera.forward[2] + 1) < 1e-6f && fabsf(st.camera.target_distance - 5) < 1e-5f);
+    srv_camera_patch bad = {.has = SRV_CAM_UP, .up = {0, 0, 1}};
+    CHECK(!srv_state_camera_apply(&st.camera, &bad, false, &e));
+    srv_camera_patch same = {.has = SRV_CAM_TARGET, .target = {0, 0, 5}};
+    CHECK(!srv_state_camera_apply(&st.camera, &same, false, &e));
+    srv_camera_patch put = {.has = SRV_CAM_FOV, .fov_deg = 30};
+    CHECK(!srv_state_camera_apply(&st.camera, &put, true, &e)); /* PUT needs position + direction */
+
+    /* lights: add, patch (spot cone order checked), delete; ids stay stable */
+    srv_light_patch lp = {
+        .has = SRV_LIGHT_TYPE | SRV_LIGHT_INTENSITY, .type = RD_LIGHT_SPOT, .intensity = 2};
+    uint32_t id = 0;
+    CHECK(srv_state_light_add(&st, &lp, &id, &e) && id == 1 && st.scene.light_count == 2);
+    srv_light_patch cone = {
+        .has = SRV_LIGHT_INNER_CONE | SRV_LIGHT_OUTER_CONE, .inner_cone = 0.5f, .outer_cone = 0.4f};
+    CHECK(!srv_state_light_apply(&st.scene.lights[1], &cone, &e));
+    CHECK(srv_state_light_delete(&st, 0, &e) && st.scene.light_count == 1);
+    CHECK(srv_state_light_index(&st, 1) == 0 && srv_state_light_index(&st, 0) == -1);
+    CHECK(!srv_state_light_delete(&st, 0, &e) && e.status == 404);
+
+    /* nodes: moving updates the world matrix; unknown ids are 404 */
+    srv_node_patch np = {.has = SRV_NODE_TRANSLATION, .translation = {1, 2, 3}};
+    CHECK(srv_state_node_apply(&st, 0, &np, &e) && st.scene.nodes[0].world[13] == 2);
+    CHECK(!srv_state_node_apply(&st, 5, &np, &e) && e.status == 404);
+
+    /* settings: whole-or-nothing */
+    srv_settings_patch sp = {.has = SRV_SET_WIDTH | SRV_SET_HEIGHT,
+                             .v = {.width = 4096, .height = 4096}};
+    unsigned w = st.settings.width;
+    CHECK(!srv_state_settings_apply(&st.settings, &sp, &e) && st.settings.width == w);
+
+    /* the persisted document restores into a fresh state of the same scene */
+    cJSON *doc = srv_state_to_json(&st);
+    srv_scene_state st2;
+    srv_state_init(&st2);
+    rd_scene s2;
+    rd_scene_init(&s2);
+    rd_scene_add_node(&s2, &n);
+    rd_scene_add_light(&s2, &l);
+    rd_scene_update(&s2, err, sizeof err);
+    srv_state_set_scene(&st2, &s2, "test", 1);
+    CHECK(srv_state_restore(&st2, doc, &e));
+    CHECK(st2.scene.light_count == 1 && st2.light_ids[0] == 1 &&
+          st2.scene.lights[0].type == RD_LIGHT_SPOT);
+    CHECK(st2.scene.nodes[0].translation[2] == 3 && fabsf(st2.camera.position[2] - 5) < 1e-5f);
+    CHECK(fabsf(st2.camera.target_distance - 5) < 1e-4f);
+    cJSON_Delete(doc);
+    srv_state_dispose(&st2);
+    srv_state_dispose(&st);
+}
+
+int main(void)
+{
+    test_bodies();
+    test_viewer_messages();
+    test_state();
+    return test_finish();
+}

@@ -1,0 +1,218 @@
+/* The contract: every operation protocol/openapi.yaml lists exists on the running server and
+ * answers only with statuses it documents (a valid request, a malformed body, a missing
+ * token, an unknown id), errors in the documented shape. Also: /v1/openapi.yaml serves the
+ * file itself. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "serve_util.h"
+#include "test_util.h"
+
+typedef struct op {
+    char path[64];
+    char method[8];
+    int codes[16];
+    int ncodes;
+} op;
+
+static op ops[64];
+static int nops;
+
+static char *read_text(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return NULL;
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *s = malloc((size_t)n + 1);
+    *len = fread(s, 1, (size_t)n, f);
+    s[*len] = 0;
+    fclose(f);
+    return s;
+}
+
+/* The spec is written with two-space indents: "  /path:" under paths, "    get:" for an
+ * operation and "        'NNN':" for its responses. */
+static void parse_spec(const char *text)
+{
+    bool in_paths = false;
+    char path[64] = "";
+    op *cur = NULL;
+    for (const char *line = text; line && *line;
+         line = strchr(line, '\n') ? strchr(line, '\n') + 1 : NULL) {
+        size_t len = strcspn(line, "\n");
+        char l[256];
+        if (len >= sizeof l) len = sizeof l - 1;
+        memcpy(l, line, len);
+        l[len] = 0;
+        if (l[0] != ' ' && l[0] != 0) in_paths = strcmp(l, "paths:") == 0;
+        if (!in_paths) continue;
+        if (strncmp(l, "  /", 3) == 0 && l[len - 1] == ':') {
+            snprintf(path, sizeof path, "%.*s", (int)(len - 3), l + 2);
+            cur = NULL;
+        } else if (strncmp(l, "    ", 4) == 0 && l[4] != ' ' && l[len - 1] == ':') {
+            static const char *methods[] = {"get", "put", "patch", "post", "delete"};
+            cur = NULL;
+            for (int i = 0; i < 5; i++) {
+                if (strncmp(l + 4, methods[i], strlen(methods[i])) == 0 &&
+                    l[4 + strlen(methods[i])] == ':' && nops < 64) {
+                    cur = &ops[nops++];
+                    snprintf(cur->path, sizeof cur->path, "%s", path);
+                    for (int k = 0; methods[i][k]; k++)
+                        cur->method[k] = (char)(methods[i][k] - 32);
+                }
+            }
+        } else if (cur && strncmp(l, "        '", 9) == 0 && l[9] != ' ' && cur->ncodes < 16) {
+            cur->codes[cur->ncodes++] = atoi(l + 9);
+        }
+    }
+}
+
+static bool documented(const op *o, int status)
+{
+    for (int i = 0; i < o->ncodes; i++)
+        if (o->codes[i] == status) return true;
+    return false;
+}
+
+static pc_daemon d = {.token = "s3cret"};
+
+/* Sends one request for o and checks the answer is documented (and, if want, equals want). */
+static void probe(const op *o, const char *path, const char *type, const void *body, size_t len,
+                  bool auth, int want, const char *what)
+{
+    char headers[256] = "";
+    size_t n = 0;
+    if (auth)
+        n += (size_t)snprintf(headers + n, sizeof headers - n, "Authorization: Bearer s3cret\r\n");
+    if (type) snprintf(headers + n, sizeof headers - n, "Content-Type: %s\r\n", type);
+    pc_http_response r;
+    int status = pc_http("127.0.0.1", d.http_port, o->method, path, headers, body, len, &r, 120000);
+    CHECKF(documented(o, status), "%s %s (%s): status %d is not documented", o->method, o->path,
+           what, status);
+    CHECKF(!want || status == want, "%s %s (%s): status %d, expected %d: %s", o->method, o->path,
+           what, status, want, r.body ? r.body : "");
+    char ct[128] = "";
+    pc_http_header(&r, "Content-Type", ct, sizeof ct);
+    if (status >= 400) {
+        cJSON *j = cJSON_Parse(r.body ? r.body : "");
+        CHECKF(cJSON_IsString(cJSON_GetObjectItemCaseSensitive(j, "error")) &&
+                   cJSON_IsString(cJSON_GetObjectItemCaseSensitive(j, "message")),
+               "%s %s (%s): error body %s", o->method, o->path, what, r.body ? r.body : "");
+        cJSON_Delete(j);
+    } else if (status != 204 && strncmp(ct, "application/json", 16) == 0) {
+        cJSON *j = cJSON_Parse(r.body ? r.body : "");
+        CHECKF(cJSON_IsObject(j), "%s %s: body is not a JSON object", o->method, o->path);
+        cJSON_Delete(j);
+    }
+    pc_http_response_free(&r);
+}
+
+/* A valid body for each mutating operation. */
+static const char *valid_body(const op *o)
+{
+    if (strcmp(o->path, "/v1/camera") == 0)
+        return "{\"position\":[0,1.5,4],\"target\":[0,0.5,0],\"fov\":45}";
+    if (strcmp(o->path, "/v1/lights") == 0)
+        return "{\"type\":\"spot\",\"intensity\":5,\"position\":[0,2,0]}";
+    if (strcmp(o->path, "/v1/lights/{id}") == 0) return "{\"color\":[1,0.8,0.6]}";
+    if (strcmp(o->path, "/v1/nodes/{id}") == 0) return "{\"rotation\":[0,0.38268343,0,0.9238795]}";
+    if (strcmp(o->path, "/v1/settings") == 0) return "{\"exposure\":0.5}";
+    return "{}";
+}
+
+static int first_light_id(void)
+{
+    cJSON *j = pc_api_get_json(&d, "/v1/lights");
+    const cJSON *a = cJSON_GetObjectItemCaseSensitive(j, "lights");
+    int id = cJSON_GetArraySize(a) > 0 ? (int)pc_json_number(cJSON_GetArrayItem(a, 0), "id") : -1;
+    cJSON_Delete(j);
+    return id;
+}
+
+int main(void)
+{
+    size_t spec_len;
+    char *spec = read_text(PROBECAST_SOURCE_DIR "/protocol/openapi.yaml", &spec_len);
+    CHECK(spec != NULL);
+    if (!spec) return test_finish();
+    parse_spec(spec);
+    CHECKF(nops >= 18, "%d operations found in the spec", nops);
+
+    const char *args[] = {
+        "--no-animate",    "--width", "64",           "--height", "48",      "--probes", "2,2,2",
+        "--rays",          "16",      "--hysteresis", "0.5",      "--token", "s3cret",   "--scene",
+        "builtin:cornell", NULL};
+    if (!pc_daemon_start(&d, args)) {
+        CHECK(!"daemon started");
+        return test_finish();
+    }
+    /* the served document is the file */
+    pc_http_response r;
+    CHECK(pc_api(&d, "GET", "/v1/openapi.yaml", NULL, false, &r) == 200);
+    CHECK(r.body_len == spec_len && memcmp(r.body, spec, spec_len) == 0);
+    pc_http_response_free(&r);
+    /* wait for the first frame so that /v1/frame.jpg has one */
+    for (int i = 0; i < 600; i++) {
+        int s = pc_api(&d, "GET", "/v1/frame.jpg", NULL, true, &r);
+        pc_http_response_free(&r);
+        if (s == 200) break;
+        pc_sleep_ms(100);
+    }
+
+    size_t glb_size;
+    uint8_t *glb = pc_make_glb(0.3f, &glb_size);
+    for (int i = 0; i < nops; i++) {
+        const op *o = &ops[i];
+        char path[96];
+        const char *brace = strchr(o->path, '{');
+        int id = strstr(o->path, "/lights/") ? first_light_id() : 1;
+        if (brace)
+            snprintf(path, sizeof path, "%.*s%d", (int)(brace - o->path), o->path, id);
+        else
+            snprintf(path, sizeof path, "%.63s", o->path);
+        fprintf(stderr, "checking %s %s (%d documented responses)\n", o->method, path, o->ncodes);
+        bool mutating = strcmp(o->method, "GET") != 0;
+        if (!mutating) {
+            probe(o, path, NULL, NULL, 0, true, 200, "valid");
+            if (brace) {
+                char unknown[96];
+                snprintf(unknown, sizeof unknown, "%.*s77777", (int)(brace - o->path), o->path);
+                probe(o, unknown, NULL, NULL, 0, true, 404, "unknown id");
+            }
+            continue;
+        }
+        probe(o, path, NULL, NULL, 0, false, 401, "no token");
+        if (strcmp(o->method, "DELETE") == 0) {
+            char unknown[96];
+            snprintf(unknown, sizeof unknown, "%.*s77777", (int)(brace - o->path), o->path);
+            probe(o, unknown, NULL, NULL, 0, true, 404, "unknown id");
+            /* a light of its own to delete */
+            CHECK(pc_api(&d, "POST", "/v1/lights", "{\"type\":\"point\"}", true, &r) == 201);
+            cJSON *j = cJSON_Parse(r.body);
+            snprintf(path, sizeof path, "/v1/lights/%d", (int)pc_json_number(j, "id"));
+            cJSON_Delete(j);
+            pc_http_response_free(&r);
+            probe(o, path, NULL, NULL, 0, true, 204, "valid");
+            probe(o, path, NULL, NULL, 0, true, 404, "deleted twice");
+            continue;
+        }
+        if (strcmp(o->path, "/v1/scene") == 0) {
+            probe(o, path, "model/gltf+json", "{", 1, true, 422, "malformed");
+            probe(o, path, "image/png", "x", 1, true, 415, "media type");
+            probe(o, path, "model/gltf-binary", glb, glb_size, true, 200, "valid");
+            continue;
+        }
+        probe(o, path, "application/json", "{", 1, true, 400, "malformed");
+        probe(o, path, "text/plain", "{}", 2, true, 415, "media type");
+        const char *body = valid_body(o);
+        probe(o, path, "application/json", body, strlen(body), true,
+              strcmp(o->method, "POST") == 0 ? 201 : 200, "valid");
+    }
+    free(glb);
+    free(spec);
+    CHECKF(pc_daemon_stop(&d) == 0, "clean exit after SIGTERM");
+    return test_finish();
+}

@@ -1,0 +1,566 @@
+// panels.js: the overlay panels: stats, lights, rendering settings, scene upload, plus toasts
+// and the token prompt. Each panel owns its DOM subtree (found by id in index.html), talks to
+// the server only through an Api (api.js) and reports failures with the server's own message.
+
+import { sceneContentType } from './api.js';
+
+const $ = (id) => document.getElementById(id);
+
+/* h('div', { class: 'x', onclick: f }, child, 'text') */
+function h(tag, attrs = {}, ...children) {
+  const el = document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs)) {
+    if (v === undefined || v === null || v === false) continue;
+    if (k.startsWith('on')) el.addEventListener(k.slice(2), v);
+    else if (k === 'class') el.className = v;
+    else if (k in el && typeof v !== 'string') el[k] = v;
+    else el.setAttribute(k, v === true ? '' : v);
+  }
+  for (const c of children.flat()) if (c !== null && c !== undefined && c !== false) el.append(c);
+  return el;
+}
+
+/* Icons as inline SVG (no icon font: glyphs such as ⌖ are missing from many system fonts). */
+const ICON_TARGET = 'M8 1.5v3M8 11.5v3M1.5 8h3M11.5 8h3M8 4.5a3.5 3.5 0 1 0 0 7a3.5 3.5 0 1 0 0-7z';
+const ICON_DELETE = 'M4 4l8 8M12 4l-8 8';
+function icon(d) {
+  const svg = document.createElementNS('http://www.w3.org/2000/svg', 'svg');
+  svg.setAttribute('viewBox', '0 0 16 16');
+  svg.setAttribute('width', '14');
+  svg.setAttribute('height', '14');
+  svg.setAttribute('aria-hidden', 'true');
+  const path = document.createElementNS('http://www.w3.org/2000/svg', 'path');
+  path.setAttribute('d', d);
+  path.setAttribute('fill', 'none');
+  path.setAttribute('stroke', 'currentColor');
+  path.setAttribute('stroke-width', '1.6');
+  path.setAttribute('stroke-linecap', 'round');
+  svg.append(path);
+  return svg;
+}
+
+const fixed = (x, d) => (Number.isFinite(x) ? x.toFixed(d) : '–');
+function si(x, unit = '') {
+  if (!Number.isFinite(x)) return '–';
+  const a = Math.abs(x);
+  if (a >= 1e9) return (x / 1e9).toFixed(2) + ' G' + unit;
+  if (a >= 1e6) return (x / 1e6).toFixed(2) + ' M' + unit;
+  if (a >= 1e3) return (x / 1e3).toFixed(1) + ' k' + unit;
+  return x.toFixed(0) + (unit ? ' ' + unit : '');
+}
+const mb = (n) => (n / 1048576).toFixed(n < 10485760 ? 2 : 1) + ' MB';
+
+/* ---- colours: glTF light colours are linear RGB; <input type=color> is sRGB ---------------- */
+const toSrgb = (c) => (c <= 0.0031308 ? 12.92 * c : 1.055 * Math.pow(c, 1 / 2.4) - 0.055);
+const toLinear = (c) => (c <= 0.04045 ? c / 12.92 : Math.pow((c + 0.055) / 1.055, 2.4));
+export function linearToHex(rgb) {
+  const m = Math.max(1, ...rgb); // HDR colours: show the hue
+  return '#' + rgb.map((c) => Math.round(Math.min(1, Math.max(0, toSrgb(c / m))) * 255).toString(16).padStart(2, '0')).join('');
+}
+export function hexToLinear(hex) {
+  const n = parseInt(hex.slice(1), 16);
+  return [(n >> 16) & 255, (n >> 8) & 255, n & 255].map((v) => Math.round(toLinear(v / 255) * 1e4) / 1e4);
+}
+
+/* Intensity slider: logarithmic from 0.01 to 10000, with 0 at the far left. */
+const SLIDER_MAX = 1000;
+const intensityToSlider = (v) => (v > 0 ? Math.min(SLIDER_MAX, Math.max(1, ((Math.log10(v) + 2) / 6) * SLIDER_MAX)) : 0);
+const sliderToIntensity = (p) => (p > 0 ? Number(Math.pow(10, (p / SLIDER_MAX) * 6 - 2).toPrecision(3)) : 0);
+
+/* Coalescer: at most one request in flight per key; patches given meanwhile are merged and
+ * sent when it returns (the latest value of each field wins). send(key, patch) -> Promise of
+ * the server's answer (after the merged request that carried the patch). */
+export class Coalescer {
+  constructor(request) {
+    this.request = request; // (key, patch) => Promise
+    this.slots = new Map();
+  }
+  send(key, patch) {
+    let s = this.slots.get(key);
+    if (!s) { s = { busy: false, next: null, waiters: [] }; this.slots.set(key, s); }
+    s.next = { ...(s.next || {}), ...patch };
+    const p = new Promise((resolve, reject) => s.waiters.push({ resolve, reject }));
+    if (!s.busy) this.pump(key, s);
+    return p;
+  }
+  busy(key) { const s = this.slots.get(key); return !!s && (s.busy || !!s.next); }
+  async pump(key, s) {
+    s.busy = true;
+    while (s.next) {
+      const patch = s.next, waiters = s.waiters;
+      s.next = null;
+      s.waiters = [];
+      try {
+        const r = await this.request(key, patch);
+        waiters.forEach((w) => w.resolve(r));
+      } catch (e) {
+        waiters.forEach((w) => w.reject(e));
+      }
+    }
+    s.busy = false;
+    this.slots.delete(key);
+  }
+}
+
+/* ---- toasts -------------------------------------------------------------------------------- */
+export class Toasts {
+  constructor(root = $('toasts')) { this.root = root; }
+  show(message, kind = 'error', ms = kind === 'error' ? 7000 : 3500) {
+    const el = h('div', { class: 'toast ' + kind, role: kind === 'error' ? 'alert' : 'status' }, message);
+    this.root.append(el);
+    while (this.root.children.length > 4) this.root.firstChild.remove();
+    setTimeout(() => el.remove(), ms);
+    return el;
+  }
+  error(e) { return this.show(e && e.message ? e.message : String(e), 'error'); }
+}
+
+/* ---- the token prompt ---------------------------------------------------------------------- */
+/* ask(reason) -> Promise<string|null>. After the user cancels, later asks wait (without a
+ * dialog) until reopen() is called, so a reconnect loop does not nag. onState(waiting) tells
+ * the status bar that a token is needed. */
+export class TokenPrompt {
+  constructor({ onState = () => {} } = {}) {
+    this.dialog = $('token-dialog');
+    this.input = $('token-input');
+    this.reason = $('token-reason');
+    this.onState = onState;
+    this.current = null;
+    this.declined = false;
+    this.wake = null;
+    $('token-cancel').addEventListener('click', () => this.dialog.close('cancel'));
+  }
+
+  ask(reason) {
+    if (this.current) return this.current;
+    this.current = (async () => {
+      this.onState(true);
+      if (this.declined) await new Promise((r) => { this.wake = r; });
+      const t = await this.show(reason);
+      this.declined = !t;
+      this.onState(!t);
+      return t;
+    })().finally(() => { this.current = null; });
+    return this.current;
+  }
+
+  reopen() {
+    this.declined = false;
+    if (this.wake) { const w = this.wake; this.wake = null; w(); }
+  }
+
+  show(reason) {
+    return new Promise((resolve) => {
+      this.reason.textContent = reason || 'This server needs an access token.';
+      this.input.value = '';
+      this.dialog.returnValue = '';
+      const done = () => {
+        this.dialog.removeEventListener('close', done);
+        const v = this.input.value.trim();
+        resolve(this.dialog.returnValue !== 'cancel' && v ? v : null);
+      };
+      this.dialog.addEventListener('close', done);
+      this.dialog.showModal();
+      this.input.focus();
+    });
+  }
+}
+
+/* ---- stats ------------------------------------------------------------------------------- */
+export class StatsPanel {
+  constructor() {
+    this.f = {};
+    for (const k of ['fps', 'latency', 'kbps', 'frame', 'size', 'rays', 'probes', 'gpu', 'passes', 'device']) this.f[k] = $('st-' + k);
+    this.passRows = new Map();
+  }
+
+  /* client: FrameStream.metrics(); header: the last drawn frame's header (or null); server:
+   * GET /v1/stats (or null when the poll failed). */
+  render({ client, header, server }) {
+    const f = this.f;
+    const sfps = server && Number.isFinite(server.fps) ? ` <small>/ ${fixed(server.fps, 1)} server</small>` : '';
+    f.fps.innerHTML = `${fixed(client.fps, 1)}${sfps}`;
+    f.latency.textContent = client.latencyMs !== null ? `${fixed(client.latencyMs, 0)} ms`
+      : client.lastLatencyMs !== null ? `${fixed(client.lastLatencyMs, 0)} ms (idle)` : '–';
+    f.kbps.textContent = `${client.kbps >= 10000 ? (client.kbps / 1000).toFixed(1) + ' Mbit/s' : fixed(client.kbps, 0) + ' kbit/s'}`;
+    f.frame.innerHTML = header ? `#${header.frameId} <small>q${header.quality}${header.still ? ' still' : ''}</small>` : '–';
+    f.size.textContent = header ? `${header.width}×${header.height}` : '–';
+    if (!server) {
+      for (const k of ['rays', 'probes', 'gpu']) f[k].textContent = '–';
+      this.renderPasses({}, 0);
+      return;
+    }
+    f.rays.textContent = si(server.rays_per_second);
+    const p = server.probes || {};
+    const active = p.mode && p.mode !== 'off' ? p.total || 0 : 0;
+    f.probes.innerHTML = active
+      ? `${active} <small>${p.mode} · ${p.converged ? 'converged' : 'converging'}</small>`
+      : `0 <small>${p.mode || 'off'}</small>`;
+    f.gpu.innerHTML = server.rendering === false ? `idle <small>(converged)</small>`
+      : `${fixed(server.gpu_ms_total, 1)} ms`;
+    f.device.textContent = server.device ? `${server.device}${server.stream ? ` · ${server.stream.viewers} viewer${server.stream.viewers === 1 ? '' : 's'}` : ''}` : '';
+    f.device.title = f.device.textContent;
+    this.renderPasses(server.gpu_ms || {}, server.gpu_ms_total);
+  }
+
+  renderPasses(passes, total) {
+    const names = Object.keys(passes);
+    const sum = total > 0 ? total : names.reduce((a, k) => a + passes[k], 0) || 1;
+    for (const [name, row] of this.passRows) if (!(name in passes)) { row.el.remove(); this.passRows.delete(name); }
+    for (const name of names) {
+      let row = this.passRows.get(name);
+      if (!row) {
+        const ms = h('span', { class: 'ms' }), bar = h('i');
+        row = { el: h('div', { class: 'pass' }, h('span', {}, name), ms, h('div', { class: 'bar' }, bar)), ms, bar };
+        this.passRows.set(name, row);
+      }
+      this.f.passes.append(row.el); // keeps the server's order
+      row.ms.textContent = fixed(passes[name], 2);
+      row.bar.style.width = `${Math.min(100, (passes[name] / sum) * 100).toFixed(1)}%`;
+    }
+  }
+}
+
+/* ---- rendering settings ------------------------------------------------------------------ */
+const GI_LABELS = [['off', 'Off'], ['classic', 'Classic'], ['ddgi', 'DDGI'], ['pathtrace', 'Path trace']];
+const VIEW_LABELS = [['final', 'Final'], ['irradiance', 'Irradiance'], ['probes', 'Probes']];
+const GI_TITLES = {
+  off: 'Direct light only',
+  classic: 'Irradiance probes without visibility (leaks through thin walls)',
+  ddgi: 'Dynamic Diffuse Global Illumination: probes with visibility (Majercik et al. 2019)',
+};
+
+export class RenderPanel {
+  constructor(api, { toasts }) {
+    this.api = api;
+    this.toasts = toasts;
+    this.settings = null;
+    this.queue = new Coalescer((_, patch) => this.api.patch('/v1/settings', patch));
+    this.gi = $('gi-modes');
+    this.view = $('view-modes');
+    this.exposure = $('exposure');
+    this.exposureOut = $('exposure-out');
+    this.animate = $('animate');
+    this.setCapabilities({});
+    this.exposure.addEventListener('input', () => {
+      this.exposureOut.textContent = `${Number(this.exposure.value).toFixed(1)} EV`;
+      this.patch({ exposure: Number(this.exposure.value) });
+    });
+    this.animate.addEventListener('change', () => this.patch({ animate: this.animate.checked }));
+  }
+
+  /* gi, view: the enums the API offers (from /v1/openapi.yaml); defaults are those of v1. */
+  setCapabilities({ gi = ['off', 'classic', 'ddgi'], view = ['final', 'irradiance', 'probes'] }) {
+    this.giAllowed = gi;
+    this.viewAllowed = view;
+    this.gi.replaceChildren(...GI_LABELS.map(([v, label]) => {
+      const ok = gi.includes(v);
+      return h('button', {
+        type: 'button', role: 'radio', 'data-value': v, 'aria-checked': 'false', disabled: !ok,
+        title: ok ? GI_TITLES[v] || label
+          : `Not offered by this server: PATCH /v1/settings accepts gi_mode ${gi.join(', ')}. ` +
+            'Path-traced references are rendered offline with `probecast render --gi pathtrace`.',
+        onclick: () => this.patch({ gi_mode: v }),
+      }, label);
+    }));
+    // The path-trace button is disabled, and disabled buttons get no hover events in most
+    // browsers: its wrapper carries the tooltip too.
+    for (const b of this.gi.querySelectorAll('button:disabled')) {
+      const wrap = h('span', { style: 'flex:1;display:flex', title: b.title });
+      b.replaceWith(wrap);
+      b.style.flex = '1';
+      wrap.append(b);
+    }
+    this.view.replaceChildren(...VIEW_LABELS.filter(([v]) => view.includes(v)).map(([v, label]) => h('button', {
+      type: 'button', role: 'radio', 'data-value': v, 'aria-checked': 'false',
+      title: v === 'probes' ? 'Probe visualisation (P)' : v === 'irradiance' ? 'Indirect irradiance only' : 'The lit image',
+      onclick: () => this.patch({ view: v }),
+    }, label)));
+    if (this.settings) this.apply(this.settings);
+  }
+
+  async refresh() {
+    try {
+      this.apply(await this.api.get('/v1/settings'));
+    } catch (e) { /* the status bar shows the connection; the next refresh fixes it */ }
+  }
+
+  apply(s) {
+    if (!s) return;
+    this.settings = s;
+    for (const b of this.gi.querySelectorAll('button')) b.setAttribute('aria-checked', String(b.dataset.value === s.gi_mode));
+    for (const b of this.view.querySelectorAll('button')) b.setAttribute('aria-checked', String(b.dataset.value === s.view));
+    if (document.activeElement !== this.exposure && !this.queue.busy('s') && Number.isFinite(s.exposure)) {
+      this.exposure.value = s.exposure;
+      this.exposureOut.textContent = `${Number(s.exposure).toFixed(1)} EV`;
+    }
+    this.animate.checked = !!s.animate;
+  }
+
+  async patch(p) {
+    // Optimistic: the control shows the choice at once; the answer confirms or reverts it.
+    if (this.settings) this.apply({ ...this.settings, ...p });
+    try {
+      const s = await this.queue.send('s', p);
+      if (!this.queue.busy('s')) this.apply(s);
+    } catch (e) {
+      this.toasts.error(e);
+      this.refresh();
+    }
+  }
+
+  toggleProbes() {
+    if (!this.settings || !this.viewAllowed.includes('probes')) return;
+    this.patch({ view: this.settings.view === 'probes' ? 'final' : 'probes' });
+  }
+}
+
+/* ---- lights ------------------------------------------------------------------------------ */
+/* Lists the lights of GET /v1/lights; every control edits through PATCH /v1/lights/{id}
+ * (coalesced per light), Add posts, × deletes. cameraTarget() and sceneSize() place new
+ * lights where the user is looking, at a strength that suits the scene's size. */
+export class LightsPanel {
+  constructor(api, { toasts, cameraTarget, sceneSize }) {
+    this.api = api;
+    this.toasts = toasts;
+    this.cameraTarget = cameraTarget;
+    this.sceneSize = sceneSize;
+    this.root = $('lights');
+    this.count = $('light-count');
+    this.cards = new Map(); // id -> { el, light, inputs }
+    this.lastEdit = -Infinity;
+    this.queue = new Coalescer((id, patch) => this.api.patch(`/v1/lights/${id}`, patch));
+    $('light-add').addEventListener('click', () => this.add($('light-type').value));
+  }
+
+  async refresh() {
+    try {
+      const r = await this.api.get('/v1/lights');
+      this.render(r.lights || []);
+    } catch (e) { /* offline: keep the list */ }
+  }
+
+  /* Whether the user is working in the list (an edit in the last 2 s or on its way): periodic
+   * refreshes wait then (and fill() never overwrites the focused control). */
+  editing() {
+    if (performance.now() - this.lastEdit < 2000) return true;
+    for (const id of this.cards.keys()) if (this.queue.busy(id)) return true;
+    return false;
+  }
+
+  render(lights) {
+    const seen = new Set();
+    lights.forEach((l, i) => {
+      seen.add(l.id);
+      let c = this.cards.get(l.id);
+      if (!c) {
+        c = this.card(l, i < 3);
+        this.cards.set(l.id, c);
+      }
+      this.root.append(c.el); // server order
+      if (!this.queue.busy(l.id)) this.fill(c, l);
+    });
+    for (const [id, c] of this.cards) if (!seen.has(id)) { c.el.remove(); this.cards.delete(id); }
+    this.count.textContent = lights.length ? `(${lights.length})` : '';
+  }
+
+  card(l, open) {
+    const num = (axis, field) => h('input', {
+      type: 'number', step: '0.05', 'aria-label': `${field} ${axis}`, 'data-field': field,
+      oninput: () => this.edit(c, { [field]: c.vec(field) }),
+    });
+    const c = { light: l, inputs: {} };
+    c.vec = (field) => c.inputs[field].map((i) => Number(i.value) || 0);
+    c.inputs.color = h('input', { type: 'color', 'aria-label': 'colour', oninput: () => this.edit(c, { color: hexToLinear(c.inputs.color.value) }) });
+    c.inputs.slider = h('input', {
+      type: 'range', min: '0', max: String(SLIDER_MAX), step: '1', 'aria-label': 'intensity',
+      oninput: () => {
+        const v = sliderToIntensity(Number(c.inputs.slider.value));
+        c.inputs.intensity.value = v;
+        this.edit(c, { intensity: v });
+      },
+    });
+    c.inputs.intensity = h('input', {
+      type: 'number', min: '0', step: 'any', 'aria-label': 'intensity value',
+      oninput: () => {
+        const v = Number(c.inputs.intensity.value);
+        if (!(v >= 0)) return;
+        c.inputs.slider.value = intensityToSlider(v);
+        this.edit(c, { intensity: v });
+      },
+    });
+    c.inputs.position = ['x', 'y', 'z'].map((a) => num(a, 'position'));
+    c.inputs.direction = ['x', 'y', 'z'].map((a) => num(a, 'direction'));
+    c.swatch = h('span', { class: 'swatch' });
+    c.name = h('span', { class: 'name' });
+    c.type = h('span', { class: 'type' });
+    c.dirLine = h('div', { class: 'line' }, h('span', {}, 'direction'), h('div', { class: 'xyz' }, c.inputs.direction));
+    c.posLine = h('div', { class: 'line' }, h('span', {}, 'position'), h('div', { class: 'xyz' }, c.inputs.position));
+    const tools = h('span', { class: 'tools' },
+      h('button', { type: 'button', title: 'Move to the centre of the view', 'aria-label': 'move to view centre',
+        onclick: (e) => { e.preventDefault(); this.moveToView(c); } }, icon(ICON_TARGET)),
+      h('button', { type: 'button', class: 'danger', title: 'Delete this light', 'aria-label': 'delete light',
+        onclick: (e) => { e.preventDefault(); this.remove(c); } }, icon(ICON_DELETE)));
+    c.el = h('details', { class: 'light', open, 'data-id': String(l.id) },
+      h('summary', {}, c.swatch, c.name, c.type, tools),
+      h('div', { class: 'body' },
+        h('div', { class: 'line' }, h('span', {}, 'colour'), c.inputs.color),
+        h('div', { class: 'line' }, h('span', {}, 'intensity'), h('div', { class: 'inten' }, c.inputs.slider, c.inputs.intensity)),
+        c.posLine, c.dirLine));
+    return c;
+  }
+
+  /* Shows l in the card, leaving alone the control the user is editing. */
+  fill(c, l) {
+    c.light = l;
+    const active = document.activeElement;
+    const set = (input, v) => { if (input !== active) input.value = v; };
+    c.name.textContent = l.name || `light ${l.id}`;
+    c.type.textContent = l.type + (l.node >= 0 ? ` · node ${l.node}` : '');
+    const hex = linearToHex(l.color || [1, 1, 1]);
+    c.swatch.style.background = hex;
+    c.swatch.style.boxShadow = `0 0 ${l.intensity > 0 ? 8 : 0}px ${hex}`;
+    set(c.inputs.color, hex);
+    set(c.inputs.intensity, Number((l.intensity ?? 0).toPrecision(4)));
+    set(c.inputs.slider, intensityToSlider(l.intensity ?? 0));
+    (l.position || [0, 0, 0]).forEach((v, i) => set(c.inputs.position[i], Number(v.toFixed(3)) || 0));
+    (l.direction || [0, -1, 0]).forEach((v, i) => set(c.inputs.direction[i], Number(v.toFixed(3)) || 0));
+    c.posLine.hidden = l.type === 'directional';
+    c.dirLine.hidden = l.type === 'point';
+  }
+
+  async edit(c, patch) {
+    this.lastEdit = performance.now();
+    c.el.classList.add('busy');
+    if (patch.color) c.swatch.style.background = linearToHex(patch.color);
+    try {
+      const l = await this.queue.send(c.light.id, patch);
+      if (!this.queue.busy(c.light.id) && l) this.fill(c, l);
+    } catch (e) {
+      this.toasts.error(e);
+      this.refresh();
+    } finally {
+      if (!this.queue.busy(c.light.id)) c.el.classList.remove('busy');
+    }
+  }
+
+  moveToView(c) {
+    const t = this.cameraTarget();
+    if (t) this.edit(c, { position: t.map((v) => Math.round(v * 1000) / 1000) });
+  }
+
+  async remove(c) {
+    try {
+      await this.api.del(`/v1/lights/${c.light.id}`);
+      this.toasts.show(`Deleted ${c.light.name || 'light ' + c.light.id}.`, 'ok');
+    } catch (e) {
+      this.toasts.error(e);
+    }
+    this.refresh();
+  }
+
+  async add(type) {
+    const t = this.cameraTarget() || [0, 1, 0];
+    const size = Math.max(0.1, this.sceneSize() || 3.5);
+    const body = { type, color: [1, 1, 1] };
+    if (type === 'directional') {
+      Object.assign(body, { intensity: 2, direction: [-0.3, -1, -0.2] });
+    } else {
+      // Candela: about as bright at a quarter of the scene's size as the demo's light is.
+      Object.assign(body, { intensity: Number((3 * (size / 3.5) ** 2).toPrecision(3)),
+        position: [t[0], t[1] + size * 0.15, t[2]].map((v) => Math.round(v * 1000) / 1000) });
+      if (type === 'spot') Object.assign(body, { direction: [0, -1, 0], inner_cone_angle: 0.35, outer_cone_angle: 0.6 });
+    }
+    try {
+      const l = await this.api.post('/v1/lights', body);
+      await this.refresh();
+      const c = l && this.cards.get(l.id);
+      if (c) { c.el.open = true; c.el.scrollIntoView({ block: 'nearest' }); }
+    } catch (e) {
+      this.toasts.error(e);
+    }
+  }
+}
+
+/* ---- scene and upload -------------------------------------------------------------------- */
+/* Shows GET /v1/scene and uploads files with PUT /v1/scene (XMLHttpRequest for progress).
+ * onSceneChanged(scene) runs after a successful upload. */
+export class ScenePanel {
+  constructor(api, { toasts, onSceneChanged }) {
+    this.api = api;
+    this.toasts = toasts;
+    this.onSceneChanged = onSceneChanged;
+    this.info = $('scene-info');
+    this.btn = $('upload-btn');
+    this.file = $('upload-file');
+    this.box = $('upload');
+    this.bar = $('upload-bar');
+    this.text = $('upload-text');
+    this.err = $('upload-error');
+    this.job = null;
+    this.btn.addEventListener('click', () => this.file.click());
+    this.file.addEventListener('change', () => {
+      const f = this.file.files && this.file.files[0];
+      this.file.value = '';
+      if (f) this.upload(f);
+    });
+    $('upload-cancel').addEventListener('click', () => this.job && this.job.abort());
+    this.err.title = 'Click to dismiss';
+    this.err.addEventListener('click', () => { this.err.hidden = true; });
+  }
+
+  render(s) {
+    if (!s) return;
+    const p = s.probes || {};
+    const src = s.source === 'upload' ? 'uploaded scene' : s.source;
+    this.info.replaceChildren(
+      h('div', {}, h('b', {}, src || '–'), s.generation ? ` · generation ${s.generation}` : ''),
+      h('div', {}, `${(s.triangles || 0).toLocaleString('en')} triangles · ${s.node_count ?? '–'} nodes · ${s.light_count ?? '–'} lights`),
+      p.counts ? h('div', {}, `probes ${p.counts.join('×')} (${p.total}) · ${p.rays_per_probe} rays · ${p.mode}`) : '',
+      ...(s.warnings || []).slice(0, 3).map((w) => h('div', { class: 'hint' }, '⚠ ' + w)));
+  }
+
+  showError(name, e) {
+    this.err.replaceChildren(h('b', {}, `${name} was not loaded`), h('span', { class: 'msg' }, e.message),
+      e.status ? h('div', { class: 'hint' }, `HTTP ${e.status} · ${e.code}`) : '');
+    this.err.hidden = false;
+    this.err.scrollIntoView({ block: 'nearest' });
+    // The panel shows the message; a toast only when the panels are hidden (H).
+    if (document.body.classList.contains('ui-hidden')) this.toasts.show(`${name}: ${e.message}`, 'error');
+  }
+
+  async upload(file) {
+    if (this.job) { this.toasts.show('An upload is already running.', 'error'); return; }
+    const panel = $('panel-scene');
+    panel.open = true;
+    requestAnimationFrame(() => panel.scrollIntoView({ block: 'nearest' }));
+    this.err.hidden = true;
+    this.box.hidden = false;
+    this.btn.disabled = true;
+    const progress = this.bar.parentElement;
+    progress.classList.remove('indeterminate');
+    this.job = this.api.upload('/v1/scene', file, sceneContentType(file), (frac, phase) => {
+      if (phase === 'process') {
+        progress.classList.add('indeterminate');
+        this.text.textContent = 'Validating and building the BVH…';
+      } else {
+        this.bar.style.width = `${(frac * 100).toFixed(1)}%`;
+        this.text.textContent = `Uploading ${(frac * 100).toFixed(0)} % · ${mb(frac * file.size)} of ${mb(file.size)}`;
+      }
+    });
+    try {
+      const scene = await this.job.promise;
+      this.toasts.show(`Loaded ${file.name}: ${(scene && scene.triangles || 0).toLocaleString('en')} triangles.`, 'ok');
+      this.render(scene);
+      this.onSceneChanged(scene);
+    } catch (e) {
+      if (e.code !== 'aborted') this.showError(file.name, e);
+    } finally {
+      this.job = null;
+      this.box.hidden = true;
+      this.btn.disabled = false;
+      progress.classList.remove('indeterminate');
+      this.bar.style.width = '0';
+    }
+  }
+}

@@ -1,0 +1,331 @@
+// stream.js: the frame stream (protocol/stream.md, version 1): WebSocket, header parsing, JPEG
+// decoding off the main thread, drawing, acknowledgements, input sequence numbers and reconnects.
+
+export const MAGIC = 0x52464350; // 'PCFR' read as a little-endian uint32
+export const HEADER_V1_SIZE = 64;
+const FLAG_STILL = 1;
+const BACKOFF_MIN_MS = 250;
+const BACKOFF_MAX_MS = 5000;
+const CONNECT_TIMEOUT_MS = 5000;
+const WINDOW_MS = 1000; // fps and bit rate are measured over the last second
+
+/* Parses a frame header from an ArrayBuffer; throws on a message that is not a v1 frame.
+ * 64-bit fields become Numbers (exact below 2^53, i.e. for 285 years of microseconds). */
+export function parseHeader(buf) {
+  if (!(buf instanceof ArrayBuffer) || buf.byteLength < HEADER_V1_SIZE) throw new Error('short frame message');
+  const v = new DataView(buf);
+  const u64 = (o) => v.getUint32(o, true) + v.getUint32(o + 4, true) * 4294967296;
+  if (v.getUint32(0, true) !== MAGIC) throw new Error('bad frame magic');
+  const version = v.getUint16(4, true);
+  const headerSize = v.getUint16(6, true);
+  if (version !== 1) throw new Error('unsupported frame version ' + version);
+  if (headerSize < HEADER_V1_SIZE) throw new Error('bad frame header size');
+  const h = {
+    version,
+    headerSize,
+    frameId: u64(8),
+    captureUs: u64(16),
+    encodeUs: u64(24),
+    sendUs: u64(32),
+    viewId: v.getUint32(40, true),
+    width: v.getUint32(44, true),
+    height: v.getUint32(48, true),
+    inputSeq: v.getUint32(52, true),
+    jpegSize: v.getUint32(56, true),
+    quality: v.getUint8(60),
+    still: (v.getUint8(61) & FLAG_STILL) !== 0,
+  };
+  if (headerSize + h.jpegSize > buf.byteLength) throw new Error('truncated frame');
+  return h;
+}
+
+/* Decodes JPEG bytes to something drawImage takes. createImageBitmap on a Blob decodes on the
+ * browser's image decoding threads (Chromium, Firefox, Safari 15+); the <img>.decode() fallback
+ * is asynchronous too. Returns { image, close() }. */
+async function decodeJpeg(blob) {
+  if (typeof createImageBitmap === 'function') {
+    const bmp = await createImageBitmap(blob);
+    return { image: bmp, width: bmp.width, height: bmp.height, close: () => bmp.close() };
+  }
+  const url = URL.createObjectURL(blob);
+  const img = new Image();
+  img.src = url;
+  try {
+    await img.decode();
+  } finally {
+    URL.revokeObjectURL(url);
+  }
+  return { image: img, width: img.naturalWidth, height: img.naturalHeight, close() {} };
+}
+
+/* CanvasView: draws decoded frames into a canvas whose backing store follows its CSS size times
+ * devicePixelRatio, fitted without distortion (letterboxed when the shared view has another
+ * aspect). Keeps the last frame so a resize redraws at once. */
+export class CanvasView {
+  constructor(canvas) {
+    this.canvas = canvas;
+    this.ctx = canvas.getContext('2d', { alpha: false });
+    this.last = null;
+    this.fitBacking();
+  }
+
+  /* Sizes the backing store; returns the CSS size and device pixel ratio. */
+  fitBacking() {
+    const r = this.canvas.getBoundingClientRect();
+    const dpr = window.devicePixelRatio || 1;
+    const w = Math.max(1, Math.round(r.width * dpr));
+    const h = Math.max(1, Math.round(r.height * dpr));
+    if (this.canvas.width !== w || this.canvas.height !== h) {
+      this.canvas.width = w;
+      this.canvas.height = h;
+      this.redraw();
+    }
+    return { width: r.width, height: r.height, dpr };
+  }
+
+  show(frame) {
+    if (this.last && this.last !== frame) this.last.close();
+    this.last = frame;
+    this.redraw();
+  }
+
+  redraw() {
+    const { ctx, canvas } = this;
+    ctx.fillStyle = '#0b0c10';
+    ctx.fillRect(0, 0, canvas.width, canvas.height);
+    const f = this.last;
+    if (!f) return;
+    const s = Math.min(canvas.width / f.width, canvas.height / f.height);
+    const w = Math.round(f.width * s), h = Math.round(f.height * s);
+    ctx.imageSmoothingEnabled = true;
+    ctx.imageSmoothingQuality = s > 1 ? 'medium' : 'high';
+    ctx.drawImage(f.image, (canvas.width - w) >> 1, (canvas.height - h) >> 1, w, h);
+  }
+}
+
+/* FrameStream: one WebSocket at a time to the frame stream, reconnecting with exponential
+ * backoff (0.25 s doubling to 5 s, 50-100 % jitter).
+ *
+ *   resolve(): async () => ({ url, protocols }) names the stream for the next attempt (it may
+ *              wait, e.g. for a token); throwing schedules a retry.
+ *   view:      a CanvasView that receives decoded frames.
+ *
+ * Frames: the newest wins. One decode runs at a time and one waits; a newer arrival replaces
+ * the waiting one, so a slow decoder skips to the newest frame. A frame is never drawn after a
+ * newer one, and each drawn frame is acknowledged ({"type":"ack","frame":id}).
+ *
+ * Events: 'state' (detail: { state, retryInMs, attempt, code, reason }), 'open', 'frame'
+ * (detail: header, after drawing). */
+export class FrameStream extends EventTarget {
+  constructor({ resolve, view }) {
+    super();
+    this.resolve = resolve;
+    this.view = view;
+    this.ws = null;
+    this.gen = 0;            // connection generation: decodes of older connections are dropped
+    this.attempt = 0;
+    this.state = 'idle';
+    this.stopped = true;
+    this.retryTimer = 0;
+    this.retryAt = 0;
+    this.nextSeq = 1;        // camera message sequence numbers, increasing for the page's life
+    this.inputs = [];        // [{ seq, t }] sent and not yet seen in a frame
+    this.resetFrames();
+    this.counters = { received: 0, drawn: 0, skipped: 0, stale: 0, bad: 0, decodeErrors: 0, reconnects: 0 };
+    this.recent = [];        // [{ t, bytes, drawn }] over the last WINDOW_MS
+    this.latencies = [];     // [{ t, ms }] input-to-frame samples
+    this.lastHeader = null;
+  }
+
+  resetFrames() {
+    this.newestId = 0;       // newest frame id received on this connection
+    this.drawnId = 0;        // newest frame id drawn on this connection
+    this.decoding = false;
+    this.pending = null;
+  }
+
+  start() {
+    if (!this.stopped) return;
+    this.stopped = false;
+    this.connect();
+  }
+
+  stop() {
+    this.stopped = true;
+    clearTimeout(this.retryTimer);
+    if (this.ws) {
+      const ws = this.ws;
+      this.ws = null;
+      ws.close(1000, 'viewer closed');
+    }
+    this.setState('idle');
+  }
+
+  /* Connects now, ending a pending backoff wait (used on 'online' and when the tab shows). */
+  retryNow() {
+    if (this.stopped || this.state !== 'waiting') return;
+    clearTimeout(this.retryTimer);
+    this.connect();
+  }
+
+  get open() { return !!this.ws && this.ws.readyState === WebSocket.OPEN; }
+
+  setState(state, extra = {}) {
+    this.state = state;
+    this.dispatchEvent(new CustomEvent('state', { detail: { state, attempt: this.attempt, ...extra } }));
+  }
+
+  async connect() {
+    if (this.stopped) return;
+    this.setState('connecting');
+    let target;
+    try {
+      target = await this.resolve();
+    } catch (e) {
+      this.scheduleRetry({ reason: e && e.message });
+      return;
+    }
+    if (this.stopped) return;
+    let ws;
+    try {
+      ws = new WebSocket(target.url, target.protocols);
+    } catch (e) {
+      this.scheduleRetry({ reason: e.message });
+      return;
+    }
+    ws.binaryType = 'arraybuffer';
+    const gen = ++this.gen;
+    this.ws = ws;
+    this.resetFrames();
+    const connectTimer = setTimeout(() => { if (ws.readyState === WebSocket.CONNECTING) ws.close(); }, CONNECT_TIMEOUT_MS);
+    ws.onopen = () => {
+      clearTimeout(connectTimer);
+      if (this.ws !== ws) return;
+      this.setState('open');
+      this.dispatchEvent(new Event('open'));
+    };
+    ws.onmessage = (ev) => { if (this.ws === ws) this.onMessage(ev.data, gen); };
+    ws.onclose = (ev) => {
+      clearTimeout(connectTimer);
+      if (this.ws !== ws) return;
+      this.ws = null;
+      this.inputs = []; // never reflected now: the server forgets them with the connection
+      if (ev.code === 1008 || ev.code === 1009 || ev.code === 1003)
+        console.warn(`probecast: the server closed the stream (${ev.code} ${ev.reason}): a viewer message was refused`);
+      this.scheduleRetry({ code: ev.code, reason: ev.reason });
+    };
+  }
+
+  scheduleRetry(extra) {
+    if (this.stopped) return;
+    const base = Math.min(BACKOFF_MAX_MS, BACKOFF_MIN_MS * 2 ** Math.min(this.attempt, 10));
+    const delay = Math.round(base * (0.5 + 0.5 * Math.random()));
+    this.attempt++;
+    this.counters.reconnects++;
+    this.retryAt = performance.now() + delay;
+    clearTimeout(this.retryTimer);
+    this.retryTimer = setTimeout(() => this.connect(), delay);
+    this.setState('waiting', { retryInMs: delay, ...extra });
+  }
+
+  /* Sends a viewer message (an object); false when not connected. */
+  send(msg) {
+    if (!this.open) return false;
+    this.ws.send(JSON.stringify(msg));
+    return true;
+  }
+
+  /* Sends a camera message with the next sequence number; returns the seq or 0. */
+  sendCamera(fields) {
+    const seq = this.nextSeq;
+    if (!this.send({ type: 'camera', seq, ...fields })) return 0;
+    this.nextSeq = seq >= 4294967295 ? 1 : seq + 1;
+    this.inputs.push({ seq, t: performance.now() });
+    if (this.inputs.length > 256) this.inputs.shift();
+    return seq;
+  }
+
+  sendResize(width, height, dpr) {
+    return this.send({
+      type: 'resize',
+      width: Math.max(1, Math.min(16384, Math.round(width))),
+      height: Math.max(1, Math.min(16384, Math.round(height))),
+      dpr: Math.max(0.25, Math.min(8, Math.round(dpr * 1000) / 1000)),
+    });
+  }
+
+  onMessage(data, gen) {
+    if (typeof data === 'string') return; // version 1 sends no text
+    const now = performance.now();
+    let h;
+    try {
+      h = parseHeader(data);
+    } catch (e) {
+      this.counters.bad++;
+      return;
+    }
+    this.counters.received++;
+    this.recent.push({ t: now, bytes: data.byteLength, drawn: false });
+    if (this.attempt) this.attempt = 0; // frames flow: the next outage starts from the short backoff
+    if (h.frameId <= this.newestId) { this.counters.stale++; return; }
+    this.newestId = h.frameId;
+    const job = { h, gen, blob: new Blob([new Uint8Array(data, h.headerSize, h.jpegSize)], { type: 'image/jpeg' }) };
+    if (this.decoding) {
+      if (this.pending) this.counters.skipped++;
+      this.pending = job;
+      return;
+    }
+    this.decode(job);
+  }
+
+  async decode(job) {
+    this.decoding = true;
+    try {
+      const frame = await decodeJpeg(job.blob);
+      if (job.gen !== this.gen || job.h.frameId <= this.drawnId) frame.close();
+      else this.present(job.h, frame);
+    } catch (e) {
+      this.counters.decodeErrors++;
+    } finally {
+      this.decoding = false;
+      const next = this.pending;
+      this.pending = null;
+      if (next && next.gen === this.gen) this.decode(next);
+    }
+  }
+
+  present(h, frame) {
+    const now = performance.now();
+    this.drawnId = h.frameId;
+    this.view.show(frame);
+    this.send({ type: 'ack', frame: h.frameId });
+    this.counters.drawn++;
+    this.lastHeader = h;
+    this.recent.push({ t: now, bytes: 0, drawn: true });
+    // Input-to-frame latency: every input this frame reflects gets its sample, measured to
+    // the moment the frame is on the canvas.
+    while (this.inputs.length && this.inputs[0].seq <= h.inputSeq) {
+      const i = this.inputs.shift();
+      this.latencies.push({ t: now, ms: now - i.t });
+    }
+    if (this.latencies.length > 120) this.latencies.splice(0, this.latencies.length - 120);
+    this.dispatchEvent(new CustomEvent('frame', { detail: h }));
+  }
+
+  /* Viewer-side numbers over the last second: { fps, kbps, latencyMs (median of the samples of
+   * the last 3 s, null if none), lastLatencyMs }. */
+  metrics() {
+    const now = performance.now();
+    while (this.recent.length && now - this.recent[0].t > WINDOW_MS) this.recent.shift();
+    let bytes = 0, drawn = 0;
+    for (const r of this.recent) { bytes += r.bytes; drawn += r.drawn ? 1 : 0; }
+    const lat = this.latencies.filter((l) => now - l.t < 3000).map((l) => l.ms).sort((a, b) => a - b);
+    const last = this.latencies.length ? this.latencies[this.latencies.length - 1].ms : null;
+    return {
+      fps: drawn * 1000 / WINDOW_MS,
+      kbps: bytes * 8 / WINDOW_MS,
+      latencyMs: lat.length ? lat[lat.length >> 1] : null,
+      lastLatencyMs: last,
+    };
+  }
+}
