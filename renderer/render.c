@@ -87,6 +87,7 @@ static rd_vk_result ensure_size(rd_renderer *r, unsigned w, unsigned h, char *er
     /* Work submitted elsewhere (a frame readback copying rgba8) may still read these buffers:
      * resizes are rare, so wait for the device before freeing them. */
     if (r->width || r->height) vkDeviceWaitIdle(r->vk->device);
+    r->pathtrace_samples = 0;
     rd_buffer_destroy(r->vk, &r->gbuffer);
     rd_buffer_destroy(r->vk, &r->radiance);
     rd_buffer_destroy(r->vk, &r->rgba8);
@@ -147,19 +148,22 @@ static rd_vk_result render_pathtraced(rd_renderer *r, pc_globals *g, const rd_fr
     uint32_t gy = (r->height + PC_WG_2D_Y - 1) / PC_WG_2D_Y;
     unsigned batch = r->vk->is_cpu ? 1 : 16;
     rd_vk_result res = RD_VK_OK;
-    for (unsigned s = 0; res == RD_VK_OK && s < fs->pathtrace_spp; s += batch) {
+    unsigned first = fs->pathtrace_first, end = first + fs->pathtrace_spp;
+    if (r->frame_index == 0 || first > r->pathtrace_samples) first = 0; /* nothing to continue */
+    end = first + fs->pathtrace_spp;
+    for (unsigned s = first; res == RD_VK_OK && s < end; s += batch) {
         rd_cmd cmd;
         res = rd_cmd_begin(r->vk, &cmd, err, errlen);
         if (res != RD_VK_OK) return res;
         rd_timer_begin(&cmd, &r->timer);
-        for (unsigned k = s; k < s + batch && k < fs->pathtrace_spp; k++) {
+        for (unsigned k = s; k < s + batch && k < end; k++) {
             pc_push push = {.globals = r->globals.address, .buf0 = r->radiance.address,
                             .buf1 = r->counters.address, .params = {k, fs->max_bounces, 0, 0}};
             rd_cmd_dispatch(&cmd, &r->pathtrace, &push, gx, gy, 1);
             rd_cmd_barrier(&cmd);
         }
         rd_timer_mark(&cmd, &r->timer, "path trace");
-        bool last = s + batch >= fs->pathtrace_spp;
+        bool last = s + batch >= end;
         if (last) {
             pc_push push = {.globals = r->globals.address, .buf0 = r->radiance.address,
                             .buf1 = r->rgba8.address};
@@ -172,6 +176,7 @@ static rd_vk_result render_pathtraced(rd_renderer *r, pc_globals *g, const rd_fr
     }
     memcpy(&r->stats.rays, r->counters.mapped, sizeof r->stats.rays);
     r->frame_index++;
+    r->pathtrace_samples = res == RD_VK_OK ? end : 0;
     return res;
 }
 
@@ -200,6 +205,7 @@ rd_vk_result rd_renderer_render(rd_renderer *r, const rd_gpu_scene *scene,
     memset(r->counters.mapped, 0, sizeof(pc_counters));
 
     if (fs->pathtrace_spp > 0) return render_pathtraced(r, &g, fs, err, errlen);
+    r->pathtrace_samples = 0; /* this frame overwrites the accumulation */
 
     /* All probe updates but the last run on their own; the last is recorded with the frame so
      * that the frame's timings show every pass. */

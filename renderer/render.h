@@ -21,6 +21,8 @@ typedef struct rd_frame_settings {
     unsigned pathtrace_spp; /* > 0: reference path tracing with this many samples per pixel
                                instead of direct light + probes */
     unsigned max_bounces;   /* path tracing (0 = 64) */
+    unsigned pathtrace_first; /* path tracing: samples already accumulated from an identical
+                                 earlier frame (0 = start over); progressive rendering */
 } rd_frame_settings;
 
 typedef struct rd_frame_stats {
@@ -41,6 +43,7 @@ typedef struct rd_renderer {
     rd_pipeline gi_sample, pathtrace;
     unsigned width, height;
     unsigned frame_index;
+    unsigned pathtrace_samples; /* accumulated in the radiance buffer by the last frame */
     rd_frame_stats stats;
 } rd_renderer;
 

@@ -295,11 +295,11 @@ bool srv_json_node_patch(const cJSON *obj, srv_node_patch *p, srv_api_error *e)
 
 static const char *const tonemap_names[] = {"aces", "clamp"};
 static const char *const view_names[] = {"final", "irradiance", "probes"};
-static const char *const gi_names[] = {"off", "classic", "ddgi"};
+static const char *const gi_names[] = {"off", "classic", "ddgi", "pathtrace"};
 
 const char *srv_gi_mode_name(unsigned mode)
 {
-    return mode < 3 ? gi_names[mode] : "unknown";
+    return mode < 4 ? gi_names[mode] : "unknown";
 }
 
 bool srv_json_settings_patch(const cJSON *obj, srv_settings_patch *p, srv_api_error *e)
@@ -340,7 +340,7 @@ bool srv_json_settings_patch(const cJSON *obj, srv_settings_patch *p, srv_api_er
         else if (strcmp(k, "view") == 0)
             ok = once(&p->has, SRV_SET_VIEW, it, e) && get_enum(it, view_names, 3, &v->view, e);
         else if (strcmp(k, "gi_mode") == 0)
-            ok = once(&p->has, SRV_SET_GI_MODE, it, e) && get_enum(it, gi_names, 3, &v->gi_mode, e);
+            ok = once(&p->has, SRV_SET_GI_MODE, it, e) && get_enum(it, gi_names, 4, &v->gi_mode, e);
         else if (strcmp(k, "probe_counts") == 0) {
             float c[3];
             ok = once(&p->has, SRV_SET_PROBE_COUNTS, it, e) && get_vec(it, 3, 0, 256, c, e);

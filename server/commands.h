@@ -18,6 +18,9 @@
 /* ---- camera ------------------------------------------------------------------------------ */
 
 /* The shared view's camera as the API describes it. */
+/* settings.gi_mode beyond PC_GI_*: progressive reference path tracing (no probes) */
+#define SRV_GI_PATHTRACE 3u
+
 typedef struct srv_camera {
     float position[3];
     float forward[3];      /* unit */
@@ -89,7 +92,7 @@ typedef struct srv_settings {
     unsigned tonemap; /* PC_TONEMAP_* */
     float sky[3];
     unsigned view;            /* PC_VIEW_* */
-    unsigned gi_mode;         /* PC_GI_* */
+    unsigned gi_mode;         /* PC_GI_*, or SRV_GI_PATHTRACE */
     unsigned probe_counts[3]; /* 0 = fitted to the scene */
     float probe_spacing;      /* 0 = derived */
     unsigned rays_per_probe;

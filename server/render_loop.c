@@ -47,6 +47,7 @@ struct srv_render_loop {
     uint64_t generation_counter;
     bool dirty;
     unsigned gi_updates, gi_converge;
+    unsigned pt_samples, pt_target; /* progressive path tracing (gi_mode pathtrace) */
     double last_motion_ms, last_render_ms, last_render_end_ms;
     bool need_still;
     srv_image *last_image;
@@ -215,6 +216,7 @@ static void mark_view_changed(srv_render_loop *l, bool input, bool lighting)
     l->dirty = true;
     if (input) l->last_motion_ms = mono_ms();
     if (lighting) l->gi_updates = 0;
+    l->pt_samples = 0; /* any change restarts the path-traced accumulation */
 }
 
 static rd_vk_result configure_gi(srv_render_loop *l, char *err, size_t errlen)
@@ -225,6 +227,8 @@ static rd_vk_result configure_gi(srv_render_loop *l, char *err, size_t errlen)
                                                l->st.scene.bounds_max, &gi, err, errlen);
     l->gi_updates = 0;
     l->gi_converge = l->r.gi ? converge_updates(&l->st.settings) : 0;
+    l->pt_samples = 0;
+    l->pt_target = l->st.settings.gi_mode == SRV_GI_PATHTRACE ? (l->vk.is_cpu ? 64 : 4096) : 0;
     return vr;
 }
 
@@ -279,7 +283,8 @@ static cJSON *scene_json(srv_render_loop *l)
     srv_json_add_floats(probes, "origin", origin, 3);
     cJSON_AddNumberToObject(probes, "rays_per_probe", l->r.gi ? v->counts.w : 0);
     cJSON_AddNumberToObject(probes, "updates", l->r.gi ? l->r.ddgi.updates : 0);
-    cJSON_AddBoolToObject(probes, "converged", !l->r.gi || l->gi_updates >= l->gi_converge);
+    cJSON_AddBoolToObject(probes, "converged", (!l->r.gi || l->gi_updates >= l->gi_converge) &&
+                                                   l->pt_samples >= l->pt_target);
     cJSON *w = cJSON_AddArrayToObject(j, "warnings");
     for (uint32_t i = 0; i < s->warning_count; i++)
         cJSON_AddItemToArray(w, cJSON_CreateString(s->warnings[i]));
@@ -603,6 +608,11 @@ static void render_frame(srv_render_loop *l, double now, bool animating)
         unsigned left = l->gi_converge - l->gi_updates;
         fs.gi_updates = left < CONVERGE_UPDATES_PER_FRAME ? left : CONVERGE_UPDATES_PER_FRAME;
     }
+    if (s->gi_mode == SRV_GI_PATHTRACE) { /* progressive: add samples to the accumulation */
+        fs.pathtrace_spp = l->vk.is_cpu ? 1 : 16;
+        fs.pathtrace_first = l->pt_samples;
+        fs.seed = 1;
+    }
     rd_view_camera cam;
     srv_camera_to_view(&l->st.camera, &cam);
     srv_frame_info info = {
@@ -618,6 +628,7 @@ static void render_frame(srv_render_loop *l, double now, bool animating)
     l->last_render_end_ms = mono_ms();
     double wall = l->last_render_end_ms - now;
     if (l->r.gi && l->gi_updates < UINT32_MAX - fs.gi_updates) l->gi_updates += fs.gi_updates;
+    if (fs.pathtrace_spp) l->pt_samples = vr == RD_VK_OK ? l->r.pathtrace_samples : 0;
     if (vr == RD_VK_OK)
         vr = srv_readback_submit(&l->rb, &l->r.rgba8, l->r.width, l->r.height, &info, err,
                                  sizeof err);
@@ -727,7 +738,7 @@ static void *render_main(void *arg)
         const srv_settings *s = &l->st.settings;
         bool lost = l->vk.device_lost;
         bool animating = s->animate && atomic_load(&l->viewers) > 0 && l->st.scene.light_count > 0;
-        bool converging = l->r.gi && l->gi_updates < l->gi_converge;
+        bool converging = (l->r.gi && l->gi_updates < l->gi_converge) || l->pt_samples < l->pt_target;
         bool want = !lost && (l->dirty || animating || converging);
         share_state(l, want);
         double wake = INFINITY;

@@ -338,7 +338,7 @@ bool srv_state_settings_apply(srv_settings *s, const srv_settings_patch *p, srv_
     if (h & SRV_SET_ANIMATE) n.animate = v->animate;
     if ((uint64_t)n.width * n.height > n.max_pixels)
         return BAD("%ux%u is more than max_pixels (%u).", n.width, n.height, n.max_pixels);
-    if (n.view != PC_VIEW_FINAL && n.gi_mode == PC_GI_OFF)
+    if (n.view != PC_VIEW_FINAL && n.gi_mode != PC_GI_CLASSIC && n.gi_mode != PC_GI_DDGI)
         return BAD("The irradiance and probes views need gi_mode classic or ddgi.");
     uint64_t probes = (uint64_t)n.probe_counts[0] * n.probe_counts[1] * n.probe_counts[2];
     if (probes > 65535)
@@ -350,7 +350,7 @@ bool srv_state_settings_apply(srv_settings *s, const srv_settings_patch *p, srv_
 void srv_settings_to_gi(const srv_settings *s, rd_ddgi_settings *gi)
 {
     memset(gi, 0, sizeof *gi);
-    gi->mode = s->gi_mode;
+    gi->mode = s->gi_mode == SRV_GI_PATHTRACE ? PC_GI_OFF : s->gi_mode; /* no probes */
     memcpy(gi->counts, s->probe_counts, sizeof gi->counts);
     gi->spacing[0] = gi->spacing[1] = gi->spacing[2] = s->probe_spacing;
     gi->rays = s->rays_per_probe;

@@ -372,8 +372,12 @@ test('lights are added and deleted through the panel', { timeout: 30000 }, async
 
 test('the rendering panel switches GI mode and the probe view', { timeout: 30000 }, async () => {
   const pt = page.locator('#gi-modes button[data-value=pathtrace]');
-  assert.equal(await pt.isDisabled(), true, 'path tracing is not offered by the v1 API');
-  assert.match(await pt.getAttribute('title'), /gi_mode/);
+  assert.equal(await pt.isDisabled(), false, 'the API offers gi_mode pathtrace');
+  await pt.click();
+  await until(async () => (await http('GET', '/v1/settings')).json.gi_mode === 'pathtrace', 'gi_mode pathtrace');
+  assert.equal(await pt.getAttribute('aria-checked'), 'true');
+  await waitDrawnAfter((await state()).drawnId + 1);
+  await shot('pathtrace.png');
   await page.locator('#gi-modes button[data-value=classic]').click();
   await until(async () => (await http('GET', '/v1/settings')).json.gi_mode === 'classic', 'gi_mode classic');
   assert.equal(await page.locator('#gi-modes button[data-value=classic]').getAttribute('aria-checked'), 'true');

@@ -228,6 +228,7 @@ const GI_TITLES = {
   off: 'Direct light only',
   classic: 'Irradiance probes without visibility (leaks through thin walls)',
   ddgi: 'Dynamic Diffuse Global Illumination: probes with visibility (Majercik et al. 2019)',
+  pathtrace: 'Reference path tracer: samples accumulate while nothing changes (slow on a CPU)',
 };
 
 export class RenderPanel {

@@ -1,0 +1,68 @@
+/* probecast serve in gi_mode pathtrace: frames accumulate samples progressively until the
+ * target count, then the daemon idles; a camera move restarts the accumulation. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "serve_util.h"
+#include "test_util.h"
+
+static const char *const args[] = {"--no-animate", "--width", "48", "--height", "32",
+                                   "--max-fps", "60", "--scene", "builtin:cornell", NULL};
+
+/* Polls /v1/stats until rendering stops; returns frames rendered (NaN on timeout). */
+static double wait_idle(pc_daemon *d, int timeout_ms)
+{
+    double deadline = pc_now_ms() + timeout_ms;
+    while (pc_now_ms() < deadline) {
+        pc_sleep_ms(300);
+        cJSON *s = pc_api_get_json(d, "/v1/stats");
+        const cJSON *rendering = cJSON_GetObjectItemCaseSensitive(s, "rendering");
+        double frames = pc_json_number(s, "frames_rendered");
+        bool idle = cJSON_IsFalse(rendering);
+        cJSON_Delete(s);
+        if (idle) return frames;
+    }
+    return NAN;
+}
+
+int main(void)
+{
+    pc_daemon d = {0};
+    if (!pc_daemon_start(&d, args)) {
+        CHECK(!"daemon started");
+        return test_finish();
+    }
+    pc_http_response r;
+    CHECK(pc_api(&d, "PATCH", "/v1/settings", "{\"gi_mode\":\"pathtrace\"}", false, &r) == 200);
+    CHECK(r.body && strstr(r.body, "\"pathtrace\""));
+    pc_http_response_free(&r);
+    double before = wait_idle(&d, 240000);
+    CHECKF(before >= 64, "path tracing stopped after %g frames (64 samples expected)", before);
+
+    cJSON *s = pc_api_get_json(&d, "/v1/stats");
+    const cJSON *gpu = cJSON_GetObjectItemCaseSensitive(s, "gpu_ms");
+    CHECK(cJSON_GetObjectItemCaseSensitive(gpu, "path trace") != NULL);
+    cJSON_Delete(s);
+
+    pc_ws ws;
+    pc_frame f = {0};
+    CHECK(pc_stream_open(&d, &ws));
+    CHECK(pc_stream_next(&ws, 60000, true, &f)); /* a new viewer gets the current frame */
+    CHECK(f.mean > 5);                             /* lit, not black */
+    pc_frame_free(&f);
+    pc_ws_close(&ws);
+
+    /* a camera move restarts the accumulation: 64 more frames, then idle again */
+    CHECK(pc_api(&d, "PATCH", "/v1/camera", "{\"position\":[0.5,1,3.9]}", false, &r) == 200);
+    pc_http_response_free(&r);
+    double after = wait_idle(&d, 240000);
+    CHECKF(after >= before + 64, "camera move: %g frames after %g", after, before);
+
+    /* views that need probes are refused in this mode */
+    CHECK(pc_api(&d, "PATCH", "/v1/settings", "{\"view\":\"probes\"}", false, &r) == 400);
+    pc_http_response_free(&r);
+    CHECK(pc_daemon_stop(&d) == 0);
+    return test_finish();
+}
