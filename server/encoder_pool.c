@@ -1,5 +1,6 @@
 /* encoder_pool.c: JPEG encoder threads with latest-frame-wins publication. */
 #include "encoder_pool.h"
+#include "clock.h"
 
 #include <pthread.h>
 #include <stdlib.h>
@@ -16,19 +17,7 @@ static void *xcalloc(size_t n, size_t size)
     return p;
 }
 
-static double mono_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
 
-static uint64_t unix_us(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_REALTIME, &ts);
-    return (uint64_t)ts.tv_sec * 1000000u + (uint64_t)ts.tv_nsec / 1000u;
-}
 
 /* ---- images and frames ----------------------------------------------------------------------- */
 
@@ -118,7 +107,7 @@ static void variant_done(srv_encoder_pool *p, srv_frame *f)
     for (unsigned i = 0; ok && i < f->variant_count; i++)
         ok = f->variants[i].data != NULL;
     if (ok && (!p->latest || f->info.frame_id > p->latest->info.frame_id)) {
-        f->encode_us = unix_us();
+        f->encode_us = srv_unix_us();
         srv_frame_unref(p->latest);
         p->latest = f; /* the pool's reference moves to latest */
         p->stats.frames_published++;
@@ -149,11 +138,11 @@ static void *encoder_main(void *arg)
         const srv_image *img = f->image;
         unsigned char *out = NULL;
         unsigned long size = 0;
-        double t0 = mono_ms();
+        double t0 = srv_mono_ms();
         int rc = tj ? tjCompress2(tj, img->rgba, (int)img->width, 0, (int)img->height, TJPF_RGBA,
                                   &out, &size, TJSAMP_420, (int)v->quality, TJFLAG_FASTDCT)
                     : -1;
-        double ms = mono_ms() - t0;
+        double ms = srv_mono_ms() - t0;
         if (rc != 0) {
             srv_error("encoder", "JPEG encoding failed: %s",
                       tj ? tjGetErrorStr2(tj) : "no encoder");

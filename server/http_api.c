@@ -1,5 +1,6 @@
 /* http_api.c: routing, limits and JSON of the HTTP API v1 on libmicrohttpd. */
 #include "http_api.h"
+#include "clock.h"
 
 #include <arpa/inet.h>
 #include <errno.h>
@@ -96,12 +97,6 @@ typedef struct request {
     double start_ms;
 } request;
 
-static double mono_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
 
 /* ---- responses ------------------------------------------------------------------------------ */
 
@@ -357,7 +352,7 @@ static void snapshot(srv_http *h, srv_stats_snapshot *s)
     pthread_mutex_lock(&h->counters_mu);
     s->http = h->counters;
     pthread_mutex_unlock(&h->counters_mu);
-    s->uptime_s = (mono_ms() - h->start_ms) / 1000.0;
+    s->uptime_s = (srv_mono_ms() - h->start_ms) / 1000.0;
 }
 
 static enum MHD_Result handle_health(srv_http *h, struct MHD_Connection *conn, request *rq)
@@ -368,7 +363,7 @@ static enum MHD_Result handle_health(srv_http *h, struct MHD_Connection *conn, r
     cJSON_AddStringToObject(j, "status", rs.device_lost ? "degraded" : "ok");
     cJSON_AddStringToObject(j, "version", PROBECAST_VERSION);
     cJSON_AddStringToObject(j, "device", rs.device);
-    cJSON_AddNumberToObject(j, "uptime_s", floor(mono_ms() - h->start_ms) / 1000.0);
+    cJSON_AddNumberToObject(j, "uptime_s", floor(srv_mono_ms() - h->start_ms) / 1000.0);
     cJSON_AddStringToObject(j, "auth", h->token[0] ? "bearer" : "none");
     cJSON *st = cJSON_AddObjectToObject(j, "stream");
     cJSON_AddNumberToObject(st, "port", h->cfg.ws ? srv_ws_port(h->cfg.ws) : 0);
@@ -408,7 +403,7 @@ static enum MHD_Result handle_upload(srv_http *h, struct MHD_Connection *conn, r
     rd_scene *scene = calloc(1, sizeof *scene);
     if (!scene) abort();
     char err[512] = "";
-    double t0 = mono_ms();
+    double t0 = srv_mono_ms();
     rd_gltf_result gr = rd_gltf_load_memory(rq->data, rq->len, NULL, NULL, scene, err, sizeof err);
     if (gr != RD_GLTF_OK) {
         free(scene);
@@ -422,7 +417,7 @@ static enum MHD_Result handle_upload(srv_http *h, struct MHD_Connection *conn, r
     for (uint32_t i = 0; i < scene->warning_count; i++)
         srv_warn("http", "uploaded scene: %s", scene->warnings[i]);
     srv_info("http", "scene upload of %zu bytes parsed in %.0f ms (%llu triangles)", rq->len,
-             mono_ms() - t0, (unsigned long long)scene->tri_total);
+             srv_mono_ms() - t0, (unsigned long long)scene->tri_total);
     srv_cmd *c = srv_cmd_new(SRV_CMD_REPLACE_SCENE);
     c->scene = scene;
     snprintf(c->source, sizeof c->source, "upload");
@@ -635,7 +630,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
         rq = calloc(1, sizeof *rq);
         if (!rq) abort();
         *con_cls = rq;
-        rq->start_ms = mono_ms();
+        rq->start_ms = srv_mono_ms();
         rq->method = method_bit(method);
         rq->route = match(url, &rq->id, &rq->id_ok);
         enum MHD_Result ret;
@@ -672,7 +667,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
     }
     if (rq->responded) return MHD_YES;
     enum MHD_Result r = dispatch(h, conn, rq, url);
-    double ms = mono_ms() - rq->start_ms;
+    double ms = srv_mono_ms() - rq->start_ms;
     if ((rq->method & (M_GET | M_HEAD)) && rq->status < 400)
         srv_debug("http", "%s %s %d (%.1f ms)", method, url, rq->status, ms);
     else
@@ -736,7 +731,7 @@ srv_http *srv_http_start(const srv_http_config *cfg, char *err, size_t errlen)
     if (!h->cfg.max_per_ip) h->cfg.max_per_ip = 16;
     if (!h->cfg.timeout_s) h->cfg.timeout_s = 30;
     snprintf(h->token, sizeof h->token, "%s", cfg->token ? cfg->token : "");
-    h->start_ms = mono_ms();
+    h->start_ms = srv_mono_ms();
     pthread_mutex_init(&h->counters_mu, NULL);
     if (cfg->web_dir && realpath(cfg->web_dir, h->web_dir)) h->have_web_dir = true;
     load_openapi(h, cfg->openapi_path);

@@ -1,5 +1,6 @@
 /* render_loop.c: the render thread: command queue, dirty tracking, pacing, GPU work. */
 #include "render_loop.h"
+#include "clock.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -65,19 +66,7 @@ struct srv_render_loop {
     unsigned frame_time_next;
 };
 
-static double mono_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
 
-static uint64_t unix_us(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_REALTIME, &ts);
-    return (uint64_t)ts.tv_sec * 1000000u + (uint64_t)ts.tv_nsec / 1000u;
-}
 
 /* ---- commands ------------------------------------------------------------------------------- */
 
@@ -214,7 +203,7 @@ static unsigned converge_updates(const srv_settings *s)
 static void mark_view_changed(srv_render_loop *l, bool input, bool lighting)
 {
     l->dirty = true;
-    if (input) l->last_motion_ms = mono_ms();
+    if (input) l->last_motion_ms = srv_mono_ms();
     if (lighting) l->gi_updates = 0;
     l->pt_samples = 0; /* any change restarts the path-traced accumulation */
 }
@@ -316,7 +305,7 @@ static void replace_scene(srv_render_loop *l, srv_cmd *c)
     char err[256];
     rd_gpu_scene ngs;
     memset(&ngs, 0, sizeof ngs);
-    double t0 = mono_ms();
+    double t0 = srv_mono_ms();
     rd_vk_result vr = rd_gpu_scene_create(&l->vk, &ngs, c->scene, err, sizeof err);
     if (vr != RD_VK_OK) {
         srv_warn("render", "uploaded scene rejected by the GPU: %s", err);
@@ -336,7 +325,7 @@ static void replace_scene(srv_render_loop *l, srv_cmd *c)
     l->persist_dirty = true;
     srv_info("render", "scene replaced (generation %llu, %llu triangles, %.0f ms on the GPU side)",
              (unsigned long long)l->st.generation, (unsigned long long)l->st.scene.tri_total,
-             mono_ms() - t0);
+             srv_mono_ms() - t0);
     pthread_mutex_lock(&c->mu);
     c->reply.scene_generation = l->st.generation;
     pthread_mutex_unlock(&c->mu);
@@ -617,7 +606,7 @@ static void render_frame(srv_render_loop *l, double now, bool animating)
     srv_camera_to_view(&l->st.camera, &cam);
     srv_frame_info info = {
         .frame_id = ++l->next_frame_id,
-        .capture_us = unix_us(),
+        .capture_us = srv_unix_us(),
         .input_ticket = l->applied_ticket,
         .still = still,
     };
@@ -625,7 +614,7 @@ static void render_frame(srv_render_loop *l, double now, bool animating)
     l->last_render_ms = now;
     char err[256];
     rd_vk_result vr = rd_renderer_render(&l->r, &l->gs, &cam, &fs, err, sizeof err);
-    l->last_render_end_ms = mono_ms();
+    l->last_render_end_ms = srv_mono_ms();
     double wall = l->last_render_end_ms - now;
     if (l->r.gi && l->gi_updates < UINT32_MAX - fs.gi_updates) l->gi_updates += fs.gi_updates;
     if (fs.pathtrace_spp) l->pt_samples = vr == RD_VK_OK ? l->r.pathtrace_samples : 0;
@@ -680,7 +669,7 @@ static void wait_until(srv_render_loop *l, double wake_ms)
         if (isinf(wake_ms)) {
             pthread_cond_wait(&l->cv, &l->mu);
         } else {
-            double delay = wake_ms - mono_ms();
+            double delay = wake_ms - srv_mono_ms();
             if (delay > 0) {
                 struct timespec ts;
                 clock_gettime(CLOCK_REALTIME, &ts);
@@ -734,7 +723,7 @@ static void *render_main(void *arg)
         if (stop) break;
         poll_readback(l, 0);
 
-        double now = mono_ms();
+        double now = srv_mono_ms();
         const srv_settings *s = &l->st.settings;
         bool lost = l->vk.device_lost;
         bool animating = s->animate && atomic_load(&l->viewers) > 0 && l->st.scene.light_count > 0;
@@ -794,7 +783,7 @@ static void *render_main(void *arg)
         fail(c, 503, SRV_ERR_UNAVAILABLE, "The server is shutting down.");
         srv_cmd_unref(c);
     }
-    if (l->persist_dirty) post_state(l, mono_ms());
+    if (l->persist_dirty) post_state(l, srv_mono_ms());
     srv_info("render", "render thread stopped");
     return NULL;
 }
@@ -911,7 +900,7 @@ void srv_render_loop_destroy(srv_render_loop *l)
 
 void srv_render_get_stats(srv_render_loop *l, srv_render_stats *out)
 {
-    double now = mono_ms();
+    double now = srv_mono_ms();
     pthread_mutex_lock(&l->stats_mu);
     *out = l->stats;
     unsigned n = 0;

@@ -1,5 +1,6 @@
 /* ws_stream.c: the frame stream on libwebsockets (one service thread). */
 #include "ws_stream.h"
+#include "clock.h"
 
 #include <libwebsockets.h>
 #include <math.h>
@@ -82,19 +83,7 @@ struct srv_ws_stream {
     srv_ws_stats stats;
 };
 
-static double mono_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
 
-static uint64_t unix_us(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_REALTIME, &ts);
-    return (uint64_t)ts.tv_sec * 1000000u + (uint64_t)ts.tv_nsec / 1000u;
-}
 
 /* ---- handshake checks --------------------------------------------------------------------- */
 
@@ -295,7 +284,7 @@ static void close_viewer(viewer *v, int code, const char *reason)
  * Returns -1 when the connection must close. */
 static int send_some(srv_ws_stream *ws, viewer *v)
 {
-    double now = mono_ms();
+    double now = srv_mono_ms();
     if (!v->cur) {
         if (flow_blocked(v, now)) return 0;
         srv_frame *f = srv_encoder_latest(ws->cfg.encoders);
@@ -310,7 +299,7 @@ static int send_some(srv_ws_stream *ws, viewer *v)
             .frame_id = f->info.frame_id,
             .capture_us = f->info.capture_us,
             .encode_us = f->encode_us,
-            .send_us = unix_us(),
+            .send_us = srv_unix_us(),
             .view_id = f->info.view_id,
             .width = f->width,
             .height = f->height,
@@ -398,7 +387,7 @@ static void handle_message(srv_ws_stream *ws, viewer *v)
         break;
     }
     case SRV_VIEWER_ACK: {
-        double now = mono_ms();
+        double now = srv_mono_ms();
         for (unsigned i = 0; i < SENT_RING; i++) {
             if (v->sent[i].id != m.frame || m.frame == 0) continue;
             double lag = now - v->sent[i].ms;
@@ -497,7 +486,7 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
         return 0;
 
     case LWS_CALLBACK_RECEIVE: {
-        double now = mono_ms();
+        double now = srv_mono_ms();
         if (now - v->rate_window_ms >= 1000) v->rate_window_ms = now, v->rate_count = 0;
         if (lws_frame_is_binary(wsi)) {
             close_viewer(v, LWS_CLOSE_STATUS_UNACCEPTABLE_OPCODE, "text messages only");
@@ -549,7 +538,7 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
 static void on_tick(lws_sorted_usec_list_t *sul)
 {
     srv_ws_stream *ws = lws_container_of(sul, srv_ws_stream, tick);
-    double now = mono_ms();
+    double now = srv_mono_ms();
     pthread_mutex_lock(&ws->stats_mu);
     double dt = (now - ws->tick_ms) / 1000.0;
     if (dt > 0)
@@ -569,7 +558,7 @@ static void *service_main(void *arg)
     while (!ws->exit_loop) {
         lws_service(ws->ctx, 0);
         if (atomic_load(&ws->stopping) &&
-            (ws->viewer_count == 0 || mono_ms() > ws->stop_deadline_ms))
+            (ws->viewer_count == 0 || srv_mono_ms() > ws->stop_deadline_ms))
             ws->exit_loop = true;
     }
     return NULL;
@@ -646,7 +635,7 @@ void srv_ws_set_http_port(srv_ws_stream *ws, unsigned port)
 
 bool srv_ws_start(srv_ws_stream *ws)
 {
-    ws->tick_ms = mono_ms();
+    ws->tick_ms = srv_mono_ms();
     lws_sul_schedule(ws->ctx, 0, &ws->tick, on_tick, LWS_US_PER_SEC);
     if (pthread_create(&ws->thread, NULL, service_main, ws) != 0) return false;
     ws->started = true;
@@ -657,7 +646,7 @@ void srv_ws_destroy(srv_ws_stream *ws)
 {
     if (!ws) return;
     if (ws->started) {
-        ws->stop_deadline_ms = mono_ms() + STOP_GRACE_MS;
+        ws->stop_deadline_ms = srv_mono_ms() + STOP_GRACE_MS;
         atomic_store(&ws->stopping, true);
         lws_cancel_service(ws->ctx);
         pthread_join(ws->thread, NULL);
