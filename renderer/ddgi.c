@@ -236,14 +236,16 @@ void rd_ddgi_record_update(rd_ddgi *d, rd_cmd *c, rd_timer *timer, VkDeviceAddre
     rd_cmd_dispatch(c, &d->shade, &push, ray_groups, probes, 1);
     rd_cmd_barrier(c);
     if (timer) rd_timer_mark(c, timer, "probe shade");
-    push.params = (pc_uvec4){0, 0, 0, 0};
-    rd_cmd_dispatch(c, &d->blend, &push, probes, 1, 1);
-    rd_cmd_barrier(c);
-    if (timer) rd_timer_mark(c, timer, "blend irradiance");
-    push.params.x = 1;
+    /* distance first: the irradiance blend re-classifies probes, and both must see the
+     * classification the trace used */
+    push.params = (pc_uvec4){1, 0, 0, 0};
     rd_cmd_dispatch(c, &d->blend, &push, probes, 1, 1);
     rd_cmd_barrier(c);
     if (timer) rd_timer_mark(c, timer, "blend distance");
+    push.params.x = 0;
+    rd_cmd_dispatch(c, &d->blend, &push, probes, 1, 1);
+    rd_cmd_barrier(c);
+    if (timer) rd_timer_mark(c, timer, "blend irradiance");
     push.params.x = 0;
     rd_cmd_dispatch(c, &d->border, &push, (probes * 4 * (IRR_SIDE - 1) + PC_WG_1D - 1) / PC_WG_1D, 1, 1);
     push.params.x = 1;

@@ -1,5 +1,5 @@
 /* ddgi.h: the DDGI probe volume (Majercik et al. 2019) on the GPU: grid placement, probe
- * atlases, and the per-update passes (trace, shade, blend irradiance, blend distance,
+ * atlases, and the per-update passes (trace, shade, blend distance, blend irradiance,
  * borders). The renderer records an update before shading a frame that uses GI.
  */
 #ifndef RD_DDGI_H
@@ -43,7 +43,8 @@ rd_vk_result rd_ddgi_reset(rd_ddgi *d, char *err, size_t errlen);
 /* Chooses the next update's random rotation; call before writing pc_globals for it. */
 void rd_ddgi_begin_update(rd_ddgi *d);
 /* Records one probe update. globals must hold d->vol as set by rd_ddgi_begin_update.
- * Timer marks: "probe trace", "probe shade", "blend irradiance", "blend distance", "borders". */
+ * Timer marks: "probe trace", "probe shade", "blend distance", "blend irradiance", "borders".
+ * Off probes (inside geometry) trace PC_DDGI_INACTIVE_RAYS rays and are not shaded or blended. */
 void rd_ddgi_record_update(rd_ddgi *d, rd_cmd *c, rd_timer *timer, VkDeviceAddress globals,
                            VkDeviceAddress counters);
 /* Call after the update's command buffer was submitted. */

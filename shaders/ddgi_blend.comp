@@ -28,7 +28,12 @@ void main()
     uvec2 t = gl_LocalInvocationID.xy;
     bool mine = all(lessThan(t, uvec2(interior)));
     vec3 texel_dir = oct_texel_dir(min(t, uvec2(interior - 1u)), interior);
-    uint n = vol.counts.w;
+    /* the classification as the trace saw it (the distance blend runs first, the irradiance
+     * blend updates the classification last) */
+    bool probe_on = ddgi_probe_active(vol, probe);
+    if (!probe_on && !irradiance) return; /* whole workgroup: an off probe keeps its atlas */
+    uint n = probe_on ? vol.counts.w : min(vol.counts.w, PC_DDGI_INACTIVE_RAYS);
+    if (!probe_on) mine = false;         /* only re-classified, not blended */
     uint lid = gl_LocalInvocationIndex;
     uint threads = gl_WorkGroupSize.x * gl_WorkGroupSize.y;
     if (lid == 0u) s_backfaces = 0u;
@@ -39,20 +44,19 @@ void main()
     for (uint base = 0u; base < n; base += CHUNK) {
         barrier();
         for (uint i = lid; i < CHUNK && base + i < n; i += threads) {
-            s_ray[i] = DdgiRayRef(vol.rays).v[probe * n + base + i];
+            s_ray[i] = DdgiRayRef(vol.rays).v[probe * vol.counts.w + base + i];
             s_dir[i] = ddgi_ray_dir(vol, base + i);
         }
         barrier();
         uint count = min(CHUNK, n - base);
+        if (irradiance && lid == 0u) /* classification: back faces among the traced rays */
+            for (uint i = 0u; i < count; i++) s_backfaces += s_ray[i].w < 0.0 ? 1u : 0u;
         if (!mine) continue;
         for (uint i = 0u; i < count; i++) {
             vec4 r = s_ray[i];
             float c = dot(texel_dir, s_dir[i]);
             if (irradiance) {
-                if (r.w < 0.0) { /* back face: no irradiance */
-                    if (t == uvec2(0u)) atomicAdd(s_backfaces, 1u);
-                    continue;
-                }
+                if (r.w < 0.0) continue; /* back face: no irradiance */
                 float w = max(0.0, c);
                 sum += r.rgb * w;
                 wsum += w;

@@ -20,7 +20,8 @@ void main()
     pc_ddgi_volume vol = g.ddgi;
     uint ray = gl_GlobalInvocationID.x, probe = gl_GlobalInvocationID.y;
     uint shadow_rays = 0u;
-    if (ray < vol.counts.w && probe < ddgi_probe_count(vol)) {
+    /* inactive probes are never sampled: nothing to shade */
+    if (ray < vol.counts.w && probe < ddgi_probe_count(vol) && ddgi_probe_active(vol, probe)) {
         uint slot = probe * vol.counts.w + ray;
         vec4 r = DdgiRayRef(vol.rays).v[slot];
         uvec4 rec = HitRef(pc.buf0).v[slot];

@@ -4,6 +4,7 @@
  * registers). Writes per ray: hits[] = (tri, instance, u bits, v bits) and rays[].w = hit
  * distance (1e27 for a miss, -0.2 t for a back face of a single-sided surface, which marks a
  * probe that may sit inside geometry). ddgi_shade.comp fills in the radiance.
+ * Inactive probes trace only their first PC_DDGI_INACTIVE_RAYS rays (for re-classification).
  * push: globals, buf0 = uvec4 hits[], buf1 = pc_counters. */
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
@@ -19,7 +20,9 @@ void main()
     pc_ddgi_volume vol = g.ddgi;
     uint ray = gl_GlobalInvocationID.x, probe = gl_GlobalInvocationID.y;
     uint rays = 0u;
-    if (ray < vol.counts.w && probe < ddgi_probe_count(vol)) {
+    bool wanted = ray < vol.counts.w && probe < ddgi_probe_count(vol) &&
+                  (ray < PC_DDGI_INACTIVE_RAYS || ddgi_probe_active(vol, probe));
+    if (wanted) {
         uint slot = probe * vol.counts.w + ray;
         vec3 org = ddgi_probe_position(vol, probe);
         vec3 dir = ddgi_ray_dir(vol, ray);

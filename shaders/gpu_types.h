@@ -200,6 +200,10 @@ PC_END(pc_view);
 #define PC_DDGI_DIST_INTERIOR 16u /* distance texels per side, without border */
 #define PC_DDGI_MAX_RAYS 1024u
 #define PC_DDGI_PROBE_ACTIVE 1u   /* probe_data.w bit: probe outside geometry, sampled */
+/* An inactive (off) probe traces only this many of its rays, enough to notice when the
+ * geometry around it changes (2021 paper: off probes trace a few fixed rays), and is
+ * neither shaded nor blended. */
+#define PC_DDGI_INACTIVE_RAYS 32u
 
 /* origin: xyz position of probe (0,0,0), w = max ray distance for distance blending;
  * spacing: xyz grid spacing, w = 1 / (1 - hysteresis) unused (0);

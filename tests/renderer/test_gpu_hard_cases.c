@@ -206,6 +206,12 @@ static void test_thick_walls_probes(void)
     }
     CHECKF(inside > 0 && off == inside, "%u of %u probes inside the wall switched off", off, inside);
     CHECKF(off_outside == 0, "%u probes outside the wall switched off", off_outside);
+    /* off probes trace only a few rays and are not shaded: the next update costs less */
+    fs.gi_updates = 1;
+    CHECK(rd_renderer_render(&r, &gs, &cam, &fs, err, sizeof err) == RD_VK_OK);
+    unsigned expect = (n - off) * gi.rays + off * PC_DDGI_INACTIVE_RAYS;
+    CHECKF(r.stats.rays.probe_rays == expect, "probe rays %u, expected %u", r.stats.rays.probe_rays,
+           expect);
     free(probes);
     rd_renderer_destroy(&r);
     rd_gpu_scene_destroy(&vk, &gs);
