@@ -54,7 +54,8 @@ static void serve_usage(FILE *f)
         "device)\n"
         "  --max-fps N            frame rate cap while something changes (default 30; 15 on CPU)\n"
         "  --quality-interactive Q, --quality-still Q  JPEG qualities (default 60 and 90)\n"
-        "  --gi off|classic|ddgi  global illumination (default ddgi)\n"
+        "  --gi off|classic|ddgi|pathtrace  global illumination (default ddgi; pathtrace\n"
+        "                         accumulates reference samples while nothing changes)\n"
         "  --probes X,Y,Z         probe counts (default: fitted to the scene)\n"
         "  --probe-spacing S      probe spacing in metres\n"
         "  --rays N               rays per probe per update (default 256; 64 on CPU)\n"
@@ -211,8 +212,10 @@ static int parse(int argc, char **argv, serve_args *a)
                 s->gi_mode = PC_GI_CLASSIC;
             else if (strcmp(v, "ddgi") == 0)
                 s->gi_mode = PC_GI_DDGI;
+            else if (strcmp(v, "pathtrace") == 0)
+                s->gi_mode = SRV_GI_PATHTRACE;
             else {
-                fprintf(stderr, "probecast serve: --gi expects off, classic or ddgi\n");
+                fprintf(stderr, "probecast serve: --gi expects off, classic, ddgi or pathtrace\n");
                 return 2;
             }
         } else if (IS("--probes")) {
