@@ -217,3 +217,24 @@ void rd_mat4_transform_normal(const float m[16], const float n[3], float out[3])
                 narrow((cof[1][0] * x + cof[1][1] * y + cof[1][2] * z) * s),
                 narrow((cof[2][0] * x + cof[2][1] * y + cof[2][2] * z) * s));
 }
+
+void rd_mat3_cols_to_quat(const float cols[3][3], float q[4])
+{
+    float m00 = cols[0][0], m01 = cols[1][0], m02 = cols[2][0];
+    float m10 = cols[0][1], m11 = cols[1][1], m12 = cols[2][1];
+    float m20 = cols[0][2], m21 = cols[1][2], m22 = cols[2][2];
+    float tr = m00 + m11 + m22;
+    if (tr > 0) {
+        float s = sqrtf(tr + 1.0f) * 2;
+        q[3] = 0.25f * s, q[0] = (m21 - m12) / s, q[1] = (m02 - m20) / s, q[2] = (m10 - m01) / s;
+    } else if (m00 > m11 && m00 > m22) {
+        float s = sqrtf(1.0f + m00 - m11 - m22) * 2;
+        q[3] = (m21 - m12) / s, q[0] = 0.25f * s, q[1] = (m01 + m10) / s, q[2] = (m02 + m20) / s;
+    } else if (m11 > m22) {
+        float s = sqrtf(1.0f + m11 - m00 - m22) * 2;
+        q[3] = (m02 - m20) / s, q[0] = (m01 + m10) / s, q[1] = 0.25f * s, q[2] = (m12 + m21) / s;
+    } else {
+        float s = sqrtf(1.0f + m22 - m00 - m11) * 2;
+        q[3] = (m10 - m01) / s, q[0] = (m02 + m20) / s, q[1] = (m12 + m21) / s, q[2] = 0.25f * s;
+    }
+}

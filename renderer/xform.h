@@ -29,6 +29,9 @@ void rd_mat4_mul(float out[16], const float a[16], const float b[16]);
 /* T * R * S as glTF composes a node's local matrix. q = (x, y, z, w) is normalised here; a
  * zero or non-finite quaternion gives no rotation. */
 void rd_mat4_from_trs(float out[16], const float t[3], const float q[4], const float s[3]);
+/* Quaternion (x, y, z, w) of a rotation matrix given by its three columns (Shoemake's
+ * trace-based method, robust for every rotation angle). */
+void rd_mat3_cols_to_quat(const float cols[3][3], float q[4]);
 /* General inverse. Returns false (out untouched) when m is singular or not finite. */
 bool rd_mat4_inverse(float out[16], const float m[16]);
 /* Determinant of the upper-left 3x3 (negative: the transform mirrors, flipping winding). */

@@ -1,6 +1,7 @@
 /* api_json.c: strict JSON parsing of API bodies and viewer messages, and JSON views of the
  * scene state. See api_json.h for the contract and protocol/openapi.yaml for the documents. */
 #include "api_json.h"
+#include "renderer/xform.h"
 
 #include <ctype.h>
 #include <math.h>
@@ -476,24 +477,8 @@ static void basis_to_quat(const float fwd[3], const float up[3], float q[4])
     float z[3] = {-fwd[0], -fwd[1], -fwd[2]};
     float x[3] = {up[1] * z[2] - up[2] * z[1], up[2] * z[0] - up[0] * z[2],
                   up[0] * z[1] - up[1] * z[0]};
-    /* m[row][col], columns x, up, z */
-    float m00 = x[0], m01 = up[0], m02 = z[0];
-    float m10 = x[1], m11 = up[1], m12 = z[1];
-    float m20 = x[2], m21 = up[2], m22 = z[2];
-    float tr = m00 + m11 + m22;
-    if (tr > 0) {
-        float s = sqrtf(tr + 1.0f) * 2;
-        q[3] = 0.25f * s, q[0] = (m21 - m12) / s, q[1] = (m02 - m20) / s, q[2] = (m10 - m01) / s;
-    } else if (m00 > m11 && m00 > m22) {
-        float s = sqrtf(1.0f + m00 - m11 - m22) * 2;
-        q[3] = (m21 - m12) / s, q[0] = 0.25f * s, q[1] = (m01 + m10) / s, q[2] = (m02 + m20) / s;
-    } else if (m11 > m22) {
-        float s = sqrtf(1.0f + m11 - m00 - m22) * 2;
-        q[3] = (m02 - m20) / s, q[0] = (m01 + m10) / s, q[1] = 0.25f * s, q[2] = (m12 + m21) / s;
-    } else {
-        float s = sqrtf(1.0f + m22 - m00 - m11) * 2;
-        q[3] = (m10 - m01) / s, q[0] = (m02 + m20) / s, q[1] = (m12 + m21) / s, q[2] = 0.25f * s;
-    }
+    const float cols[3][3] = {{x[0], x[1], x[2]}, {up[0], up[1], up[2]}, {z[0], z[1], z[2]}};
+    rd_mat3_cols_to_quat(cols, q);
 }
 
 cJSON *srv_json_camera(const srv_camera *c)

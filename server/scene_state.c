@@ -263,23 +263,7 @@ static void decompose(const float m[16], float t[3], float q[4], float s[3])
     for (int c = 0; c < 3; c++)
         for (int r = 0; r < 3; r++)
             cols[c][r] = s[c] != 0 ? cols[c][r] / s[c] : (c == r);
-    float m00 = cols[0][0], m01 = cols[1][0], m02 = cols[2][0];
-    float m10 = cols[0][1], m11 = cols[1][1], m12 = cols[2][1];
-    float m20 = cols[0][2], m21 = cols[1][2], m22 = cols[2][2];
-    float tr = m00 + m11 + m22;
-    if (tr > 0) {
-        float k = sqrtf(tr + 1.0f) * 2;
-        q[3] = 0.25f * k, q[0] = (m21 - m12) / k, q[1] = (m02 - m20) / k, q[2] = (m10 - m01) / k;
-    } else if (m00 > m11 && m00 > m22) {
-        float k = sqrtf(1.0f + m00 - m11 - m22) * 2;
-        q[3] = (m21 - m12) / k, q[0] = 0.25f * k, q[1] = (m01 + m10) / k, q[2] = (m02 + m20) / k;
-    } else if (m11 > m22) {
-        float k = sqrtf(1.0f + m11 - m00 - m22) * 2;
-        q[3] = (m02 - m20) / k, q[0] = (m01 + m10) / k, q[1] = 0.25f * k, q[2] = (m12 + m21) / k;
-    } else {
-        float k = sqrtf(1.0f + m22 - m00 - m11) * 2;
-        q[3] = (m10 - m01) / k, q[0] = (m02 + m20) / k, q[1] = (m12 + m21) / k, q[2] = 0.25f * k;
-    }
+    rd_mat3_cols_to_quat((const float(*)[3])cols, q);
 }
 
 bool srv_state_node_apply(srv_scene_state *st, uint32_t id, const srv_node_patch *p,
