@@ -59,28 +59,15 @@ typedef struct bvh_builder {
     bvh_bin bin[3][BVH_MAX_BINS];
 } bvh_builder;
 
-static uint32_t f2u(float f)
-{
-    uint32_t u;
-    memcpy(&u, &f, sizeof u);
-    return u;
-}
-
-static float u2f(uint32_t u)
-{
-    float f;
-    memcpy(&f, &u, sizeof f);
-    return f;
-}
 
 uint32_t rd_bvh_node_first(const pc_bvh_node *n)
 {
-    return f2u(n->bmin.w);
+    return pc_f2u(n->bmin.w);
 }
 
 uint32_t rd_bvh_node_count(const pc_bvh_node *n)
 {
-    return f2u(n->bmax.w);
+    return pc_f2u(n->bmax.w);
 }
 
 static void node_set(pc_bvh_node *n, const float lo[3], const float hi[3], uint32_t first,
@@ -92,8 +79,8 @@ static void node_set(pc_bvh_node *n, const float lo[3], const float hi[3], uint3
     n->bmax.x = hi[0];
     n->bmax.y = hi[1];
     n->bmax.z = hi[2];
-    n->bmin.w = u2f(first);
-    n->bmax.w = u2f(count);
+    n->bmin.w = pc_u2f(first);
+    n->bmax.w = pc_u2f(count);
 }
 
 /* ---- bounds ---------------------------------------------------------------------------- */
@@ -619,8 +606,8 @@ void rd_offset_ray_origin(const float p[3], const float n[3], float out[3])
         int32_t of = (s > -1e9f && s < 1e9f) ? (int32_t)s : 0; /* NaN normal -> no offset */
         /* Integer add on the bit pattern (in uint32 so wrap-around is defined); for a
          * negative p the offset is negated so the point still moves along n. */
-        uint32_t bits = f2u(p[a]) + (uint32_t)(p[a] < 0.0f ? -of : of);
-        out[a] = fabsf(p[a]) < origin ? p[a] + float_scale * n[a] : u2f(bits);
+        uint32_t bits = pc_f2u(p[a]) + (uint32_t)(p[a] < 0.0f ? -of : of);
+        out[a] = fabsf(p[a]) < origin ? p[a] + float_scale * n[a] : pc_u2f(bits);
     }
 }
 

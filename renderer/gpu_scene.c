@@ -26,13 +26,6 @@ static void *xcalloc(size_t n, size_t size)
     return p;
 }
 
-static inline float u2f(uint32_t u)
-{
-    float f;
-    memcpy(&f, &u, sizeof f);
-    return f;
-}
-
 static pc_vec4 v4(const float *p, float w)
 {
     return (pc_vec4){p[0], p[1], p[2], w};
@@ -149,7 +142,7 @@ static rd_vk_result build_blas(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, c
         for (uint32_t i = 0; i < bvh->node_count; i++) {
             pc_bvh_node n = bvh->nodes[i];
             uint32_t first = rd_bvh_node_first(&n), count = rd_bvh_node_count(&n);
-            n.bmin.w = u2f(first + (count ? tri_base : node_base));
+            n.bmin.w = pc_u2f(first + (count ? tri_base : node_base));
             nodes[node_base + i] = n;
         }
         for (uint32_t i = 0; i < bvh->prim_count; i++) {
@@ -162,9 +155,9 @@ static rd_vk_result build_blas(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, c
             const float *n = &mesh->normals[src * 9];
             const float *uv = &mesh->uvs[src * 6];
             pc_tri *t = &tris[tri_base + i];
-            t->v0 = v4(p, u2f(mat));
-            t->v1 = v4(p + 3, u2f(flags));
-            t->v2 = v4(p + 6, u2f(src));
+            t->v0 = v4(p, pc_u2f(mat));
+            t->v1 = v4(p + 3, pc_u2f(flags));
+            t->v2 = v4(p + 6, pc_u2f(src));
             pc_tri_attr *a = &attrs[tri_base + i];
             a->n0 = v4(n, 0), a->n1 = v4(n + 3, 0), a->n2 = v4(n + 6, 0);
             a->uv01 = (pc_vec4){uv[0], uv[1], uv[2], uv[3]};

@@ -34,6 +34,20 @@ typedef float pc_f32;
 typedef uint64_t pc_u64;
 #define PC_STRUCT(name) typedef struct name
 #define PC_END(name) name
+#include <string.h>
+/* The C side of GLSL's floatBitsToUint / uintBitsToFloat, for indices kept in w components. */
+static inline uint32_t pc_f2u(float f)
+{
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    return u;
+}
+static inline float pc_u2f(uint32_t u)
+{
+    float f;
+    memcpy(&f, &u, sizeof f);
+    return f;
+}
 #endif
 
 /* ---- workgroup sizes ------------------------------------------------------------------- */

@@ -45,19 +45,6 @@ static float rng_range(float a, float b)
     return a + (b - a) * rng_f();
 }
 
-static uint32_t f2u(float f)
-{
-    uint32_t u;
-    memcpy(&u, &f, sizeof u);
-    return u;
-}
-
-static float u2f(uint32_t u)
-{
-    float f;
-    memcpy(&f, &u, sizeof f);
-    return f;
-}
 
 typedef struct mesh {
     uint32_t n;
@@ -271,7 +258,7 @@ static uint32_t compare(const char *what, const float *rays, const gpu_hit *g, c
         const float *a = rays + 8 * r, *b = a + 4;
         cpu_hit c = cpu_trace(meshes, inst, a, b, a[3], b[3], flags);
         bool gh = g[r].hit != 0;
-        float gt = u2f(g[r].t), gu = u2f(g[r].u), gv = u2f(g[r].v);
+        float gt = pc_u2f(g[r].t), gu = pc_u2f(g[r].u), gv = pc_u2f(g[r].v);
         uint32_t gtri = PC_INVALID;
         bool valid_index = true;
         if (gh) {
@@ -279,7 +266,7 @@ static uint32_t compare(const char *what, const float *rays, const gpu_hit *g, c
             if (valid_index) {
                 const mesh *m = &meshes[inst[g[r].instance].mesh];
                 valid_index = g[r].tri >= m->tri_base && g[r].tri < m->tri_base + m->n;
-                gtri = f2u(tris[g[r].tri].v2.w);
+                gtri = pc_f2u(tris[g[r].tri].v2.w);
                 valid_index = valid_index && gtri < m->n;
             }
         }
@@ -369,16 +356,16 @@ int main(void)
         for (uint32_t i = 0; i < me->bvh.node_count; i++) {
             pc_bvh_node n = me->bvh.nodes[i];
             uint32_t first = rd_bvh_node_first(&n), count = rd_bvh_node_count(&n);
-            n.bmin.w = u2f(first + (count ? me->tri_base : me->node_base));
+            n.bmin.w = pc_u2f(first + (count ? me->tri_base : me->node_base));
             blas[me->node_base + i] = n;
         }
         for (uint32_t k = 0; k < me->n; k++) {
             uint32_t src = me->bvh.prim_index[k];
             const float *p = me->pos + 9 * src;
             pc_tri *t = &tris[me->tri_base + k];
-            *t = (pc_tri){{p[0], p[1], p[2], u2f(0)},
-                          {p[3], p[4], p[5], u2f(me->flags[src])},
-                          {p[6], p[7], p[8], u2f(src)}};
+            *t = (pc_tri){{p[0], p[1], p[2], pc_u2f(0)},
+                          {p[3], p[4], p[5], pc_u2f(me->flags[src])},
+                          {p[6], p[7], p[8], pc_u2f(src)}};
         }
     }
 
@@ -441,8 +428,8 @@ int main(void)
     CHECK(rd_bvh_build(&tlas_bvh, tlo, thi, INSTANCES, &(rd_bvh_options){.max_leaf = 1}));
     CHECK(tlas_bvh.node_count == 2 * INSTANCES - 1);
     pc_bvh_node one_leaf = tlas_bvh.nodes[0];
-    one_leaf.bmin.w = u2f(0);
-    one_leaf.bmax.w = u2f(INSTANCES);
+    one_leaf.bmin.w = pc_u2f(0);
+    one_leaf.bmax.w = pc_u2f(INSTANCES);
     const uint32_t identity[INSTANCES] = {0, 1, 2, 3, 4};
 
     float *rays = malloc(RAYS * 8 * sizeof(float));
