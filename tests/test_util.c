@@ -2,6 +2,7 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 #include <sys/stat.h>
 
 int test_failures = 0;
@@ -27,4 +28,36 @@ const char *test_tmp_path(const char *name)
     slot = (slot + 1) % 4;
     snprintf(path[slot], sizeof path[slot], "test-output/%s", name);
     return path[slot];
+}
+
+/* A cube [-1,1]^3 with each face split into g x g cells of two triangles, outward CCW. */
+uint32_t test_make_cube(float *pos, int g)
+{
+    uint32_t n = 0;
+    for (int axis = 0; axis < 3; axis++) {
+        for (int side = -1; side <= 1; side += 2) {
+            int u = (axis + 1) % 3, v = (axis + 2) % 3;
+            for (int i = 0; i < g; i++) {
+                for (int j = 0; j < g; j++) {
+                    float p[4][3];
+                    for (int c = 0; c < 4; c++) {
+                        int ii = i + (c == 1 || c == 2), jj = j + (c >= 2);
+                        p[c][axis] = (float)side;
+                        p[c][u] = -1.0f + 2.0f * (float)ii / (float)g;
+                        p[c][v] = -1.0f + 2.0f * (float)jj / (float)g;
+                    }
+                    /* (u, v, axis) is right-handed: CCW in (u, v) faces +axis */
+                    int order[2][3] = {{0, 1, 2}, {0, 2, 3}};
+                    for (int t = 0; t < 2; t++) {
+                        for (int k = 0; k < 3; k++) {
+                            int kk = side > 0 ? order[t][k] : order[t][2 - k];
+                            memcpy(pos + 9 * n + 3 * k, p[kk], 3 * sizeof(float));
+                        }
+                        n++;
+                    }
+                }
+            }
+        }
+    }
+    return n;
 }

@@ -3,6 +3,7 @@
 #ifndef PC_TEST_UTIL_H
 #define PC_TEST_UTIL_H
 
+#include <stdint.h>
 #include <stdio.h>
 
 extern int test_failures;
@@ -33,6 +34,10 @@ int test_close_rel(double a, double b, double tol);
 /* Prints a summary and returns the process exit code (0 when every check passed and at
  * least one ran). */
 int test_finish(void);
+/* A cube [-1,1]^3 with each face split into g x g cells of two triangles, counter-clockwise
+ * seen from outside; writes 9 floats per triangle to pos (room for 6*g*g*2 triangles) and
+ * returns the triangle count. */
+uint32_t test_make_cube(float *pos, int g);
 /* Writes a scratch path under the build tree's test output folder. */
 const char *test_tmp_path(const char *name);
 

@@ -610,38 +610,6 @@ static void test_depth_cap(void)
     free(pos);
 }
 
-/* A cube [-1,1]^3 with each face split into g x g cells of two triangles, outward CCW. */
-static uint32_t make_cube(float *pos, int g)
-{
-    uint32_t n = 0;
-    for (int axis = 0; axis < 3; axis++) {
-        for (int side = -1; side <= 1; side += 2) {
-            int u = (axis + 1) % 3, v = (axis + 2) % 3;
-            for (int i = 0; i < g; i++) {
-                for (int j = 0; j < g; j++) {
-                    float p[4][3];
-                    for (int c = 0; c < 4; c++) {
-                        int ii = i + (c == 1 || c == 2), jj = j + (c >= 2);
-                        p[c][axis] = (float)side;
-                        p[c][u] = -1.0f + 2.0f * (float)ii / (float)g;
-                        p[c][v] = -1.0f + 2.0f * (float)jj / (float)g;
-                    }
-                    /* (u, v, axis) is right-handed: CCW in (u, v) faces +axis */
-                    int order[2][3] = {{0, 1, 2}, {0, 2, 3}};
-                    for (int t = 0; t < 2; t++) {
-                        for (int k = 0; k < 3; k++) {
-                            int kk = side > 0 ? order[t][k] : order[t][2 - k];
-                            memcpy(pos + 9 * n + 3 * k, p[kk], 3 * sizeof(float));
-                        }
-                        n++;
-                    }
-                }
-            }
-        }
-    }
-    return n;
-}
-
 static int watertight_rays(const char *what, const rd_bvh *bvh, const float *pos, uint32_t n,
                            const float o[3], const float target[3], bool expect_front)
 {
@@ -670,7 +638,7 @@ static void test_watertight(void)
 {
     const int g = 8;
     float *pos = tris_alloc(6 * g * g * 2);
-    uint32_t n = make_cube(pos, g);
+    uint32_t n = test_make_cube(pos, g);
     rd_bvh bvh;
     if (!build_checked("cube", &bvh, pos, n, NULL)) {
         free(pos);
@@ -877,7 +845,7 @@ static void test_axis_aligned(void)
     float *pos = tris_alloc(cells * cells * cells * 12);
     uint32_t n = 0;
     float cube[6 * 8 * 8 * 2 * 9];
-    uint32_t cn = make_cube(cube, 1);
+    uint32_t cn = test_make_cube(cube, 1);
     for (int i = 0; i < cells; i++)
         for (int j = 0; j < cells; j++)
             for (int k = 0; k < cells; k++) {

@@ -86,29 +86,7 @@ static void make_cube(mesh *m)
     m->n = 6 * g * g * 2;
     m->pos = malloc(m->n * 9 * sizeof(float));
     m->flags = calloc(m->n, sizeof(uint32_t));
-    uint32_t n = 0;
-    for (int axis = 0; axis < 3; axis++) {
-        for (int side = -1; side <= 1; side += 2) {
-            int u = (axis + 1) % 3, v = (axis + 2) % 3;
-            for (int i = 0; i < g; i++) {
-                for (int j = 0; j < g; j++) {
-                    float p[4][3];
-                    for (int c = 0; c < 4; c++) {
-                        int ii = i + (c == 1 || c == 2), jj = j + (c >= 2);
-                        p[c][axis] = (float)side;
-                        p[c][u] = -1.0f + 2.0f * (float)ii / (float)g;
-                        p[c][v] = -1.0f + 2.0f * (float)jj / (float)g;
-                    }
-                    const int order[2][3] = {{0, 1, 2}, {0, 2, 3}};
-                    for (int t = 0; t < 2; t++, n++)
-                        for (int k = 0; k < 3; k++) {
-                            int kk = side > 0 ? order[t][k] : order[t][2 - k];
-                            memcpy(m->pos + 9 * n + 3 * k, p[kk], 3 * sizeof(float));
-                        }
-                }
-            }
-        }
-    }
+    test_make_cube(m->pos, g);
     m->flags[3] = PC_TRI_ALPHA_MASK;
 }
 
