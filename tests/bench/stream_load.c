@@ -22,6 +22,7 @@
 
 #include "protocol/stream.h"
 #include "tests/server/http_client.h"
+#include "tests/server/socket_util.h"
 #include "tests/server/ws_client.h"
 
 #define MAX_VIEWERS 200
@@ -30,13 +31,6 @@
 static char http_host[64] = "127.0.0.1", ws_host[64] = "127.0.0.1";
 static unsigned http_port = 8080, ws_port = 8081;
 static const char *token = NULL;
-
-static double now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
 
 typedef struct viewer {
     int index;
@@ -70,7 +64,7 @@ static bool next_frame(viewer *v, int timeout_ms, proto_frame_header *h)
         if (proto_frame_header_unpack(data, len, h, NULL) != PROTO_OK) return false;
         ack(v, h->frame_id);
         if (atomic_load(&v->measuring)) {
-            double t = now_ms();
+            double t = pc_now_ms();
             if (!v->frames) v->first_ms = t;
             v->last_ms = t;
             v->frames++;
@@ -99,18 +93,18 @@ static void *viewer_main(void *arg)
             msg, sizeof msg,
             "{\"type\":\"camera\",\"seq\":%u,\"position\":[%.4f,1.2,%.4f],\"target\":[0,0.9,0]}",
             seq, 3.6 * sin(a), 3.6 * cos(a));
-        double t0 = now_ms();
+        double t0 = pc_now_ms();
         if (pc_ws_send_text(&v->ws, msg) != 0) break;
         bool got = false;
         while (!atomic_load(&v->stop) && !got) {
             if (!next_frame(v, 500, &h)) {
-                if (now_ms() - t0 > 60000) break;
+                if (pc_now_ms() - t0 > 60000) break;
                 continue;
             }
             got = h.input_seq >= seq;
         }
         if (got && atomic_load(&v->measuring) && v->latency_count < MAX_SAMPLES)
-            v->latency[v->latency_count++] = now_ms() - t0;
+            v->latency[v->latency_count++] = pc_now_ms() - t0;
     }
     return NULL;
 }
@@ -204,10 +198,10 @@ static bool run(unsigned w, unsigned h, unsigned nviewers, double seconds, doubl
     api("GET", "/v1/stats", NULL, &r);
     double frames0 = json_number(r.body, "\"frames_rendered\":");
     pc_http_response_free(&r);
-    double t0 = now_ms();
+    double t0 = pc_now_ms();
     ts = (struct timespec){(time_t)seconds, (long)((seconds - floor(seconds)) * 1e9)};
     nanosleep(&ts, NULL);
-    double elapsed = (now_ms() - t0) / 1000.0;
+    double elapsed = (pc_now_ms() - t0) / 1000.0;
     api("GET", "/v1/stats", NULL, &r);
     double frames1 = json_number(r.body, "\"frames_rendered\":");
     out->gpu_ms = json_number(r.body, "\"gpu_ms_total\":");

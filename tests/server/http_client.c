@@ -1,5 +1,6 @@
 /* http_client.c: a minimal HTTP/1.1 client for tests and benchmarks. */
 #include "http_client.h"
+#include "socket_util.h"
 
 #include <errno.h>
 #include <netdb.h>
@@ -13,44 +14,12 @@
 #include <time.h>
 #include <unistd.h>
 
-static double now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
-
-static int send_all(int fd, const void *data, size_t len)
-{
-    const char *p = data;
-    while (len > 0) {
-        ssize_t n = send(fd, p, len, MSG_NOSIGNAL);
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) return -1;
-        p += n;
-        len -= (size_t)n;
-    }
-    return 0;
-}
-
 int pc_http(const char *host, unsigned port, const char *method, const char *path,
             const char *headers, const void *body, size_t body_len, pc_http_response *out,
             int timeout_ms)
 {
     memset(out, 0, sizeof *out);
-    char service[16];
-    snprintf(service, sizeof service, "%u", port);
-    struct addrinfo hints = {.ai_socktype = SOCK_STREAM}, *res = NULL;
-    if (getaddrinfo(host, service, &hints, &res) != 0) return 0;
-    int fd = -1;
-    for (struct addrinfo *a = res; a && fd < 0; a = a->ai_next) {
-        fd = socket(a->ai_family, a->ai_socktype | SOCK_CLOEXEC, a->ai_protocol);
-        if (fd >= 0 && connect(fd, a->ai_addr, a->ai_addrlen) != 0) {
-            close(fd);
-            fd = -1;
-        }
-    }
-    freeaddrinfo(res);
+    int fd = pc_dial(host, port, timeout_ms);
     if (fd < 0) return 0;
     char req[8192];
     int n = snprintf(req, sizeof req, "%s %s HTTP/1.1\r\nHost: %s:%u\r\nConnection: close\r\n%s",
@@ -60,13 +29,13 @@ int pc_http(const char *host, unsigned port, const char *method, const char *pat
         n += snprintf(req + n, sizeof req - (size_t)n, "Content-Length: %zu\r\n", body_len);
     n += snprintf(req + n, sizeof req - (size_t)n, "\r\n");
     /* a send error after the headers is fine: the server may answer early and close */
-    if (send_all(fd, req, (size_t)n) == 0 && body && body_len) send_all(fd, body, body_len);
+    if (pc_send_all(fd, req, (size_t)n) == 0 && body && body_len) pc_send_all(fd, body, body_len);
     size_t cap = 65536, len = 0;
     char *buf = malloc(cap + 1);
     if (!buf) abort();
-    double deadline = now_ms() + timeout_ms;
+    double deadline = pc_now_ms() + timeout_ms;
     for (;;) {
-        int wait = (int)(deadline - now_ms());
+        int wait = (int)(deadline - pc_now_ms());
         if (wait <= 0) break;
         struct pollfd p = {.fd = fd, .events = POLLIN};
         int r = poll(&p, 1, wait);

@@ -10,6 +10,7 @@
 
 #include "http_client.h"
 #include "protocol/stream.h"
+#include "socket_util.h"
 #include "ws_client.h"
 
 typedef struct pc_daemon {
@@ -56,7 +57,6 @@ uint8_t *pc_make_glb(float box_x, size_t *size);
 /* The same scene as a self-contained .gltf (data: URI buffer). Caller frees. */
 char *pc_make_gltf(float box_x);
 
-double pc_now_ms(void);
 void pc_sleep_ms(int ms);
 
 #endif

@@ -1,5 +1,6 @@
 /* ws_client.c: a minimal WebSocket client for tests and benchmarks. */
 #include "ws_client.h"
+#include "socket_util.h"
 
 #include <errno.h>
 #include <netdb.h>
@@ -13,52 +14,6 @@
 #include <time.h>
 #include <unistd.h>
 
-static double now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
-
-static int dial(const char *host, unsigned port, int timeout_ms)
-{
-    char service[16];
-    snprintf(service, sizeof service, "%u", port);
-    struct addrinfo hints = {.ai_socktype = SOCK_STREAM}, *res = NULL;
-    if (getaddrinfo(host, service, &hints, &res) != 0) return -1;
-    int fd = -1;
-    for (struct addrinfo *a = res; a && fd < 0; a = a->ai_next) {
-        fd = socket(a->ai_family, a->ai_socktype | SOCK_CLOEXEC, a->ai_protocol);
-        if (fd < 0) continue;
-        struct timeval tv = {timeout_ms / 1000, (timeout_ms % 1000) * 1000};
-        setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
-        if (connect(fd, a->ai_addr, a->ai_addrlen) != 0) {
-            close(fd);
-            fd = -1;
-        }
-    }
-    freeaddrinfo(res);
-    if (fd >= 0) {
-        int one = 1;
-        setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
-    }
-    return fd;
-}
-
-static int send_all(int fd, const void *data, size_t len)
-{
-    const char *p = data;
-    while (len > 0) {
-        ssize_t n = send(fd, p, len, MSG_NOSIGNAL);
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) return -1;
-        p += n;
-        len -= (size_t)n;
-    }
-    return 0;
-}
-
-/* Reads more bytes into ws->buf; 1 read, 0 timeout, -1 closed or error. */
 static int fill(pc_ws *ws, double deadline)
 {
     if (ws->len == ws->cap) {
@@ -67,7 +22,7 @@ static int fill(pc_ws *ws, double deadline)
         if (!ws->buf) abort();
     }
     for (;;) {
-        double left = deadline - now_ms();
+        double left = deadline - pc_now_ms();
         if (left < 0) return 0;
         int wait = (int)(left + 0.999);
         struct pollfd p = {.fd = ws->fd, .events = POLLIN};
@@ -87,7 +42,7 @@ int pc_ws_connect(pc_ws *ws, const char *host, unsigned port, const char *path,
                   const char *extra_headers, int timeout_ms)
 {
     memset(ws, 0, sizeof *ws);
-    ws->fd = dial(host, port, timeout_ms);
+    ws->fd = pc_dial(host, port, timeout_ms);
     if (ws->fd < 0) return -1;
     char req[4096];
     int n = snprintf(
@@ -95,8 +50,8 @@ int pc_ws_connect(pc_ws *ws, const char *host, unsigned port, const char *path,
         "GET %s HTTP/1.1\r\nHost: %s:%u\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
         "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n%s\r\n",
         path, host, port, extra_headers ? extra_headers : "");
-    if (n <= 0 || (size_t)n >= sizeof req || send_all(ws->fd, req, (size_t)n) != 0) return -1;
-    double deadline = now_ms() + timeout_ms;
+    if (n <= 0 || (size_t)n >= sizeof req || pc_send_all(ws->fd, req, (size_t)n) != 0) return -1;
+    double deadline = pc_now_ms() + timeout_ms;
     for (;;) {
         uint8_t *end = ws->len >= 4 ? memmem(ws->buf, ws->len, "\r\n\r\n", 4) : NULL;
         if (end) {
@@ -136,7 +91,7 @@ int pc_ws_send_frame(pc_ws *ws, int opcode, const void *data, size_t len, bool f
     memcpy(frame, hdr, h);
     for (size_t i = 0; i < len; i++)
         frame[h + i] = ((const uint8_t *)data)[i] ^ mask[i & 3];
-    int r = send_all(ws->fd, frame, h + len);
+    int r = pc_send_all(ws->fd, frame, h + len);
     free(frame);
     return r;
 }
@@ -178,7 +133,7 @@ static int parse_frame(pc_ws *ws, int *opcode, bool *fin, uint8_t **payload, siz
 
 int pc_ws_recv(pc_ws *ws, int timeout_ms, uint8_t **data, size_t *len)
 {
-    double deadline = now_ms() + timeout_ms;
+    double deadline = pc_now_ms() + timeout_ms;
     if (ws->msg_done) { /* the previous message was returned: start a new one */
         ws->msg_len = 0;
         ws->msg_done = false;
