@@ -6,6 +6,25 @@
 #include "renderer/procedural.h"
 #include "test_util.h"
 
+bool test_vk_open(rd_vk *vk)
+{
+    char err[512] = "";
+    rd_vk_options opt = {0};
+    rd_vk_result r = rd_vk_create(vk, &opt, err, sizeof err);
+    CHECKF(r == RD_VK_OK, "%s", err);
+    if (r == RD_VK_OK)
+        printf("device: %s, validation %s\n", vk->device_name, vk->validation ? "on" : "off");
+    return r == RD_VK_OK;
+}
+
+int test_vk_close(rd_vk *vk)
+{
+    CHECKF(rd_vk_validation_messages(vk) == 0, "%u validation messages",
+           rd_vk_validation_messages(vk));
+    rd_vk_destroy(vk);
+    return test_finish();
+}
+
 float *test_render(rd_vk *vk, const test_render_desc *d, pc_view *view_out,
                    rd_frame_stats *stats_out)
 {

@@ -16,6 +16,13 @@ typedef struct test_render_desc {
     unsigned seed;
 } test_render_desc;
 
+/* Creates the device for a GPU test (the environment picks lavapipe and validation) and
+ * prints it; false after a failed CHECK. */
+bool test_vk_open(rd_vk *vk);
+/* Checks that the validation layer reported nothing, destroys the device and returns the
+ * test's exit status. */
+int test_vk_close(rd_vk *vk);
+
 /* Returns width*height*3 linear floats (caller frees) or NULL after a failed CHECK.
  * view_out (optional) receives the camera's pc_view; stats_out the frame statistics. */
 float *test_render(rd_vk *vk, const test_render_desc *d, pc_view *view_out,

@@ -239,18 +239,12 @@ static void test_debug_views(void)
 
 int main(void)
 {
-    rd_vk_options opt = {0};
-    rd_vk_result r = rd_vk_create(&vk, &opt, err, sizeof err);
-    CHECKF(r == RD_VK_OK, "%s", err);
-    if (r != RD_VK_OK) return test_finish();
+    if (!test_vk_open(&vk)) return test_finish();
     test_octahedral_and_rays();
     test_borders();
     test_furnace();
     test_thin_wall();
     test_determinism();
     test_debug_views();
-    CHECKF(rd_vk_validation_messages(&vk) == 0, "%u validation messages",
-           rd_vk_validation_messages(&vk));
-    rd_vk_destroy(&vk);
-    return test_finish();
+    return test_vk_close(&vk);
 }

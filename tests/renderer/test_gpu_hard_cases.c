@@ -259,11 +259,7 @@ static void test_moving(void)
 
 int main(void)
 {
-    char err[512] = "";
-    rd_vk_options opt = {0};
-    rd_vk_result r = rd_vk_create(&vk, &opt, err, sizeof err);
-    CHECKF(r == RD_VK_OK, "%s", err);
-    if (r != RD_VK_OK) return test_finish();
+    if (!test_vk_open(&vk)) return test_finish();
     unsigned n;
     const rd_hard_case *cases = rd_hard_cases(&n);
     for (unsigned i = 0; i < n; i++) printf("case %-13s expects: %s\n", cases[i].name, cases[i].expect);
@@ -277,7 +273,5 @@ int main(void)
     test_finite_and_lit("degenerate", 16, 3);
     test_mirrored();
     test_moving();
-    CHECKF(rd_vk_validation_messages(&vk) == 0, "%u validation messages", rd_vk_validation_messages(&vk));
-    rd_vk_destroy(&vk);
-    return test_finish();
+    return test_vk_close(&vk);
 }

@@ -191,19 +191,11 @@ static void test_texture(void)
 
 int main(void)
 {
-    char err[512] = "";
-    rd_vk_options opt = {0};
-    rd_vk_result r = rd_vk_create(&vk, &opt, err, sizeof err);
-    CHECKF(r == RD_VK_OK, "%s", err);
-    if (r != RD_VK_OK) return test_finish();
-    printf("device: %s, validation %s\n", vk.device_name, vk.validation ? "on" : "off");
+    if (!test_vk_open(&vk)) return test_finish();
     test_point_light("plane-point", 0);
     test_point_light("shadow", 1);
     test_directional();
     test_emissive();
     test_texture();
-    CHECKF(rd_vk_validation_messages(&vk) == 0, "%u validation messages",
-           rd_vk_validation_messages(&vk));
-    rd_vk_destroy(&vk);
-    return test_finish();
+    return test_vk_close(&vk);
 }
