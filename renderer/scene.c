@@ -172,6 +172,15 @@ uint32_t rd_scene_add_light(rd_scene *s, const rd_light *l)
     return i;
 }
 
+void rd_scene_remove_light(rd_scene *s, uint32_t index)
+{
+    if (index >= s->light_count) return;
+    free(s->lights[index].name);
+    memmove(&s->lights[index], &s->lights[index + 1],
+            (s->light_count - index - 1) * sizeof *s->lights);
+    s->light_count--;
+}
+
 uint32_t rd_scene_add_camera(rd_scene *s, const rd_camera *c)
 {
     uint32_t i = grow((void **)&s->cameras, &s->camera_count, sizeof *s->cameras);

@@ -123,6 +123,8 @@ uint32_t rd_scene_add_mesh(rd_scene *s, const char *name, uint32_t tri_count);
 uint32_t rd_scene_add_node(rd_scene *s, const rd_node *n);
 uint32_t rd_scene_add_light(rd_scene *s, const rd_light *l);
 uint32_t rd_scene_add_camera(rd_scene *s, const rd_camera *c);
+/* Removes light index (later lights move down by one); out-of-range indices are ignored. */
+void rd_scene_remove_light(rd_scene *s, uint32_t index);
 void rd_scene_warn(rd_scene *s, const char *fmt, ...);
 
 /* Fills zero-length normals of a mesh with its triangles' flat (geometric) normals. */

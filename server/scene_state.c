@@ -238,11 +238,9 @@ bool srv_state_light_delete(srv_scene_state *st, uint32_t id, srv_api_error *e)
         srv_api_fail(e, 404, SRV_ERR_NOT_FOUND, "There is no light with id %u.", id);
         return false;
     }
-    free(st->scene.lights[i].name);
     uint32_t rest = st->scene.light_count - (uint32_t)i - 1;
-    memmove(&st->scene.lights[i], &st->scene.lights[i + 1], rest * sizeof *st->scene.lights);
     memmove(&st->light_ids[i], &st->light_ids[i + 1], rest * sizeof *st->light_ids);
-    st->scene.light_count--;
+    rd_scene_remove_light(&st->scene, (uint32_t)i);
     return true;
 }
 

@@ -270,8 +270,33 @@ static void test_growth(void)
     rd_scene_destroy(&s);
 }
 
+/* Removing a light frees its name, keeps the others in order and ignores bad indices. */
+static void test_remove_light(void)
+{
+    rd_scene s;
+    rd_scene_init(&s);
+    const char *names[3] = {"a", "b", "c"};
+    for (int i = 0; i < 3; i++) {
+        rd_light l = {.name = (char *)names[i], .type = RD_LIGHT_POINT, .intensity = (float)i};
+        rd_scene_add_light(&s, &l);
+    }
+    rd_scene_remove_light(&s, 1);
+    CHECK(s.light_count == 2);
+    CHECK(strcmp(s.lights[0].name, "a") == 0 && strcmp(s.lights[1].name, "c") == 0);
+    CHECK(s.lights[1].intensity == 2.0f);
+    rd_scene_remove_light(&s, 7); /* out of range: nothing happens */
+    CHECK(s.light_count == 2);
+    rd_scene_remove_light(&s, 1);
+    rd_scene_remove_light(&s, 0);
+    CHECK(s.light_count == 0);
+    rd_light l = {.name = "d"};
+    CHECK(rd_scene_add_light(&s, &l) == 0); /* the array is still usable */
+    rd_scene_destroy(&s);
+}
+
 int main(void)
 {
+    test_remove_light();
     test_growth();
     test_init_destroy();
     test_xform();
