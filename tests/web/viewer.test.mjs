@@ -375,12 +375,13 @@ test('the rendering panel switches GI mode and the probe view', { timeout: 30000
   assert.equal(await pt.isDisabled(), false, 'the API offers gi_mode pathtrace');
   await pt.click();
   await until(async () => (await http('GET', '/v1/settings')).json.gi_mode === 'pathtrace', 'gi_mode pathtrace');
-  assert.equal(await pt.getAttribute('aria-checked'), 'true');
+  // the panel marks the mode once the server's answer arrives (it may trail the settings)
+  await until(async () => (await pt.getAttribute('aria-checked')) === 'true', 'path trace checked');
   await waitDrawnAfter((await state()).drawnId + 1);
   await shot('pathtrace.png');
   await page.locator('#gi-modes button[data-value=classic]').click();
   await until(async () => (await http('GET', '/v1/settings')).json.gi_mode === 'classic', 'gi_mode classic');
-  assert.equal(await page.locator('#gi-modes button[data-value=classic]').getAttribute('aria-checked'), 'true');
+  await until(async () => (await page.locator('#gi-modes button[data-value=classic]').getAttribute('aria-checked')) === 'true', 'classic checked');
   const idAt = (await state()).drawnId;
   await page.locator('#view-modes button[data-value=probes]').click();
   await until(async () => (await http('GET', '/v1/settings')).json.view === 'probes', 'view probes');
