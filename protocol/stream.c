@@ -64,7 +64,9 @@ void proto_frame_header_pack(const proto_frame_header *h, uint8_t out[PROTO_STRE
 {
     memset(out, 0, PROTO_STREAM_HEADER_SIZE);
     memcpy(out, PROTO_STREAM_MAGIC, 4);
-    put16(out + 4, PROTO_STREAM_VERSION);
+    put16(out + 4, h->version >= PROTO_STREAM_VERSION_MIN && h->version <= PROTO_STREAM_VERSION
+                       ? h->version
+                       : PROTO_STREAM_VERSION);
     put16(out + 6, PROTO_STREAM_HEADER_SIZE);
     put64(out + 8, h->frame_id);
     put64(out + 16, h->capture_us);
@@ -87,7 +89,8 @@ proto_result proto_frame_header_unpack(const uint8_t *msg, size_t len, proto_fra
     if (memcmp(msg, PROTO_STREAM_MAGIC, 4) != 0) return PROTO_ERR_MAGIC;
     h->version = get16(msg + 4);
     h->header_size = get16(msg + 6);
-    if (h->version != PROTO_STREAM_VERSION) return PROTO_ERR_VERSION;
+    if (h->version < PROTO_STREAM_VERSION_MIN || h->version > PROTO_STREAM_VERSION)
+        return PROTO_ERR_VERSION;
     if (h->header_size < PROTO_STREAM_HEADER_SIZE) return PROTO_ERR_HEADER_SIZE;
     if (len < h->header_size) return PROTO_ERR_SHORT;
     h->frame_id = get64(msg + 8);

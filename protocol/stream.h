@@ -1,19 +1,21 @@
-/* stream.h: the binary frame message of the WebSocket stream (/v1/stream), version 1.
+/* stream.h: the binary frame message of the WebSocket stream (/v1/stream), versions 1 and 2.
  *
  * Every binary message the server sends is one frame: a little-endian header of
- * header_size bytes (64 in version 1) followed by exactly jpeg_size bytes of baseline JPEG.
+ * header_size bytes (64) followed by exactly jpeg_size bytes of baseline JPEG. Versions 1 and 2
+ * share the layout; the version is the connection's protocol version (2: each connection owns a
+ * view and view_id says which one a frame shows; 1: everybody shares view 0).
  * Readers skip header_size bytes, so later versions may append fields without breaking them;
  * the version changes only when a field's meaning does. protocol/stream.md is the prose spec.
  *
  *   offset size field
  *        0    4 magic        "PCFR" (0x50 0x43 0x46 0x52)
- *        4    2 version      1
+ *        4    2 version      1 or 2
  *        6    2 header_size  64
- *        8    8 frame_id     increases by one per frame the server produces (per view)
+ *        8    8 frame_id     increases with every frame the server produces (over all views)
  *       16    8 capture_us   when rendering of the frame began (Unix time, microseconds)
  *       24    8 encode_us    when its JPEG encoding finished (Unix time, microseconds)
  *       32    8 send_us      when the server began sending it (Unix time, microseconds)
- *       40    4 view_id      the view the frame shows (0: the shared view)
+ *       40    4 view_id      the view the frame shows (0: the default view)
  *       44    4 width        pixels
  *       48    4 height       pixels
  *       52    4 input_seq    the last "seq" of this client's camera messages that the frame
@@ -31,7 +33,8 @@
 #include <stdint.h>
 
 #define PROTO_STREAM_MAGIC "PCFR"
-#define PROTO_STREAM_VERSION 1u
+#define PROTO_STREAM_VERSION 2u     /* the newest version */
+#define PROTO_STREAM_VERSION_MIN 1u /* the oldest still spoken */
 #define PROTO_STREAM_HEADER_SIZE 64u
 #define PROTO_STREAM_FLAG_STILL 1u
 
@@ -58,8 +61,8 @@ typedef enum proto_result {
 
 const char *proto_strerror(proto_result r);
 
-/* Writes the version-1 header (PROTO_STREAM_HEADER_SIZE bytes) for h into out; the version
- * and header_size fields of h are ignored (always 1 and 64). */
+/* Writes the header (PROTO_STREAM_HEADER_SIZE bytes) for h into out with h->version (1 or 2;
+ * anything else writes PROTO_STREAM_VERSION); header_size is always 64. */
 void proto_frame_header_pack(const proto_frame_header *h, uint8_t out[PROTO_STREAM_HEADER_SIZE]);
 
 /* Reads a frame message of len bytes. On success fills h and points *jpeg at the JPEG bytes

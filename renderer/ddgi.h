@@ -1,6 +1,7 @@
 /* ddgi.h: the DDGI probe volume (Majercik et al. 2019) on the GPU: grid placement, probe
  * atlases, and the per-update passes (trace, shade, blend distance, blend irradiance,
- * borders). The renderer records an update before shading a frame that uses GI.
+ * borders). The world (world.h) runs updates in their own submissions; views only sample
+ * the field (sampling reads neither the rotation nor the update index).
  */
 #ifndef RD_DDGI_H
 #define RD_DDGI_H
@@ -9,14 +10,20 @@
 #include "vk_buffer.h"
 #include "vk_compute.h"
 
+/* What a zero rays or an unset hysteresis in rd_ddgi_settings stands for (the server's
+ * settings table takes its defaults from here too). */
+#define RD_DDGI_DEFAULT_HYSTERESIS 0.97f
+#define RD_DDGI_DEFAULT_RAYS 256u
+
 typedef struct rd_ddgi_settings {
     unsigned mode;       /* PC_GI_OFF, PC_GI_CLASSIC or PC_GI_DDGI */
     unsigned counts[3];  /* probes per axis; 0 = fit to the scene */
     float spacing[3];    /* 0 = derived (from counts, or from the scene's size) */
     float origin[3];     /* position of probe (0,0,0), used when has_origin */
     bool has_origin;
-    unsigned rays;       /* rays per probe per update; 0 = 256 */
-    float hysteresis;    /* 0 = 0.97 */
+    unsigned rays;       /* rays per probe per update; 0 = RD_DDGI_DEFAULT_RAYS */
+    float hysteresis;    /* weight of the old value; 0 = RD_DDGI_DEFAULT_HYSTERESIS unless... */
+    bool has_hysteresis; /* ...this is set: then hysteresis is used as given, 0 included */
     unsigned seed;       /* ray rotations are a deterministic function of seed and update */
 } rd_ddgi_settings;
 

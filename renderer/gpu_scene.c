@@ -96,14 +96,14 @@ static rd_vk_result upload_materials(rd_vk *vk, rd_gpu_scene *gs, const rd_scene
     return r;
 }
 
-/* Builds every mesh's BLAS into one node array and the triangle records in leaf order. */
-static rd_vk_result build_blas(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, char *err,
-                               size_t errlen)
+rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *s, char *err,
+                                  size_t errlen)
 {
+    memset(p, 0, sizeof *p);
     double t0 = now_ms();
-    gs->mesh_count = s->mesh_count;
-    gs->mesh_root = xcalloc(s->mesh_count, sizeof *gs->mesh_root);
-    gs->mesh_bounds = xcalloc(s->mesh_count, 6 * sizeof(float));
+    p->mesh_count = s->mesh_count;
+    p->mesh_root = xcalloc(s->mesh_count, sizeof *p->mesh_root);
+    p->mesh_bounds = xcalloc(s->mesh_count, 6 * sizeof(float));
     rd_bvh *bvhs = xcalloc(s->mesh_count, sizeof *bvhs);
     uint64_t tri_total = 0, node_total = 0;
     for (uint32_t m = 0; m < s->mesh_count; m++) {
@@ -112,29 +112,28 @@ static rd_vk_result build_blas(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, c
             fprintf(stderr, "probecast: out of memory building a BVH\n");
             abort();
         }
-        gs->mesh_root[m] = (uint32_t)node_total;
+        p->mesh_root[m] = (uint32_t)node_total;
         const pc_bvh_node *root = &bvhs[m].nodes[0];
-        float *b = &gs->mesh_bounds[m * 6];
+        float *b = &p->mesh_bounds[m * 6];
         b[0] = root->bmin.x, b[1] = root->bmin.y, b[2] = root->bmin.z;
         b[3] = root->bmax.x, b[4] = root->bmax.y, b[5] = root->bmax.z;
-        if (bvhs[m].depth > gs->max_blas_depth) gs->max_blas_depth = bvhs[m].depth;
+        if (bvhs[m].depth > p->max_blas_depth) p->max_blas_depth = bvhs[m].depth;
         tri_total += mesh->tri_count;
         node_total += bvhs[m].node_count;
     }
-    gs->blas_build_ms = now_ms() - t0;
-    gs->tri_count = tri_total;
-    gs->blas_node_count = node_total;
+    p->tri_count = tri_total;
+    p->node_count = node_total;
     if (tri_total > UINT32_MAX / 2 || node_total > UINT32_MAX / 2) {
         for (uint32_t m = 0; m < s->mesh_count; m++) rd_bvh_destroy(&bvhs[m]);
         free(bvhs);
-        snprintf(err, errlen, "scene too large: %llu triangles",
-                 (unsigned long long)tri_total);
+        rd_gpu_scene_prep_destroy(p);
+        snprintf(err, errlen, "scene too large: %llu triangles", (unsigned long long)tri_total);
         return RD_VK_ERR_OUT_OF_MEMORY;
     }
 
-    pc_bvh_node *nodes = xcalloc(node_total, sizeof *nodes);
-    pc_tri *tris = xcalloc(tri_total, sizeof *tris);
-    pc_tri_attr *attrs = xcalloc(tri_total, sizeof *attrs);
+    p->nodes = xcalloc(node_total, sizeof *p->nodes);
+    p->tris = xcalloc(tri_total, sizeof *p->tris);
+    p->attrs = xcalloc(tri_total, sizeof *p->attrs);
     uint32_t node_base = 0, tri_base = 0;
     for (uint32_t m = 0; m < s->mesh_count; m++) {
         const rd_mesh *mesh = &s->meshes[m];
@@ -143,7 +142,7 @@ static rd_vk_result build_blas(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, c
             pc_bvh_node n = bvh->nodes[i];
             uint32_t first = rd_bvh_node_first(&n), count = rd_bvh_node_count(&n);
             n.bmin.w = pc_u2f(first + (count ? tri_base : node_base));
-            nodes[node_base + i] = n;
+            p->nodes[node_base + i] = n;
         }
         for (uint32_t i = 0; i < bvh->prim_count; i++) {
             uint32_t src = bvh->prim_index[i];
@@ -151,14 +150,14 @@ static rd_vk_result build_blas(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, c
             const rd_material *mm = &s->materials[mat];
             uint32_t flags = (mm->double_sided ? PC_TRI_DOUBLE_SIDED : 0) |
                              (mm->alpha_mode == RD_ALPHA_MASK ? PC_TRI_ALPHA_MASK : 0);
-            const float *p = &mesh->positions[src * 9];
+            const float *pos = &mesh->positions[src * 9];
             const float *n = &mesh->normals[src * 9];
             const float *uv = &mesh->uvs[src * 6];
-            pc_tri *t = &tris[tri_base + i];
-            t->v0 = v4(p, pc_u2f(mat));
-            t->v1 = v4(p + 3, pc_u2f(flags));
-            t->v2 = v4(p + 6, pc_u2f(src));
-            pc_tri_attr *a = &attrs[tri_base + i];
+            pc_tri *t = &p->tris[tri_base + i];
+            t->v0 = v4(pos, pc_u2f(mat));
+            t->v1 = v4(pos + 3, pc_u2f(flags));
+            t->v2 = v4(pos + 6, pc_u2f(src));
+            pc_tri_attr *a = &p->attrs[tri_base + i];
             a->n0 = v4(n, 0), a->n1 = v4(n + 3, 0), a->n2 = v4(n + 6, 0);
             a->uv01 = (pc_vec4){uv[0], uv[1], uv[2], uv[3]};
             a->uv2 = (pc_vec4){uv[4], uv[5], 0, 0};
@@ -168,16 +167,41 @@ static rd_vk_result build_blas(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, c
         rd_bvh_destroy(&bvhs[m]);
     }
     free(bvhs);
+    p->build_ms = now_ms() - t0;
+    return RD_VK_OK;
+}
 
+void rd_gpu_scene_prep_destroy(rd_gpu_scene_prep *p)
+{
+    free(p->mesh_root);
+    free(p->mesh_bounds);
+    free(p->nodes);
+    free(p->tris);
+    free(p->attrs);
+    memset(p, 0, sizeof *p);
+}
+
+/* Uploads the prepared BLAS nodes and triangle records; the mesh tables move into gs. */
+static rd_vk_result upload_blas(rd_vk *vk, rd_gpu_scene *gs, rd_gpu_scene_prep *p, char *err,
+                                size_t errlen)
+{
+    gs->mesh_count = p->mesh_count;
+    gs->mesh_root = p->mesh_root;
+    gs->mesh_bounds = p->mesh_bounds;
+    p->mesh_root = NULL;
+    p->mesh_bounds = NULL;
+    gs->blas_build_ms = p->build_ms;
+    gs->tri_count = p->tri_count;
+    gs->blas_node_count = p->node_count;
+    gs->max_blas_depth = p->max_blas_depth;
     double t1 = now_ms();
-    rd_vk_result r = upload_new(vk, &gs->blas_nodes, nodes, sizeof *nodes * node_total, err, errlen);
-    if (r == RD_VK_OK) r = upload_new(vk, &gs->tris, tris, sizeof *tris * tri_total, err, errlen);
+    rd_vk_result r = upload_new(vk, &gs->blas_nodes, p->nodes, sizeof *p->nodes * p->node_count,
+                                err, errlen);
     if (r == RD_VK_OK)
-        r = upload_new(vk, &gs->tri_attrs, attrs, sizeof *attrs * tri_total, err, errlen);
+        r = upload_new(vk, &gs->tris, p->tris, sizeof *p->tris * p->tri_count, err, errlen);
+    if (r == RD_VK_OK)
+        r = upload_new(vk, &gs->tri_attrs, p->attrs, sizeof *p->attrs * p->tri_count, err, errlen);
     gs->upload_ms += now_ms() - t1;
-    free(nodes);
-    free(tris);
-    free(attrs);
     return r;
 }
 
@@ -316,15 +340,15 @@ rd_vk_result rd_gpu_scene_update_lights(rd_vk *vk, rd_gpu_scene *gs, const rd_sc
     return r;
 }
 
-rd_vk_result rd_gpu_scene_create(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, char *err,
-                                 size_t errlen)
+rd_vk_result rd_gpu_scene_upload(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
+                                 rd_gpu_scene_prep *prep, char *err, size_t errlen)
 {
     memset(gs, 0, sizeof *gs);
     for (int k = 0; k < 3; k++) {
         float c = 0.5f * (s->bounds_min[k] + s->bounds_max[k]);
         gs->origin_shift[k] = isfinite(c) ? c : 0.0f;
     }
-    rd_vk_result r = build_blas(vk, gs, s, err, errlen);
+    rd_vk_result r = upload_blas(vk, gs, prep, err, errlen);
     if (r == RD_VK_OK) r = rd_gpu_scene_update_instances(vk, gs, s, err, errlen);
     if (r == RD_VK_OK) r = upload_materials(vk, gs, s, err, errlen);
     if (r == RD_VK_OK) r = rd_gpu_scene_update_lights(vk, gs, s, err, errlen);
@@ -346,6 +370,20 @@ rd_vk_result rd_gpu_scene_create(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
         .counts = {s->instance_count, s->light_count, s->material_count, s->texture_count},
     };
     return RD_VK_OK;
+}
+
+rd_vk_result rd_gpu_scene_create(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, char *err,
+                                 size_t errlen)
+{
+    rd_gpu_scene_prep prep;
+    rd_vk_result r = rd_gpu_scene_prepare(&prep, s, err, errlen);
+    if (r != RD_VK_OK) {
+        memset(gs, 0, sizeof *gs);
+        return r;
+    }
+    r = rd_gpu_scene_upload(vk, gs, s, &prep, err, errlen);
+    rd_gpu_scene_prep_destroy(&prep);
+    return r;
 }
 
 void rd_gpu_scene_destroy(rd_vk *vk, rd_gpu_scene *gs)

@@ -30,7 +30,31 @@ typedef struct rd_gpu_scene {
     uint32_t tlas_node_count, max_blas_depth;
 } rd_gpu_scene;
 
-/* Builds every BVH and uploads the scene. On failure everything is released. */
+/* The CPU half of a scene's creation: every mesh's bottom-level BVH and the triangle records in
+ * leaf order. Plain CPU work with no Vulkan, so it can run on any thread (the daemon builds an
+ * upload's BVHs on the uploading connection's thread, not on the render thread). */
+typedef struct rd_gpu_scene_prep {
+    uint32_t mesh_count;
+    uint32_t *mesh_root;  /* absolute BLAS root node per mesh */
+    float *mesh_bounds;   /* 6 floats per mesh */
+    pc_bvh_node *nodes;
+    pc_tri *tris;
+    pc_tri_attr *attrs;
+    uint64_t tri_count, node_count;
+    uint32_t max_blas_depth;
+    double build_ms;
+} rd_gpu_scene_prep;
+
+/* Builds the BLASes of scene. On failure (a scene too large) p is left empty. */
+rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *scene, char *err,
+                                  size_t errlen);
+void rd_gpu_scene_prep_destroy(rd_gpu_scene_prep *p); /* idempotent */
+/* The GPU half: uploads prep (its mesh tables move into gs), builds the top level, uploads
+ * materials, textures and lights. prep must come from the same scene. On failure everything is
+ * released. */
+rd_vk_result rd_gpu_scene_upload(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *scene,
+                                 rd_gpu_scene_prep *prep, char *err, size_t errlen);
+/* Both halves at once. */
 rd_vk_result rd_gpu_scene_create(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *scene, char *err,
                                  size_t errlen);
 /* Rebuilds the top-level BVH and instance transforms from scene's current node world

@@ -1,50 +1,42 @@
-/* render.h: one frame = [probe updates] -> primary pass -> shade (direct) -> [GI sampling]
- * -> tone map, with GPU timings and ray counts. The renderer owns the per-resolution buffers and the pipelines; the scene is
- * passed in (rd_gpu_scene) so one renderer can draw any uploaded scene.
+/* render.h: the one-view convenience for offline tools (probecast render, eval, tests): a
+ * world (world.h) and one view (view.h) of it, where each frame first advances the probe
+ * field and then renders: [probe updates] -> primary -> shade (direct) -> [GI sampling]
+ * -> tone map, with GPU timings and ray counts of all of it. The scene is passed in
+ * (rd_gpu_scene) so one renderer can draw any uploaded scene. The daemon uses world and views
+ * directly.
  */
 #ifndef RD_RENDER_H
 #define RD_RENDER_H
 
 #include "camera.h"
 #include "ddgi.h"
+#include "frame_stats.h"
 #include "gpu_scene.h"
+#include "view.h"
 #include "vk_compute.h"
+#include "world.h"
 
 typedef struct rd_frame_settings {
-    unsigned width, height; /* 0 = 960 x 540 */
-    float sky[3];           /* radiance of rays that escape (default black) */
-    float exposure_ev;      /* exposure in stops: radiance * 2^ev before tone mapping */
-    unsigned tonemap;       /* PC_TONEMAP_* (0 = ACES fit) */
-    unsigned seed;          /* random streams of stochastic passes */
-    unsigned view;          /* PC_VIEW_* */
-    unsigned gi_updates;    /* probe updates before this frame is shaded (0 = 1) */
-    unsigned pathtrace_spp; /* > 0: reference path tracing with this many samples per pixel
-                               instead of direct light + probes */
-    unsigned max_bounces;   /* path tracing (0 = 64) */
+    unsigned width, height;   /* 0 = 960 x 540 */
+    float sky[3];             /* radiance of rays that escape (default black) */
+    float exposure_ev;        /* exposure in stops: radiance * 2^ev before tone mapping */
+    unsigned tonemap;         /* PC_TONEMAP_* (0 = ACES fit) */
+    unsigned seed;            /* random streams of stochastic passes */
+    unsigned view;            /* PC_VIEW_* */
+    unsigned gi_updates;      /* probe updates before this frame is shaded (0 = 1) */
+    unsigned pathtrace_spp;   /* > 0: reference path tracing with this many samples per pixel
+                                 instead of direct light + probes (no probe updates) */
+    unsigned max_bounces;     /* path tracing (0 = 64) */
     unsigned pathtrace_first; /* path tracing: samples already accumulated from an identical
                                  earlier frame (0 = start over); progressive rendering */
 } rd_frame_settings;
 
-typedef struct rd_frame_stats {
-    unsigned pass_count;
-    const char *pass_name[RD_TIMER_MAX];
-    double pass_ms[RD_TIMER_MAX]; /* GPU time per pass (0 when timestamps are unavailable) */
-    bool timed;
-    pc_counters rays;             /* rays traced per kind in this frame */
-} rd_frame_stats;
-
 typedef struct rd_renderer {
     rd_vk *vk;
-    rd_pipeline primary, shade, tonemap;
-    rd_buffer globals, counters, gbuffer, radiance, rgba8;
-    rd_timer timer;
-    rd_ddgi ddgi;           /* created by rd_renderer_configure_gi */
-    bool gi;                /* a GI mode other than off is configured */
-    rd_pipeline gi_sample, pathtrace;
-    unsigned width, height;
-    unsigned frame_index;
-    unsigned pathtrace_samples; /* accumulated in the radiance buffer by the last frame */
-    rd_frame_stats stats;
+    rd_view_passes passes;
+    rd_world world;       /* world.gi, world.ddgi: the probe field */
+    rd_view view;         /* view.width, view.height, view.rgba8, view.pathtrace_samples ... */
+    rd_frame_stats stats; /* of the last frame: the world's updates, then the view's passes */
 } rd_renderer;
 
 rd_vk_result rd_renderer_create(rd_vk *vk, rd_renderer *r, char *err, size_t errlen);
@@ -53,7 +45,8 @@ void rd_renderer_destroy(rd_renderer *r); /* idempotent */
  * off); resets the probe field. */
 rd_vk_result rd_renderer_configure_gi(rd_renderer *r, const float bmin[3], const float bmax[3],
                                       const rd_ddgi_settings *gi, char *err, size_t errlen);
-/* Renders one frame of scene from camera into the renderer's buffers (blocking). */
+/* Renders one frame of scene from camera into the renderer's buffers (blocking): with GI on
+ * and no path tracing, settings->gi_updates probe updates (at least 1) first. */
 rd_vk_result rd_renderer_render(rd_renderer *r, const rd_gpu_scene *scene,
                                 const rd_view_camera *camera, const rd_frame_settings *settings,
                                 char *err, size_t errlen);

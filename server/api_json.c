@@ -292,87 +292,6 @@ bool srv_json_node_patch(const cJSON *obj, srv_node_patch *p, srv_api_error *e)
     return true;
 }
 
-/* ---- settings ------------------------------------------------------------------------------- */
-
-static const char *const tonemap_names[] = {"aces", "clamp"};
-static const char *const view_names[] = {"final", "irradiance", "probes"};
-static const char *const gi_names[] = {"off", "classic", "ddgi", "pathtrace"};
-
-const char *srv_gi_mode_name(unsigned mode)
-{
-    return mode < 4 ? gi_names[mode] : "unknown";
-}
-
-bool srv_json_settings_patch(const cJSON *obj, srv_settings_patch *p, srv_api_error *e)
-{
-    memset(p, 0, sizeof *p);
-    srv_settings *v = &p->v;
-    const cJSON *it;
-    cJSON_ArrayForEach(it, obj)
-    {
-        const char *k = it->string;
-        bool ok;
-        if (strcmp(k, "width") == 0)
-            ok = once(&p->has, SRV_SET_WIDTH, it, e) && get_uint(it, 16, 4096, &v->width, e);
-        else if (strcmp(k, "height") == 0)
-            ok = once(&p->has, SRV_SET_HEIGHT, it, e) && get_uint(it, 16, 4096, &v->height, e);
-        else if (strcmp(k, "max_pixels") == 0)
-            ok = once(&p->has, SRV_SET_MAX_PIXELS, it, e) &&
-                 get_uint(it, 256, 4096.0 * 4096.0, &v->max_pixels, e);
-        else if (strcmp(k, "max_fps") == 0)
-            ok = once(&p->has, SRV_SET_MAX_FPS, it, e) && get_uint(it, 1, 240, &v->max_fps, e);
-        else if (strcmp(k, "quality_interactive") == 0)
-            ok = once(&p->has, SRV_SET_QUALITY_INTERACTIVE, it, e) &&
-                 get_uint(it, 1, 100, &v->quality_interactive, e);
-        else if (strcmp(k, "quality_still") == 0)
-            ok = once(&p->has, SRV_SET_QUALITY_STILL, it, e) &&
-                 get_uint(it, 1, 100, &v->quality_still, e);
-        else if (strcmp(k, "still_delay_ms") == 0)
-            ok = once(&p->has, SRV_SET_STILL_DELAY, it, e) &&
-                 get_uint(it, 0, 10000, &v->still_delay_ms, e);
-        else if (strcmp(k, "exposure") == 0)
-            ok = once(&p->has, SRV_SET_EXPOSURE, it, e) &&
-                 get_float(it, -20, 20, &v->exposure_ev, e);
-        else if (strcmp(k, "tonemap") == 0)
-            ok = once(&p->has, SRV_SET_TONEMAP, it, e) &&
-                 get_enum(it, tonemap_names, 2, &v->tonemap, e);
-        else if (strcmp(k, "sky") == 0)
-            ok = once(&p->has, SRV_SET_SKY, it, e) && get_vec(it, 3, 0, 1e6, v->sky, e);
-        else if (strcmp(k, "view") == 0)
-            ok = once(&p->has, SRV_SET_VIEW, it, e) && get_enum(it, view_names, 3, &v->view, e);
-        else if (strcmp(k, "gi_mode") == 0)
-            ok = once(&p->has, SRV_SET_GI_MODE, it, e) && get_enum(it, gi_names, 4, &v->gi_mode, e);
-        else if (strcmp(k, "probe_counts") == 0) {
-            float c[3];
-            ok = once(&p->has, SRV_SET_PROBE_COUNTS, it, e) && get_vec(it, 3, 0, 256, c, e);
-            for (int i = 0; ok && i < 3; i++) {
-                if (c[i] != floorf(c[i])) ok = BAD("Field 'probe_counts' must hold integers.");
-                v->probe_counts[i] = (unsigned)c[i];
-            }
-            bool any = v->probe_counts[0] || v->probe_counts[1] || v->probe_counts[2];
-            bool all = v->probe_counts[0] && v->probe_counts[1] && v->probe_counts[2];
-            if (ok && any && !all)
-                ok = BAD("Field 'probe_counts' must be all zero (fitted) or all in 1..256.");
-        } else if (strcmp(k, "probe_spacing") == 0)
-            ok = once(&p->has, SRV_SET_PROBE_SPACING, it, e) &&
-                 get_float(it, 0, 1e6, &v->probe_spacing, e);
-        else if (strcmp(k, "rays_per_probe") == 0)
-            ok = once(&p->has, SRV_SET_RAYS, it, e) &&
-                 get_uint(it, 1, PC_DDGI_MAX_RAYS, &v->rays_per_probe, e);
-        else if (strcmp(k, "hysteresis") == 0)
-            ok = once(&p->has, SRV_SET_HYSTERESIS, it, e) &&
-                 get_float(it, 0, 0.999, &v->hysteresis, e);
-        else if (strcmp(k, "animate") == 0) {
-            ok = once(&p->has, SRV_SET_ANIMATE, it, e);
-            if (ok && !cJSON_IsBool(it)) ok = BAD("Field 'animate' must be true or false.");
-            v->animate = cJSON_IsTrue(it);
-        } else
-            ok = BAD("Unknown settings field '%s'.", k);
-        if (!ok) return false;
-    }
-    return true;
-}
-
 /* ---- viewer messages ------------------------------------------------------------------------ */
 
 bool srv_json_viewer_msg(const char *text, size_t len, srv_viewer_msg *out, srv_api_error *e)
@@ -388,7 +307,7 @@ bool srv_json_viewer_msg(const char *text, size_t len, srv_viewer_msg *out, srv_
     bool ok = true;
     const cJSON *type = cJSON_GetObjectItemCaseSensitive(j, "type");
     if (!cJSON_IsString(type)) {
-        ok = BAD("A message needs a string 'type' (camera, resize or ack).");
+        ok = BAD("A message needs a string 'type' (camera, resize, follow or ack).");
     } else if (strcmp(type->valuestring, "camera") == 0) {
         out->type = SRV_VIEWER_CAMERA;
         bool have_seq = false;
@@ -430,6 +349,24 @@ bool srv_json_viewer_msg(const char *text, size_t len, srv_viewer_msg *out, srv_
             if (!ok) break;
         }
         if (ok && (has & 3) != 3) ok = BAD("A resize message needs 'width' and 'height'.");
+    } else if (strcmp(type->valuestring, "follow") == 0) {
+        out->type = SRV_VIEWER_FOLLOW;
+        bool have = false;
+        const cJSON *it;
+        cJSON_ArrayForEach(it, j)
+        {
+            if (it == type) continue;
+            if (strcmp(it->string, "view") == 0 && !have) {
+                have = true;
+                if (cJSON_IsNull(it))
+                    out->follow_own = true;
+                else
+                    ok = get_uint(it, 0, 4294967295.0, &out->view, e);
+            } else
+                ok = BAD("Unexpected follow message field '%s'.", it->string);
+            if (!ok) break;
+        }
+        if (ok && !have) ok = BAD("A follow message needs 'view' (a view id, or null).");
     } else if (strcmp(type->valuestring, "ack") == 0) {
         out->type = SRV_VIEWER_ACK;
         bool have = false;
@@ -449,7 +386,8 @@ bool srv_json_viewer_msg(const char *text, size_t len, srv_viewer_msg *out, srv_
         }
         if (ok && !have) ok = BAD("An ack message needs 'frame'.");
     } else {
-        ok = BAD("Unknown message type '%.40s' (camera, resize or ack).", type->valuestring);
+        ok = BAD("Unknown message type '%.40s' (camera, resize, follow or ack).",
+                 type->valuestring);
     }
     cJSON_Delete(j);
     return ok;
@@ -526,31 +464,6 @@ cJSON *srv_json_node(uint32_t id, const rd_node *n)
     srv_json_add_floats(j, "scale", n->scale, 3);
     float wt[3] = {n->world[12], n->world[13], n->world[14]};
     srv_json_add_floats(j, "world_translation", wt, 3);
-    return j;
-}
-
-cJSON *srv_json_settings(const srv_settings *s)
-{
-    cJSON *j = cJSON_CreateObject();
-    cJSON_AddNumberToObject(j, "width", s->width);
-    cJSON_AddNumberToObject(j, "height", s->height);
-    cJSON_AddNumberToObject(j, "max_pixels", s->max_pixels);
-    cJSON_AddNumberToObject(j, "max_fps", s->max_fps);
-    cJSON_AddNumberToObject(j, "quality_interactive", s->quality_interactive);
-    cJSON_AddNumberToObject(j, "quality_still", s->quality_still);
-    cJSON_AddNumberToObject(j, "still_delay_ms", s->still_delay_ms);
-    cJSON_AddNumberToObject(j, "exposure", srv_json_float(s->exposure_ev));
-    cJSON_AddStringToObject(j, "tonemap", tonemap_names[s->tonemap < 2 ? s->tonemap : 0]);
-    srv_json_add_floats(j, "sky", s->sky, 3);
-    cJSON_AddStringToObject(j, "view", view_names[s->view < 3 ? s->view : 0]);
-    cJSON_AddStringToObject(j, "gi_mode", srv_gi_mode_name(s->gi_mode));
-    cJSON *pc = cJSON_AddArrayToObject(j, "probe_counts");
-    for (int i = 0; i < 3; i++)
-        cJSON_AddItemToArray(pc, cJSON_CreateNumber(s->probe_counts[i]));
-    cJSON_AddNumberToObject(j, "probe_spacing", srv_json_float(s->probe_spacing));
-    cJSON_AddNumberToObject(j, "rays_per_probe", s->rays_per_probe);
-    cJSON_AddNumberToObject(j, "hysteresis", srv_json_float(s->hysteresis));
-    cJSON_AddBoolToObject(j, "animate", s->animate);
     return j;
 }
 

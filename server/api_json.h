@@ -1,4 +1,5 @@
-/* api_json.h: the API's JSON documents (protocol/openapi.yaml) to and from commands.h types.
+/* api_json.h: the API's JSON documents (protocol/openapi.yaml) to and from commands.h types
+ * (the settings document: srv_json_settings_patch and srv_json_settings in settings.h).
  *
  * Parsers are strict: a body must be one JSON object; every member must be known, of the
  * right type, finite and in range; otherwise they fail with a 400 srv_api_error whose message
@@ -37,14 +38,12 @@ cJSON *srv_json_parse_object(const char *text, size_t len, srv_api_error *e);
 bool srv_json_camera_patch(const cJSON *obj, srv_camera_patch *out, srv_api_error *e);
 bool srv_json_light_patch(const cJSON *obj, srv_light_patch *out, srv_api_error *e);
 bool srv_json_node_patch(const cJSON *obj, srv_node_patch *out, srv_api_error *e);
-bool srv_json_settings_patch(const cJSON *obj, srv_settings_patch *out, srv_api_error *e);
 /* A text message of the stream: {"type":"camera"|"resize"|"ack", ...}. */
 bool srv_json_viewer_msg(const char *text, size_t len, srv_viewer_msg *out, srv_api_error *e);
 
 cJSON *srv_json_camera(const srv_camera *c);
 cJSON *srv_json_light(uint32_t id, const rd_light *l);
 cJSON *srv_json_node(uint32_t id, const rd_node *n);
-cJSON *srv_json_settings(const srv_settings *s);
 
 /* {"error": code, "message": message} as malloc'd text. */
 char *srv_json_error_body(const char *code, const char *message);
@@ -55,8 +54,7 @@ void srv_json_add_floats(cJSON *obj, const char *name, const float *v, int n);
 /* A float as the double that prints like the float ("0.97", not "0.97000002861022949"). */
 double srv_json_float(float f);
 
-/* Names of enumerations as the API spells them. */
+/* Names of enumerations as the API spells them (settings: settings.h). */
 const char *srv_light_type_name(uint32_t type);
-const char *srv_gi_mode_name(unsigned mode);
 
 #endif

@@ -307,10 +307,10 @@ static bool run_setting(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene
         }
     row->gpu_ms = times[a->timing_frames / 2];
     if (gi->mode != PC_GI_OFF) {
-        row->probes[0] = c->r.ddgi.vol.counts.x;
-        row->probes[1] = c->r.ddgi.vol.counts.y;
-        row->probes[2] = c->r.ddgi.vol.counts.z;
-        row->rays = c->r.ddgi.vol.counts.w;
+        row->probes[0] = c->r.world.ddgi.vol.counts.x;
+        row->probes[1] = c->r.world.ddgi.vol.counts.y;
+        row->probes[2] = c->r.world.ddgi.vol.counts.z;
+        row->rays = c->r.world.ddgi.vol.counts.w;
     }
     row->updates = gi->mode != PC_GI_OFF ? updates : 0;
     return true;
@@ -447,7 +447,7 @@ int cli_eval(int argc, char **argv)
         rd_ddgi_settings fit = {.mode = PC_GI_DDGI};
         unsigned fitted[3] = {1, 1, 1};
         if (rc == 0 && rd_renderer_configure_gi(&c.r, s.bounds_min, s.bounds_max, &fit, c.err, sizeof c.err) == RD_VK_OK) {
-            fitted[0] = c.r.ddgi.vol.counts.x, fitted[1] = c.r.ddgi.vol.counts.y, fitted[2] = c.r.ddgi.vol.counts.z;
+            fitted[0] = c.r.world.ddgi.vol.counts.x, fitted[1] = c.r.world.ddgi.vol.counts.y, fitted[2] = c.r.world.ddgi.vol.counts.z;
         }
         for (unsigned k = 0; rc == 0 && k < 2 + sweep; k++) {
             eval_row *row = &rows[nrows];

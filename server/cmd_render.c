@@ -35,9 +35,9 @@ static void render_usage(FILE *f)
             "  --max-bounces N        path length limit (default 64; Russian roulette after 3)\n"
             "  --probes X,Y,Z         probe counts (default: fitted to the scene bounds)\n"
             "  --probe-spacing S      probe spacing in metres (default: from the scene size)\n"
-            "  --rays N               rays per probe per update (default 256)\n"
+            "  --rays N               rays per probe per update (default %u)\n"
             "  --frames N             probe updates before the image is taken (default 32)\n"
-            "  --hysteresis H         temporal blend weight of the old probe value (default 0.97)\n"
+            "  --hysteresis H         temporal blend weight of the old probe value (default %g)\n"
             "  --seed S               seed of the probe ray rotations (same seed, same image)\n"
             "  --view final|irradiance|probes  debug views: indirect irradiance only, or probe\n"
             "                         spheres shaded with their stored irradiance\n"
@@ -49,7 +49,7 @@ static void render_usage(FILE *f)
             "                         GPU, else lavapipe)\n"
             "  --list-devices         list the Vulkan devices and exit\n"
             "  --help                 this text\n",
-            rd_procedural_names());
+            rd_procedural_names(), RD_DDGI_DEFAULT_RAYS, (double)RD_DDGI_DEFAULT_HYSTERESIS);
 }
 
 typedef struct render_args {
@@ -177,7 +177,7 @@ static int parse(int argc, char **argv, render_args *a)
                 fprintf(stderr, "probecast render: --hysteresis expects a value in [0, 1)\n");
                 return 2;
             }
-            if (a->gi.hysteresis == 0) a->gi.hysteresis = 1e-9f; /* 0 means default */
+            a->gi.has_hysteresis = true; /* 0 too is a value: no history */
         } else if (strcmp(o, "--seed") == 0) {
             NEED_VALUE
             if (!cli_parse_uint(o, v, 0, 0xffffffffu, &a->gi.seed)) return 2;
@@ -269,7 +269,8 @@ static rd_vk_result dump_probes(rd_renderer *r, const char *prefix, char *err, s
 {
     float *irr = NULL, *dist = NULL;
     unsigned iw, ih, dw, dh;
-    rd_vk_result vr = rd_ddgi_read_atlases(&r->ddgi, &irr, &iw, &ih, &dist, &dw, &dh, err, errlen);
+    rd_vk_result vr =
+        rd_ddgi_read_atlases(&r->world.ddgi, &irr, &iw, &ih, &dist, &dw, &dh, err, errlen);
     if (vr != RD_VK_OK) return vr;
     char path[1024];
     uint8_t *rgba = malloc((size_t)iw * ih * 4);

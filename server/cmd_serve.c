@@ -20,6 +20,7 @@
 #include "renderer/gltf_loader.h"
 #include "renderer/procedural.h"
 #include "scene_state.h"
+#include "snapshot.h"
 #include "ws_stream.h"
 
 #define DEMO_SCENE "builtin:cornell"
@@ -48,30 +49,25 @@ static void serve_usage(FILE *f)
         "  --max-viewers N        stream connections in all (default 100)\n"
         "  --max-viewers-per-ip N stream connections per client address (default 64)\n"
         "  --http-connections N   HTTP connections in all (default 64; 16 per address)\n"
+        "  --max-views N          views in all: the default view and one per viewer of stream\n"
+        "                         protocol 2 (default 64, at most 256)\n"
+        "  --max-total-pixels N   pixels over all views (default 16777216)\n"
         "  --web-dir DIR          viewer files served at / (default: web/ of the source tree)\n"
         "  --encoders N           JPEG encoder threads (default 2)\n"
-        "  --width W, --height H  render resolution (default 960 x 540; 512 x 288 on a CPU "
-        "device)\n"
-        "  --max-fps N            frame rate cap while something changes (default 30; 15 on CPU)\n"
-        "  --quality-interactive Q, --quality-still Q  JPEG qualities (default 60 and 90)\n"
-        "  --gi off|classic|ddgi|pathtrace  global illumination (default ddgi; pathtrace\n"
-        "                         accumulates reference samples while nothing changes)\n"
-        "  --probes X,Y,Z         probe counts (default: fitted to the scene)\n"
-        "  --probe-spacing S      probe spacing in metres\n"
-        "  --rays N               rays per probe per update (default 256; 64 on CPU)\n"
-        "  --hysteresis H         probe blend weight of the old value (default 0.97)\n"
-        "  --exposure EV          exposure in stops (default 0)\n"
-        "  --sky R,G,B            sky radiance (default 0,0,0)\n"
-        "  --animate, --no-animate  the light animation (default: on for the demo scene only)\n"
         "  --device INDEX|NAME    Vulkan device (default: $PROBECAST_DEVICE, else the best)\n"
         "  --log-level L          error, warn, info (default) or debug ($PROBECAST_LOG)\n"
-        "  --help                 this text\n");
+        "  --help                 this text\n"
+        "\n"
+        "Settings at start-up (GET and PATCH /v1/settings while it runs):\n");
+    srv_settings_print_usage(f);
+    fprintf(f, "  --animate, --no-animate  the light animation (default: on for the demo scene "
+               "only)\n");
 }
 
 typedef struct serve_args {
     const char *scene, *http, *ws, *token, *data_dir, *web_dir, *device;
     size_t max_upload;
-    unsigned max_viewers, max_per_ip, http_connections, encoders;
+    unsigned max_viewers, max_per_ip, http_connections, encoders, max_views, max_total_pixels;
     srv_settings settings;
     unsigned given; /* SRV_SET_* chosen on the command line */
     int animate;    /* -1 default, 0 off, 1 on */
@@ -151,6 +147,9 @@ static int parse(int argc, char **argv, serve_args *a)
     srv_settings_defaults(&a->settings);
     srv_settings *s = &a->settings;
     for (int i = 1; i < argc; i++) {
+        int setting = srv_settings_parse_flag("probecast serve", argc, argv, &i, s, &a->given);
+        if (setting < 0) return 2;
+        if (setting > 0) continue;
         const char *o = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
 #define NEED_VALUE                                                                                 \
@@ -187,67 +186,14 @@ static int parse(int argc, char **argv, serve_args *a)
             NEED_VALUE if (!cli_parse_uint(o, v, 1, 10000, &a->max_viewers)) return 2;
         } else if (IS("--max-viewers-per-ip")) {
             NEED_VALUE if (!cli_parse_uint(o, v, 1, 10000, &a->max_per_ip)) return 2;
+        } else if (IS("--max-views")) {
+            NEED_VALUE if (!cli_parse_uint(o, v, 1, 256, &a->max_views)) return 2;
+        } else if (IS("--max-total-pixels")) {
+            NEED_VALUE if (!cli_parse_uint(o, v, 256, 4000000000u, &a->max_total_pixels)) return 2;
         } else if (IS("--http-connections")) {
             NEED_VALUE if (!cli_parse_uint(o, v, 1, 10000, &a->http_connections)) return 2;
         } else if (IS("--encoders")) {
             NEED_VALUE if (!cli_parse_uint(o, v, 1, 64, &a->encoders)) return 2;
-        } else if (IS("--width")) {
-            NEED_VALUE if (!cli_parse_uint(o, v, 16, 4096, &s->width)) return 2;
-            a->given |= SRV_SET_WIDTH;
-        } else if (IS("--height")) {
-            NEED_VALUE if (!cli_parse_uint(o, v, 16, 4096, &s->height)) return 2;
-            a->given |= SRV_SET_HEIGHT;
-        } else if (IS("--max-fps")) {
-            NEED_VALUE if (!cli_parse_uint(o, v, 1, 240, &s->max_fps)) return 2;
-            a->given |= SRV_SET_MAX_FPS;
-        } else if (IS("--quality-interactive")) {
-            NEED_VALUE if (!cli_parse_uint(o, v, 1, 100, &s->quality_interactive)) return 2;
-        } else if (IS("--quality-still")) {
-            NEED_VALUE if (!cli_parse_uint(o, v, 1, 100, &s->quality_still)) return 2;
-        } else if (IS("--gi")) {
-            NEED_VALUE
-            if (strcmp(v, "off") == 0)
-                s->gi_mode = PC_GI_OFF;
-            else if (strcmp(v, "classic") == 0)
-                s->gi_mode = PC_GI_CLASSIC;
-            else if (strcmp(v, "ddgi") == 0)
-                s->gi_mode = PC_GI_DDGI;
-            else if (strcmp(v, "pathtrace") == 0)
-                s->gi_mode = SRV_GI_PATHTRACE;
-            else {
-                fprintf(stderr, "probecast serve: --gi expects off, classic, ddgi or pathtrace\n");
-                return 2;
-            }
-        } else if (IS("--probes")) {
-            NEED_VALUE
-            float c[3];
-            if (!cli_parse_floats(o, v, c, 3)) return 2;
-            for (int k = 0; k < 3; k++) {
-                if (c[k] < 1 || c[k] > 256 || c[k] != (float)(unsigned)c[k]) {
-                    fprintf(stderr, "probecast serve: --probes expects three integers in 1..256\n");
-                    return 2;
-                }
-                s->probe_counts[k] = (unsigned)c[k];
-            }
-        } else if (IS("--probe-spacing")) {
-            NEED_VALUE if (!cli_parse_float(o, v, &s->probe_spacing)) return 2;
-            if (!(s->probe_spacing > 0)) {
-                fprintf(stderr, "probecast serve: --probe-spacing must be positive\n");
-                return 2;
-            }
-        } else if (IS("--rays")) {
-            NEED_VALUE if (!cli_parse_uint(o, v, 1, PC_DDGI_MAX_RAYS, &s->rays_per_probe)) return 2;
-            a->given |= SRV_SET_RAYS;
-        } else if (IS("--hysteresis")) {
-            NEED_VALUE if (!cli_parse_float(o, v, &s->hysteresis)) return 2;
-            if (!(s->hysteresis >= 0 && s->hysteresis <= 0.999f)) {
-                fprintf(stderr, "probecast serve: --hysteresis expects a value in [0, 0.999]\n");
-                return 2;
-            }
-        } else if (IS("--exposure")) {
-            NEED_VALUE if (!cli_parse_float(o, v, &s->exposure_ev)) return 2;
-        } else if (IS("--sky")) {
-            NEED_VALUE if (!cli_parse_floats(o, v, s->sky, 3)) return 2;
         } else if (IS("--log-level")) {
             NEED_VALUE
             srv_log_level lv;
@@ -388,6 +334,7 @@ int cli_serve(int argc, char **argv)
 
     int rc = 1;
     srv_encoder_pool *enc = NULL;
+    srv_snapshot *snap = srv_snapshot_create();
     srv_render_loop *loop = NULL;
     srv_ws_stream *ws = NULL;
     srv_http *http = NULL;
@@ -401,7 +348,10 @@ int cli_serve(int argc, char **argv)
         .device = a.device,
         .settings = a.settings,
         .encoders = enc,
+        .snapshot = snap,
         .persist = persist,
+        .max_views = a.max_views,
+        .max_total_pixels = a.max_total_pixels,
         .generation_base = saved.scene_generation,
         .adapt_to_cpu = true,
         .settings_given = a.given,
@@ -420,6 +370,7 @@ int cli_serve(int argc, char **argv)
         .max_per_ip = a.max_per_ip,
         .loop = loop,
         .encoders = enc,
+        .snapshot = snap,
     };
     ws = srv_ws_create(&ws_cfg, err, sizeof err);
     if (!ws) {
@@ -438,6 +389,7 @@ int cli_serve(int argc, char **argv)
         .loop = loop,
         .encoders = enc,
         .ws = ws,
+        .snapshot = snap,
         .persist = persist,
     };
     http = srv_http_start(&http_cfg, err, sizeof err);
@@ -447,6 +399,7 @@ int cli_serve(int argc, char **argv)
     }
     srv_ws_set_http_port(ws, srv_http_port(http));
     srv_encoder_pool_set_listener(enc, srv_ws_frame_ready, ws);
+    srv_snapshot_set_listener(snap, srv_ws_event_ready, ws);
     if (!srv_render_loop_start(loop) || !srv_ws_start(ws)) {
         fprintf(stderr, "probecast serve: cannot start threads\n");
         goto out;
@@ -473,12 +426,14 @@ out:
     srv_http_quiesce(http);
     srv_render_loop_stop(loop);
     if (enc) srv_encoder_pool_set_listener(enc, NULL, NULL);
+    srv_snapshot_set_listener(snap, NULL, NULL);
     srv_ws_destroy(ws);
     srv_http_stop(http);
     srv_encoder_pool_destroy(enc);
     srv_persist_close(persist);
     unsigned validation = srv_render_loop_validation_messages(loop);
     srv_render_loop_destroy(loop);
+    srv_snapshot_destroy(snap);
     if (validation > 0 && rc == 0) {
         srv_error("serve", "%u Vulkan validation message(s) during this run", validation);
         rc = 1;

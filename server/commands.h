@@ -13,6 +13,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "renderer/gpu_scene.h"
 #include "renderer/scene.h"
 
 /* ---- camera ------------------------------------------------------------------------------ */
@@ -82,51 +83,8 @@ typedef struct srv_node_patch {
 
 /* ---- settings ------------------------------------------------------------------------------- */
 
-typedef struct srv_settings {
-    unsigned width, height; /* render resolution in pixels */
-    unsigned max_pixels;    /* cap on width * height (viewer resize requests are clamped) */
-    unsigned max_fps;       /* frame pacing while something changes */
-    unsigned quality_interactive, quality_still; /* JPEG quality while input arrives / after */
-    unsigned still_delay_ms; /* quiet time after the last input before the still frame */
-    float exposure_ev;
-    unsigned tonemap; /* PC_TONEMAP_* */
-    float sky[3];
-    unsigned view;            /* PC_VIEW_* */
-    unsigned gi_mode;         /* PC_GI_*, or SRV_GI_PATHTRACE */
-    unsigned probe_counts[3]; /* 0 = fitted to the scene */
-    float probe_spacing;      /* 0 = derived */
-    unsigned rays_per_probe;
-    float hysteresis;
-    bool animate; /* the demo's light animation (only while viewers watch) */
-} srv_settings;
-
-enum {
-    SRV_SET_WIDTH = 1u << 0,
-    SRV_SET_HEIGHT = 1u << 1,
-    SRV_SET_MAX_PIXELS = 1u << 2,
-    SRV_SET_MAX_FPS = 1u << 3,
-    SRV_SET_QUALITY_INTERACTIVE = 1u << 4,
-    SRV_SET_QUALITY_STILL = 1u << 5,
-    SRV_SET_STILL_DELAY = 1u << 6,
-    SRV_SET_EXPOSURE = 1u << 7,
-    SRV_SET_TONEMAP = 1u << 8,
-    SRV_SET_SKY = 1u << 9,
-    SRV_SET_VIEW = 1u << 10,
-    SRV_SET_GI_MODE = 1u << 11,
-    SRV_SET_PROBE_COUNTS = 1u << 12,
-    SRV_SET_PROBE_SPACING = 1u << 13,
-    SRV_SET_RAYS = 1u << 14,
-    SRV_SET_HYSTERESIS = 1u << 15,
-    SRV_SET_ANIMATE = 1u << 16,
-};
-#define SRV_SET_GI_FIELDS                                                                          \
-    (SRV_SET_GI_MODE | SRV_SET_PROBE_COUNTS | SRV_SET_PROBE_SPACING | SRV_SET_RAYS |               \
-     SRV_SET_HYSTERESIS)
-
-typedef struct srv_settings_patch {
-    unsigned has;
-    srv_settings v; /* the fields named in has */
-} srv_settings_patch;
+/* srv_settings, the SRV_SET_* bits and srv_settings_patch come from the settings table. */
+#include "settings.h"
 
 /* ---- viewer messages (WebSocket text frames) -------------------------------------------- */
 
@@ -134,6 +92,7 @@ typedef enum srv_viewer_msg_type {
     SRV_VIEWER_CAMERA = 1,
     SRV_VIEWER_RESIZE,
     SRV_VIEWER_ACK,
+    SRV_VIEWER_FOLLOW, /* version 2 */
 } srv_viewer_msg_type;
 
 typedef struct srv_viewer_msg {
@@ -143,6 +102,8 @@ typedef struct srv_viewer_msg {
     unsigned width, height;  /* resize: CSS pixels */
     float dpr;               /* resize: device pixel ratio (default 1) */
     uint64_t frame;          /* ack */
+    uint32_t view;           /* follow: the view to watch */
+    bool follow_own;         /* follow: null (back to the own view) */
 } srv_viewer_msg;
 
 /* ---- errors ----------------------------------------------------------------------------- */
@@ -177,6 +138,10 @@ typedef enum srv_cmd_kind {
     SRV_CMD_PATCH_SETTINGS,
     SRV_CMD_VIEWER_CAMERA, /* from the stream; no reply */
     SRV_CMD_VIEWER_RESIZE, /* from the stream; no reply */
+    SRV_CMD_VIEW_OPEN,     /* a stream connection's own view (id chosen by the stream) */
+    SRV_CMD_VIEW_CLOSE,    /* its connection left: free the view */
+    SRV_CMD_VIEW_WATCH,    /* delta connections more (or fewer) show view `view` */
+    SRV_CMD_FRAME_REQUEST, /* GET /v1/frame.jpg: reply {"after": frame id} to wait past */
 } srv_cmd_kind;
 
 /* The render thread's answer: an HTTP status and a JSON body (malloc'd, may be NULL). */
@@ -189,6 +154,8 @@ typedef struct srv_reply {
 typedef struct srv_cmd {
     srv_cmd_kind kind;
     uint32_t id;  /* light or node id */
+    uint32_t view; /* the view a camera, resize, watch or frame request is for (0: default) */
+    int delta;     /* VIEW_WATCH */
     bool replace; /* SET_CAMERA: PUT (position and a direction are required) */
     srv_camera_patch camera;
     srv_light_patch light;
@@ -196,6 +163,7 @@ typedef struct srv_cmd {
     srv_settings_patch settings;
     unsigned width, height; /* VIEWER_RESIZE: device pixels */
     rd_scene *scene;        /* REPLACE_SCENE: validated scene, owned by the command */
+    rd_gpu_scene_prep *prepared; /* REPLACE_SCENE: its BVHs, built by the poster (owned) */
     char source[128];       /* REPLACE_SCENE: where it came from ("upload", "builtin:...") */
 
     /* Owned by render_loop.c. */

@@ -90,11 +90,33 @@ struct srv_encoder_pool {
     unsigned thread_count;
     pthread_t *threads;
     uint32_t caps;
-    srv_frame *latest;
+    /* the newest published frame of each view (latest frame wins per view) */
+    struct {
+        uint32_t view_id;
+        srv_frame *frame;
+    } *latest;
+    unsigned latest_count, latest_cap;
+    pthread_cond_t published; /* broadcast on every publication (srv_encoder_wait_frame) */
     srv_frame_listener listener;
     void *listener_user;
     srv_encoder_stats stats;
 };
+
+/* The slot of view_id in the latest table, or NULL (create: a new empty slot). Lock held. */
+static srv_frame **latest_slot(srv_encoder_pool *p, uint32_t view_id, bool create)
+{
+    for (unsigned i = 0; i < p->latest_count; i++)
+        if (p->latest[i].view_id == view_id) return &p->latest[i].frame;
+    if (!create) return NULL;
+    if (p->latest_count == p->latest_cap) {
+        p->latest_cap = p->latest_cap ? 2 * p->latest_cap : 8;
+        p->latest = realloc(p->latest, p->latest_cap * sizeof *p->latest);
+        if (!p->latest) abort();
+    }
+    p->latest[p->latest_count].view_id = view_id;
+    p->latest[p->latest_count].frame = NULL;
+    return &p->latest[p->latest_count++].frame;
+}
 
 /* One variant of a frame is finished (or dropped); the last one publishes or frees the frame.
  * Called with p->mu held. */
@@ -106,11 +128,13 @@ static void variant_done(srv_encoder_pool *p, srv_frame *f)
     bool ok = !f->abandoned;
     for (unsigned i = 0; ok && i < f->variant_count; i++)
         ok = f->variants[i].data != NULL;
-    if (ok && (!p->latest || f->info.frame_id > p->latest->info.frame_id)) {
+    srv_frame **slot = ok ? latest_slot(p, f->info.view_id, true) : NULL;
+    if (slot && (!*slot || f->info.frame_id > (*slot)->info.frame_id)) {
         f->encode_us = srv_unix_us();
-        srv_frame_unref(p->latest);
-        p->latest = f; /* the pool's reference moves to latest */
+        srv_frame_unref(*slot);
+        *slot = f; /* the pool's reference moves to the view's latest */
         p->stats.frames_published++;
+        pthread_cond_broadcast(&p->published);
         if (p->listener) p->listener(p->listener_user);
     } else {
         p->stats.frames_dropped++;
@@ -173,6 +197,7 @@ srv_encoder_pool *srv_encoder_pool_create(unsigned threads)
     srv_encoder_pool *p = xcalloc(1, sizeof *p);
     pthread_mutex_init(&p->mu, NULL);
     pthread_cond_init(&p->cv, NULL);
+    pthread_cond_init(&p->published, NULL);
     p->threads = xcalloc(threads ? threads : 2, sizeof *p->threads);
     unsigned want = threads ? threads : 2;
     for (unsigned i = 0; i < want; i++) {
@@ -204,8 +229,11 @@ void srv_encoder_pool_destroy(srv_encoder_pool *p)
         variant_done(p, j->frame);
         free(j);
     }
-    srv_frame_unref(p->latest);
+    for (unsigned i = 0; i < p->latest_count; i++)
+        srv_frame_unref(p->latest[i].frame);
+    free(p->latest);
     free(p->threads);
+    pthread_cond_destroy(&p->published);
     pthread_cond_destroy(&p->cv);
     pthread_mutex_destroy(&p->mu);
     free(p);
@@ -251,12 +279,13 @@ void srv_encoder_submit(srv_encoder_pool *p, srv_image *img, const srv_frame_inf
     for (unsigned i = 0; i < n; i++)
         f->variants[i].quality = q[i];
 
-    /* latest frame wins: jobs of older frames that no thread has started are dropped */
+    /* latest frame wins: jobs of the view's older frames that no thread has started are
+     * dropped (other views' frames are not this one's to replace) */
     job **link = &p->head;
     p->tail = NULL;
     while (*link) {
         job *j = *link;
-        if (j->frame->info.frame_id < info->frame_id) {
+        if (j->frame->info.view_id == info->view_id && j->frame->info.frame_id < info->frame_id) {
             *link = j->next;
             j->frame->abandoned = true;
             variant_done(p, j->frame);
@@ -280,12 +309,47 @@ void srv_encoder_submit(srv_encoder_pool *p, srv_image *img, const srv_frame_inf
     pthread_mutex_unlock(&p->mu);
 }
 
-srv_frame *srv_encoder_latest(srv_encoder_pool *p)
+srv_frame *srv_encoder_latest(srv_encoder_pool *p, uint32_t view_id)
 {
     pthread_mutex_lock(&p->mu);
-    srv_frame *f = p->latest ? srv_frame_ref(p->latest) : NULL;
+    srv_frame **slot = latest_slot(p, view_id, false);
+    srv_frame *f = slot && *slot ? srv_frame_ref(*slot) : NULL;
     pthread_mutex_unlock(&p->mu);
     return f;
+}
+
+srv_frame *srv_encoder_wait_frame(srv_encoder_pool *p, uint32_t view_id, uint64_t after_id,
+                                  unsigned timeout_ms)
+{
+    struct timespec deadline;
+    clock_gettime(CLOCK_REALTIME, &deadline);
+    long long ns = deadline.tv_nsec + (long long)timeout_ms * 1000000LL;
+    deadline.tv_sec += ns / 1000000000LL;
+    deadline.tv_nsec = ns % 1000000000LL;
+    pthread_mutex_lock(&p->mu);
+    srv_frame *f = NULL;
+    for (;;) {
+        srv_frame **slot = latest_slot(p, view_id, false);
+        if (slot && *slot && (*slot)->info.frame_id > after_id) {
+            f = srv_frame_ref(*slot);
+            break;
+        }
+        if (p->stop || pthread_cond_timedwait(&p->published, &p->mu, &deadline) != 0) break;
+    }
+    pthread_mutex_unlock(&p->mu);
+    return f;
+}
+
+void srv_encoder_forget_view(srv_encoder_pool *p, uint32_t view_id)
+{
+    pthread_mutex_lock(&p->mu);
+    for (unsigned i = 0; i < p->latest_count; i++) {
+        if (p->latest[i].view_id != view_id) continue;
+        srv_frame_unref(p->latest[i].frame);
+        p->latest[i] = p->latest[--p->latest_count];
+        break;
+    }
+    pthread_mutex_unlock(&p->mu);
 }
 
 void srv_encoder_get_stats(srv_encoder_pool *p, srv_encoder_stats *out)

@@ -3,9 +3,9 @@
  * The render thread submits each read-back image with its frame info; the pool encodes it at
  * the frame's base quality and at the lower qualities the viewers' lag calls for (one job per
  * quality, spread over the threads), and publishes the frame once all its variants are done
- * and only if it is newer than the published one: latest frame wins. Jobs of older frames that
- * have not started are dropped when a newer frame arrives, so a slow encoder never builds a
- * queue. Encoders see only CPU memory: never a GPU object.
+ * and only if it is newer than its view's published one: latest frame wins, per view. Jobs of a
+ * view's older frames that have not started are dropped when a newer frame of that view
+ * arrives, so a slow encoder never builds a queue. Encoders see only CPU memory: never a GPU object.
  */
 #ifndef SRV_ENCODER_POOL_H
 #define SRV_ENCODER_POOL_H
@@ -88,8 +88,14 @@ void srv_encoder_submit(srv_encoder_pool *p, srv_image *img, const srv_frame_inf
                         unsigned base_quality);
 /* Sets the lag-driven caps the viewers currently need (see SRV_CAP_*). */
 void srv_encoder_set_caps(srv_encoder_pool *p, uint32_t mask);
-/* The newest published frame (a new reference) or NULL. */
-srv_frame *srv_encoder_latest(srv_encoder_pool *p);
+/* The newest published frame of view view_id (a new reference) or NULL. */
+srv_frame *srv_encoder_latest(srv_encoder_pool *p, uint32_t view_id);
+/* Waits up to timeout_ms for a published frame of view_id newer than after_id; returns it (a new
+ * reference) or NULL on timeout. */
+srv_frame *srv_encoder_wait_frame(srv_encoder_pool *p, uint32_t view_id, uint64_t after_id,
+                                  unsigned timeout_ms);
+/* Drops the view's published frame (the view was freed). */
+void srv_encoder_forget_view(srv_encoder_pool *p, uint32_t view_id);
 void srv_encoder_get_stats(srv_encoder_pool *p, srv_encoder_stats *out);
 
 #endif

@@ -25,6 +25,7 @@
 
 #define DEFAULT_MAX_UPLOAD (256u << 20)
 #define CALL_TIMEOUT_MS 30000
+#define FRAME_TIMEOUT_MS 60000 /* GET /v1/frame.jpg waits this long for a frame to be rendered */
 #define SCENE_TIMEOUT_MS 300000
 #define MAX_CONCURRENT_UPLOADS 2
 #define STATIC_FILE_MAX (64u << 20)
@@ -44,6 +45,8 @@ typedef enum route {
     R_NODE,
     R_SETTINGS,
     R_FRAME,
+    R_VIEWS,
+    R_VIEW_CAMERA,
     R_UNKNOWN, /* under /v1/ but no such resource */
     R_COUNT
 } route;
@@ -61,6 +64,8 @@ static const unsigned route_methods[R_COUNT] = {
     [R_NODE] = M_GET | M_HEAD | M_PATCH,
     [R_SETTINGS] = M_GET | M_HEAD | M_PATCH,
     [R_FRAME] = M_GET | M_HEAD,
+    [R_VIEWS] = M_GET | M_HEAD,
+    [R_VIEW_CAMERA] = M_GET | M_HEAD | M_PUT | M_PATCH,
     [R_UNKNOWN] = 0,
 };
 
@@ -227,7 +232,8 @@ static route match(const char *url, uint32_t *id, bool *id_ok)
     } fixed[] = {{"/v1/health", R_HEALTH},        {"/v1/stats", R_STATS},
                  {"/v1/openapi.yaml", R_OPENAPI}, {"/v1/scene", R_SCENE},
                  {"/v1/camera", R_CAMERA},        {"/v1/lights", R_LIGHTS},
-                 {"/v1/settings", R_SETTINGS},    {"/v1/frame.jpg", R_FRAME}};
+                 {"/v1/settings", R_SETTINGS},    {"/v1/frame.jpg", R_FRAME},
+                 {"/v1/views", R_VIEWS}};
     for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; i++)
         if (strcmp(url, fixed[i].path) == 0) return fixed[i].r;
     if (strncmp(url, "/v1/lights/", 11) == 0) {
@@ -237,6 +243,19 @@ static route match(const char *url, uint32_t *id, bool *id_ok)
     if (strncmp(url, "/v1/nodes/", 10) == 0) {
         *id_ok = parse_id(url + 10, id);
         return R_NODE;
+    }
+    if (strncmp(url, "/v1/views/", 10) == 0) {
+        const char *rest = url + 10, *slash = strchr(rest, '/');
+        if (!slash || strcmp(slash, "/camera") != 0) return R_UNKNOWN;
+        char num[16];
+        size_t n = (size_t)(slash - rest);
+        *id_ok = n < sizeof num;
+        if (*id_ok) {
+            memcpy(num, rest, n);
+            num[n] = 0;
+            *id_ok = parse_id(num, id);
+        }
+        return R_VIEW_CAMERA;
     }
     return R_UNKNOWN;
 }
@@ -368,29 +387,56 @@ static enum MHD_Result handle_health(srv_http *h, struct MHD_Connection *conn, r
     cJSON *st = cJSON_AddObjectToObject(j, "stream");
     cJSON_AddNumberToObject(st, "port", h->cfg.ws ? srv_ws_port(h->cfg.ws) : 0);
     cJSON_AddStringToObject(st, "path", "/v1/stream");
-    cJSON_AddStringToObject(st, "subprotocol", "probecast.v1");
+    cJSON_AddStringToObject(st, "subprotocol", "probecast.v2");
     if (rs.device_lost) cJSON_AddStringToObject(j, "error", rs.last_error);
     return respond_json(h, conn, rq, rs.device_lost ? 503 : 200, j);
 }
 
+/* GET /v1/frame.jpg[?view=ID]: the view's current frame; when it has none, or owes one, the
+ * render thread is asked for it and the request waits for its encoding. */
+static double frame_after(const cJSON *j)
+{
+    const cJSON *a = cJSON_GetObjectItemCaseSensitive(j, "after");
+    return cJSON_IsNumber(a) && a->valuedouble >= 0 ? a->valuedouble : 0;
+}
+
 static enum MHD_Result handle_frame(srv_http *h, struct MHD_Connection *conn, request *rq)
 {
-    srv_frame *f = srv_encoder_latest(h->cfg.encoders);
+    uint32_t view = 0;
+    const char *q = MHD_lookup_connection_value(conn, MHD_GET_ARGUMENT_KIND, "view");
+    if (q && !parse_id(q, &view))
+        return respond_error(h, conn, rq, 400, SRV_ERR_INVALID_FIELD,
+                             "Query 'view' must be a view id (GET /v1/views lists them).");
+    srv_cmd *c = srv_cmd_new(SRV_CMD_FRAME_REQUEST);
+    c->view = view;
+    srv_render_call(h->cfg.loop, c, CALL_TIMEOUT_MS);
+    if (c->reply.status != 200) {
+        enum MHD_Result r = respond_reply(h, conn, rq, c);
+        srv_cmd_unref(c);
+        return r;
+    }
+    cJSON *j = cJSON_Parse(c->reply.body ? c->reply.body : "");
+    double after = frame_after(j);
+    cJSON_Delete(j);
+    srv_cmd_unref(c);
+    srv_frame *f = srv_encoder_wait_frame(h->cfg.encoders, view, (uint64_t)after, FRAME_TIMEOUT_MS);
     if (!f)
         return respond_error(h, conn, rq, 503, SRV_ERR_UNAVAILABLE,
-                             "No frame has been rendered yet.");
-    const srv_jpeg *j = srv_frame_best(f);
+                             "No frame of view %u was rendered in time.", view);
+    const srv_jpeg *jp = srv_frame_best(f);
     struct MHD_Response *resp =
-        MHD_create_response_from_buffer(j->size, j->data, MHD_RESPMEM_MUST_COPY);
-    char id[32], q[8];
+        MHD_create_response_from_buffer(jp->size, jp->data, MHD_RESPMEM_MUST_COPY);
+    char id[32], qs[8], vs[16];
     snprintf(id, sizeof id, "%llu", (unsigned long long)f->info.frame_id);
-    snprintf(q, sizeof q, "%u", j->quality);
+    snprintf(qs, sizeof qs, "%u", jp->quality);
+    snprintf(vs, sizeof vs, "%u", f->info.view_id);
     srv_frame_unref(f);
     if (!resp) return MHD_NO;
     MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, "image/jpeg");
     MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
     MHD_add_response_header(resp, "X-Frame-Id", id);
-    MHD_add_response_header(resp, "X-Frame-Quality", q);
+    MHD_add_response_header(resp, "X-Frame-Quality", qs);
+    MHD_add_response_header(resp, "X-View-Id", vs);
     enum MHD_Result r = MHD_queue_response(conn, 200, resp);
     MHD_destroy_response(resp);
     count_status(h, rq, 200);
@@ -418,8 +464,25 @@ static enum MHD_Result handle_upload(srv_http *h, struct MHD_Connection *conn, r
         srv_warn("http", "uploaded scene: %s", scene->warnings[i]);
     srv_info("http", "scene upload of %zu bytes parsed in %.0f ms (%llu triangles)", rq->len,
              srv_mono_ms() - t0, (unsigned long long)scene->tri_total);
+    /* the BVHs too are built here, on this connection's thread: the render thread only uploads
+     * them, so viewers keep seeing the old scene meanwhile */
+    rd_gpu_scene_prep *prep = calloc(1, sizeof *prep);
+    if (!prep) abort();
+    double t1 = srv_mono_ms();
+    rd_vk_result pr = rd_gpu_scene_prepare(prep, scene, err, sizeof err);
+    if (pr != RD_VK_OK) {
+        free(prep);
+        rd_scene_destroy(scene);
+        free(scene);
+        pthread_mutex_lock(&h->counters_mu);
+        h->counters.uploads_rejected++;
+        pthread_mutex_unlock(&h->counters_mu);
+        return respond_error(h, conn, rq, 422, SRV_ERR_INVALID_GLTF, "%s", err);
+    }
+    srv_info("http", "BVHs of the upload built in %.0f ms", srv_mono_ms() - t1);
     srv_cmd *c = srv_cmd_new(SRV_CMD_REPLACE_SCENE);
     c->scene = scene;
+    c->prepared = prep;
     snprintf(c->source, sizeof c->source, "upload");
     srv_render_call(h->cfg.loop, c, SCENE_TIMEOUT_MS);
     pthread_mutex_lock(&h->counters_mu);
@@ -438,45 +501,91 @@ static enum MHD_Result handle_upload(srv_http *h, struct MHD_Connection *conn, r
     return r;
 }
 
+/* Answers a GET from the published snapshot (never waits for the render thread). */
+static enum MHD_Result handle_get(srv_http *h, struct MHD_Connection *conn, request *rq)
+{
+    srv_snapshot *snap = h->cfg.snapshot;
+    char *text = NULL;
+    srv_view_info vi;
+    switch (rq->route) {
+    case R_SCENE:
+        text = srv_snapshot_print(snap, SRV_DOC_SCENE, NULL);
+        break;
+    case R_LIGHTS:
+        text = srv_snapshot_print(snap, SRV_DOC_LIGHTS, NULL);
+        break;
+    case R_SETTINGS:
+        text = srv_snapshot_print(snap, SRV_DOC_SETTINGS, NULL);
+        break;
+    case R_VIEWS:
+        text = srv_snapshot_print(snap, SRV_DOC_VIEWS, NULL);
+        break;
+    case R_LIGHT:
+        text = srv_snapshot_print_light(snap, rq->id);
+        if (!text)
+            return respond_error(h, conn, rq, 404, SRV_ERR_NOT_FOUND,
+                                 "There is no light with id %u.", rq->id);
+        break;
+    case R_NODE:
+        text = srv_snapshot_print_node(snap, rq->id);
+        if (!text)
+            return respond_error(h, conn, rq, 404, SRV_ERR_NOT_FOUND,
+                                 "There is no node with id %u.", rq->id);
+        break;
+    case R_CAMERA:
+    case R_VIEW_CAMERA: {
+        uint32_t id = rq->route == R_CAMERA ? SRV_DEFAULT_VIEW : rq->id;
+        if (!srv_snapshot_view(snap, id, &vi))
+            return respond_error(h, conn, rq, 404, SRV_ERR_NOT_FOUND,
+                                 "There is no view with id %u.", id);
+        text = srv_json_print_delete(srv_json_camera(&vi.camera));
+        break;
+    }
+    default:
+        break;
+    }
+    if (!text)
+        return respond_error(h, conn, rq, 503, SRV_ERR_UNAVAILABLE,
+                             "The server is still starting.");
+    return respond(h, conn, rq, 200, "application/json", text, strlen(text));
+}
+
 static enum MHD_Result handle_json_route(srv_http *h, struct MHD_Connection *conn, request *rq)
 {
+    if (rq->method & (M_GET | M_HEAD)) return handle_get(h, conn, rq);
     srv_api_error e;
     cJSON *body = NULL;
     if (rq->body == BODY_JSON) {
         body = srv_json_parse_object((const char *)rq->data, rq->len, &e);
         if (!body) return respond_api_error(h, conn, rq, &e);
     }
-    bool get = rq->method & (M_GET | M_HEAD);
     srv_cmd *c = NULL;
     bool ok = true;
     switch (rq->route) {
-    case R_SCENE:
-        c = srv_cmd_new(SRV_CMD_GET_SCENE);
-        break;
     case R_CAMERA:
-        c = srv_cmd_new(get ? SRV_CMD_GET_CAMERA : SRV_CMD_SET_CAMERA);
+    case R_VIEW_CAMERA:
+        c = srv_cmd_new(SRV_CMD_SET_CAMERA);
+        c->view = rq->route == R_CAMERA ? SRV_DEFAULT_VIEW : rq->id;
         c->replace = rq->method == M_PUT;
-        if (!get) ok = srv_json_camera_patch(body, &c->camera, &e);
+        ok = srv_json_camera_patch(body, &c->camera, &e);
         break;
     case R_LIGHTS:
-        c = srv_cmd_new(get ? SRV_CMD_GET_LIGHTS : SRV_CMD_ADD_LIGHT);
-        if (!get) ok = srv_json_light_patch(body, &c->light, &e);
+        c = srv_cmd_new(SRV_CMD_ADD_LIGHT);
+        ok = srv_json_light_patch(body, &c->light, &e);
         break;
     case R_LIGHT:
-        c = srv_cmd_new(get                      ? SRV_CMD_GET_LIGHT
-                        : rq->method == M_DELETE ? SRV_CMD_DELETE_LIGHT
-                                                 : SRV_CMD_PATCH_LIGHT);
+        c = srv_cmd_new(rq->method == M_DELETE ? SRV_CMD_DELETE_LIGHT : SRV_CMD_PATCH_LIGHT);
         c->id = rq->id;
         if (rq->method == M_PATCH) ok = srv_json_light_patch(body, &c->light, &e);
         break;
     case R_NODE:
-        c = srv_cmd_new(get ? SRV_CMD_GET_NODE : SRV_CMD_PATCH_NODE);
+        c = srv_cmd_new(SRV_CMD_PATCH_NODE);
         c->id = rq->id;
-        if (!get) ok = srv_json_node_patch(body, &c->node, &e);
+        ok = srv_json_node_patch(body, &c->node, &e);
         break;
     case R_SETTINGS:
-        c = srv_cmd_new(get ? SRV_CMD_GET_SETTINGS : SRV_CMD_PATCH_SETTINGS);
-        if (!get) ok = srv_json_settings_patch(body, &c->settings, &e);
+        c = srv_cmd_new(SRV_CMD_PATCH_SETTINGS);
+        ok = srv_json_settings_patch(body, &c->settings, &e);
         break;
     default:
         break;
@@ -613,6 +722,11 @@ static enum MHD_Result dispatch(srv_http *h, struct MHD_Connection *conn, reques
         if (!rq->id_ok)
             return respond_error(h, conn, rq, 404, SRV_ERR_NOT_FOUND, "'%s' is not a %s id.",
                                  strrchr(url, '/') + 1, rq->route == R_LIGHT ? "light" : "node");
+        return handle_json_route(h, conn, rq);
+    case R_VIEW_CAMERA:
+        if (!rq->id_ok)
+            return respond_error(h, conn, rq, 404, SRV_ERR_NOT_FOUND, "Not a view id in '%s'.",
+                                 url);
         return handle_json_route(h, conn, rq);
     default:
         return handle_json_route(h, conn, rq);

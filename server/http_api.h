@@ -1,9 +1,10 @@
 /* http_api.h: the HTTP API v1 (protocol/openapi.yaml) and the viewer's static files, on
  * libmicrohttpd with one thread per connection.
  *
- * A connection's thread parses and validates the request (JSON bodies, glTF uploads), posts a
- * command to the render thread and waits for its reply, so nothing here touches the scene or
- * the GPU. Limits are applied before a body is read: the token (401), the media type (415) and
+ * GET routes answer from the published snapshot (snapshot.h) without waiting for the render
+ * thread. For a change, a connection's thread parses and validates the request (JSON bodies;
+ * glTF uploads, whose BVHs it builds too), posts a command to the render thread and waits for its
+ * reply, so nothing here touches the scene or the GPU. Limits are applied before a body is read: the token (401), the media type (415) and
  * Content-Length against the upload cap (413); bodies without a length are counted as they
  * arrive. Every error answers {"error": code, "message": sentence}.
  */
@@ -31,6 +32,7 @@ typedef struct srv_http_config {
     srv_render_loop *loop;
     srv_encoder_pool *encoders;
     srv_ws_stream *ws;
+    srv_snapshot *snapshot; /* GET routes answer from it */
     srv_persist *persist; /* may be NULL */
 } srv_http_config;
 

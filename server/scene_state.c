@@ -12,23 +12,6 @@
 
 #define BAD(...) (srv_api_fail(e, 400, SRV_ERR_INVALID_FIELD, __VA_ARGS__), false)
 
-void srv_settings_defaults(srv_settings *s)
-{
-    memset(s, 0, sizeof *s);
-    s->width = 960;
-    s->height = 540;
-    s->max_pixels = 1920 * 1080;
-    s->max_fps = 30;
-    s->quality_interactive = 60;
-    s->quality_still = 90;
-    s->still_delay_ms = 150;
-    s->tonemap = PC_TONEMAP_ACES;
-    s->view = PC_VIEW_FINAL;
-    s->gi_mode = PC_GI_DDGI;
-    s->rays_per_probe = 256;
-    s->hysteresis = 0.97f;
-}
-
 void srv_state_init(srv_scene_state *st)
 {
     memset(st, 0, sizeof *st);
@@ -291,52 +274,6 @@ bool srv_state_node_apply(srv_scene_state *st, uint32_t id, const srv_node_patch
     }
     st->node_moved[id] = true;
     return true;
-}
-
-/* ---- settings ---------------------------------------------------------------------------------
- */
-
-bool srv_state_settings_apply(srv_settings *s, const srv_settings_patch *p, srv_api_error *e)
-{
-    srv_settings n = *s;
-    const srv_settings *v = &p->v;
-    unsigned h = p->has;
-    if (h & SRV_SET_WIDTH) n.width = v->width;
-    if (h & SRV_SET_HEIGHT) n.height = v->height;
-    if (h & SRV_SET_MAX_PIXELS) n.max_pixels = v->max_pixels;
-    if (h & SRV_SET_MAX_FPS) n.max_fps = v->max_fps;
-    if (h & SRV_SET_QUALITY_INTERACTIVE) n.quality_interactive = v->quality_interactive;
-    if (h & SRV_SET_QUALITY_STILL) n.quality_still = v->quality_still;
-    if (h & SRV_SET_STILL_DELAY) n.still_delay_ms = v->still_delay_ms;
-    if (h & SRV_SET_EXPOSURE) n.exposure_ev = v->exposure_ev;
-    if (h & SRV_SET_TONEMAP) n.tonemap = v->tonemap;
-    if (h & SRV_SET_SKY) memcpy(n.sky, v->sky, sizeof n.sky);
-    if (h & SRV_SET_VIEW) n.view = v->view;
-    if (h & SRV_SET_GI_MODE) n.gi_mode = v->gi_mode;
-    if (h & SRV_SET_PROBE_COUNTS) memcpy(n.probe_counts, v->probe_counts, sizeof n.probe_counts);
-    if (h & SRV_SET_PROBE_SPACING) n.probe_spacing = v->probe_spacing;
-    if (h & SRV_SET_RAYS) n.rays_per_probe = v->rays_per_probe;
-    if (h & SRV_SET_HYSTERESIS) n.hysteresis = v->hysteresis;
-    if (h & SRV_SET_ANIMATE) n.animate = v->animate;
-    if ((uint64_t)n.width * n.height > n.max_pixels)
-        return BAD("%ux%u is more than max_pixels (%u).", n.width, n.height, n.max_pixels);
-    if (n.view != PC_VIEW_FINAL && n.gi_mode != PC_GI_CLASSIC && n.gi_mode != PC_GI_DDGI)
-        return BAD("The irradiance and probes views need gi_mode classic or ddgi.");
-    uint64_t probes = (uint64_t)n.probe_counts[0] * n.probe_counts[1] * n.probe_counts[2];
-    if (probes > 65535)
-        return BAD("At most 65535 probes (probe_counts give %llu).", (unsigned long long)probes);
-    *s = n;
-    return true;
-}
-
-void srv_settings_to_gi(const srv_settings *s, rd_ddgi_settings *gi)
-{
-    memset(gi, 0, sizeof *gi);
-    gi->mode = s->gi_mode == SRV_GI_PATHTRACE ? PC_GI_OFF : s->gi_mode; /* no probes */
-    memcpy(gi->counts, s->probe_counts, sizeof gi->counts);
-    gi->spacing[0] = gi->spacing[1] = gi->spacing[2] = s->probe_spacing;
-    gi->rays = s->rays_per_probe;
-    gi->hysteresis = s->hysteresis > 0 ? s->hysteresis : 1e-9f; /* 0 means default there */
 }
 
 /* ---- persistence document --------------------------------------------------------------- */

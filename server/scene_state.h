@@ -1,5 +1,6 @@
 /* scene_state.h: what the render thread owns besides the GPU: the scene model, stable light
- * ids, the shared view's camera and the settings, and how API patches change them.
+ * ids, the shared view's camera and the settings, and how API patches change them (settings
+ * patches: srv_state_settings_apply in settings.h).
  *
  * Everything here is plain CPU code (tested without a GPU). Each apply function validates
  * the patch against the current state and either changes the state completely or leaves it
@@ -26,9 +27,6 @@ typedef struct srv_scene_state {
     srv_settings settings;
 } srv_scene_state;
 
-/* Defaults of every setting (the server's options start from these). */
-void srv_settings_defaults(srv_settings *s);
-
 /* Empty state with default settings. */
 void srv_state_init(srv_scene_state *st);
 void srv_state_dispose(srv_scene_state *st); /* idempotent */
@@ -52,12 +50,9 @@ bool srv_state_light_delete(srv_scene_state *st, uint32_t id, srv_api_error *e);
 /* Moves node id and recomputes world matrices (rd_scene_update). */
 bool srv_state_node_apply(srv_scene_state *st, uint32_t id, const srv_node_patch *p,
                           srv_api_error *e);
-bool srv_state_settings_apply(srv_settings *s, const srv_settings_patch *p, srv_api_error *e);
 
 void srv_camera_from_view(const rd_view_camera *v, float target_distance, srv_camera *c);
 void srv_camera_to_view(const srv_camera *c, rd_view_camera *v);
-/* The renderer's GI settings for s. */
-void srv_settings_to_gi(const srv_settings *s, rd_ddgi_settings *gi);
 
 /* The persisted document: {"camera", "settings", "lights", "nodes"} (moved nodes only). */
 cJSON *srv_state_to_json(const srv_scene_state *st);

@@ -26,10 +26,10 @@ cJSON *srv_stats_json(const srv_stats_snapshot *s)
     cJSON_AddItemToArray(res, cJSON_CreateNumber(r->height));
     cJSON_AddNumberToObject(j, "frame_ms", r->frame_ms_last);
     cJSON *gpu = cJSON_AddObjectToObject(j, "gpu_ms");
-    for (unsigned i = 0; i < r->pass_count; i++)
-        cJSON_AddNumberToObject(gpu, r->pass_name[i], r->pass_ms[i]);
-    cJSON_AddNumberToObject(j, "gpu_ms_total", r->gpu_ms_last);
-    cJSON_AddNumberToObject(j, "rays_last_frame", (double)r->rays_last);
+    for (unsigned i = 0; i < r->view_passes.count; i++)
+        cJSON_AddNumberToObject(gpu, r->view_passes.name[i], r->view_passes.ms[i]);
+    cJSON_AddNumberToObject(j, "gpu_ms_total", r->view_passes.total_ms);
+    cJSON_AddNumberToObject(j, "rays_last_frame", (double)r->view_passes.rays);
     cJSON_AddNumberToObject(j, "rays_per_second", r->rays_per_second);
     cJSON *enc = cJSON_AddObjectToObject(j, "encoder");
     cJSON_AddNumberToObject(enc, "encode_ms", s->encoder.encode_ms_avg);
@@ -37,6 +37,17 @@ cJSON *srv_stats_json(const srv_stats_snapshot *s)
     cJSON_AddNumberToObject(enc, "jpegs_encoded", (double)s->encoder.jpegs_encoded);
     cJSON_AddNumberToObject(enc, "frames_published", (double)s->encoder.frames_published);
     cJSON_AddNumberToObject(enc, "frames_dropped", (double)s->encoder.frames_dropped);
+    cJSON *w = cJSON_AddObjectToObject(j, "world");
+    cJSON_AddNumberToObject(w, "ticks", (double)r->world_ticks);
+    cJSON_AddNumberToObject(w, "probe_updates", (double)r->world_updates_total);
+    cJSON_AddNumberToObject(w, "probe_updates_per_second", r->world_updates_per_second);
+    cJSON *wgpu = cJSON_AddObjectToObject(w, "gpu_ms");
+    for (unsigned i = 0; i < r->world_passes.count; i++)
+        cJSON_AddNumberToObject(wgpu, r->world_passes.name[i], r->world_passes.ms[i]);
+    cJSON_AddNumberToObject(w, "gpu_ms_total", r->world_passes.total_ms);
+    cJSON *vw = cJSON_AddObjectToObject(j, "views");
+    cJSON_AddNumberToObject(vw, "count", r->views);
+    cJSON_AddNumberToObject(vw, "watched", r->views_watched);
     cJSON *p = cJSON_AddObjectToObject(j, "probes");
     cJSON_AddStringToObject(p, "mode", srv_gi_mode_name(r->gi_mode));
     cJSON *c = cJSON_AddArrayToObject(p, "counts");
@@ -55,6 +66,7 @@ cJSON *srv_stats_json(const srv_stats_snapshot *s)
     cJSON_AddNumberToObject(st, "frames_sent", (double)s->stream.frames_sent);
     cJSON_AddNumberToObject(st, "frames_skipped", (double)s->stream.frames_skipped);
     cJSON_AddNumberToObject(st, "messages_received", (double)s->stream.messages_received);
+    cJSON_AddNumberToObject(st, "events_sent", (double)s->stream.events_sent);
     cJSON_AddNumberToObject(st, "lag_ms_max", s->stream.lag_ms_max);
     cJSON_AddNumberToObject(st, "connections_rejected", (double)s->stream.connections_rejected);
     cJSON_AddNumberToObject(st, "connections_closed_for_abuse",
@@ -119,16 +131,26 @@ char *srv_stats_prometheus(const srv_stats_snapshot *s)
     metric(&t, "probecast_frames_rendered_total", "counter", "Frames rendered.",
            (double)r->frames_rendered);
     metric(&t, "probecast_frame_gpu_milliseconds", "gauge", "GPU time of the last frame.",
-           r->gpu_ms_last);
-    put(&t, "# HELP probecast_pass_gpu_milliseconds GPU time of each pass of the last frame.\n"
+           r->view_passes.total_ms);
+    put(&t, "# HELP probecast_pass_gpu_milliseconds GPU time of each pass of the last frame "
+            "and of the last world update.\n"
             "# TYPE probecast_pass_gpu_milliseconds gauge\n");
-    for (unsigned i = 0; i < r->pass_count; i++) {
-        char label[SRV_PASS_NAME_MAX];
-        snprintf(label, sizeof label, "%s", r->pass_name[i]);
-        for (char *q = label; *q; q++)
-            if (*q == '"' || *q == '\\' || *q == '\n') *q = '_';
-        put(&t, "probecast_pass_gpu_milliseconds{pass=\"%s\"} %.17g\n", label, r->pass_ms[i]);
-    }
+    const srv_pass_times *sets[2] = {&r->view_passes, &r->world_passes};
+    for (int k = 0; k < 2; k++)
+        for (unsigned i = 0; i < sets[k]->count; i++) {
+            char label[SRV_PASS_NAME_MAX];
+            snprintf(label, sizeof label, "%s", sets[k]->name[i]);
+            for (char *q = label; *q; q++)
+                if (*q == '"' || *q == '\\' || *q == '\n') *q = '_';
+            put(&t, "probecast_pass_gpu_milliseconds{pass=\"%s\"} %.17g\n", label,
+                sets[k]->ms[i]);
+        }
+    metric(&t, "probecast_world_ticks_total", "counter", "Times the shared world advanced.",
+           (double)r->world_ticks);
+    metric(&t, "probecast_probe_updates_total", "counter", "DDGI probe updates run.",
+           (double)r->world_updates_total);
+    metric(&t, "probecast_views", "gauge", "Views (the default view and one per viewer).",
+           r->views);
     metric(&t, "probecast_rays_per_second", "gauge",
            "Rays per second of GPU time in the last frame.", r->rays_per_second);
     metric(&t, "probecast_probes", "gauge", "DDGI probes.", r->probes);

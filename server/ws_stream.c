@@ -4,6 +4,7 @@
 
 #include <libwebsockets.h>
 #include <math.h>
+#include <stdarg.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -22,12 +23,22 @@
 #define ACK_STALL_MS 1000          /* after this long without acks, stop waiting for them */
 #define RATE_LIMIT_PER_S 1000      /* viewer messages per second before the connection is closed */
 #define STOP_GRACE_MS 1000
+#define TEXT_QUEUE 16              /* server text messages waiting per viewer (v2) */
+#define EVENT_MAX (4u << 20)       /* the largest event document sent (bytes) */
 
 typedef struct viewer {
     struct lws *wsi;
     struct viewer *prev, *next;
     uint32_t id;
     char ip[64];
+    /* views (protocol/stream.md): version 2 owns a view; version 1 shares view 0 */
+    unsigned version;
+    uint32_t own_view;  /* 0 for version 1 */
+    uint32_t watching;  /* the view whose frames it is sent */
+    /* server text messages (version 2): a small queue, then the newest events */
+    char *texts[TEXT_QUEUE];
+    unsigned text_head, text_count;
+    uint64_t seen[SRV_DOC_COUNT], seen_node;
     /* input: which ticket carried which seq */
     struct {
         uint64_t ticket;
@@ -46,7 +57,7 @@ typedef struct viewer {
     const srv_jpeg *cur_jpeg;
     size_t cur_pos; /* bytes of the current message sent (header included) */
     uint8_t cur_header[PROTO_STREAM_HEADER_SIZE];
-    uint64_t last_sent_id;
+    uint64_t last_sent_id; /* of the watched view (frame ids are global over views) */
     struct {
         uint64_t id;
         double ms;
@@ -66,16 +77,16 @@ struct srv_ws_stream {
     char token[256], http_host[256];
     struct lws_context *ctx;
     struct lws_vhost *vhost;
-    struct lws_protocols protocols[2];
+    struct lws_protocols protocols[3];
     lws_retry_bo_t retry;
     lws_sorted_usec_list_t tick;
     pthread_t thread;
     bool started;
-    atomic_bool stopping, frame_pending;
+    atomic_bool stopping, frame_pending, event_pending;
     bool exit_loop;
     double stop_deadline_ms;
     viewer *viewers; /* service thread only */
-    unsigned viewer_count;
+    unsigned viewer_count, v2_count;
     uint32_t next_viewer_id;
     uint64_t bytes_at_tick;
     double tick_ms;
@@ -189,6 +200,31 @@ static bool token_ok(srv_ws_stream *ws, struct lws *wsi)
     return false;
 }
 
+/* Whether the client asked for protocol version 2 (its own view). */
+static bool offers_v2(struct lws *wsi)
+{
+    char buf[1024];
+    int n = lws_hdr_copy(wsi, buf, sizeof buf, WSI_TOKEN_PROTOCOL);
+    for (char *save = NULL, *t = n > 0 ? strtok_r(buf, ", ", &save) : NULL; t;
+         t = strtok_r(NULL, ", ", &save))
+        if (strcmp(t, "probecast.v2") == 0) return true;
+    return false;
+}
+
+typedef struct srv_settings_view_size {
+    unsigned width, height;
+} srv_settings_view_size;
+
+/* The size a new view starts at (the width and height settings, as published). */
+static srv_settings_view_size default_size(srv_ws_stream *ws)
+{
+    srv_settings_view_size sz = {0, 0};
+    srv_view_info v0;
+    if (srv_snapshot_view(ws->cfg.snapshot, SRV_DEFAULT_VIEW, &v0))
+        sz.width = v0.width, sz.height = v0.height;
+    return sz;
+}
+
 /* 0 to accept the upgrade, else a reason logged and the connection refused. */
 static const char *handshake_refusal(srv_ws_stream *ws, struct lws *wsi)
 {
@@ -207,6 +243,13 @@ static const char *handshake_refusal(srv_ws_stream *ws, struct lws *wsi)
     }
     if (!token_ok(ws, wsi)) return "missing or wrong token";
     if (ws->viewer_count >= ws->cfg.max_viewers) return "too many viewers";
+    if (offers_v2(wsi)) {
+        srv_view_limits lim;
+        srv_render_view_limits(ws->cfg.loop, &lim);
+        if (ws->v2_count + 1 >= lim.max_views)
+            return "too many views (the server's --max-views); connect with probecast.v1 to "
+                   "share the default view";
+    }
     char ip[64] = "";
     lws_get_peer_simple(wsi, ip, sizeof ip);
     unsigned same = 0;
@@ -254,8 +297,9 @@ static bool flow_blocked(const viewer *v, double now)
     return v->acked_any && unacked(v) >= MAX_UNACKED && now - v->last_ack_ms < ACK_STALL_MS;
 }
 
-static uint32_t seq_for(const viewer *v, uint64_t ticket)
+static uint32_t seq_for(const viewer *v, uint32_t view, uint64_t ticket)
 {
+    if (view != v->own_view) return 0; /* its camera messages go to its own view only */
     for (unsigned i = 0; i < v->input_count; i++) {
         unsigned k = (v->input_head + INPUT_RING - 1 - i) % INPUT_RING;
         if (v->inputs[k].ticket <= ticket) return v->inputs[k].seq;
@@ -266,7 +310,7 @@ static uint32_t seq_for(const viewer *v, uint64_t ticket)
 /* Whether a newer frame than the viewer's last one is published. */
 static bool has_new_frame(srv_ws_stream *ws, const viewer *v)
 {
-    srv_frame *f = srv_encoder_latest(ws->cfg.encoders);
+    srv_frame *f = srv_encoder_latest(ws->cfg.encoders, v->watching);
     bool fresh = f && f->info.frame_id > v->last_sent_id;
     srv_frame_unref(f);
     return fresh;
@@ -280,14 +324,136 @@ static void close_viewer(viewer *v, int code, const char *reason)
     lws_callback_on_writable(v->wsi);
 }
 
-/* Sends the next fragment of the viewer's frame, starting the newest frame when idle.
- * Returns -1 when the connection must close. */
+/* ---- server text messages (version 2) ------------------------------------------------------ */
+
+/* Queues a text message (taken); a viewer that lets TEXT_QUEUE pile up is too slow to keep. */
+static void queue_text(viewer *v, char *text)
+{
+    if (v->version < 2) {
+        free(text);
+        return;
+    }
+    if (v->text_count == TEXT_QUEUE) {
+        free(text);
+        close_viewer(v, LWS_CLOSE_STATUS_POLICY_VIOLATION, "not reading messages");
+        return;
+    }
+    v->texts[(v->text_head + v->text_count++) % TEXT_QUEUE] = text;
+    lws_callback_on_writable(v->wsi);
+}
+
+static void queue_textf(viewer *v, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void queue_textf(viewer *v, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    char *text = NULL;
+    if (vasprintf(&text, fmt, ap) < 0) abort();
+    va_end(ap);
+    queue_text(v, text);
+}
+
+static char *event_text(const char *what, const char *doc)
+{
+    char *text = NULL;
+    if (asprintf(&text, "{\"type\":\"event\",\"what\":\"%s\",\"data\":%s}", what, doc) < 0)
+        abort();
+    return text;
+}
+
+/* The next text message for v (malloc'd), or NULL: the queue first, then each kind of event
+ * whose document changed since v saw it (only the newest document of a kind is sent). */
+static char *next_text(srv_ws_stream *ws, viewer *v)
+{
+    if (v->version < 2) return NULL;
+    if (v->text_count) {
+        char *t = v->texts[v->text_head];
+        v->text_head = (v->text_head + 1) % TEXT_QUEUE;
+        v->text_count--;
+        return t;
+    }
+    for (int k = 0; k < SRV_DOC_COUNT; k++) {
+        if (srv_snapshot_version(ws->cfg.snapshot, (srv_doc)k) <= v->seen[k]) continue;
+        char *doc = srv_snapshot_print(ws->cfg.snapshot, (srv_doc)k, &v->seen[k]);
+        if (!doc) continue;
+        char *t = strlen(doc) <= EVENT_MAX ? event_text(srv_doc_name((srv_doc)k), doc) : NULL;
+        free(doc);
+        if (t) return t;
+    }
+    uint64_t ver;
+    char *doc = srv_snapshot_next_node(ws->cfg.snapshot, v->seen_node, &ver);
+    if (doc) {
+        v->seen_node = ver;
+        char *t = event_text("node", doc);
+        free(doc);
+        return t;
+    }
+    return NULL;
+}
+
+static bool has_news(srv_ws_stream *ws, const viewer *v)
+{
+    if (v->version < 2) return false;
+    if (v->text_count) return true;
+    for (int k = 0; k < SRV_DOC_COUNT; k++)
+        if (srv_snapshot_version(ws->cfg.snapshot, (srv_doc)k) > v->seen[k]) return true;
+    return srv_snapshot_node_version(ws->cfg.snapshot) > v->seen_node;
+}
+
+/* Sends one text message; -1 when the connection must close. */
+static int send_text(srv_ws_stream *ws, viewer *v, char *text)
+{
+    size_t len = strlen(text);
+    uint8_t *buf = malloc(LWS_PRE + len);
+    if (!buf) abort();
+    memcpy(buf + LWS_PRE, text, len);
+    free(text);
+    int n = lws_write(v->wsi, buf + LWS_PRE, len, LWS_WRITE_TEXT);
+    free(buf);
+    if (n < (int)len) return -1;
+    pthread_mutex_lock(&ws->stats_mu);
+    ws->stats.bytes_sent += len;
+    ws->stats.events_sent++;
+    pthread_mutex_unlock(&ws->stats_mu);
+    lws_callback_on_writable(v->wsi); /* more news, or the frame */
+    return 0;
+}
+
+/* Points v at view `view` (its own, or one it follows), moving its watch there. */
+static void watch(srv_ws_stream *ws, viewer *v, uint32_t view)
+{
+    if (view == v->watching) return;
+    srv_cmd *c = srv_cmd_new(SRV_CMD_VIEW_WATCH);
+    c->view = v->watching;
+    c->delta = -1;
+    srv_render_post(ws->cfg.loop, c);
+    c = srv_cmd_new(SRV_CMD_VIEW_WATCH);
+    c->view = view;
+    c->delta = 1;
+    srv_render_post(ws->cfg.loop, c);
+    v->watching = view;
+    v->last_sent_id = 0; /* frame ids of another view are not comparable */
+    queue_textf(v, "{\"type\":\"following\",\"view\":%u}", view);
+    lws_callback_on_writable(v->wsi);
+}
+
+/* Connections that follow a view whose owner left go back to their own view. */
+static void release_followers(srv_ws_stream *ws, uint32_t view)
+{
+    for (viewer *x = ws->viewers; x; x = x->next)
+        if (x->watching == view && x->own_view != view) watch(ws, x, x->own_view);
+}
+
+/* Sends the next fragment of the viewer's frame, starting the newest frame when idle (text
+ * messages go first, between frames). Returns -1 when the connection must close. */
 static int send_some(srv_ws_stream *ws, viewer *v)
 {
     double now = srv_mono_ms();
     if (!v->cur) {
+        char *text = next_text(ws, v);
+        if (text) return send_text(ws, v, text);
         if (flow_blocked(v, now)) return 0;
-        srv_frame *f = srv_encoder_latest(ws->cfg.encoders);
+        srv_frame *f = srv_encoder_latest(ws->cfg.encoders, v->watching);
         if (!f || f->info.frame_id <= v->last_sent_id) {
             srv_frame_unref(f);
             return 0;
@@ -303,11 +469,12 @@ static int send_some(srv_ws_stream *ws, viewer *v)
             .view_id = f->info.view_id,
             .width = f->width,
             .height = f->height,
-            .input_seq = seq_for(v, f->info.input_ticket),
+            .input_seq = seq_for(v, f->info.view_id, f->info.input_ticket),
             .jpeg_size = (uint32_t)v->cur_jpeg->size,
             .quality = (uint8_t)v->cur_jpeg->quality,
             .flags = f->info.still ? PROTO_STREAM_FLAG_STILL : 0,
         };
+        h.version = (uint16_t)v->version;
         proto_frame_header_pack(&h, v->cur_header);
         pthread_mutex_lock(&ws->stats_mu);
         if (v->last_sent_id && f->info.frame_id > v->last_sent_id + 1)
@@ -363,6 +530,7 @@ static void handle_message(srv_ws_stream *ws, viewer *v)
     switch (m.type) {
     case SRV_VIEWER_CAMERA: {
         srv_cmd *c = srv_cmd_new(SRV_CMD_VIEWER_CAMERA);
+        c->view = v->own_view;
         c->camera = m.camera;
         uint64_t ticket = srv_render_post(ws->cfg.loop, c);
         if (!ticket) {
@@ -381,9 +549,25 @@ static void handle_message(srv_ws_stream *ws, viewer *v)
     }
     case SRV_VIEWER_RESIZE: {
         srv_cmd *c = srv_cmd_new(SRV_CMD_VIEWER_RESIZE);
+        c->view = v->own_view;
         c->width = (unsigned)lroundf(m.width * m.dpr);
         c->height = (unsigned)lroundf(m.height * m.dpr);
         srv_render_post(ws->cfg.loop, c);
+        break;
+    }
+    case SRV_VIEWER_FOLLOW: {
+        if (v->version < 2) {
+            close_viewer(v, LWS_CLOSE_STATUS_POLICY_VIOLATION, "follow needs probecast.v2");
+            break;
+        }
+        uint32_t target = m.follow_own ? v->own_view : m.view;
+        srv_view_info info;
+        if (target != v->own_view && !srv_snapshot_view(ws->cfg.snapshot, target, &info)) {
+            queue_textf(v, "{\"type\":\"error\",\"message\":\"There is no view with id %u.\"}",
+                        target);
+            break;
+        }
+        watch(ws, v, target);
         break;
     }
     case SRV_VIEWER_ACK: {
@@ -449,12 +633,31 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
         return 1;
     }
 
-    case LWS_CALLBACK_ESTABLISHED:
+    case LWS_CALLBACK_ESTABLISHED: {
         memset(v, 0, sizeof *v);
         v->wsi = wsi;
         v->id = ++ws->next_viewer_id;
         v->cap = 100;
         lws_get_peer_simple(wsi, v->ip, sizeof v->ip);
+        v->version = offers_v2(wsi) ? 2 : 1;
+        if (v->version == 2) {
+            /* its own view, opened by the render thread; it watches it from the start */
+            v->own_view = v->watching = srv_render_new_view_id(ws->cfg.loop);
+            srv_cmd *c = srv_cmd_new(SRV_CMD_VIEW_OPEN);
+            c->view = v->own_view;
+            srv_render_post(ws->cfg.loop, c);
+            ws->v2_count++;
+            v->seen_node = srv_snapshot_node_version(ws->cfg.snapshot);
+            const srv_settings_view_size sz = default_size(ws);
+            queue_textf(v, "{\"type\":\"welcome\",\"protocol\":2,\"view\":%u,\"width\":%u,"
+                           "\"height\":%u}",
+                        v->own_view, sz.width, sz.height);
+        } else {
+            srv_cmd *c = srv_cmd_new(SRV_CMD_VIEW_WATCH);
+            c->view = SRV_DEFAULT_VIEW;
+            c->delta = 1;
+            srv_render_post(ws->cfg.loop, c);
+        }
         v->tx = malloc(LWS_PRE + FRAGMENT_BYTES);
         if (!v->tx) abort();
         v->next = ws->viewers;
@@ -466,6 +669,7 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
                  ws->viewer_count);
         lws_callback_on_writable(wsi); /* the current frame right away */
         return 0;
+    }
 
     case LWS_CALLBACK_CLOSED:
         if (!v->wsi) return 0;
@@ -475,6 +679,25 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
             ws->viewers = v->next;
         if (v->next) v->next->prev = v->prev;
         ws->viewer_count--;
+        {
+            srv_cmd *c = srv_cmd_new(SRV_CMD_VIEW_WATCH);
+            c->view = v->watching;
+            c->delta = -1;
+            srv_render_post(ws->cfg.loop, c);
+            if (v->version == 2) {
+                ws->v2_count--;
+                v->watching = v->own_view; /* its followers are released below */
+                release_followers(ws, v->own_view);
+                c = srv_cmd_new(SRV_CMD_VIEW_CLOSE);
+                c->view = v->own_view;
+                srv_render_post(ws->cfg.loop, c);
+            }
+            while (v->text_count) {
+                free(v->texts[v->text_head]);
+                v->text_head = (v->text_head + 1) % TEXT_QUEUE;
+                v->text_count--;
+            }
+        }
         srv_frame_unref(v->cur);
         v->cur = NULL;
         free(v->tx);
@@ -523,9 +746,12 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
         if (atomic_load(&ws->stopping)) {
             for (viewer *x = ws->viewers; x; x = x->next)
                 close_viewer(x, LWS_CLOSE_STATUS_GOINGAWAY, "server stopping");
-        } else if (atomic_exchange(&ws->frame_pending, false)) {
+        } else {
+            bool frames = atomic_exchange(&ws->frame_pending, false);
+            bool events = atomic_exchange(&ws->event_pending, false);
             for (viewer *x = ws->viewers; x; x = x->next)
-                if (!x->cur) lws_callback_on_writable(x->wsi);
+                if (!x->cur && (frames || (events && has_news(ws, x))))
+                    lws_callback_on_writable(x->wsi);
         }
         return 0;
 
@@ -585,12 +811,15 @@ srv_ws_stream *srv_ws_create(const srv_ws_config *cfg, char *err, size_t errlen)
     snprintf(ws->http_host, sizeof ws->http_host, "%s",
              cfg->http_host ? cfg->http_host : "127.0.0.1");
     pthread_mutex_init(&ws->stats_mu, NULL);
+    /* the first is what clients offering no subprotocol get; offers_v2 decides the version */
     ws->protocols[0] = (struct lws_protocols){
         .name = "probecast.v1",
         .callback = callback,
         .per_session_data_size = sizeof(viewer),
         .rx_buffer_size = SRV_VIEWER_MSG_MAX,
     };
+    ws->protocols[1] = ws->protocols[0];
+    ws->protocols[1].name = "probecast.v2";
     ws->retry = (lws_retry_bo_t){.secs_since_valid_ping = 20, .secs_since_valid_hangup = 40};
     lws_set_log_level(LLL_ERR | LLL_WARN, lws_log);
 
@@ -662,6 +891,13 @@ void srv_ws_frame_ready(void *arg)
 {
     srv_ws_stream *ws = arg;
     atomic_store(&ws->frame_pending, true);
+    lws_cancel_service(ws->ctx);
+}
+
+void srv_ws_event_ready(void *arg)
+{
+    srv_ws_stream *ws = arg;
+    atomic_store(&ws->event_pending, true);
     lws_cancel_service(ws->ctx);
 }
 

@@ -2,7 +2,10 @@
  *
  * One service thread owns every connection. Encoder threads only signal it (a frame was
  * published: lws_cancel_service); it then asks each idle viewer's socket for writability and
- * sends the newest frame, fragmented, at the quality the viewer's lag allows. Each viewer has
+ * sends the newest frame of the view the viewer watches, fragmented, at the quality the viewer's
+ * lag allows. Each version-2 connection owns a view (opened and closed through the render
+ * thread's mailbox) and may follow another; version-1 connections share view 0. World changes
+ * published to the snapshot go out as event messages between frames. Each viewer has
  * at most one frame in flight and the newest one pending (never a queue), so a slow viewer
  * only skips frames: it never slows the renderer or the other viewers. Viewer text messages
  * (camera, resize, ack) are validated, size- and rate-capped, and posted to the render thread.
@@ -27,11 +30,12 @@ typedef struct srv_ws_config {
     unsigned max_per_ip;  /* 0 = 64 */
     srv_render_loop *loop;
     srv_encoder_pool *encoders;
+    srv_snapshot *snapshot;
 } srv_ws_config;
 
 typedef struct srv_ws_stats {
     unsigned viewers;
-    uint64_t frames_sent, frames_skipped, bytes_sent, messages_received;
+    uint64_t frames_sent, frames_skipped, bytes_sent, messages_received, events_sent;
     uint64_t connections_rejected, connections_closed_for_abuse;
     double bandwidth_bps; /* bits per second sent over the last second */
     double lag_ms_max;    /* largest smoothed viewer lag */
@@ -49,6 +53,8 @@ bool srv_ws_start(srv_ws_stream *ws);
 void srv_ws_destroy(srv_ws_stream *ws);
 /* The encoder pool's listener: a new frame was published (any thread). */
 void srv_ws_frame_ready(void *ws);
+/* The snapshot's listener: the world changed, viewers get events (any thread). */
+void srv_ws_event_ready(void *ws);
 void srv_ws_get_stats(srv_ws_stream *ws, srv_ws_stats *out);
 
 /* The checks the handshake applies, exposed for tests. */

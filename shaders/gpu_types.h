@@ -188,10 +188,10 @@ PC_STRUCT(pc_scene_refs)
 }
 PC_END(pc_scene_refs);
 
-/* Camera and output settings for one frame.
+/* Camera and output settings for one frame of one view.
  * eye: xyz position; forward/right/up: camera basis scaled so that a pixel's direction is
  * forward + ndc.x * right + ndc.y * up with ndc in [-1, 1] (y up);
- * size: x width, y height, z frame index, w seed; sky: rgb radiance of misses;
+ * size: x width, y height, z frame index, w seed;
  * tonemap: x exposure scale (2^EV), y PC_TONEMAP_* as float, z PC_VIEW_* as float. */
 PC_STRUCT(pc_view)
 {
@@ -200,10 +200,17 @@ PC_STRUCT(pc_view)
     pc_vec4 right;
     pc_vec4 up;
     pc_uvec4 size;
-    pc_vec4 sky;
     pc_vec4 tonemap;
 }
 PC_END(pc_view);
+
+/* What the world around the scene looks like; shared by every view of a world.
+ * sky: rgb radiance of rays that escape (primary misses, probe rays, paths), w unused. */
+PC_STRUCT(pc_environment)
+{
+    pc_vec4 sky;
+}
+PC_END(pc_environment);
 
 /* ---- DDGI probe volume (Majercik et al. 2019) -------------------------------------------- */
 #define PC_GI_OFF 0u
@@ -246,12 +253,14 @@ PC_STRUCT(pc_ddgi_volume)
 }
 PC_END(pc_ddgi_volume);
 
-/* Everything a pass reads, in one GPU buffer reached by address. */
+/* Everything a pass reads, in one GPU buffer reached by address. scene, env and ddgi are the
+ * world's (rd_world_fill_globals); view is the rendering view's (zero for probe updates). */
 PC_STRUCT(pc_globals)
 {
     pc_scene_refs scene;
     pc_view view;
     pc_ddgi_volume ddgi;
+    pc_environment env;
 }
 PC_END(pc_globals);
 
@@ -321,10 +330,10 @@ PC_OFF(pc_light, info, 64);
 PC_CHECK(pc_scene_refs, 96);
 PC_OFF(pc_scene_refs, lights, 72);
 PC_OFF(pc_scene_refs, counts, 80);
-PC_CHECK(pc_view, 112);
+PC_CHECK(pc_view, 96);
 PC_OFF(pc_view, size, 64);
-PC_OFF(pc_view, sky, 80);
-PC_OFF(pc_view, tonemap, 96);
+PC_OFF(pc_view, tonemap, 80);
+PC_CHECK(pc_environment, 16);
 PC_CHECK(pc_ddgi_volume, 160);
 PC_OFF(pc_ddgi_volume, counts, 32);
 PC_OFF(pc_ddgi_volume, rotation, 48);
@@ -334,7 +343,8 @@ PC_OFF(pc_ddgi_volume, irradiance, 128);
 PC_OFF(pc_ddgi_volume, probes, 152);
 PC_CHECK(pc_globals, 368);
 PC_OFF(pc_globals, view, 96);
-PC_OFF(pc_globals, ddgi, 208);
+PC_OFF(pc_globals, ddgi, 192);
+PC_OFF(pc_globals, env, 352);
 PC_CHECK(pc_gbuffer_texel, 80);
 PC_OFF(pc_gbuffer_texel, albedo, 48);
 PC_CHECK(pc_counters, 32);

@@ -58,7 +58,7 @@ void main()
             pc_hit hit;
             rays++;
             if (!trace_ray(g.scene, org, dir, 0.0, 1e30, flags, hit)) {
-                radiance += throughput * g.view.sky.rgb;
+                radiance += throughput * g.env.sky.rgb;
                 break;
             }
             flags = 0u;

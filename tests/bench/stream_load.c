@@ -1,16 +1,21 @@
 /* probecast_loadtest: input-to-frame latency and sustained frame rate of a running
  * `probecast serve` with 1..N viewers on the stream, at several resolutions.
  *
- * For each resolution (set through PATCH /v1/settings) and viewer count, N WebSocket viewers
- * connect and acknowledge every frame (as the browser viewer does). Viewer 0 also drives the
- * camera in a closed loop: it sends {"type":"camera","seq":s,...}, waits for the first frame
- * whose header reflects seq s, records the time between (input-to-frame latency), and sends
- * the next. After a warm-up, frames and bytes per viewer are counted for --seconds.
- * Prints a table and writes a CSV. A benchmark, not a test: nothing is asserted.
+ * --mode own (default): every viewer connects with protocol version 2, so it owns a view; it
+ * resizes its view to the run's size and orbits its own camera in a closed loop: it sends
+ * {"type":"camera","seq":s,...}, waits for the first frame whose header reflects seq s, records
+ * the time between (input-to-frame latency), and sends the next. All viewers share one world.
+ * --mode shared: the version-1 behaviour: one shared view sized through PATCH /v1/settings;
+ * viewer 0 drives the camera, the others watch.
+ * Every viewer acknowledges every frame (as the browser viewer does). After a warm-up, frames
+ * and bytes per viewer are counted for --seconds; /v1/stats gives the GPU time of a view's
+ * frame and of a world update. Prints a table and writes a CSV. A benchmark, not a test:
+ * nothing is asserted. For many large views start the daemon with enough --max-views and
+ * --max-total-pixels (50 views of 1920x1080 need 104 M pixels).
  *
  *   probecast_loadtest [--http 127.0.0.1:8080] [--ws 127.0.0.1:8081] [--token T]
- *                      [--sizes 1280x720,1920x1080] [--viewers 1,10,50] [--seconds 10]
- *                      [--warmup 2] [--csv tests/bench/results/stream_load.csv]
+ *                      [--mode own|shared] [--sizes 1280x720,1920x1080] [--viewers 1,10,50]
+ *                      [--seconds 10] [--warmup 2] [--csv tests/bench/results/stream_load.csv]
  */
 #include <math.h>
 #include <pthread.h>
@@ -31,6 +36,7 @@
 static char http_host[64] = "127.0.0.1", ws_host[64] = "127.0.0.1";
 static unsigned http_port = 8080, ws_port = 8081;
 static const char *token = NULL;
+static bool own_views = true;
 
 typedef struct viewer {
     int index;
@@ -40,7 +46,8 @@ typedef struct viewer {
     atomic_bool measuring, stop;
     uint64_t frames, bytes; /* while measuring */
     double first_ms, last_ms;
-    /* driver only */
+    unsigned w, h; /* own mode: the size it asks for */
+    /* drivers only */
     double *latency;
     unsigned latency_count;
 } viewer;
@@ -78,16 +85,22 @@ static void *viewer_main(void *arg)
 {
     viewer *v = arg;
     proto_frame_header h;
-    if (v->index != 0) {
+    if (own_views) {
+        char msg[128];
+        snprintf(msg, sizeof msg, "{\"type\":\"resize\",\"width\":%u,\"height\":%u,\"dpr\":1}",
+                 v->w, v->h);
+        pc_ws_send_text(&v->ws, msg);
+    } else if (v->index != 0) {
         while (!atomic_load(&v->stop))
             next_frame(v, 500, &h);
         return NULL;
     }
-    /* the driver: orbit the camera, one input at a time, timing each until its frame arrives */
+    /* a driver: orbit the camera, one input at a time, timing each until its frame arrives;
+     * each viewer starts at its own angle */
     uint32_t seq = 0;
     while (!atomic_load(&v->stop)) {
         seq++;
-        double a = seq * 0.05;
+        double a = seq * 0.05 + v->index * 0.7;
         char msg[256];
         snprintf(
             msg, sizeof msg,
@@ -154,25 +167,34 @@ static double percentile(double *v, unsigned n, double p)
 
 typedef struct row {
     unsigned w, h, viewers, connected;
-    double fps_mean, fps_min, lat_p50, lat_p95, lat_max, mbps;
+    double fps_mean, fps_min, lat_p50, lat_p99, lat_max, mbps;
     unsigned samples;
-    double server_fps, gpu_ms, encode_ms;
+    double server_fps, gpu_ms, world_ms, ticks_per_s, encode_ms;
 } row;
+
+/* A number inside the "world" object of /v1/stats. */
+static double world_number(const char *body, const char *key)
+{
+    const char *w = body ? strstr(body, "\"world\":") : NULL;
+    return w ? json_number(w, key) : NAN;
+}
 
 static bool run(unsigned w, unsigned h, unsigned nviewers, double seconds, double warmup, row *out)
 {
     memset(out, 0, sizeof *out);
     out->w = w, out->h = h, out->viewers = nviewers;
     char body[128];
-    snprintf(body, sizeof body, "{\"width\":%u,\"height\":%u}", w, h);
-    pc_http_response r;
-    int s = api("PATCH", "/v1/settings", body, &r);
-    if (s != 200) {
-        fprintf(stderr, "PATCH /v1/settings %s: %d %s\n", body, s, r.body ? r.body : "");
+    pc_http_response r = {0};
+    if (!own_views) {
+        snprintf(body, sizeof body, "{\"width\":%u,\"height\":%u}", w, h);
+        int s = api("PATCH", "/v1/settings", body, &r);
+        if (s != 200) {
+            fprintf(stderr, "PATCH /v1/settings %s: %d %s\n", body, s, r.body ? r.body : "");
+            pc_http_response_free(&r);
+            return false;
+        }
         pc_http_response_free(&r);
-        return false;
     }
-    pc_http_response_free(&r);
     viewer *v = calloc(nviewers, sizeof *v);
     char path[256];
     if (token)
@@ -181,13 +203,17 @@ static bool run(unsigned w, unsigned h, unsigned nviewers, double seconds, doubl
         snprintf(path, sizeof path, "/v1/stream");
     for (unsigned i = 0; i < nviewers; i++) {
         v[i].index = (int)i;
-        v[i].connected = pc_ws_connect(&v[i].ws, ws_host, ws_port, path, NULL, 10000) == 0;
+        v[i].w = w, v[i].h = h;
+        v[i].connected =
+            pc_ws_connect(&v[i].ws, ws_host, ws_port, path,
+                          own_views ? "Sec-WebSocket-Protocol: probecast.v2\r\n" : NULL,
+                          10000) == 0;
         if (!v[i].connected) {
             fprintf(stderr, "viewer %u could not connect (status %d)\n", i, v[i].ws.http_status);
             continue;
         }
         out->connected++;
-        if (i == 0) v[i].latency = calloc(MAX_SAMPLES, sizeof(double));
+        if (i == 0 || own_views) v[i].latency = calloc(MAX_SAMPLES, sizeof(double));
         pthread_create(&v[i].thread, NULL, viewer_main, &v[i]);
     }
     struct timespec ts = {(time_t)warmup, (long)((warmup - floor(warmup)) * 1e9)};
@@ -197,6 +223,7 @@ static bool run(unsigned w, unsigned h, unsigned nviewers, double seconds, doubl
     pc_http_response_free(&r);
     api("GET", "/v1/stats", NULL, &r);
     double frames0 = json_number(r.body, "\"frames_rendered\":");
+    double ticks0 = world_number(r.body, "\"ticks\":");
     pc_http_response_free(&r);
     double t0 = pc_now_ms();
     ts = (struct timespec){(time_t)seconds, (long)((seconds - floor(seconds)) * 1e9)};
@@ -205,6 +232,8 @@ static bool run(unsigned w, unsigned h, unsigned nviewers, double seconds, doubl
     api("GET", "/v1/stats", NULL, &r);
     double frames1 = json_number(r.body, "\"frames_rendered\":");
     out->gpu_ms = json_number(r.body, "\"gpu_ms_total\":");
+    out->world_ms = world_number(r.body, "\"gpu_ms_total\":");
+    out->ticks_per_s = (world_number(r.body, "\"ticks\":") - ticks0) / elapsed;
     out->encode_ms = json_number(r.body, "\"encode_ms\":");
     pc_http_response_free(&r);
     out->server_fps = (frames1 - frames0) / elapsed;
@@ -227,13 +256,20 @@ static bool run(unsigned w, unsigned h, unsigned nviewers, double seconds, doubl
         out->fps_mean = fps_sum / out->connected;
         out->mbps = bytes * 8 / elapsed / 1e6;
     }
-    if (v[0].latency) {
-        out->samples = v[0].latency_count;
-        out->lat_max = out->samples ? percentile(v[0].latency, out->samples, 1.0) : NAN;
-        out->lat_p50 = percentile(v[0].latency, out->samples, 0.5);
-        out->lat_p95 = percentile(v[0].latency, out->samples, 0.95);
-        free(v[0].latency);
+    /* every driver's samples together */
+    unsigned total = 0;
+    for (unsigned i = 0; i < nviewers; i++) total += v[i].latency_count;
+    double *all = calloc(total ? total : 1, sizeof *all);
+    for (unsigned i = 0; i < nviewers; i++) {
+        if (v[i].latency_count)
+            memcpy(all + out->samples, v[i].latency, v[i].latency_count * sizeof *all);
+        out->samples += v[i].latency_count;
+        free(v[i].latency);
     }
+    out->lat_max = out->samples ? percentile(all, out->samples, 1.0) : NAN;
+    out->lat_p50 = percentile(all, out->samples, 0.5);
+    out->lat_p99 = percentile(all, out->samples, 0.99);
+    free(all);
     free(v);
     return true;
 }
@@ -265,6 +301,9 @@ int main(int argc, char **argv)
             if (!split_addr(v, ws_host, sizeof ws_host, &ws_port)) return 2;
         } else if (strcmp(o, "--token") == 0 && ++i) {
             token = v;
+        } else if (strcmp(o, "--mode") == 0 && ++i) {
+            if (strcmp(v, "own") != 0 && strcmp(v, "shared") != 0) return 2;
+            own_views = strcmp(v, "own") == 0;
         } else if (strcmp(o, "--viewers") == 0 && ++i) {
             nviewers = parse_list(v, viewers, 16);
         } else if (strcmp(o, "--sizes") == 0 && ++i) {
@@ -285,9 +324,9 @@ int main(int argc, char **argv)
         } else {
             fprintf(
                 stderr,
-                "usage: probecast_loadtest [--http H:P] [--ws H:P] [--token T] [--sizes WxH,...]\n"
-                "                          [--viewers N,...] [--seconds S] [--warmup S] [--csv "
-                "FILE]\n");
+                "usage: probecast_loadtest [--http H:P] [--ws H:P] [--token T] [--mode own|shared]\n"
+                "                          [--sizes WxH,...] [--viewers N,...] [--seconds S]\n"
+                "                          [--warmup S] [--csv FILE]\n");
             return strcmp(o, "--help") == 0 ? 0 : 2;
         }
     }
@@ -308,27 +347,32 @@ int main(int argc, char **argv)
     FILE *f = fopen(csv, "w");
     if (f)
         fprintf(f,
-                "width,height,viewers,connected,viewer_fps_mean,viewer_fps_min,server_fps,latency_"
-                "p50_ms,"
-                "latency_p95_ms,latency_max_ms,latency_samples,stream_mbit_s,gpu_ms,encode_ms\n");
-    printf("\n%-10s %7s %10s %10s %10s %10s %10s %10s %8s %10s %8s %9s\n", "size", "viewers",
-           "fps/viewer", "fps(min)", "server fps", "lat p50", "lat p95", "lat max", "samples",
-           "Mbit/s", "GPU ms", "encode ms");
+                "mode,width,height,viewers,connected,viewer_fps_mean,viewer_fps_min,server_fps,"
+                "latency_p50_ms,latency_p99_ms,latency_max_ms,latency_samples,stream_mbit_s,"
+                "view_gpu_ms,world_gpu_ms,world_ticks_per_s,encode_ms\n");
+    printf("mode: %s\n", own_views ? "own (every viewer its own view and camera)"
+                                    : "shared (one view, viewer 0 drives)");
+    printf("\n%-10s %7s %10s %10s %10s %9s %9s %9s %8s %9s %8s %8s %8s %9s\n", "size",
+           "viewers", "fps/viewer", "fps(min)", "server fps", "lat p50", "lat p99", "lat max",
+           "samples", "Mbit/s", "view ms", "world ms", "ticks/s", "encode ms");
     for (int s = 0; s < nsizes; s++) {
         for (int k = 0; k < nviewers; k++) {
             row rw;
             if (!run(sizes[s][0], sizes[s][1], viewers[k], seconds, warmup, &rw)) continue;
             char size[24];
             snprintf(size, sizeof size, "%ux%u", rw.w, rw.h);
-            printf("%-10s %7u %10.2f %10.2f %10.2f %10.1f %10.1f %10.1f %8u %10.2f %8.1f %9.2f\n",
+            printf("%-10s %7u %10.2f %10.2f %10.2f %9.1f %9.1f %9.1f %8u %9.2f %8.2f %8.2f %8.1f "
+                   "%9.2f\n",
                    size, rw.connected, rw.fps_mean, rw.fps_min, rw.server_fps, rw.lat_p50,
-                   rw.lat_p95, rw.lat_max, rw.samples, rw.mbps, rw.gpu_ms, rw.encode_ms);
+                   rw.lat_p99, rw.lat_max, rw.samples, rw.mbps, rw.gpu_ms, rw.world_ms,
+                   rw.ticks_per_s, rw.encode_ms);
             fflush(stdout);
             if (f)
-                fprintf(f, "%u,%u,%u,%u,%.3f,%.3f,%.3f,%.2f,%.2f,%.2f,%u,%.3f,%.3f,%.3f\n", rw.w,
-                        rw.h, rw.viewers, rw.connected, rw.fps_mean, rw.fps_min, rw.server_fps,
-                        rw.lat_p50, rw.lat_p95, rw.lat_max, rw.samples, rw.mbps, rw.gpu_ms,
-                        rw.encode_ms);
+                fprintf(f,
+                        "%s,%u,%u,%u,%u,%.3f,%.3f,%.3f,%.2f,%.2f,%.2f,%u,%.3f,%.3f,%.3f,%.3f,%.3f\n",
+                        own_views ? "own" : "shared", rw.w, rw.h, rw.viewers, rw.connected,
+                        rw.fps_mean, rw.fps_min, rw.server_fps, rw.lat_p50, rw.lat_p99, rw.lat_max,
+                        rw.samples, rw.mbps, rw.gpu_ms, rw.world_ms, rw.ticks_per_s, rw.encode_ms);
         }
     }
     if (f) {

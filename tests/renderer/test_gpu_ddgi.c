@@ -122,10 +122,10 @@ static void test_borders(void)
     rd_camera_for_scene(&s, -1, &cam, e, sizeof e);
     rd_frame_settings fs = {.width = 8, .height = 8, .gi_updates = 2};
     CHECKF(rd_renderer_render(&r, &gs, &cam, &fs, e, sizeof e) == RD_VK_OK, "%s", e);
-    unsigned probes = rd_ddgi_probe_count(&r.ddgi);
+    unsigned probes = rd_ddgi_probe_count(&r.world.ddgi);
     CHECK(probes == 12);
     const unsigned sides[2] = {PC_DDGI_IRR_INTERIOR + 2, PC_DDGI_DIST_INTERIOR + 2};
-    rd_buffer *bufs[2] = {&r.ddgi.irradiance, &r.ddgi.distance};
+    rd_buffer *bufs[2] = {&r.world.ddgi.irradiance, &r.world.ddgi.distance};
     for (int a = 0; a < 2; a++) {
         unsigned side = sides[a];
         size_t texels = (size_t)probes * side * side;

@@ -191,10 +191,10 @@ static void test_thick_walls_probes(void)
     rd_camera_for_scene(&s, -1, &cam, err, sizeof err);
     rd_frame_settings fs = {.width = 8, .height = 8, .gi_updates = 3};
     CHECK(rd_renderer_render(&r, &gs, &cam, &fs, err, sizeof err) == RD_VK_OK);
-    unsigned n = rd_ddgi_probe_count(&r.ddgi), inside = 0, off = 0, off_outside = 0;
+    unsigned n = rd_ddgi_probe_count(&r.world.ddgi), inside = 0, off = 0, off_outside = 0;
     pc_vec4 *probes = malloc(n * sizeof *probes);
-    CHECK(rd_buffer_download(&vk, &r.ddgi.probes, 0, probes, n * sizeof *probes, err, sizeof err) == RD_VK_OK);
-    const pc_ddgi_volume *v = &r.ddgi.vol;
+    CHECK(rd_buffer_download(&vk, &r.world.ddgi.probes, 0, probes, n * sizeof *probes, err, sizeof err) == RD_VK_OK);
+    const pc_ddgi_volume *v = &r.world.ddgi.vol;
     for (unsigned i = 0; i < n; i++) {
         unsigned x = i % v->counts.x, z = i / (v->counts.x * v->counts.y);
         float px = v->origin.x + x * v->spacing.x, pz = v->origin.z + z * v->spacing.z;

@@ -165,6 +165,42 @@ bool pc_stream_open(pc_daemon *d, pc_ws *ws)
     return pc_ws_connect(ws, "127.0.0.1", d->ws_port, path, NULL, 10000) == 0;
 }
 
+bool pc_stream_open_v2(pc_daemon *d, pc_ws *ws, uint32_t *view)
+{
+    char path[256];
+    if (d->token)
+        snprintf(path, sizeof path, "/v1/stream?token=%s", d->token);
+    else
+        snprintf(path, sizeof path, "/v1/stream");
+    if (pc_ws_connect(ws, "127.0.0.1", d->ws_port, path,
+                      "Sec-WebSocket-Protocol: probecast.v2\r\n", 10000) != 0)
+        return false;
+    cJSON *w = pc_stream_next_text(ws, 10000, "welcome");
+    double id = pc_json_number(w, "view");
+    cJSON_Delete(w);
+    if (!(id >= 1)) return false;
+    *view = (uint32_t)id;
+    return true;
+}
+
+cJSON *pc_stream_next_text(pc_ws *ws, int timeout_ms, const char *type)
+{
+    double deadline = pc_now_ms() + timeout_ms;
+    for (;;) {
+        double left_ms = deadline - pc_now_ms();
+        if (left_ms < 0) return NULL;
+        uint8_t *data;
+        size_t len;
+        int op = pc_ws_recv(ws, (int)(left_ms + 0.999), &data, &len);
+        if (op <= 0 || op == 8) return NULL;
+        if (op != 1) continue;
+        cJSON *j = cJSON_ParseWithLength((const char *)data, len);
+        const cJSON *t = cJSON_GetObjectItemCaseSensitive(j, "type");
+        if (cJSON_IsString(t) && (!type || strcmp(t->valuestring, type) == 0)) return j;
+        cJSON_Delete(j);
+    }
+}
+
 bool pc_stream_next(pc_ws *ws, int timeout_ms, bool ack, pc_frame *f)
 {
     memset(f, 0, sizeof *f);

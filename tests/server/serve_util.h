@@ -38,6 +38,13 @@ double pc_json_number(const cJSON *o, const char *name);
 /* Opens the stream (token in the query when the daemon has one). */
 bool pc_stream_open(pc_daemon *d, pc_ws *ws);
 
+/* Opens the stream with protocol version 2 (a view of its own) and reads the welcome message;
+ * *view is the connection's view id. */
+bool pc_stream_open_v2(pc_daemon *d, pc_ws *ws, uint32_t *view);
+/* The next text message whose "type" is type (any type when NULL), skipping frames and other
+ * messages; NULL on timeout. Caller deletes. */
+cJSON *pc_stream_next_text(pc_ws *ws, int timeout_ms, const char *type);
+
 typedef struct pc_frame {
     proto_frame_header h;
     uint8_t *rgb; /* width * height * 3, decoded */

@@ -113,7 +113,7 @@ static void probe(const op *o, const char *path, const char *type, const void *b
 /* A valid body for each mutating operation. */
 static const char *valid_body(const op *o)
 {
-    if (strcmp(o->path, "/v1/camera") == 0)
+    if (strcmp(o->path, "/v1/camera") == 0 || strcmp(o->path, "/v1/views/{id}/camera") == 0)
         return "{\"position\":[0,1.5,4],\"target\":[0,0.5,0],\"fov\":45}";
     if (strcmp(o->path, "/v1/lights") == 0)
         return "{\"type\":\"spot\",\"intensity\":5,\"position\":[0,2,0]}";
@@ -139,7 +139,7 @@ int main(void)
     CHECK(spec != NULL);
     if (!spec) return test_finish();
     parse_spec(spec);
-    CHECKF(nops >= 18, "%d operations found in the spec", nops);
+    CHECKF(nops >= 22, "%d operations found in the spec", nops);
 
     const char *args[] = {
         "--no-animate",    "--width", "64",           "--height", "48",      "--probes", "2,2,2",
@@ -168,9 +168,12 @@ int main(void)
         const op *o = &ops[i];
         char path[96];
         const char *brace = strchr(o->path, '{');
-        int id = strstr(o->path, "/lights/") ? first_light_id() : 1;
+        const char *after = brace ? strchr(brace, '}') + 1 : ""; /* "/camera" of views */
+        int id = strstr(o->path, "/lights/") ? first_light_id()
+                 : strstr(o->path, "/views/") ? 0 /* the default view */
+                                              : 1;
         if (brace)
-            snprintf(path, sizeof path, "%.*s%d", (int)(brace - o->path), o->path, id);
+            snprintf(path, sizeof path, "%.*s%d%s", (int)(brace - o->path), o->path, id, after);
         else
             snprintf(path, sizeof path, "%.63s", o->path);
         fprintf(stderr, "checking %s %s (%d documented responses)\n", o->method, path, o->ncodes);
@@ -179,7 +182,8 @@ int main(void)
             probe(o, path, NULL, NULL, 0, true, 200, "valid");
             if (brace) {
                 char unknown[96];
-                snprintf(unknown, sizeof unknown, "%.*s77777", (int)(brace - o->path), o->path);
+                snprintf(unknown, sizeof unknown, "%.*s77777%s", (int)(brace - o->path), o->path,
+                         after);
                 probe(o, unknown, NULL, NULL, 0, true, 404, "unknown id");
             }
             continue;

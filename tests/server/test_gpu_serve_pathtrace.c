@@ -1,5 +1,6 @@
-/* probecast serve in gi_mode pathtrace: frames accumulate samples progressively until the
- * target count, then the daemon idles; a camera move restarts the accumulation. */
+/* probecast serve in gi_mode pathtrace: while a viewer watches, frames accumulate samples
+ * progressively until the target count, then the daemon idles; a camera move restarts the
+ * accumulation; a view nobody watches is not rendered. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -35,6 +36,10 @@ int main(void)
         return test_finish();
     }
     pc_http_response r;
+    /* a viewer watches the default view: only watched views are rendered */
+    pc_ws ws;
+    pc_frame f = {0};
+    CHECK(pc_stream_open(&d, &ws));
     CHECK(pc_api(&d, "PATCH", "/v1/settings", "{\"gi_mode\":\"pathtrace\"}", false, &r) == 200);
     CHECK(r.body && strstr(r.body, "\"pathtrace\""));
     pc_http_response_free(&r);
@@ -46,19 +51,26 @@ int main(void)
     CHECK(cJSON_GetObjectItemCaseSensitive(gpu, "path trace") != NULL);
     cJSON_Delete(s);
 
-    pc_ws ws;
-    pc_frame f = {0};
-    CHECK(pc_stream_open(&d, &ws));
-    CHECK(pc_stream_next(&ws, 60000, true, &f)); /* a new viewer gets the current frame */
-    CHECK(f.mean > 5);                             /* lit, not black */
+    pc_ws ws2;
+    CHECK(pc_stream_open(&d, &ws2));
+    CHECK(pc_stream_next(&ws2, 60000, true, &f)); /* a new viewer gets the current frame */
+    CHECK(f.mean > 5);                              /* lit, not black */
     pc_frame_free(&f);
-    pc_ws_close(&ws);
+    pc_ws_close(&ws2);
 
     /* a camera move restarts the accumulation: 64 more frames, then idle again */
     CHECK(pc_api(&d, "PATCH", "/v1/camera", "{\"position\":[0.5,1,3.9]}", false, &r) == 200);
     pc_http_response_free(&r);
     double after = wait_idle(&d, 240000);
     CHECKF(after >= before + 64, "camera move: %g frames after %g", after, before);
+    pc_ws_close(&ws);
+
+    /* nobody watching: a change renders nothing */
+    pc_sleep_ms(300);
+    CHECK(pc_api(&d, "PATCH", "/v1/camera", "{\"position\":[0.4,1,3.9]}", false, &r) == 200);
+    pc_http_response_free(&r);
+    double unwatched = wait_idle(&d, 240000);
+    CHECKF(unwatched == after, "unwatched view: %g frames after %g", unwatched, after);
 
     /* views that need probes are refused in this mode */
     CHECK(pc_api(&d, "PATCH", "/v1/settings", "{\"view\":\"probes\"}", false, &r) == 400);

@@ -11,6 +11,7 @@ int main(void)
         .capture_us = 1700000000123456ull,
         .encode_us = 1700000000123999ull,
         .send_us = 1700000000124500ull,
+        .version = 1,
         .view_id = 7,
         .width = 1920,
         .height = 1080,
@@ -50,8 +51,18 @@ int main(void)
     bad[0] = 'X';
     CHECK(proto_frame_header_unpack(bad, sizeof bad, &r, NULL) == PROTO_ERR_MAGIC);
     memcpy(bad, msg, sizeof msg);
-    bad[4] = 2;
+    bad[4] = 3;
     CHECK(proto_frame_header_unpack(bad, sizeof bad, &r, NULL) == PROTO_ERR_VERSION);
+    bad[4] = 0;
+    CHECK(proto_frame_header_unpack(bad, sizeof bad, &r, NULL) == PROTO_ERR_VERSION);
+    /* version 2 (a connection with its own view) has the same layout */
+    memcpy(bad, msg, sizeof msg);
+    bad[4] = 2;
+    CHECK(proto_frame_header_unpack(bad, sizeof bad, &r, NULL) == PROTO_OK && r.version == 2 &&
+          r.view_id == 7);
+    h.version = 2;
+    proto_frame_header_pack(&h, bad);
+    CHECK(bad[4] == 2 && bad[5] == 0);
     memcpy(bad, msg, sizeof msg);
     bad[6] = 32;
     CHECK(proto_frame_header_unpack(bad, sizeof bad, &r, NULL) == PROTO_ERR_HEADER_SIZE);

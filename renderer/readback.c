@@ -3,13 +3,13 @@
 
 #include <string.h>
 
-void srv_readback_init(srv_readback *rb, rd_vk *vk)
+void rd_readback_init(rd_readback *rb, rd_vk *vk)
 {
     memset(rb, 0, sizeof *rb);
     rb->vk = vk;
 }
 
-static void slot_release_cmd(rd_vk *vk, srv_readback_slot *s)
+static void slot_release_cmd(rd_vk *vk, rd_readback_slot *s)
 {
     if (s->cmd.fence) vkDestroyFence(vk->device, s->cmd.fence, NULL);
     if (s->cmd.cb) vkFreeCommandBuffers(vk->device, vk->command_pool, 1, &s->cmd.cb);
@@ -18,11 +18,11 @@ static void slot_release_cmd(rd_vk *vk, srv_readback_slot *s)
     s->busy = false;
 }
 
-void srv_readback_dispose(srv_readback *rb)
+void rd_readback_dispose(rd_readback *rb)
 {
     if (!rb->vk) return;
-    for (int i = 0; i < SRV_READBACK_SLOTS; i++) {
-        srv_readback_slot *s = &rb->slots[i];
+    for (int i = 0; i < RD_READBACK_SLOTS; i++) {
+        rd_readback_slot *s = &rb->slots[i];
         if (s->busy && s->cmd.fence && !rb->vk->device_lost)
             vkWaitForFences(rb->vk->device, 1, &s->cmd.fence, VK_TRUE, UINT64_MAX);
         slot_release_cmd(rb->vk, s);
@@ -31,27 +31,32 @@ void srv_readback_dispose(srv_readback *rb)
     rb->vk = NULL;
 }
 
-bool srv_readback_has_free(const srv_readback *rb)
+bool rd_readback_has_free(const rd_readback *rb)
 {
-    for (int i = 0; i < SRV_READBACK_SLOTS; i++)
+    for (int i = 0; i < RD_READBACK_SLOTS; i++)
         if (!rb->slots[i].busy) return true;
     return false;
 }
 
-unsigned srv_readback_busy(const srv_readback *rb)
+unsigned rd_readback_busy(const rd_readback *rb)
 {
     unsigned n = 0;
-    for (int i = 0; i < SRV_READBACK_SLOTS; i++)
+    for (int i = 0; i < RD_READBACK_SLOTS; i++)
         n += rb->slots[i].busy;
     return n;
 }
 
-rd_vk_result srv_readback_submit(srv_readback *rb, const rd_buffer *src, unsigned width,
-                                 unsigned height, const srv_frame_info *info, char *err,
-                                 size_t errlen)
+rd_vk_result rd_readback_submit(rd_readback *rb, const rd_buffer *src, unsigned width,
+                                unsigned height, const void *info, size_t info_size, char *err,
+                                size_t errlen)
 {
-    srv_readback_slot *s = NULL;
-    for (int i = 0; i < SRV_READBACK_SLOTS && !s; i++)
+    if (info_size > RD_READBACK_INFO_MAX || (info_size && !info)) {
+        rd_vk_errorf(err, errlen, "Readback record of %zu bytes (at most %d).", info_size,
+                     RD_READBACK_INFO_MAX);
+        return RD_VK_ERR_UNSUPPORTED;
+    }
+    rd_readback_slot *s = NULL;
+    for (int i = 0; i < RD_READBACK_SLOTS && !s; i++)
         if (!rb->slots[i].busy) s = &rb->slots[i];
     if (!s) {
         rd_vk_errorf(err, errlen, "No free readback slot.");
@@ -63,7 +68,8 @@ rd_vk_result srv_readback_submit(srv_readback *rb, const rd_buffer *src, unsigne
                      (unsigned long long)bytes, (unsigned long long)src->size);
         return RD_VK_ERR_VULKAN;
     }
-    if (s->buffer.buffer == VK_NULL_HANDLE || s->buffer.size != bytes) {
+    /* grow only: frames of several views share the ring, so sizes alternate */
+    if (s->buffer.buffer == VK_NULL_HANDLE || s->buffer.size < bytes) {
         rd_buffer_destroy(rb->vk, &s->buffer);
         rd_vk_result r =
             rd_buffer_create(rb->vk, &s->buffer, bytes, RD_MEMORY_READBACK, err, errlen);
@@ -71,8 +77,10 @@ rd_vk_result srv_readback_submit(srv_readback *rb, const rd_buffer *src, unsigne
     }
     rd_vk_result r = rd_cmd_begin(rb->vk, &s->cmd, err, errlen);
     if (r != RD_VK_OK) return r;
-    VkBufferCopy region = {.srcOffset = 0, .dstOffset = 0, .size = bytes};
-    vkCmdCopyBuffer(s->cmd.cb, src->buffer, s->buffer.buffer, 1, &region);
+    if (bytes > 0) {
+        VkBufferCopy region = {.srcOffset = 0, .dstOffset = 0, .size = bytes};
+        vkCmdCopyBuffer(s->cmd.cb, src->buffer, s->buffer.buffer, 1, &region);
+    }
     /* the copy's writes become visible to the host; and every later command (the next frame's
      * passes writing src) waits for the copy to have read src */
     VkMemoryBarrier mb = {
@@ -101,24 +109,26 @@ rd_vk_result srv_readback_submit(srv_readback *rb, const rd_buffer *src, unsigne
     s->seq = rb->next_seq++;
     s->width = width;
     s->height = height;
-    s->info = *info;
+    s->info_size = info_size;
+    memset(s->info, 0, sizeof s->info);
+    if (info_size) memcpy(s->info, info, info_size);
     return RD_VK_OK;
 }
 
-static srv_readback_slot *oldest(srv_readback *rb)
+static rd_readback_slot *oldest(rd_readback *rb)
 {
-    srv_readback_slot *o = NULL;
-    for (int i = 0; i < SRV_READBACK_SLOTS; i++) {
-        srv_readback_slot *s = &rb->slots[i];
+    rd_readback_slot *o = NULL;
+    for (int i = 0; i < RD_READBACK_SLOTS; i++) {
+        rd_readback_slot *s = &rb->slots[i];
         if (s->busy && (!o || s->seq < o->seq)) o = s;
     }
     return o;
 }
 
-rd_vk_result srv_readback_poll(srv_readback *rb, uint64_t timeout_ns, srv_readback_fn fn,
-                               void *user, char *err, size_t errlen)
+rd_vk_result rd_readback_poll(rd_readback *rb, uint64_t timeout_ns, rd_readback_fn fn, void *user,
+                              char *err, size_t errlen)
 {
-    for (srv_readback_slot *s = oldest(rb); s; s = oldest(rb)) {
+    for (rd_readback_slot *s = oldest(rb); s; s = oldest(rb)) {
         VkResult vr = timeout_ns
                           ? vkWaitForFences(rb->vk->device, 1, &s->cmd.fence, VK_TRUE, timeout_ns)
                           : vkGetFenceStatus(rb->vk->device, s->cmd.fence);
@@ -140,7 +150,7 @@ rd_vk_result srv_readback_poll(srv_readback *rb, uint64_t timeout_ns, srv_readba
             if (vr != VK_SUCCESS)
                 return rd_vk_fail(rb->vk, vr, "vkInvalidateMappedMemoryRanges", err, errlen);
         }
-        fn(user, &s->info, s->width, s->height, (const uint8_t *)s->buffer.mapped);
+        fn(user, s->info, s->width, s->height, (const uint8_t *)s->buffer.mapped);
     }
     return RD_VK_OK;
 }

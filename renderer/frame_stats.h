@@ -1,0 +1,27 @@
+/* frame_stats.h: GPU time per named pass and rays traced, for one frame or one world update.
+ * Pass names point at string literals (the rd_timer_mark names), so stats can be copied and
+ * merged freely. */
+#ifndef RD_FRAME_STATS_H
+#define RD_FRAME_STATS_H
+
+#include <stdbool.h>
+
+#include "../shaders/gpu_types.h"
+#include "vk_compute.h"
+
+typedef struct rd_frame_stats {
+    unsigned pass_count;
+    const char *pass_name[RD_TIMER_MAX];
+    double pass_ms[RD_TIMER_MAX]; /* GPU time per pass (0 when timestamps are unavailable) */
+    bool timed;
+    pc_counters rays; /* rays traced per kind */
+} rd_frame_stats;
+
+/* Adds src to dst: the times of passes with the same name are summed, new passes are appended
+ * in src's order (those past RD_TIMER_MAX are dropped), and ray counts are added. dst is timed
+ * when either is. */
+void rd_frame_stats_add(rd_frame_stats *dst, const rd_frame_stats *src);
+/* Adds the sections of a resolved timer (rd_timer_resolve) to dst, by name as above. */
+void rd_frame_stats_add_timer(rd_frame_stats *dst, const rd_timer *t);
+
+#endif

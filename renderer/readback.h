@@ -1,0 +1,62 @@
+/* readback.h: a ring of host-visible buffers that frames are copied into without waiting.
+ *
+ * After a frame is rendered, rd_readback_submit records a copy of a view's RGBA8 buffer into a
+ * free slot and submits it with its own fence, then returns at once; the render thread goes on
+ * with the next frame while the copy runs. rd_readback_poll hands completed slots to a callback
+ * in submission order (on the render thread; the callback copies the pixels out). A barrier at
+ * the end of each copy orders it before any later write to the source buffer.
+ * Render thread only: this is Vulkan.
+ *
+ * One ring can carry frames of different sizes (several views): a slot's buffer grows when a
+ * frame does not fit and is kept otherwise. Each frame carries an opaque caller record (info,
+ * copied into the slot) that comes back with its pixels.
+ */
+#ifndef RD_READBACK_H
+#define RD_READBACK_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "vk_buffer.h"
+#include "vk_compute.h"
+
+#define RD_READBACK_SLOTS 3
+#define RD_READBACK_INFO_MAX 64 /* bytes of caller record per frame */
+
+typedef struct rd_readback_slot {
+    rd_buffer buffer; /* RD_MEMORY_READBACK; at least width * height * 4 bytes */
+    rd_cmd cmd;       /* command buffer and fence while busy */
+    bool busy;
+    uint64_t seq; /* submission order */
+    unsigned width, height;
+    size_t info_size;
+    _Alignas(16) unsigned char info[RD_READBACK_INFO_MAX];
+} rd_readback_slot;
+
+typedef struct rd_readback {
+    rd_vk *vk;
+    rd_readback_slot slots[RD_READBACK_SLOTS];
+    uint64_t next_seq;
+} rd_readback;
+
+void rd_readback_init(rd_readback *rb, rd_vk *vk);
+/* Waits for copies in flight and frees the buffers (idempotent). */
+void rd_readback_dispose(rd_readback *rb);
+bool rd_readback_has_free(const rd_readback *rb);
+unsigned rd_readback_busy(const rd_readback *rb);
+/* Copies width * height * 4 bytes of src into a free slot (there must be one), with a copy of
+ * info_size <= RD_READBACK_INFO_MAX bytes of info (info may be NULL when info_size is 0). */
+rd_vk_result rd_readback_submit(rd_readback *rb, const rd_buffer *src, unsigned width,
+                                unsigned height, const void *info, size_t info_size, char *err,
+                                size_t errlen);
+
+/* info: the slot's copy of the submitted record (aligned to 16 bytes, valid during the call);
+ * rgba: width * height * 4 bytes, valid during the call. */
+typedef void (*rd_readback_fn)(void *user, const void *info, unsigned width, unsigned height,
+                               const uint8_t *rgba);
+/* Delivers every completed copy, oldest first, stopping at the first one still running; with
+ * timeout_ns > 0 first waits up to that long for the oldest. */
+rd_vk_result rd_readback_poll(rd_readback *rb, uint64_t timeout_ns, rd_readback_fn fn, void *user,
+                              char *err, size_t errlen);
+
+#endif

@@ -1,0 +1,247 @@
+/* view.c: one camera's frame of a world. */
+#include "view.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "shaders/ddgi_sample.spv.h"
+#include "shaders/pathtrace.spv.h"
+#include "shaders/primary.spv.h"
+#include "shaders/shade.spv.h"
+#include "shaders/tonemap.spv.h"
+
+#define DEFAULT_WIDTH 960
+#define DEFAULT_HEIGHT 540
+
+rd_vk_result rd_view_passes_create(rd_vk *vk, rd_view_passes *p, char *err, size_t errlen)
+{
+    memset(p, 0, sizeof *p);
+    rd_vk_result res = rd_pipeline_create(vk, &p->primary, "primary", pc_spv_primary,
+                                          sizeof pc_spv_primary, sizeof(pc_push), err, errlen);
+    if (res == RD_VK_OK)
+        res = rd_pipeline_create(vk, &p->shade, "shade", pc_spv_shade, sizeof pc_spv_shade,
+                                 sizeof(pc_push), err, errlen);
+    if (res == RD_VK_OK)
+        res = rd_pipeline_create(vk, &p->tonemap, "tonemap", pc_spv_tonemap, sizeof pc_spv_tonemap,
+                                 sizeof(pc_push), err, errlen);
+    if (res == RD_VK_OK)
+        res = rd_pipeline_create(vk, &p->gi_sample, "gi sample", pc_spv_ddgi_sample,
+                                 sizeof pc_spv_ddgi_sample, sizeof(pc_push), err, errlen);
+    if (res == RD_VK_OK)
+        res = rd_pipeline_create(vk, &p->pathtrace, "path trace", pc_spv_pathtrace,
+                                 sizeof pc_spv_pathtrace, sizeof(pc_push), err, errlen);
+    if (res != RD_VK_OK) rd_view_passes_destroy(vk, p);
+    return res;
+}
+
+void rd_view_passes_destroy(rd_vk *vk, rd_view_passes *p)
+{
+    rd_pipeline_destroy(vk, &p->pathtrace);
+    rd_pipeline_destroy(vk, &p->gi_sample);
+    rd_pipeline_destroy(vk, &p->tonemap);
+    rd_pipeline_destroy(vk, &p->shade);
+    rd_pipeline_destroy(vk, &p->primary);
+}
+
+rd_vk_result rd_view_create(rd_vk *vk, const rd_view_passes *passes, rd_view *v, char *err,
+                            size_t errlen)
+{
+    memset(v, 0, sizeof *v);
+    v->vk = vk;
+    v->passes = passes;
+    rd_vk_result res =
+        rd_buffer_create(vk, &v->globals, sizeof(pc_globals), RD_MEMORY_UPLOAD, err, errlen);
+    if (res == RD_VK_OK)
+        res = rd_buffer_create(vk, &v->counters, sizeof(pc_counters), RD_MEMORY_READBACK, err,
+                               errlen);
+    if (res == RD_VK_OK) res = rd_timer_create(vk, &v->timer, err, errlen);
+    if (res != RD_VK_OK) rd_view_destroy(v);
+    return res;
+}
+
+static void free_images(rd_view *v)
+{
+    rd_buffer_destroy(v->vk, &v->rgba8);
+    rd_buffer_destroy(v->vk, &v->radiance);
+    rd_buffer_destroy(v->vk, &v->gbuffer);
+    v->width = v->height = 0;
+    v->pathtrace_samples = 0;
+}
+
+void rd_view_destroy(rd_view *v)
+{
+    if (!v->vk) return;
+    /* work submitted elsewhere (a frame readback copying rgba8) may still read the images */
+    if (v->width || v->height) vkDeviceWaitIdle(v->vk->device);
+    free_images(v);
+    rd_timer_destroy(v->vk, &v->timer);
+    rd_buffer_destroy(v->vk, &v->counters);
+    rd_buffer_destroy(v->vk, &v->globals);
+    v->passes = NULL;
+    v->vk = NULL;
+}
+
+/* (Re)creates the per-pixel buffers when the resolution changes. */
+static rd_vk_result ensure_size(rd_view *v, unsigned w, unsigned h, char *err, size_t errlen)
+{
+    if (w == v->width && h == v->height) return RD_VK_OK;
+    /* resizes are rare: wait for any readback of the old images before freeing them */
+    if (v->width || v->height) vkDeviceWaitIdle(v->vk->device);
+    free_images(v);
+    size_t px = (size_t)w * h;
+    rd_vk_result res = rd_buffer_create(v->vk, &v->gbuffer, px * sizeof(pc_gbuffer_texel),
+                                        RD_MEMORY_DEVICE, err, errlen);
+    if (res == RD_VK_OK)
+        res = rd_buffer_create(v->vk, &v->radiance, px * 16, RD_MEMORY_DEVICE, err, errlen);
+    if (res == RD_VK_OK)
+        res = rd_buffer_create(v->vk, &v->rgba8, px * 4, RD_MEMORY_DEVICE, err, errlen);
+    if (res != RD_VK_OK) {
+        free_images(v);
+        return res;
+    }
+    v->width = w;
+    v->height = h;
+    return RD_VK_OK;
+}
+
+static rd_vk_result collect_times(rd_view *v, char *err, size_t errlen)
+{
+    rd_vk_result res = rd_timer_resolve(v->vk, &v->timer, err, errlen);
+    if (res == RD_VK_OK) rd_frame_stats_add_timer(&v->stats, &v->timer);
+    return res;
+}
+
+/* Reference path tracing: spp dispatches accumulate into the radiance buffer (w counts
+ * samples), submitted in batches so that no single submission runs for long. */
+static rd_vk_result render_pathtraced(rd_view *v, const rd_view_settings *s, char *err,
+                                      size_t errlen)
+{
+    const rd_view_passes *p = v->passes;
+    uint32_t gx = (v->width + PC_WG_2D_X - 1) / PC_WG_2D_X;
+    uint32_t gy = (v->height + PC_WG_2D_Y - 1) / PC_WG_2D_Y;
+    unsigned batch = v->vk->is_cpu ? 1 : 16;
+    rd_vk_result res = RD_VK_OK;
+    unsigned first = s->pathtrace_first;
+    if (v->frame_index == 0 || first > v->pathtrace_samples) first = 0; /* nothing to continue */
+    unsigned end = first + s->pathtrace_spp;
+    for (unsigned k0 = first; res == RD_VK_OK && k0 < end; k0 += batch) {
+        rd_cmd cmd;
+        res = rd_cmd_begin(v->vk, &cmd, err, errlen);
+        if (res != RD_VK_OK) break;
+        rd_timer_begin(&cmd, &v->timer);
+        for (unsigned k = k0; k < k0 + batch && k < end; k++) {
+            pc_push push = {.globals = v->globals.address,
+                            .buf0 = v->radiance.address,
+                            .buf1 = v->counters.address,
+                            .params = {k, s->max_bounces, 0, 0}};
+            rd_cmd_dispatch(&cmd, &p->pathtrace, &push, gx, gy, 1);
+            rd_cmd_barrier(&cmd);
+        }
+        rd_timer_mark(&cmd, &v->timer, "path trace");
+        if (k0 + batch >= end) {
+            pc_push push = {.globals = v->globals.address,
+                            .buf0 = v->radiance.address,
+                            .buf1 = v->rgba8.address};
+            rd_cmd_dispatch(&cmd, &p->tonemap, &push, gx, gy, 1);
+            rd_cmd_barrier(&cmd);
+            rd_timer_mark(&cmd, &v->timer, "tonemap");
+        }
+        res = rd_cmd_submit_wait(v->vk, &cmd, err, errlen);
+        if (res == RD_VK_OK) res = collect_times(v, err, errlen);
+    }
+    memcpy(&v->stats.rays, v->counters.mapped, sizeof v->stats.rays);
+    v->frame_index++;
+    v->pathtrace_samples = res == RD_VK_OK ? end : 0;
+    return res;
+}
+
+rd_vk_result rd_view_render(rd_view *v, const rd_world *w, const rd_view_camera *camera,
+                            const rd_view_settings *s, char *err, size_t errlen)
+{
+    memset(&v->stats, 0, sizeof v->stats);
+    if (!w->scene) {
+        snprintf(err, errlen, "rendering a world without a scene");
+        return RD_VK_ERR_UNSUPPORTED;
+    }
+    unsigned width = s->width ? s->width : DEFAULT_WIDTH;
+    unsigned height = s->height ? s->height : DEFAULT_HEIGHT;
+    if (width > 16384 || height > 16384) {
+        snprintf(err, errlen, "resolution %ux%u exceeds 16384 in a dimension", width, height);
+        return RD_VK_ERR_UNSUPPORTED;
+    }
+    rd_vk_result res = ensure_size(v, width, height, err, errlen);
+    if (res != RD_VK_OK) return res;
+
+    /* this view's globals: the world's part copied, the camera's part filled here */
+    pc_globals g;
+    memset(&g, 0, sizeof g);
+    rd_world_fill_globals(w, &g);
+    rd_view_camera shifted = *camera;
+    for (int k = 0; k < 3; k++)
+        shifted.eye[k] -= w->scene->origin_shift[k];
+    rd_camera_to_view(&shifted, width, height, &g.view);
+    g.view.size = (pc_uvec4){width, height, v->frame_index, s->seed};
+    g.view.tonemap = (pc_vec4){exp2f(s->exposure_ev), (float)s->tonemap, (float)s->view, 0};
+    memcpy(v->globals.mapped, &g, sizeof g);
+    memset(v->counters.mapped, 0, sizeof(pc_counters));
+
+    if (s->pathtrace_spp > 0) return render_pathtraced(v, s, err, errlen);
+    v->pathtrace_samples = 0; /* this frame overwrites the accumulation */
+
+    const rd_view_passes *p = v->passes;
+    rd_cmd cmd;
+    res = rd_cmd_begin(v->vk, &cmd, err, errlen);
+    if (res != RD_VK_OK) return res;
+    uint32_t gx = (width + PC_WG_2D_X - 1) / PC_WG_2D_X;
+    uint32_t gy = (height + PC_WG_2D_Y - 1) / PC_WG_2D_Y;
+    rd_timer_begin(&cmd, &v->timer);
+    pc_push push = {.globals = v->globals.address,
+                    .buf0 = v->gbuffer.address,
+                    .buf1 = v->counters.address,
+                    .buf2 = v->radiance.address};
+    rd_cmd_dispatch(&cmd, &p->primary, &push, gx, gy, 1);
+    rd_cmd_barrier(&cmd);
+    rd_timer_mark(&cmd, &v->timer, "primary");
+    rd_cmd_dispatch(&cmd, &p->shade, &push, gx, gy, 1);
+    rd_cmd_barrier(&cmd);
+    rd_timer_mark(&cmd, &v->timer, "shade");
+    if (w->gi) {
+        rd_cmd_dispatch(&cmd, &p->gi_sample, &push, gx, gy, 1);
+        rd_cmd_barrier(&cmd);
+        rd_timer_mark(&cmd, &v->timer, "gi sample");
+    }
+    push.buf0 = v->radiance.address;
+    push.buf1 = v->rgba8.address;
+    rd_cmd_dispatch(&cmd, &p->tonemap, &push, gx, gy, 1);
+    rd_cmd_barrier(&cmd);
+    rd_timer_mark(&cmd, &v->timer, "tonemap");
+    res = rd_cmd_submit_wait(v->vk, &cmd, err, errlen);
+    if (res != RD_VK_OK) return res;
+    v->frame_index++;
+    memcpy(&v->stats.rays, v->counters.mapped, sizeof v->stats.rays);
+    return collect_times(v, err, errlen);
+}
+
+rd_vk_result rd_view_read_rgba8(rd_view *v, uint8_t *out, char *err, size_t errlen)
+{
+    return rd_buffer_download(v->vk, &v->rgba8, 0, out, (VkDeviceSize)v->width * v->height * 4, err,
+                              errlen);
+}
+
+rd_vk_result rd_view_read_hdr(rd_view *v, float *rgb, char *err, size_t errlen)
+{
+    size_t px = (size_t)v->width * v->height;
+    float *rgba = malloc(px * 16);
+    if (!rgba) abort();
+    rd_vk_result res = rd_buffer_download(v->vk, &v->radiance, 0, rgba, px * 16, err, errlen);
+    for (size_t i = 0; res == RD_VK_OK && i < px; i++) {
+        float n = rgba[i * 4 + 3] > 1 ? rgba[i * 4 + 3] : 1; /* accumulated samples */
+        rgb[i * 3 + 0] = rgba[i * 4 + 0] / n;
+        rgb[i * 3 + 1] = rgba[i * 4 + 1] / n;
+        rgb[i * 3 + 2] = rgba[i * 4 + 2] / n;
+    }
+    free(rgba);
+    return res;
+}

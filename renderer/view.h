@@ -1,0 +1,63 @@
+/* view.h: one camera's images of a world: primary pass -> shade (direct) -> [GI sampling]
+ * -> tone map, or progressive path tracing, with GPU timings and ray counts.
+ *
+ * A view owns its per-resolution buffers and its own globals buffer; the pipelines
+ * (rd_view_passes) are created once per device and shared by every view. Rendering reads the
+ * world (scene, sky, probe field as it is) and writes only the view. Render thread only.
+ */
+#ifndef RD_VIEW_H
+#define RD_VIEW_H
+
+#include "camera.h"
+#include "frame_stats.h"
+#include "vk_buffer.h"
+#include "vk_compute.h"
+#include "world.h"
+
+typedef struct rd_view_settings { /* per frame */
+    unsigned width, height;       /* 0 = 960 x 540 */
+    float exposure_ev;            /* exposure in stops: radiance * 2^ev before tone mapping */
+    unsigned tonemap;             /* PC_TONEMAP_* (0 = ACES fit) */
+    unsigned seed;                /* random streams of stochastic passes */
+    unsigned view;                /* PC_VIEW_* debug view */
+    unsigned pathtrace_spp;       /* > 0: reference path tracing with this many samples per
+                                     pixel instead of direct light + probes */
+    unsigned max_bounces;         /* path tracing (0 = 64) */
+    unsigned pathtrace_first;     /* path tracing: samples already accumulated from an identical
+                                     earlier frame of this view (0 = start over) */
+} rd_view_settings;
+
+/* The pipelines of a view's frame; created once per device, shared by all views. */
+typedef struct rd_view_passes {
+    rd_pipeline primary, shade, tonemap, gi_sample, pathtrace;
+} rd_view_passes;
+
+rd_vk_result rd_view_passes_create(rd_vk *vk, rd_view_passes *p, char *err, size_t errlen);
+void rd_view_passes_destroy(rd_vk *vk, rd_view_passes *p); /* idempotent */
+
+typedef struct rd_view {
+    rd_vk *vk;
+    const rd_view_passes *passes; /* not owned; must outlive the view */
+    rd_buffer globals, counters, gbuffer, radiance, rgba8;
+    rd_timer timer;
+    unsigned width, height; /* of the buffers (the last frame); 0 before the first */
+    unsigned frame_index;
+    unsigned pathtrace_samples; /* accumulated in the radiance buffer by the last frame */
+    rd_frame_stats stats;       /* of the last frame */
+} rd_view;
+
+rd_vk_result rd_view_create(rd_vk *vk, const rd_view_passes *passes, rd_view *v, char *err,
+                            size_t errlen);
+/* Idempotent; waits for the device if buffers may be in use (a readback copying rgba8). */
+void rd_view_destroy(rd_view *v);
+/* Renders one frame of w from camera into v's buffers (blocking). Reads the world only: uses
+ * the probe field as it is (no update). Path tracing when s->pathtrace_spp > 0. A size change
+ * waits for the device and reallocates the buffers. */
+rd_vk_result rd_view_render(rd_view *v, const rd_world *w, const rd_view_camera *camera,
+                            const rd_view_settings *s, char *err, size_t errlen);
+/* Reads back the last frame: tone-mapped RGBA8 (width*height*4 bytes) or linear radiance
+ * (width*height*3 floats). */
+rd_vk_result rd_view_read_rgba8(rd_view *v, uint8_t *out, char *err, size_t errlen);
+rd_vk_result rd_view_read_hdr(rd_view *v, float *rgb, char *err, size_t errlen);
+
+#endif

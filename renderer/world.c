@@ -1,0 +1,112 @@
+/* world.c: the scene-wide state shared by views, and probe updates. */
+#include "world.h"
+
+#include <stdio.h>
+#include <string.h>
+
+rd_vk_result rd_world_create(rd_vk *vk, rd_world *w, char *err, size_t errlen)
+{
+    memset(w, 0, sizeof *w);
+    w->vk = vk;
+    rd_vk_result res =
+        rd_buffer_create(vk, &w->globals, sizeof(pc_globals), RD_MEMORY_UPLOAD, err, errlen);
+    if (res == RD_VK_OK)
+        res = rd_buffer_create(vk, &w->counters, sizeof(pc_counters), RD_MEMORY_READBACK, err,
+                               errlen);
+    if (res == RD_VK_OK) res = rd_timer_create(vk, &w->timer, err, errlen);
+    if (res != RD_VK_OK) rd_world_destroy(w);
+    return res;
+}
+
+void rd_world_destroy(rd_world *w)
+{
+    if (!w->vk) return;
+    rd_ddgi_destroy(&w->ddgi);
+    w->gi = false;
+    rd_timer_destroy(w->vk, &w->timer);
+    rd_buffer_destroy(w->vk, &w->counters);
+    rd_buffer_destroy(w->vk, &w->globals);
+    w->scene = NULL;
+    w->vk = NULL;
+}
+
+void rd_world_set_scene(rd_world *w, const rd_gpu_scene *scene)
+{
+    w->scene = scene;
+}
+
+void rd_world_set_sky(rd_world *w, const float sky[3])
+{
+    memcpy(w->sky, sky, sizeof w->sky);
+}
+
+rd_vk_result rd_world_configure_gi(rd_world *w, const float bmin[3], const float bmax[3],
+                                   const rd_ddgi_settings *gi, char *err, size_t errlen)
+{
+    w->gi = false;
+    if (gi->mode == PC_GI_OFF) {
+        rd_ddgi_destroy(&w->ddgi); /* model only what is used: no probe memory when off */
+        return RD_VK_OK;
+    }
+    if (gi->mode != PC_GI_CLASSIC && gi->mode != PC_GI_DDGI) {
+        snprintf(err, errlen, "unknown GI mode %u", gi->mode);
+        return RD_VK_ERR_UNSUPPORTED;
+    }
+    rd_vk_result res = RD_VK_OK;
+    if (!w->ddgi.vk) res = rd_ddgi_create(w->vk, &w->ddgi, err, errlen);
+    if (res == RD_VK_OK) res = rd_ddgi_configure(&w->ddgi, bmin, bmax, gi, err, errlen);
+    w->gi = res == RD_VK_OK;
+    return res;
+}
+
+void rd_world_fill_globals(const rd_world *w, pc_globals *g)
+{
+    if (w->scene)
+        g->scene = w->scene->refs;
+    else
+        memset(&g->scene, 0, sizeof g->scene);
+    memset(&g->ddgi, 0, sizeof g->ddgi);
+    if (w->gi) {
+        /* the probe volume as the GPU sees it: its origin moved by the floating origin */
+        g->ddgi = w->ddgi.vol;
+        if (w->scene) {
+            g->ddgi.origin.x -= w->scene->origin_shift[0];
+            g->ddgi.origin.y -= w->scene->origin_shift[1];
+            g->ddgi.origin.z -= w->scene->origin_shift[2];
+        }
+    }
+    g->env.sky = (pc_vec4){w->sky[0], w->sky[1], w->sky[2], 0};
+}
+
+rd_vk_result rd_world_update(rd_world *w, unsigned n, char *err, size_t errlen)
+{
+    memset(&w->stats, 0, sizeof w->stats);
+    if (!w->gi || n == 0) return RD_VK_OK;
+    if (!w->scene) {
+        snprintf(err, errlen, "probe update without a scene");
+        return RD_VK_ERR_UNSUPPORTED;
+    }
+    memset(w->counters.mapped, 0, sizeof(pc_counters));
+    rd_vk_result res = RD_VK_OK;
+    for (unsigned u = 0; u < n && res == RD_VK_OK; u++) {
+        /* each update has its own ray rotation in the globals: one submission per update */
+        rd_ddgi_begin_update(&w->ddgi);
+        pc_globals g;
+        memset(&g, 0, sizeof g);
+        rd_world_fill_globals(w, &g);
+        memcpy(w->globals.mapped, &g, sizeof g);
+        rd_cmd cmd;
+        res = rd_cmd_begin(w->vk, &cmd, err, errlen);
+        if (res != RD_VK_OK) break;
+        rd_timer_begin(&cmd, &w->timer);
+        rd_ddgi_record_update(&w->ddgi, &cmd, &w->timer, w->globals.address, w->counters.address);
+        res = rd_cmd_submit_wait(w->vk, &cmd, err, errlen);
+        if (res != RD_VK_OK) break;
+        rd_ddgi_end_update(&w->ddgi);
+        w->updates_total++;
+        res = rd_timer_resolve(w->vk, &w->timer, err, errlen);
+        if (res == RD_VK_OK) rd_frame_stats_add_timer(&w->stats, &w->timer);
+    }
+    memcpy(&w->stats.rays, w->counters.mapped, sizeof w->stats.rays);
+    return res;
+}

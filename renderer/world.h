@@ -1,0 +1,51 @@
+/* world.h: everything scene-wide that views share: the scene being rendered, the sky, and the
+ * DDGI probe field with its updates.
+ *
+ * A world is advanced explicitly (rd_world_update: a number of probe updates, each its own
+ * blocking submission) and read by any number of views (view.h) in between; rendering a view
+ * never writes the world, so the field advances at most as often as its owner asks, whatever
+ * the number of views. Render thread only: this is Vulkan.
+ */
+#ifndef RD_WORLD_H
+#define RD_WORLD_H
+
+#include "ddgi.h"
+#include "frame_stats.h"
+#include "gpu_scene.h"
+#include "vk_buffer.h"
+#include "vk_compute.h"
+
+typedef struct rd_world {
+    rd_vk *vk;
+    const rd_gpu_scene *scene; /* the scene being rendered; NOT owned (the caller owns and
+                                  destroys it) */
+    float sky[3]; /* environment radiance seen by primary misses, probe rays and path tracing */
+    rd_ddgi ddgi; /* the probe field; valid when gi */
+    bool gi;      /* a GI mode other than off is configured */
+    rd_buffer globals, counters; /* for probe updates */
+    rd_timer timer;
+    uint64_t updates_total; /* probe updates run since creation (never reset; for stats) */
+    rd_frame_stats stats;   /* GPU times and rays of the last rd_world_update call (all its
+                               updates summed) */
+} rd_world;
+
+rd_vk_result rd_world_create(rd_vk *vk, rd_world *w, char *err, size_t errlen);
+/* Frees what the world owns (not the scene). Idempotent. */
+void rd_world_destroy(rd_world *w);
+/* The scene that updates and views trace; NULL until set. Changing it does not reset the probe
+ * field (call rd_world_configure_gi for a different scene). */
+void rd_world_set_scene(rd_world *w, const rd_gpu_scene *scene);
+void rd_world_set_sky(rd_world *w, const float sky[3]);
+/* Configures global illumination for scene bounds (PC_GI_OFF frees the probe field) and resets
+ * the field. RD_VK_ERR_UNSUPPORTED with a message for settings out of range; gi is then off. */
+rd_vk_result rd_world_configure_gi(rd_world *w, const float bmin[3], const float bmax[3],
+                                   const rd_ddgi_settings *gi, char *err, size_t errlen);
+/* Runs n probe updates (blocking, submitted and waited); no-op returning OK when GI is off or
+ * n == 0. Fills w->stats with the summed pass times ("probe trace", "probe shade", ...) and
+ * rays. Needs a scene. */
+rd_vk_result rd_world_update(rd_world *w, unsigned n, char *err, size_t errlen);
+/* Fills the world part of a pass's globals: scene refs, the probe volume shifted by the scene's
+ * floating origin (zero when GI is off), sky. Leaves g->view alone. */
+void rd_world_fill_globals(const rd_world *w, pc_globals *g);
+
+#endif

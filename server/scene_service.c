@@ -1,0 +1,407 @@
+/* scene_service.c: the world's state, GPU resources and API semantics (see scene_service.h). */
+#include "scene_service.h"
+#include "clock.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "api_json.h"
+#include "log.h"
+
+#define NODE_DOC_LIMIT 1000 /* nodes listed in GET /v1/scene */
+
+/* ---- documents ------------------------------------------------------------------------------ */
+
+static cJSON *probes_json(const srv_scene_service *svc)
+{
+    const rd_world *w = &svc->world;
+    cJSON *probes = cJSON_CreateObject();
+    cJSON_AddStringToObject(probes, "mode",
+                            w->gi ? srv_gi_mode_name(svc->st.settings.gi_mode) : "off");
+    const pc_ddgi_volume *v = &w->ddgi.vol;
+    unsigned counts[3] = {0, 0, 0};
+    float spacing[3] = {0, 0, 0}, origin[3] = {0, 0, 0};
+    if (w->gi) {
+        counts[0] = v->counts.x, counts[1] = v->counts.y, counts[2] = v->counts.z;
+        spacing[0] = v->spacing.x, spacing[1] = v->spacing.y, spacing[2] = v->spacing.z;
+        origin[0] = v->origin.x, origin[1] = v->origin.y, origin[2] = v->origin.z;
+    }
+    cJSON *c = cJSON_AddArrayToObject(probes, "counts");
+    for (int i = 0; i < 3; i++)
+        cJSON_AddItemToArray(c, cJSON_CreateNumber(counts[i]));
+    cJSON_AddNumberToObject(probes, "total", (double)counts[0] * counts[1] * counts[2]);
+    srv_json_add_floats(probes, "spacing", spacing, 3);
+    srv_json_add_floats(probes, "origin", origin, 3);
+    cJSON_AddNumberToObject(probes, "rays_per_probe", w->gi ? v->counts.w : 0);
+    cJSON_AddBoolToObject(probes, "converged", !srv_scene_service_converging(svc));
+    return probes;
+}
+
+static cJSON *scene_json(const srv_scene_service *svc)
+{
+    const rd_scene *s = &svc->st.scene;
+    cJSON *j = cJSON_CreateObject();
+    cJSON_AddStringToObject(j, "source", svc->st.source);
+    cJSON_AddNumberToObject(j, "generation", (double)svc->st.generation);
+    cJSON_AddNumberToObject(j, "triangles", (double)s->tri_total);
+    cJSON_AddNumberToObject(j, "mesh_count", s->mesh_count);
+    cJSON_AddNumberToObject(j, "instance_count", s->instance_count);
+    cJSON_AddNumberToObject(j, "material_count", s->material_count);
+    cJSON_AddNumberToObject(j, "texture_count", s->texture_count);
+    cJSON_AddNumberToObject(j, "node_count", s->node_count);
+    cJSON_AddNumberToObject(j, "light_count", s->light_count);
+    cJSON *bounds = cJSON_AddObjectToObject(j, "bounds");
+    srv_json_add_floats(bounds, "min", s->bounds_min, 3);
+    srv_json_add_floats(bounds, "max", s->bounds_max, 3);
+    cJSON *nodes = cJSON_AddArrayToObject(j, "nodes");
+    for (uint32_t i = 0; i < s->node_count && i < NODE_DOC_LIMIT; i++)
+        cJSON_AddItemToArray(nodes, srv_json_node(i, &s->nodes[i]));
+    cJSON_AddBoolToObject(j, "nodes_truncated", s->node_count > NODE_DOC_LIMIT);
+    cJSON *lights = cJSON_AddArrayToObject(j, "lights");
+    for (uint32_t i = 0; i < s->light_count; i++)
+        cJSON_AddItemToArray(lights, srv_json_light(svc->st.light_ids[i], &s->lights[i]));
+    cJSON *bvh = cJSON_AddObjectToObject(j, "bvh");
+    cJSON_AddNumberToObject(bvh, "triangles", (double)svc->gs.tri_count);
+    cJSON_AddNumberToObject(bvh, "blas_nodes", (double)svc->gs.blas_node_count);
+    cJSON_AddNumberToObject(bvh, "tlas_nodes", svc->gs.tlas_node_count);
+    cJSON_AddNumberToObject(bvh, "max_blas_depth", svc->gs.max_blas_depth);
+    cJSON_AddNumberToObject(bvh, "blas_build_ms", svc->gs.blas_build_ms);
+    cJSON_AddNumberToObject(bvh, "tlas_build_ms", svc->gs.tlas_build_ms);
+    cJSON_AddNumberToObject(bvh, "upload_ms", svc->gs.upload_ms);
+    cJSON_AddItemToObject(j, "probes", probes_json(svc));
+    cJSON *w = cJSON_AddArrayToObject(j, "warnings");
+    for (uint32_t i = 0; i < s->warning_count; i++)
+        cJSON_AddItemToArray(w, cJSON_CreateString(s->warnings[i]));
+    return j;
+}
+
+static cJSON *lights_json(const srv_scene_service *svc)
+{
+    cJSON *a = cJSON_CreateArray();
+    for (uint32_t i = 0; i < svc->st.scene.light_count; i++)
+        cJSON_AddItemToArray(a, srv_json_light(svc->st.light_ids[i], &svc->st.scene.lights[i]));
+    cJSON *j = cJSON_CreateObject();
+    cJSON_AddItemToObject(j, "lights", a);
+    return j;
+}
+
+static void publish_lights(srv_scene_service *svc, bool quiet)
+{
+    srv_snapshot_publish(svc->snap, SRV_DOC_LIGHTS, lights_json(svc), quiet);
+}
+
+/* Everything, after a new scene (or at start). */
+static void publish_scene(srv_scene_service *svc)
+{
+    const rd_scene *s = &svc->st.scene;
+    cJSON **nodes = calloc(s->node_count ? s->node_count : 1, sizeof *nodes);
+    if (!nodes) abort();
+    for (uint32_t i = 0; i < s->node_count; i++)
+        nodes[i] = srv_json_node(i, &s->nodes[i]);
+    srv_snapshot_set_nodes(svc->snap, nodes, s->node_count);
+    free(nodes);
+    svc->was_converged = !srv_scene_service_converging(svc);
+    srv_snapshot_publish(svc->snap, SRV_DOC_SCENE, scene_json(svc), false);
+    publish_lights(svc, false);
+    srv_snapshot_publish(svc->snap, SRV_DOC_SETTINGS, srv_json_settings(&svc->st.settings), false);
+}
+
+/* The probe part of the scene document, when the field's state changed (no event). */
+static void publish_probes(srv_scene_service *svc)
+{
+    srv_snapshot_patch_scene(svc->snap, "probes", probes_json(svc));
+    svc->was_converged = !srv_scene_service_converging(svc);
+}
+
+/* ---- GI ------------------------------------------------------------------------------------- */
+
+static unsigned converge_updates(const srv_settings *s)
+{
+    if (s->gi_mode != PC_GI_CLASSIC && s->gi_mode != PC_GI_DDGI) return 0;
+    /* updates until the old value's weight falls below 1%: h^n < 0.01 (h = 0: one update
+     * replaces everything; a few more let the bounces settle) */
+    double h = s->hysteresis < 0.999f ? s->hysteresis : 0.999;
+    double n = h > 0 ? ceil(log(0.01) / log(h)) : 1;
+    return n < 4 ? 4 : n > 1000 ? 1000 : (unsigned)n;
+}
+
+static rd_vk_result configure_gi(srv_scene_service *svc, char *err, size_t errlen)
+{
+    rd_ddgi_settings gi;
+    srv_settings_to_gi(&svc->st.settings, &gi);
+    if (svc->st.settings.gi_mode == SRV_GI_PATHTRACE) gi.mode = PC_GI_OFF;
+    rd_vk_result vr = rd_world_configure_gi(&svc->world, svc->st.scene.bounds_min,
+                                            svc->st.scene.bounds_max, &gi, err, errlen);
+    svc->gi_updates = 0;
+    svc->gi_converge = svc->world.gi ? converge_updates(&svc->st.settings) : 0;
+    svc->pt_target =
+        svc->st.settings.gi_mode == SRV_GI_PATHTRACE ? (svc->vk->is_cpu ? 64 : 4096) : 0;
+    return vr;
+}
+
+bool srv_scene_service_converging(const srv_scene_service *svc)
+{
+    return svc->world.gi && svc->gi_updates < svc->gi_converge;
+}
+
+unsigned srv_scene_service_updates_left(const srv_scene_service *svc)
+{
+    return srv_scene_service_converging(svc) ? svc->gi_converge - svc->gi_updates : 0;
+}
+
+bool srv_scene_service_animating(const srv_scene_service *svc, unsigned viewers)
+{
+    return svc->st.settings.animate && viewers > 0 && svc->st.scene.light_count > 0;
+}
+
+/* ---- changes -------------------------------------------------------------------------------- */
+
+static bool upload_lights(srv_scene_service *svc, srv_cmd *c)
+{
+    char err[256];
+    if (rd_gpu_scene_update_lights(svc->vk, &svc->gs, &svc->st.scene, err, sizeof err) !=
+        RD_VK_OK) {
+        if (c) srv_cmd_fail(c, 500, SRV_ERR_GPU, err);
+        return false;
+    }
+    return true;
+}
+
+/* The lighting changed: the probe field must converge again. */
+static void lighting_changed(srv_scene_service *svc)
+{
+    svc->gi_updates = 0;
+    if (svc->was_converged) publish_probes(svc);
+}
+
+static unsigned replace_scene(srv_scene_service *svc, srv_cmd *c)
+{
+    char err[256];
+    rd_gpu_scene ngs;
+    double t0 = srv_mono_ms();
+    rd_vk_result vr;
+    if (c->prepared) {
+        vr = rd_gpu_scene_upload(svc->vk, &ngs, c->scene, c->prepared, err, sizeof err);
+    } else {
+        vr = rd_gpu_scene_create(svc->vk, &ngs, c->scene, err, sizeof err);
+    }
+    if (vr != RD_VK_OK) {
+        srv_warn("render", "uploaded scene rejected by the GPU: %s", err);
+        srv_cmd_fail(c, vr == RD_VK_ERR_UNSUPPORTED ? 422 : 500,
+                     vr == RD_VK_ERR_UNSUPPORTED ? SRV_ERR_INVALID_GLTF : SRV_ERR_GPU, err);
+        return 0;
+    }
+    rd_gpu_scene_destroy(svc->vk, &svc->gs);
+    svc->gs = ngs;
+    rd_world_set_scene(&svc->world, &svc->gs);
+    srv_state_set_scene(&svc->st, c->scene, c->source, ++svc->generation_counter);
+    free(c->scene);
+    c->scene = NULL;
+    srv_animation_reset(&svc->anim);
+    if (configure_gi(svc, err, sizeof err) != RD_VK_OK)
+        srv_warn("render", "global illumination is off for this scene: %s", err);
+    srv_info("render",
+             "scene replaced (generation %llu, %llu triangles, %.0f ms on the render thread)",
+             (unsigned long long)svc->st.generation, (unsigned long long)svc->st.scene.tri_total,
+             srv_mono_ms() - t0);
+    publish_scene(svc);
+    pthread_mutex_lock(&c->mu);
+    c->reply.scene_generation = svc->st.generation;
+    pthread_mutex_unlock(&c->mu);
+    srv_cmd_complete_json(c, 200, scene_json(svc));
+    return SRV_CHANGE_VIEWS | SRV_CHANGE_SCENE | SRV_CHANGE_PERSIST;
+}
+
+static unsigned patch_settings(srv_scene_service *svc, srv_cmd *c)
+{
+    srv_api_error e;
+    srv_settings old = svc->st.settings;
+    if (!srv_state_settings_apply(&svc->st.settings, &c->settings, &e)) {
+        srv_cmd_complete_error(c, &e);
+        return 0;
+    }
+    if (c->settings.has & SRV_SET_GI_FIELDS) {
+        char err[256];
+        rd_vk_result vr = configure_gi(svc, err, sizeof err);
+        if (vr != RD_VK_OK) {
+            svc->st.settings = old;
+            char err2[256];
+            configure_gi(svc, err2, sizeof err2);
+            if (vr == RD_VK_ERR_UNSUPPORTED)
+                srv_cmd_fail(c, 400, SRV_ERR_INVALID_FIELD, err);
+            else
+                srv_cmd_fail(c, 500, SRV_ERR_GPU, err);
+            return 0;
+        }
+        publish_probes(svc);
+    }
+    if (c->settings.has & SRV_SET_SKY) {
+        rd_world_set_sky(&svc->world, svc->st.settings.sky);
+        lighting_changed(svc);
+    }
+    if (!svc->st.settings.animate) srv_animation_pause(&svc->anim);
+    svc->gi_converge = svc->world.gi ? converge_updates(&svc->st.settings) : 0;
+    srv_snapshot_publish(svc->snap, SRV_DOC_SETTINGS, srv_json_settings(&svc->st.settings), false);
+    srv_cmd_complete_json(c, 200, srv_json_settings(&svc->st.settings));
+    unsigned changes = SRV_CHANGE_VIEWS | SRV_CHANGE_PERSIST;
+    if (c->settings.has & (SRV_SET_WIDTH | SRV_SET_HEIGHT)) changes |= SRV_CHANGE_SIZE;
+    if (c->settings.has & SRV_SET_MAX_PIXELS) changes |= SRV_CHANGE_LIMITS;
+    return changes;
+}
+
+unsigned srv_scene_service_apply(srv_scene_service *svc, srv_cmd *c)
+{
+    srv_api_error e;
+    srv_scene_state *st = &svc->st;
+    if (svc->vk->device_lost) {
+        srv_cmd_fail(c, 503, SRV_ERR_GPU, "The GPU device was lost; restart the server.");
+        return 0;
+    }
+    switch (c->kind) {
+    case SRV_CMD_REPLACE_SCENE:
+        return replace_scene(svc, c);
+    case SRV_CMD_PATCH_SETTINGS:
+        return patch_settings(svc, c);
+    case SRV_CMD_PATCH_LIGHT: {
+        int i = srv_state_light_index(st, c->id);
+        if (i < 0) {
+            srv_api_fail(&e, 404, SRV_ERR_NOT_FOUND, "There is no light with id %u.", c->id);
+            srv_cmd_complete_error(c, &e);
+            return 0;
+        }
+        if (!srv_state_light_apply(&st->scene.lights[i], &c->light, &e)) {
+            srv_cmd_complete_error(c, &e);
+            return 0;
+        }
+        if (svc->anim.valid && svc->anim.light == c->id) srv_animation_reset(&svc->anim);
+        if (!upload_lights(svc, c)) return 0;
+        lighting_changed(svc);
+        publish_lights(svc, false);
+        srv_cmd_complete_json(c, 200, srv_json_light(c->id, &st->scene.lights[i]));
+        return SRV_CHANGE_VIEWS | SRV_CHANGE_PERSIST;
+    }
+    case SRV_CMD_ADD_LIGHT: {
+        uint32_t id;
+        if (!srv_state_light_add(st, &c->light, &id, &e)) {
+            srv_cmd_complete_error(c, &e);
+            return 0;
+        }
+        if (!upload_lights(svc, c)) return 0;
+        lighting_changed(svc);
+        publish_lights(svc, false);
+        srv_cmd_complete_json(c, 201,
+                              srv_json_light(id, &st->scene.lights[st->scene.light_count - 1]));
+        return SRV_CHANGE_VIEWS | SRV_CHANGE_PERSIST;
+    }
+    case SRV_CMD_DELETE_LIGHT:
+        if (!srv_state_light_delete(st, c->id, &e)) {
+            srv_cmd_complete_error(c, &e);
+            return 0;
+        }
+        if (svc->anim.valid && svc->anim.light == c->id) srv_animation_reset(&svc->anim);
+        if (!upload_lights(svc, c)) return 0;
+        lighting_changed(svc);
+        publish_lights(svc, false);
+        srv_cmd_complete(c, 204, NULL);
+        return SRV_CHANGE_VIEWS | SRV_CHANGE_PERSIST;
+    case SRV_CMD_PATCH_NODE: {
+        if (!srv_state_node_apply(st, c->id, &c->node, &e)) {
+            srv_cmd_complete_error(c, &e);
+            return 0;
+        }
+        char err[256];
+        /* the top-level BVH follows the node; lights attached to it move too */
+        if (rd_gpu_scene_update_instances(svc->vk, &svc->gs, &st->scene, err, sizeof err) !=
+            RD_VK_OK) {
+            srv_cmd_fail(c, 500, SRV_ERR_GPU, err);
+            return 0;
+        }
+        if (!upload_lights(svc, c)) return 0;
+        lighting_changed(svc);
+        srv_snapshot_set_node(svc->snap, c->id, srv_json_node(c->id, &st->scene.nodes[c->id]));
+        publish_lights(svc, true); /* attached lights moved along */
+        srv_cmd_complete_json(c, 200, srv_json_node(c->id, &st->scene.nodes[c->id]));
+        return SRV_CHANGE_VIEWS | SRV_CHANGE_PERSIST;
+    }
+    default:
+        srv_cmd_fail(c, 500, SRV_ERR_INTERNAL, "Not a world command.");
+        return 0;
+    }
+}
+
+rd_vk_result srv_scene_service_advance(srv_scene_service *svc, bool animating, unsigned updates,
+                                       double now_ms, char *err, size_t errlen)
+{
+    if (animating) {
+        if (srv_animation_step(&svc->anim, &svc->st, now_ms) && upload_lights(svc, NULL)) {
+            lighting_changed(svc);
+            publish_lights(svc, true); /* GET answers follow; no event per frame */
+        }
+    } else {
+        srv_animation_pause(&svc->anim);
+    }
+    if (!svc->world.gi) updates = 0;
+    if (animating && svc->world.gi && updates == 0) updates = 1;
+    rd_vk_result vr = rd_world_update(&svc->world, updates, err, errlen);
+    if (vr == RD_VK_OK && svc->gi_updates < UINT32_MAX - updates) svc->gi_updates += updates;
+    if (svc->was_converged != !srv_scene_service_converging(svc)) publish_probes(svc);
+    return vr;
+}
+
+cJSON *srv_scene_service_state_json(srv_scene_service *svc, const srv_camera *default_camera)
+{
+    svc->st.camera = *default_camera;
+    return srv_state_to_json(&svc->st);
+}
+
+/* ---- lifecycle ------------------------------------------------------------------------------ */
+
+rd_vk_result srv_scene_service_init(srv_scene_service *svc, rd_vk *vk, srv_snapshot *snap,
+                                    const srv_settings *settings, rd_scene *scene,
+                                    const char *source, uint64_t generation,
+                                    uint64_t generation_base, const cJSON *saved_state, char *err,
+                                    size_t errlen)
+{
+    memset(svc, 0, sizeof *svc);
+    svc->vk = vk;
+    svc->snap = snap;
+    srv_state_init(&svc->st);
+    svc->st.settings = *settings;
+    svc->generation_counter = generation_base > generation ? generation_base : generation;
+    srv_state_set_scene(&svc->st, scene, source, generation);
+    if (saved_state) {
+        srv_api_error e;
+        if (!srv_state_restore(&svc->st, saved_state, &e))
+            srv_warn("render", "saved state not applied: %s", e.message);
+        else if (e.message[0])
+            srv_warn("render", "saved state partly applied: %s", e.message);
+        else
+            srv_info("render", "restored camera, lights, nodes and settings");
+    }
+    rd_vk_result vr = rd_gpu_scene_create(vk, &svc->gs, &svc->st.scene, err, errlen);
+    svc->gs_ok = vr == RD_VK_OK;
+    if (vr == RD_VK_OK) vr = rd_world_create(vk, &svc->world, err, errlen);
+    svc->world_ok = vr == RD_VK_OK;
+    if (vr != RD_VK_OK) {
+        srv_scene_service_dispose(svc);
+        return vr;
+    }
+    rd_world_set_scene(&svc->world, &svc->gs);
+    rd_world_set_sky(&svc->world, svc->st.settings.sky);
+    if (configure_gi(svc, err, errlen) != RD_VK_OK) {
+        srv_warn("render", "global illumination is off: %s", err);
+        err[0] = '\0';
+    }
+    publish_scene(svc);
+    return RD_VK_OK;
+}
+
+void srv_scene_service_dispose(srv_scene_service *svc)
+{
+    if (svc->world_ok) rd_world_destroy(&svc->world);
+    if (svc->gs_ok) rd_gpu_scene_destroy(svc->vk, &svc->gs);
+    svc->world_ok = svc->gs_ok = false;
+    srv_state_dispose(&svc->st);
+}

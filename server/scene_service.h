@@ -1,0 +1,70 @@
+/* scene_service.h: the world side of the daemon — the scene state (scene, lights, nodes,
+ * settings), its GPU scene and the shared rd_world (environment and probe field), and the API
+ * semantics of changing them. Render thread only.
+ *
+ * srv_scene_service_apply takes a world command (scene replacement, light, node or settings
+ * change), validates it against the current state, applies it to the CPU state and the GPU,
+ * completes the command with the API's reply, publishes the changed documents to the snapshot
+ * (which turns them into events) and says what the views must do about it.
+ */
+#ifndef SRV_SCENE_SERVICE_H
+#define SRV_SCENE_SERVICE_H
+
+#include <cjson/cJSON.h>
+
+#include "animation.h"
+#include "commands.h"
+#include "mailbox.h"
+#include "renderer/world.h"
+#include "scene_state.h"
+#include "snapshot.h"
+
+/* What a change means for the views (bits). */
+enum {
+    SRV_CHANGE_VIEWS = 1u << 0,  /* every view shows something new: re-render them all */
+    SRV_CHANGE_SCENE = 1u << 1,  /* a new scene: every view's camera goes to st.camera */
+    SRV_CHANGE_SIZE = 1u << 2,   /* settings width/height: the default view's size */
+    SRV_CHANGE_LIMITS = 1u << 3, /* settings max_pixels */
+    SRV_CHANGE_PERSIST = 1u << 4 /* the saved state is out of date */
+};
+
+typedef struct srv_scene_service {
+    rd_vk *vk;
+    srv_snapshot *snap;
+    srv_scene_state st;
+    rd_gpu_scene gs;
+    bool gs_ok;
+    rd_world world;
+    bool world_ok;
+    uint64_t generation_counter;
+    unsigned gi_updates;  /* probe updates since the last lighting change */
+    unsigned gi_converge; /* updates after which the field counts as converged */
+    unsigned pt_target;   /* path tracing: samples per view to accumulate (0: not path tracing) */
+    bool was_converged;   /* as last published in the scene document */
+    srv_animation anim;
+} srv_scene_service;
+
+/* Takes over scene (left zeroed) and builds its GPU scene and the world; applies saved_state
+ * (may be NULL) first. On error everything is released and a message is in err. */
+rd_vk_result srv_scene_service_init(srv_scene_service *svc, rd_vk *vk, srv_snapshot *snap,
+                                    const srv_settings *settings, rd_scene *scene,
+                                    const char *source, uint64_t generation,
+                                    uint64_t generation_base, const cJSON *saved_state, char *err,
+                                    size_t errlen);
+void srv_scene_service_dispose(srv_scene_service *svc); /* idempotent; the device must be idle */
+
+/* Applies a world command and completes it; returns SRV_CHANGE_* bits. */
+unsigned srv_scene_service_apply(srv_scene_service *svc, srv_cmd *c);
+
+/* The probe field still wants updates (and how many). */
+bool srv_scene_service_converging(const srv_scene_service *svc);
+unsigned srv_scene_service_updates_left(const srv_scene_service *svc);
+/* The demo animation runs (enabled, the scene has a light, viewers is not 0). */
+bool srv_scene_service_animating(const srv_scene_service *svc, unsigned viewers);
+/* One world tick: moves the animation (when animating) and runs `updates` probe updates. */
+rd_vk_result srv_scene_service_advance(srv_scene_service *svc, bool animating, unsigned updates,
+                                       double now_ms, char *err, size_t errlen);
+/* The saved-state document (the default view's camera passed in). */
+cJSON *srv_scene_service_state_json(srv_scene_service *svc, const srv_camera *default_camera);
+
+#endif

@@ -1,0 +1,64 @@
+/* scheduler.h: what the render thread does next — plain policy, no GPU, unit-tested.
+ *
+ * A tick advances the shared world once (probe updates, the demo animation) and then every
+ * watched view shows it once. So:
+ *   1. A watched view that is dirty (its camera moved, the world changed, it has never been
+ *      drawn) and due under the frame-rate cap is rendered; among several, in turn (round robin
+ *      from the one after the last rendered), so no view starves.
+ *   2. Only when no watched view still owes a frame of the last world tick, and the world
+ *      wants to change (probes converging, animation) and a tick period has passed, the world
+ *      advances — at most once per tick whatever the number of views. Nobody watching: no work.
+ *      (A view that is dirty only because its own camera moved does not hold the world back.)
+ *   3. Otherwise a watched view whose input stopped still_delay_ms ago gets its still frame (the
+ *      last image re-encoded at full quality).
+ *   4. Otherwise sleep until the earliest deadline among those rules, or until woken.
+ */
+#ifndef SRV_SCHEDULER_H
+#define SRV_SCHEDULER_H
+
+#include <stdbool.h>
+
+typedef struct srv_sched_view {
+    bool watched;      /* a connection shows it, or a frame request waits for it */
+    bool dirty;        /* it owes a frame */
+    bool behind_world; /* it has not shown the world's last tick yet (implies dirty) */
+    bool need_still;   /* its last frame was interactive */
+    double last_render_ms;
+    double last_input_ms;
+} srv_sched_view;
+
+typedef struct srv_sched_state {
+    double now_ms;
+    double frame_interval_ms; /* 1000 / max_fps */
+    double still_delay_ms;
+    bool world_wants_update;     /* probes converging or animation running */
+    unsigned world_updates_left; /* probe updates still wanted (0: only the animation moves) */
+    double last_tick_ms;         /* when the world last advanced */
+    bool readback_free;          /* a frame can be handed to the readback ring now */
+    const srv_sched_view *views;
+    unsigned view_count;
+    unsigned cursor; /* round robin: the index to look at first */
+} srv_sched_state;
+
+typedef enum srv_sched_action {
+    SRV_SCHED_SLEEP = 0,
+    SRV_SCHED_ADVANCE_WORLD,
+    SRV_SCHED_RENDER_VIEW,
+    SRV_SCHED_EMIT_STILL,
+} srv_sched_action;
+
+/* Probe updates per tick while the probes converge and no input arrives: the field settles in a
+ * quarter of the ticks; right after an input a tick carries one update only, so the viewer's
+ * next frame is not delayed by the extra updates. */
+#define SRV_SCHED_CONVERGE_UPDATES 4u
+
+typedef struct srv_sched_step {
+    srv_sched_action action;
+    unsigned view;          /* RENDER_VIEW, EMIT_STILL: index into views */
+    unsigned world_updates; /* ADVANCE_WORLD: probe updates to run (0: move only) */
+    double wake_ms;         /* SLEEP: when to look again (INFINITY: only when woken) */
+} srv_sched_step;
+
+srv_sched_step srv_sched_next(const srv_sched_state *s);
+
+#endif
