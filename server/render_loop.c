@@ -282,6 +282,7 @@ static void render_view(srv_render_loop *l, srv_view *v, double now)
     };
     v->dirty = v->behind_world = false;
     v->requests = 0;
+    v->renders_since_tick++;
     v->last_render_ms = now;
     rd_vk_result vr = rd_view_render(&v->gpu, &l->svc.world, &cam, &vs, err, sizeof err);
     double wall = srv_mono_ms() - now;
@@ -404,6 +405,7 @@ static void *render_main(void *arg)
                                      .dirty = v->dirty,
                                      .behind_world = v->behind_world,
                                      .need_still = v->need_still,
+                                     .renders_since_tick = v->renders_since_tick,
                                      .last_render_ms = v->last_render_ms,
                                      .last_input_ms = v->last_input_ms};
             any_watched_dirty |= sv[i].watched && v->dirty;

@@ -3,15 +3,46 @@
 
 #include <math.h>
 
+/* The first watched, dirty view, in turn from the cursor, that pred accepts and that is due
+ * under the frame-rate cap; -1 when none. */
+static int pick(const srv_sched_state *s, bool (*pred)(const srv_sched_view *))
+{
+    for (unsigned n = 0; n < s->view_count; n++) {
+        unsigned k = (s->cursor + n) % s->view_count;
+        const srv_sched_view *v = &s->views[k];
+        if (v->watched && v->dirty && pred(v) &&
+            v->last_render_ms + s->frame_interval_ms <= s->now_ms)
+            return (int)k;
+    }
+    return -1;
+}
+
+static bool owes_tick(const srv_sched_view *v)
+{
+    return v->behind_world;
+}
+
+static bool input_first(const srv_sched_view *v)
+{
+    return v->renders_since_tick < 2; /* the tick's frame, and one for its own input */
+}
+
+static bool any(const srv_sched_view *v)
+{
+    (void)v;
+    return true;
+}
+
 srv_sched_step srv_sched_next(const srv_sched_state *s)
 {
     srv_sched_step step = {.action = SRV_SCHED_SLEEP, .wake_ms = INFINITY};
-    bool any_watched = false, any_owed = false, recent_input = false;
+    bool any_watched = false, any_owed = false, interacting = false;
     for (unsigned k = 0; k < s->view_count; k++) {
         const srv_sched_view *v = &s->views[k];
         if (!v->watched) continue;
         any_watched = true;
-        if (s->now_ms - v->last_input_ms < s->still_delay_ms) recent_input = true;
+        if (v->last_input_ms > s->last_tick_ms || s->now_ms - v->last_input_ms < s->still_delay_ms)
+            interacting = true;
         if (!v->dirty) continue;
         if (v->behind_world) any_owed = true;
         double due = v->last_render_ms + s->frame_interval_ms;
@@ -22,39 +53,47 @@ srv_sched_step srv_sched_next(const srv_sched_state *s)
             if (s->now_ms + 1 < step.wake_ms) step.wake_ms = s->now_ms + 1;
         }
     }
-    /* 1. dirty, due views in turn */
+    int k = -1;
     if (s->readback_free && s->view_count) {
-        for (unsigned n = 0; n < s->view_count; n++) {
-            unsigned k = (s->cursor + n) % s->view_count;
-            const srv_sched_view *v = &s->views[k];
-            if (v->watched && v->dirty && v->last_render_ms + s->frame_interval_ms <= s->now_ms) {
-                step.action = SRV_SCHED_RENDER_VIEW;
-                step.view = k;
-                return step;
-            }
-        }
+        /* 1. views that owe the world's last tick */
+        k = pick(s, owes_tick);
+        /* 2. a frame for a view's own input before the next tick (once per tick) */
+        if (k < 0) k = pick(s, input_first);
     }
-    /* 2. the world advances once every watched view has shown the current state */
+    if (k >= 0) {
+        step.action = SRV_SCHED_RENDER_VIEW;
+        step.view = (unsigned)k;
+        return step;
+    }
+    /* 3. the world advances once every watched view has shown its last tick */
     if (any_watched && !any_owed && s->world_wants_update) {
         double due = s->last_tick_ms + s->frame_interval_ms;
         if (due <= s->now_ms) {
             step.action = SRV_SCHED_ADVANCE_WORLD;
-            unsigned per_tick = recent_input ? 1u : SRV_SCHED_CONVERGE_UPDATES;
+            unsigned per_tick = interacting ? 1u : SRV_SCHED_CONVERGE_UPDATES;
             step.world_updates =
                 s->world_updates_left < per_tick ? s->world_updates_left : per_tick;
             return step;
         }
         if (due < step.wake_ms) step.wake_ms = due;
+    } else if (s->readback_free && s->view_count) {
+        /* 4. the world is still: views follow their input as fast as the cap allows */
+        k = pick(s, any);
+        if (k >= 0) {
+            step.action = SRV_SCHED_RENDER_VIEW;
+            step.view = (unsigned)k;
+            return step;
+        }
     }
-    /* 3. still frames once input has stopped (never for a view that owes a frame anyway) */
+    /* 5. still frames once input has stopped (never for a view that owes a frame anyway) */
     for (unsigned n = 0; n < s->view_count; n++) {
-        unsigned k = (s->cursor + n) % s->view_count;
-        const srv_sched_view *v = &s->views[k];
+        unsigned i = (s->cursor + n) % s->view_count;
+        const srv_sched_view *v = &s->views[i];
         if (!v->watched || v->dirty || !v->need_still) continue;
         double due = v->last_input_ms + s->still_delay_ms;
         if (due <= s->now_ms) {
             step.action = SRV_SCHED_EMIT_STILL;
-            step.view = k;
+            step.view = i;
             step.wake_ms = INFINITY;
             return step;
         }

@@ -1,17 +1,20 @@
 /* scheduler.h: what the render thread does next — plain policy, no GPU, unit-tested.
  *
  * A tick advances the shared world once (probe updates, the demo animation) and then every
- * watched view shows it once. So:
- *   1. A watched view that is dirty (its camera moved, the world changed, it has never been
- *      drawn) and due under the frame-rate cap is rendered; among several, in turn (round robin
- *      from the one after the last rendered), so no view starves.
- *   2. Only when no watched view still owes a frame of the last world tick, and the world
- *      wants to change (probes converging, animation) and a tick period has passed, the world
- *      advances — at most once per tick whatever the number of views. Nobody watching: no work.
- *      (A view that is dirty only because its own camera moved does not hold the world back.)
- *   3. Otherwise a watched view whose input stopped still_delay_ms ago gets its still frame (the
- *      last image re-encoded at full quality).
- *   4. Otherwise sleep until the earliest deadline among those rules, or until woken.
+ * watched view shows it once. Views nobody watches are never rendered, and nobody watching means
+ * no world work either. In order:
+ *   1. A watched view that owes a frame of the world's last tick and is due under the
+ *      frame-rate cap is rendered; among several, in turn (round robin from the one after the
+ *      last rendered), so no view starves.
+ *   2. A watched view dirty from its own input (its camera moved) gets one frame of its own
+ *      between two ticks, so input is answered without waiting for the next world update.
+ *   3. When no watched view owes the last tick, the world wants to change (probes converging,
+ *      animation) and a tick period has passed, the world advances — once per tick whatever the
+ *      number of views; with one probe update while someone interacts, else a few.
+ *   4. When the world is still, dirty views are rendered in turn as fast as the cap allows.
+ *   5. A watched view whose input stopped still_delay_ms ago gets its still frame (the last image
+ *      re-encoded at full quality).
+ *   6. Otherwise sleep until the earliest deadline among those rules, or until woken.
  */
 #ifndef SRV_SCHEDULER_H
 #define SRV_SCHEDULER_H
@@ -19,10 +22,11 @@
 #include <stdbool.h>
 
 typedef struct srv_sched_view {
-    bool watched;      /* a connection shows it, or a frame request waits for it */
-    bool dirty;        /* it owes a frame */
-    bool behind_world; /* it has not shown the world's last tick yet (implies dirty) */
-    bool need_still;   /* its last frame was interactive */
+    bool watched;                /* a connection shows it, or a frame request waits for it */
+    bool dirty;                  /* it owes a frame */
+    bool behind_world;           /* it has not shown the world's last tick yet (implies dirty) */
+    bool need_still;             /* its last frame was interactive */
+    unsigned renders_since_tick; /* frames of it since the world last advanced */
     double last_render_ms;
     double last_input_ms;
 } srv_sched_view;

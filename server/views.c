@@ -99,7 +99,10 @@ void srv_views_mark_all(srv_views *vs, bool world_tick)
 {
     for (unsigned i = 0; i < vs->count; i++) {
         vs->items[i]->dirty = true;
-        if (world_tick) vs->items[i]->behind_world = true;
+        if (world_tick) {
+            vs->items[i]->behind_world = true;
+            vs->items[i]->renders_since_tick = 0;
+        }
     }
 }
 

@@ -21,11 +21,12 @@ typedef struct srv_view {
     uint32_t id;
     srv_camera camera;
     unsigned width, height;
-    unsigned watchers; /* connections showing it */
-    unsigned requests; /* GET /v1/frame.jpg waiting for a frame of it */
-    bool dirty;        /* owes a frame */
-    bool behind_world; /* has not shown the world's last tick */
-    bool need_still;   /* its last frame was interactive */
+    unsigned watchers;           /* connections showing it */
+    unsigned requests;           /* GET /v1/frame.jpg waiting for a frame of it */
+    bool dirty;                  /* owes a frame */
+    bool behind_world;           /* has not shown the world's last tick */
+    bool need_still;             /* its last frame was interactive */
+    unsigned renders_since_tick; /* frames since the world last advanced (scheduler.h) */
     double last_input_ms, last_render_ms;
     uint64_t input_ticket;  /* newest input command applied to it (frames carry it) */
     uint64_t last_frame_id; /* of its newest frame handed to the encoders */

@@ -253,6 +253,10 @@ int main(void)
         pc_ws_close(&more[i].ws);
     pc_sleep_ms(500);
     CHECK(stat(&d, "views", "count") == 2);
+    double u1, t1, f1;
+    updates_per_change(&d, 30, &u1, &t1, &f1); /* B alone */
+    CHECKF(u1 == u5, "probe updates per change: %g with 1 view, %g with 5", u1, u5);
+    CHECKF(f1 < f5, "frames per change: %g with 1 view, %g with 5", f1, f5);
     snprintf(path, sizeof path, "/v1/views/%u/camera", a.view);
     CHECK(pc_api(&d, "GET", path, NULL, false, &r) == 404);
     pc_http_response_free(&r);

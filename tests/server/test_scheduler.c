@@ -31,6 +31,7 @@ static srv_sched_step run(srv_sched_state *s, srv_sched_view *v)
     srv_sched_step st = srv_sched_next(s);
     if (st.action == SRV_SCHED_RENDER_VIEW) {
         v[st.view].dirty = v[st.view].behind_world = false;
+        v[st.view].renders_since_tick++;
         v[st.view].last_render_ms = s->now_ms;
         s->cursor = (st.view + 1) % s->view_count;
     } else if (st.action == SRV_SCHED_ADVANCE_WORLD) {
@@ -165,10 +166,58 @@ static void test_world(void)
     v[0].last_render_ms = s.now_ms - 1;
     st = srv_sched_next(&s);
     CHECKF(st.action == SRV_SCHED_ADVANCE_WORLD, "camera-dirty view does not block the tick");
+    /* ... but, once due, its input is answered before the tick: once per tick */
+    v[0].last_render_ms = s.now_ms - 10;
+    v[0].renders_since_tick = 1;
+    st = srv_sched_next(&s);
+    CHECKF(st.action == SRV_SCHED_RENDER_VIEW, "input answered before the next tick");
+    v[0].renders_since_tick = 2;
+    st = srv_sched_next(&s);
+    CHECKF(st.action == SRV_SCHED_ADVANCE_WORLD, "one input frame per tick, then the tick");
     /* a view that has not shown the last tick does */
     v[0].behind_world = true;
+    v[0].last_render_ms = s.now_ms - 1;
     st = srv_sched_next(&s);
     CHECKF(st.action == SRV_SCHED_SLEEP, "a view behind the world blocks the next tick");
+    /* the world at rest: a dirty view renders as fast as the cap allows */
+    s.world_wants_update = false;
+    v[0].behind_world = false;
+    v[0].renders_since_tick = 50;
+    v[0].last_render_ms = s.now_ms - 10;
+    st = srv_sched_next(&s);
+    CHECKF(st.action == SRV_SCHED_RENDER_VIEW, "still world: views follow their input");
+}
+
+/* Views kept dirty by their own cameras all the time do not starve the world, and every tick
+ * is shown by every view before the next one. */
+static void test_world_not_starved(void)
+{
+    srv_sched_view v[3];
+    for (int k = 0; k < 3; k++)
+        v[k] = view(true, true);
+    srv_sched_state s = base(v, 3);
+    s.world_wants_update = true;
+    s.world_updates_left = 1000000;
+    unsigned ticks = 0, shown[3] = {0};
+    bool ok = true;
+    for (int i = 0; i < 300; i++) {
+        s.now_ms += 2;
+        for (int k = 0; k < 3; k++) {
+            v[k].dirty = true; /* camera input before every step */
+            v[k].last_input_ms = s.now_ms;
+        }
+        srv_sched_step st = run(&s, v);
+        if (st.action == SRV_SCHED_ADVANCE_WORLD) {
+            for (int k = 0; k < 3; k++)
+                ok &= ticks == 0 || shown[k] == ticks;
+            ticks++;
+        } else if (st.action == SRV_SCHED_RENDER_VIEW && v[st.view].last_render_ms == s.now_ms &&
+                   shown[st.view] < ticks) {
+            shown[st.view]++;
+        }
+    }
+    CHECKF(ticks >= 20, "%u world ticks in 600 ms of constant camera input", ticks);
+    CHECKF(ok, "every view showed each tick before the next");
 }
 
 static void test_still(void)
@@ -193,6 +242,7 @@ int main(void)
     test_round_robin();
     test_pacing();
     test_world();
+    test_world_not_starved();
     test_still();
     return test_finish();
 }
