@@ -3,7 +3,9 @@
 //   PCWEB_HTTP, PCWEB_WS   bound addresses          PCWEB_PIDFILE  the daemon's pid (rewritten here
 //   PCWEB_EXE, PCWEB_ARGS  its command (JSON argv)                  after the restart test)
 //   PCWEB_OUT              screenshots and logs     PCWEB_CHROMIUM, PCWEB_ROOT
-// The tests run in order on one page; each asserts what the user would see.
+// The tests run in order on one page (a second and third page join for the views tests); each
+// asserts what the user would see. The stream speaks version 2 (protocol/stream.md): every page
+// owns a view of its own, and the world reaches it as events, never by polling.
 
 import { after, before, test } from 'node:test';
 import assert from 'node:assert/strict';
@@ -41,6 +43,7 @@ const CHROMIUM_ARGS = ['--headless', '--no-sandbox', '--disable-gpu', '--disable
 
 let browser, context, page;
 const pageErrors = [];
+const requests = new Map(); // page -> [{ t, method, path }] of every HTTP request it made
 const spawned = []; // daemons started here, stopped in after()
 
 /* ---- helpers -------------------------------------------------------------------------------- */
@@ -109,7 +112,8 @@ async function shot(name, p = page) {
 
 /* Drags on the canvas from its centre by (dx, dy) in steps. */
 async function drag(dx, dy, p = page) {
-  const cx = VIEWPORT.width / 2, cy = VIEWPORT.height / 2;
+  const vp = p.viewportSize() || VIEWPORT;
+  const cx = vp.width / 2, cy = vp.height / 2;
   await p.mouse.move(cx, cy);
   await p.mouse.down();
   await p.mouse.move(cx + dx, cy + dy, { steps: 12 });
@@ -170,7 +174,59 @@ async function stopDaemon(child) {
 async function newViewerPage(ctx) {
   const p = await ctx.newPage();
   p.on('pageerror', (e) => pageErrors.push(e.message));
+  const reqs = [];
+  requests.set(p, reqs);
+  p.on('request', (r) => {
+    const u = new URL(r.url());
+    reqs.push({ t: Date.now(), method: r.method(), path: u.pathname });
+  });
   return p;
+}
+
+/* Record every text message a page sends and receives on a WebSocket, and count animation
+ * frames, to check coalescing, the restore after a reconnect and the server's messages. */
+async function recordSockets(ctx) {
+  await ctx.addInitScript(() => {
+    window.__sent = [];
+    window.__recv = [];
+    window.__raf = 0;
+    const tick = () => { window.__raf++; requestAnimationFrame(tick); };
+    requestAnimationFrame(tick);
+    const send = WebSocket.prototype.send;
+    WebSocket.prototype.send = function (data) {
+      if (typeof data === 'string') {
+        try { window.__sent.push({ t: performance.now(), raf: window.__raf, m: JSON.parse(data) }); } catch { /* ignore */ }
+      }
+      return send.call(this, data);
+    };
+    const WS = WebSocket;
+    window.WebSocket = class extends WS {
+      constructor(...args) {
+        super(...args);
+        this.addEventListener('message', (e) => {
+          if (typeof e.data !== 'string') return;
+          try { window.__recv.push({ t: performance.now(), m: JSON.parse(e.data) }); } catch { /* ignore */ }
+        });
+      }
+    };
+  });
+}
+
+/* The camera of a view through the HTTP API. */
+const viewCamera = async (id) => {
+  const r = await http('GET', `/v1/views/${id}/camera`);
+  assert.equal(r.status, 200, r.text);
+  return r.json;
+};
+const dist3 = (a, b) => Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+
+/* Waits until page p draws a frame of view `viewId` at `size` ({ width, height }). */
+async function waitViewFrame(p, viewId, size, timeoutMs = 20000) {
+  await p.waitForFunction(([id, w]) => {
+    const h = window.probecast.state().header;
+    return h && h.viewId === id && (!w || (h.width === w.width && h.height === w.height));
+  }, [viewId, size || null], { timeout: timeoutMs });
+  return state(p);
 }
 
 /* ---- set-up ------------------------------------------------------------------------------- */
@@ -182,21 +238,7 @@ before(async () => {
     'run.sh starts the daemon at the size the page will ask for');
   browser = await chromium.launch({ executablePath: env.PCWEB_CHROMIUM || '/usr/bin/chromium', args: CHROMIUM_ARGS });
   context = await browser.newContext({ viewport: VIEWPORT, deviceScaleFactor: 1 });
-  // Record every text message the page sends on a WebSocket, and count animation frames, to
-  // check coalescing and the restore after a reconnect.
-  await context.addInitScript(() => {
-    window.__sent = [];
-    window.__raf = 0;
-    const tick = () => { window.__raf++; requestAnimationFrame(tick); };
-    requestAnimationFrame(tick);
-    const send = WebSocket.prototype.send;
-    WebSocket.prototype.send = function (data) {
-      if (typeof data === 'string') {
-        try { window.__sent.push({ t: performance.now(), raf: window.__raf, m: JSON.parse(data) }); } catch { /* ignore */ }
-      }
-      return send.call(this, data);
-    };
-  });
+  await recordSockets(context);
   page = await newViewerPage(context);
 });
 
@@ -239,11 +281,29 @@ test('frames arrive, are drawn and acknowledged', { timeout: 40000 }, async () =
   for (let i = 1; i < acks.length; i++) assert.ok(acks[i] > acks[i - 1], 'acks (drawn frames) only move forward');
   const resize = await page.evaluate(() => window.__sent.find((x) => x.m.type === 'resize'));
   assert.deepEqual(resize.m, { type: 'resize', width: VIEWPORT.width, height: VIEWPORT.height, dpr: 1 });
+  // Version 2: the page has a view of its own (not the default view 0) and is shown it.
+  const v = await state();
+  assert.equal(v.protocol, 2, 'the stream speaks probecast.v2');
+  assert.equal(await page.evaluate(() => window.probecast.stream.ws.protocol), 'probecast.v2');
+  assert.ok(Number.isInteger(v.ownView) && v.ownView !== 0, `an own view (${v.ownView})`);
+  assert.equal(v.header.version, 2);
+  assert.equal(v.header.viewId, v.ownView, 'frames of the own view');
+  assert.equal(v.following, false);
+  // The server's first message is the welcome, then one event of each kind.
+  const recv = await page.evaluate(() => window.__recv.map((x) => x.m));
+  assert.equal(recv[0].type, 'welcome');
+  assert.equal(recv[0].protocol, 2);
+  assert.equal(recv[0].view, v.ownView);
+  const kinds = new Set(recv.filter((m) => m.type === 'event').map((m) => m.what));
+  for (const k of ['scene', 'lights', 'settings', 'views']) assert.ok(kinds.has(k), `a '${k}' event after the welcome`);
+  assert.equal((await http('GET', '/v1/health')).json.stream.subprotocol, 'probecast.v2');
   await shot('loaded.png');
 });
 
 test('dragging orbits the camera; frames reflect the input', { timeout: 40000 }, async () => {
-  const camBefore = (await http('GET', '/v1/camera')).json;
+  const own = (await state()).ownView;
+  const camBefore = await viewCamera(own);
+  const cam0Before = (await http('GET', '/v1/camera')).json;
   const s0 = await state();
   const pix0 = await pixels();
   const sentBefore = await page.evaluate(() => window.__sent.length);
@@ -263,9 +323,11 @@ test('dragging orbits the camera; frames reflect the input', { timeout: 40000 },
   assert.ok(s1.drawnId > s0.drawnId);
   const diff = meanAbsDiff(pix0, await pixels());
   assert.ok(diff > 4, `the picture changed after the drag (mean difference ${diff.toFixed(1)})`);
-  const camAfter = (await http('GET', '/v1/camera')).json;
-  const moved = Math.hypot(...camAfter.position.map((v, i) => v - camBefore.position[i]));
-  assert.ok(moved > 0.1, `the server's camera moved (${moved.toFixed(3)})`);
+  const camAfter = await viewCamera(own);
+  const moved = dist3(camAfter.position, camBefore.position);
+  assert.ok(moved > 0.1, `the camera of the page's view moved (${moved.toFixed(3)})`);
+  const cam0After = (await http('GET', '/v1/camera')).json;
+  assert.ok(dist3(cam0After.position, cam0Before.position) < 1e-6, 'the default view 0 (GET /v1/camera) stays');
   // The latency readout has a number now.
   await page.waitForFunction(() => /\d+ ms/.test(document.getElementById('st-latency').textContent), null, { timeout: 5000 });
   await shot('orbited.png');
@@ -396,6 +458,205 @@ test('the rendering panel switches GI mode and the probe view', { timeout: 30000
   await until(async () => (await http('GET', '/v1/settings')).json.gi_mode === 'ddgi', 'gi_mode ddgi');
 });
 
+/* ---- views: one world, many views (protocol/stream.md, version 2) ---------------------------- */
+
+// A second page with another window size (and so another render size). It shares the browser
+// context (and so its pool of at most 6 HTTP connections) with page A: the daemon takes at most
+// 16 HTTP connections from one address, and every context keeps up to 6 of its own open.
+const VIEWPORT_B = { width: 800, height: 640 }; // over 720 px wide: the panels start open
+const RENDER_B = serverSize(VIEWPORT_B.width, VIEWPORT_B.height, MAX_PIXELS);
+let pageB;
+
+test('two pages get their own views, each at its own size', { timeout: 60000 }, async () => {
+  assert.notDeepEqual(RENDER_B, RENDER, 'the two pages ask for different render sizes');
+  pageB = await newViewerPage(context);
+  await pageB.setViewportSize(VIEWPORT_B);
+  await pageB.goto(BASE + '/');
+  await pageB.waitForFunction(() => window.probecast.state().ownView !== null, null, { timeout: 30000 });
+  const b = await waitViewFrame(pageB, (await state(pageB)).ownView, RENDER_B, 30000);
+  const a = await state();
+  assert.equal(b.protocol, 2);
+  assert.notEqual(a.ownView, b.ownView, 'each page has a view of its own');
+  assert.equal(a.header.viewId, a.ownView);
+  assert.deepEqual({ width: a.header.width, height: a.header.height }, RENDER, 'page A keeps its size');
+  assert.deepEqual({ width: b.header.width, height: b.header.height }, RENDER_B, 'page B gets its size');
+  assert.ok(summary(await pixels(pageB)).std > 12, 'page B shows a picture');
+  // GET /v1/views lists both (and the default view 0, owned by HTTP).
+  const views = (await http('GET', '/v1/views')).json;
+  const byId = new Map(views.views.map((v) => [v.id, v]));
+  assert.equal(byId.get(0) && byId.get(0).owner, 'http');
+  assert.deepEqual(byId.get(a.ownView) && { owner: byId.get(a.ownView).owner, width: byId.get(a.ownView).width, height: byId.get(a.ownView).height },
+    { owner: 'viewer', ...RENDER });
+  assert.deepEqual(byId.get(b.ownView) && { owner: byId.get(b.ownView).owner, width: byId.get(b.ownView).width, height: byId.get(b.ownView).height },
+    { owner: 'viewer', ...RENDER_B });
+  assert.ok(views.limits && views.limits.max_views > 0);
+  // Each page's Views panel lists the other's view with a Follow button (from a 'views' event).
+  await page.locator(`#views .view-row[data-id="${b.ownView}"] button[data-follow]`).waitFor({ timeout: 10000 });
+  await pageB.locator(`#views .view-row[data-id="${a.ownView}"] button[data-follow]`).waitFor({ timeout: 10000 });
+  assert.match(await page.locator(`#views .view-row[data-id="${b.ownView}"]`).textContent(), new RegExp(`${RENDER_B.width}×${RENDER_B.height}`));
+  assert.equal(await page.locator(`#views .view-row[data-id="${a.ownView}"]`).count(), 0, 'the own view is not in the list');
+  await shot('views-a.png');
+  await shot('views-b.png', pageB);
+});
+
+test('dragging in one page does not move the other page\'s view', { timeout: 60000 }, async (t) => {
+  const a0 = await state(), b0 = await state(pageB);
+  const camA0 = await viewCamera(a0.ownView), camB0 = await viewCamera(b0.ownView);
+  const sentB = await pageB.evaluate(() => window.__sent.length);
+  const sentA = await page.evaluate(() => window.__sent.length);
+  await drag(-150, 30);
+  const camsA = await page.evaluate((n) => window.__sent.slice(n).filter((x) => x.m.type === 'camera'), sentA);
+  assert.ok(camsA.length >= 1, 'page A sent camera messages');
+  await page.waitForFunction((seq) => window.probecast.state().inputSeq >= seq, camsA[camsA.length - 1].m.seq, { timeout: 30000 });
+  await sleep(500);
+  const camA1 = await viewCamera(a0.ownView), camB1 = await viewCamera(b0.ownView);
+  assert.ok(dist3(camA1.position, camA0.position) > 0.1, 'page A\'s view moved');
+  assert.ok(dist3(camB1.position, camB0.position) < 1e-6 && dist3(camB1.target, camB0.target) < 1e-6, 'page B\'s view did not move');
+  const b1 = await state(pageB);
+  assert.equal(b1.header.viewId, b0.ownView, 'page B still shows its own view');
+  assert.equal(b1.header.inputSeq, b0.header.inputSeq, 'page B\'s frames reflect no input of A');
+  assert.deepEqual({ width: b1.header.width, height: b1.header.height }, RENDER_B);
+  assert.equal((await pageB.evaluate((n) => window.__sent.slice(n).filter((x) => x.m.type === 'camera'), sentB)).length, 0);
+  t.diagnostic(`page B's last frame id ${b0.drawnId} -> ${b1.drawnId} while A dragged (A: ${a0.drawnId} -> ${(await state()).drawnId})`);
+});
+
+test('page B follows page A\'s view, then returns to its own', { timeout: 90000 }, async () => {
+  const a = await state(), b0 = await state(pageB);
+  const follow = pageB.locator(`#views .view-row[data-id="${a.ownView}"] button[data-follow]`);
+  assert.equal(await follow.textContent(), 'Follow');
+  await follow.click();
+  // B receives frames of A's view at A's size.
+  let b = await waitViewFrame(pageB, a.ownView, RENDER, 20000);
+  assert.equal(b.watching, a.ownView, 'the server confirmed (following)');
+  assert.equal(b.following, true);
+  assert.equal(b.ownView, b0.ownView, 'B keeps its own view');
+  assert.equal(await pageB.locator('#following').isVisible(), true);
+  assert.match(await pageB.locator('#following').textContent(), new RegExp(`Following view ${a.ownView}`));
+  assert.equal(await pageB.locator(`#views .view-row[data-id="${a.ownView}"] button[data-follow]`).textContent(), 'Stop');
+  await shot('following.png', pageB);
+  // A moves: B sees it (a newer frame of A's view; followers get input_seq 0).
+  const fromB = b.drawnId;
+  const sentA = await page.evaluate(() => window.__sent.length);
+  await drag(60, -20);
+  await pageB.waitForFunction((id) => {
+    const s = window.probecast.state();
+    return s.header.viewId === id.view && s.drawnId > id.after;
+  }, { view: a.ownView, after: fromB }, { timeout: 20000 });
+  assert.equal((await state(pageB)).header.inputSeq, 0);
+  // Camera input on B while following is not sent: the drag does nothing.
+  const sentB = await pageB.evaluate(() => window.__sent.length);
+  const versionB = await pageB.evaluate(() => window.probecast.camera.version);
+  await drag(100, 20, pageB);
+  await pageB.mouse.wheel(0, -300);
+  await sleep(300);
+  assert.deepEqual(await pageB.evaluate((n) => window.__sent.slice(n).filter((x) => x.m.type === 'camera'), sentB), []);
+  assert.equal(await pageB.evaluate(() => window.probecast.camera.version), versionB, 'B\'s camera did not change');
+  assert.ok(await page.evaluate((n) => window.__sent.slice(n).some((x) => x.m.type === 'camera'), sentA));
+  assert.ok(await pageB.evaluate((n) => window.__sent.slice(n).some((x) => x.m.type === 'follow' && x.m.view !== null), 0));
+  // Stop: back to B's own view and size.
+  await pageB.locator('#following-stop').click();
+  b = await waitViewFrame(pageB, b0.ownView, RENDER_B, 20000);
+  assert.equal(b.watching, b0.ownView);
+  assert.equal(b.following, false);
+  assert.equal(await pageB.locator('#following').isHidden(), true);
+  const follows = await pageB.evaluate(() => window.__sent.filter((x) => x.m.type === 'follow').map((x) => x.m));
+  assert.deepEqual(follows, [{ type: 'follow', view: a.ownView }, { type: 'follow', view: null }]);
+  // Input works again and moves B's own view.
+  const camB0 = await viewCamera(b0.ownView);
+  await drag(-80, 0, pageB);
+  await until(async () => dist3((await viewCamera(b0.ownView)).position, camB0.position) > 0.05, 'B\'s view to move after following', 10000);
+});
+
+test('a follower returns to its own view when the followed view goes away', { timeout: 60000 }, async () => {
+  const pageC = await newViewerPage(context);
+  try {
+    await pageC.setViewportSize({ width: 320, height: 200 });
+    await pageC.goto(BASE + '/');
+    await pageC.waitForFunction(() => window.probecast.state().frames >= 1, null, { timeout: 30000 });
+    const c = await state(pageC), b0 = await state(pageB);
+    const follow = pageB.locator(`#views .view-row[data-id="${c.ownView}"] button[data-follow]`);
+    await follow.waitFor({ timeout: 10000 });
+    await follow.click();
+    await waitViewFrame(pageB, c.ownView, null, 20000);
+    assert.equal(await pageB.locator('#following').isVisible(), true);
+    await pageC.close();
+    // The server says 'following' with B's own id: the UI is back on B's view.
+    await pageB.waitForFunction((own) => {
+      const s = window.probecast.state();
+      return s.watching === own && !s.following;
+    }, b0.ownView, { timeout: 15000 });
+    await pageB.locator('#following').waitFor({ state: 'hidden', timeout: 5000 });
+    const recv = await pageB.evaluate(() => window.__recv.map((x) => x.m).filter((m) => m.type === 'following'));
+    assert.deepEqual(recv[recv.length - 1], { type: 'following', view: b0.ownView });
+    await waitViewFrame(pageB, b0.ownView, RENDER_B, 20000);
+    await pageB.locator(`#views .view-row[data-id="${c.ownView}"]`).waitFor({ state: 'detached', timeout: 10000 });
+    assert.equal(await pageB.evaluate(() => window.probecast.controls.enabled), true, 'B\'s camera input works again');
+  } finally {
+    if (!pageC.isClosed()) await pageC.close();
+  }
+});
+
+test('following an unknown view is refused and changes nothing', { timeout: 30000 }, async () => {
+  const b0 = await state(pageB);
+  await pageB.evaluate(() => window.probecast.follow(987654));
+  await pageB.locator('.toast.error').first().waitFor({ timeout: 10000 });
+  await pageB.waitForFunction((own) => {
+    const s = window.probecast.state();
+    return s.watching === own && !s.following && window.probecast.stream.expectView === own;
+  }, b0.ownView, { timeout: 10000 });
+  assert.equal(await pageB.locator('#following').isHidden(), true);
+  assert.equal((await state(pageB)).state, 'open', 'the connection stays open');
+});
+
+test('world changes through the HTTP API reach both pages as events, without polling', { timeout: 60000 }, async () => {
+  const t0 = Date.now();
+  // A light added through the HTTP API appears in both pages' lights panel.
+  const r = await http('POST', '/v1/lights', { type: 'point', position: [0, 1.5, 0], color: [0.2, 0.4, 1], intensity: 2, name: 'from-http' });
+  assert.equal(r.status, 201, r.text);
+  const id = r.json.id;
+  for (const p of [page, pageB]) {
+    await p.locator(`#lights details.light[data-id="${id}"]`).waitFor({ timeout: 10000 });
+  }
+  assert.match(await pageB.locator(`#lights details.light[data-id="${id}"] .name`).textContent(), /from-http/);
+  // A change to it shows up too.
+  assert.equal((await http('PATCH', `/v1/lights/${id}`, { intensity: 7.5 })).status, 200);
+  for (const p of [page, pageB]) {
+    await p.waitForFunction((lid) => {
+      const el = document.querySelector(`#lights details.light[data-id="${lid}"] input[aria-label="intensity value"]`);
+      return el && Number(el.value) === 7.5;
+    }, id, { timeout: 10000 });
+  }
+  // Settings changed through the HTTP API show up in both pages' rendering panel.
+  const exposure0 = (await http('GET', '/v1/settings')).json.exposure;
+  assert.equal((await http('PATCH', '/v1/settings', { exposure: 1.5 })).status, 200);
+  for (const p of [page, pageB]) {
+    await p.waitForFunction(() => Number(document.getElementById('exposure').value) === 1.5, null, { timeout: 10000 });
+  }
+  // Deleted: gone from both.
+  assert.equal((await http('DELETE', `/v1/lights/${id}`)).status, 204);
+  for (const p of [page, pageB]) {
+    await p.locator(`#lights details.light[data-id="${id}"]`).waitFor({ state: 'detached', timeout: 10000 });
+  }
+  assert.equal((await http('PATCH', '/v1/settings', { exposure: exposure0 })).status, 200);
+  await sleep(1500); // more than a stats period: a poller would have asked by now
+  // Neither page asked for the world's state: no GET of lights, settings or scene ever.
+  for (const [name, p] of [['A', page], ['B', pageB]]) {
+    const world = requests.get(p).filter((q) => q.method === 'GET' && /^\/v1\/(lights|settings|scene|nodes|views)(\/|$)/.test(q.path) &&
+      !/\/camera$/.test(q.path));
+    assert.deepEqual(world, [], `page ${name} polled the world's state`);
+    const stats = requests.get(p).filter((q) => q.path === '/v1/stats' && q.t >= t0);
+    const secs = (Date.now() - t0) / 1000;
+    assert.ok(stats.length <= secs + 2, `page ${name}: /v1/stats at most once a second (${stats.length} in ${secs.toFixed(1)} s)`);
+  }
+});
+
+test('the second page closes; its view goes away', { timeout: 30000 }, async () => {
+  const b = await state(pageB);
+  await pageB.close();
+  await until(async () => !(await http('GET', '/v1/views')).json.views.some((v) => v.id === b.ownView), 'B\'s view to be freed', 10000);
+  await page.locator(`#views .view-row[data-id="${b.ownView}"]`).waitFor({ state: 'detached', timeout: 10000 });
+});
+
 test('a rejected upload shows the server\'s message', { timeout: 30000 }, async () => {
   // A GLB whose header promises more bytes than it has.
   const json = Buffer.from('{"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"no');
@@ -444,11 +705,14 @@ test('the viewer recovers when the daemon restarts and restores its view', { tim
     const s = window.probecast.state();
     return s.state === 'open' && s.gen > g && s.drawnId > 0;
   }, s0.gen, { timeout: 30000 });
-  // The view came back: the camera moved offline, and the viewer's size.
+  // The view came back on the page's new view: the camera moved offline, and the viewer's size.
+  const own = (await state()).ownView;
+  assert.ok(Number.isInteger(own));
+  assert.equal((await state()).header.viewId, own);
   const cam = await until(async () => {
-    const c = (await http('GET', '/v1/camera')).json;
-    return Math.hypot(...c.position.map((v, i) => v - offlineCam.position[i])) < 1e-3 ? c : null;
-  }, 'the server camera to be the viewer\'s', 10000);
+    const c = await viewCamera(own);
+    return dist3(c.position, offlineCam.position) < 1e-3 ? c : null;
+  }, 'the camera of the page\'s new view to be the viewer\'s', 10000);
   assert.ok(cam);
   const after = await page.evaluate((t) => window.__sent.filter((x) => x.t > t), t0);
   assert.ok(after.some((x) => x.m.type === 'resize' && x.m.width === VIEWPORT.width), 'the size was sent again');
@@ -521,6 +785,7 @@ function tinyGltf() {
 
 test('a dropped-in scene uploads with progress and replaces the view', { timeout: 60000 }, async () => {
   const s0 = await state();
+  const camBefore = await page.evaluate(() => window.probecast.camera.toMessage().position);
   await page.evaluate(() => {
     window.__uploadTexts = [];
     const el = document.getElementById('upload-text');
@@ -536,12 +801,13 @@ test('a dropped-in scene uploads with progress and replaces the view', { timeout
   assert.equal(sc.source, 'upload');
   assert.equal(sc.light_count, 1);
   assert.match(await page.locator('#scene-info').textContent(), /uploaded scene/);
-  // The viewer took the server's new camera and shows the new scene.
-  const cam = (await http('GET', '/v1/camera')).json;
-  await page.waitForFunction((p) => {
-    const m = window.probecast.camera.toMessage().position;
-    return Math.hypot(m[0] - p[0], m[1] - p[1], m[2] - p[2]) < 1e-3;
-  }, cam.position, { timeout: 10000 });
+  // The viewer took the new scene's camera (on its own view) and shows the new scene.
+  const own = (await state()).ownView;
+  await until(async () => {
+    const c = await viewCamera(own);
+    const m = await page.evaluate(() => window.probecast.camera.toMessage().position);
+    return dist3(c.position, m) < 1e-3 && dist3(m, camBefore) > 1e-3;
+  }, 'the page and its view to share the new scene\'s camera', 10000);
   await settleAfter(s0.drawnId);
   await page.waitForFunction(() => document.querySelectorAll('#lights details.light').length === 1, null, { timeout: 10000 });
   assert.ok(summary(await pixels()).std > 8, 'the new scene is drawn');

@@ -133,7 +133,8 @@ function typingInto(el) {
  *   wheel / pinch: zoom                W A S D fly, Q E down/up, Shift faster; arrows orbit
  *   double-click or F: onFrame()       (the caller frames the scene)
  * onChange() is called after every change; update(dt) applies held keys and returns whether
- * the camera moved (call it every animation frame while keysHeld()). */
+ * the camera moved (call it every animation frame while keysHeld()). While `enabled` is false
+ * (the viewer follows another view) input is ignored: drags, wheel, pinch and keys do nothing. */
 export class CameraControls {
   constructor(element, camera, { onChange = () => {}, onFrame = () => {} } = {}) {
     this.el = element;
@@ -145,6 +146,7 @@ export class CameraControls {
     this.keys = new Set();
     this.shift = false;
     this.lastInput = 0;        // performance.now() of the last user input
+    this.enabled = true;
     this.listeners = [];
     const on = (target, type, fn, opts) => {
       target.addEventListener(type, fn, opts);
@@ -157,7 +159,7 @@ export class CameraControls {
     on(element, 'lostpointercapture', (e) => this.pointerUp(e));
     on(element, 'wheel', (e) => this.wheel(e), { passive: false });
     on(element, 'contextmenu', (e) => e.preventDefault());
-    on(element, 'dblclick', (e) => { e.preventDefault(); this.onFrame(); });
+    on(element, 'dblclick', (e) => { e.preventDefault(); if (this.enabled) this.onFrame(); });
     on(window, 'keydown', (e) => this.keyDown(e));
     on(window, 'keyup', (e) => { this.shift = e.shiftKey; this.keys.delete(e.code); });
     on(window, 'blur', () => this.keys.clear());
@@ -170,8 +172,18 @@ export class CameraControls {
     this.onChange();
   }
 
+  /* Turns input on or off; turning it off ends drags and releases held keys. */
+  setEnabled(on) {
+    this.enabled = !!on;
+    if (this.enabled) return;
+    this.pointers.clear();
+    this.pinch = null;
+    this.keys.clear();
+    this.el.classList.remove('dragging');
+  }
+
   pointerDown(e) {
-    if (e.pointerType === 'mouse' && e.button > 2) return;
+    if (!this.enabled || (e.pointerType === 'mouse' && e.button > 2)) return;
     this.el.focus({ preventScroll: true });
     this.el.setPointerCapture(e.pointerId);
     const pan = e.pointerType === 'mouse' && (e.button === 1 || e.button === 2 || e.shiftKey || e.ctrlKey);
@@ -215,13 +227,14 @@ export class CameraControls {
 
   wheel(e) {
     e.preventDefault();
+    if (!this.enabled) return;
     const px = e.deltaMode === 1 ? e.deltaY * 16 : e.deltaMode === 2 ? e.deltaY * 400 : e.deltaY;
     this.cam.zoom(Math.exp(clamp(px, -400, 400) * (e.ctrlKey ? 0.01 : 0.0015)));
     this.input();
   }
 
   keyDown(e) {
-    if (typingInto(e.target) || e.ctrlKey || e.metaKey || e.altKey) return;
+    if (!this.enabled || typingInto(e.target) || e.ctrlKey || e.metaKey || e.altKey) return;
     if (e.code === 'KeyF') { this.onFrame(); return; }
     this.shift = e.shiftKey;
     if (!(e.code in FLY_KEYS) && !(e.code in ORBIT_KEYS)) return;
@@ -234,7 +247,7 @@ export class CameraControls {
 
   /* Applies held keys over dt seconds. */
   update(dt) {
-    if (!this.keys.size || !(dt > 0)) return false;
+    if (!this.enabled || !this.keys.size || !(dt > 0)) return false;
     dt = Math.min(dt, 0.1);
     const fast = this.shift ? 4 : 1;
     const speed = Math.max(0.2, this.cam.sceneSize * 0.35) * fast * dt;

@@ -1,15 +1,22 @@
 // main.js: wires the viewer together: the stream on the canvas, camera controls (one camera
 // message per animation frame at most), the render size (debounced resize messages), the
-// panels, stats polling, drag-and-drop upload and the view restore after a reconnect.
+// panels (fed by the stream's world events), following other views, stats polling,
+// drag-and-drop upload and the view restore after a reconnect.
+//
+// Views (protocol/stream.md, version 2): every connection owns a view of its own; this page's
+// camera and size change only that view. The world (scene, lights, settings, views) reaches
+// the panels as 'event' messages on the stream, so nothing but /v1/stats (once a second) is
+// polled. Against a version-1 server (one shared view 0, no events) the page still works: it
+// reads the panels once per connection and after its own changes.
 
 import { Api } from './api.js';
 import { CameraControls, OrbitCamera } from './camera.js';
-import { LightsPanel, RenderPanel, ScenePanel, StatsPanel, Toasts, TokenPrompt } from './panels.js';
-import { CanvasView, FrameStream } from './stream.js';
+import { LightsPanel, RenderPanel, ScenePanel, StatsPanel, Toasts, TokenPrompt, ViewsPanel } from './panels.js';
+import { CanvasView, FrameStream, SUBPROTOCOL } from './stream.js';
 
 const RESIZE_DEBOUNCE_MS = 150;
 const STATS_PERIOD_MS = 1000;
-const CAMERA_SYNC_IDLE_MS = 2000; // adopt another viewer's camera only after this long without input
+const WORLD_WAIT_MS = 3000;       // how long a restore waits for the scene event before asking GET /v1/scene
 
 const $ = (id) => document.getElementById(id);
 const canvas = $('view');
@@ -26,26 +33,28 @@ const api = new Api({
 const view = new CanvasView(canvas);
 const camera = new OrbitCamera();
 let sentVersion = 0;        // camera.version last sent or adopted from the server
-let scene = null;           // last GET /v1/scene: { source, generation, bounds, ... }
+let scene = null;           // the last scene document: { source, generation, bounds, ... }
 let serverStats = null;
 
 /* ---- the stream ------------------------------------------------------------------------------ */
 
 /* Where the stream is: the --ws port from /v1/health, on the host that served this page. The
- * token goes as a 'bearer.TOKEN' subprotocol next to 'probecast.v1' (protocol/stream.md). */
+ * token goes as a 'bearer.TOKEN' subprotocol next to 'probecast.v2' (protocol/stream.md); a
+ * server that names another subprotocol (probecast.v1: before views) is offered that one. */
 async function resolveStream() {
   const health = await api.get('/v1/health', { timeoutMs: 4000 });
   if (health.auth === 'bearer' && !(await api.checkToken())) throw new Error('a token is needed');
   const st = health.stream || {};
   if (!st.port) throw new Error('the server has no stream');
   const scheme = location.protocol === 'https:' ? 'wss:' : 'ws:';
-  const protocols = [st.subprotocol || 'probecast.v1'];
+  const protocols = [st.subprotocol || SUBPROTOCOL];
   if (api.token) protocols.push('bearer.' + api.token);
   return { url: `${scheme}//${location.hostname}:${st.port}${st.path || '/v1/stream'}`, protocols };
 }
 
 const stream = new FrameStream({ resolve: resolveStream, view });
 let streamState = { state: 'connecting' };
+const v2 = () => stream.protocol === 2;
 
 function showState() {
   const s = authWaiting ? 'auth' : streamState.state;
@@ -61,37 +70,75 @@ function showState() {
 statusEl.addEventListener('click', () => { if (authWaiting) tokenPrompt.reopen(); else stream.retryNow(); });
 setInterval(showState, 250);
 
-stream.addEventListener('state', (e) => { streamState = e.detail; showState(); });
-stream.addEventListener('open', () => restoreView(stream.gen));
+stream.addEventListener('state', (e) => { streamState = e.detail; showState(); syncFollow(); });
+stream.addEventListener('open', (e) => {
+  renderPanel.eventsLive = lightsPanel.eventsLive = e.detail.protocol === 2;
+  if (e.detail.protocol !== 2) restoreView(stream.gen); // version 2 waits for the welcome (our view's id)
+});
+stream.addEventListener('welcome', () => { syncFollow(); restoreView(stream.gen); });
 
-/* After every (re)connect: report our size, then restore our camera when the server still shows
- * the same scene (it restarted, or the connection dropped), else take the server's camera.
+/* The camera of our own view: /v1/views/{id}/camera, or /v1/camera (view 0) in version 1. */
+const ownCameraPath = () => (v2() && stream.ownView !== null ? `/v1/views/${stream.ownView}/camera` : '/v1/camera');
+
+/* After every (re)connect (version 2: after the welcome; the connection has a new view): report
+ * our size, then restore our camera on the new view when the server still shows the same scene
+ * (it restarted, or the connection dropped), else take our view's camera from the server.
  * Camera messages wait for this (`restored`), so input given offline is sent afterwards and
  * input given before the first camera was known is dropped. Retried while the connection
- * lasts if the API fails meanwhile. */
+ * lasts if the API fails meanwhile. A viewer that followed another view before the outage
+ * watches its own new view again (the old ids are gone with the connection). */
 let restored = false;
-stream.addEventListener('state', (e) => { if (e.detail.state !== 'open') restored = false; });
+stream.addEventListener('state', (e) => {
+  if (e.detail.state === 'open') return;
+  restored = false;
+  viewsPanel.update({ doc: null }); // the views of a closed connection (ours included) are gone
+});
+const stale = (gen) => stream.gen !== gen || !stream.open;
 async function restoreView(gen) {
   try {
     sendResize(true);
-    const [s] = await Promise.all([api.get('/v1/scene'), loadCapabilities()]);
-    if (stream.gen !== gen || !stream.open) return;
+    const [s] = await Promise.all([firstScene(gen), loadCapabilities()]);
+    if (stale(gen)) return;
     const same = scene && s.source === scene.source && s.generation === scene.generation;
     setScene(s);
     if (camera.known && same) {
-      sentVersion = -1; // the next animation frame sends our camera
+      sentVersion = -1; // the next animation frame sends our camera to our (new) view
     } else {
-      await adoptServerCamera(true);
-      if (stream.gen !== gen || !stream.open) return;
+      const c = await api.get(ownCameraPath());
+      if (stale(gen)) return;
+      camera.setFromServer(c);
+      sentVersion = camera.version;
     }
     restored = true;
     requestTick();
-    renderPanel.refresh();
-    lightsPanel.refresh();
+    if (v2()) {
+      // Events that arrived meanwhile: a newer scene than the one restored, our view's size.
+      if (stream.world.scene && stream.world.scene !== s) onScene(stream.world.scene);
+      if (stream.world.views) onViews(stream.world.views);
+    } else {
+      renderPanel.refresh();
+      lightsPanel.refresh();
+    }
   } catch (e) {
     console.warn('probecast: restoring the view failed; retrying:', e.message);
-    setTimeout(() => { if (stream.gen === gen && stream.open) restoreView(gen); }, 1000);
+    setTimeout(() => { if (!stale(gen)) restoreView(gen); }, 1000);
   }
+}
+
+/* The scene of this connection: its first 'scene' event (sent right after the welcome), or
+ * GET /v1/scene when none came within WORLD_WAIT_MS (and in version 1). */
+function firstScene(gen) {
+  if (!v2()) return api.get('/v1/scene');
+  if (stream.world.scene) return Promise.resolve(stream.world.scene);
+  return new Promise((resolve, reject) => {
+    const done = (doc) => { clearTimeout(timer); stream.removeEventListener('world', onWorld); resolve(doc); };
+    const onWorld = (e) => { if (e.detail.what === 'scene' && stream.gen === gen) done(e.detail.data); };
+    const timer = setTimeout(() => {
+      stream.removeEventListener('world', onWorld);
+      api.get('/v1/scene').then(resolve, reject);
+    }, WORLD_WAIT_MS);
+    stream.addEventListener('world', onWorld);
+  });
 }
 
 function setScene(s) {
@@ -101,18 +148,87 @@ function setScene(s) {
   if (b && b.min && b.max) camera.sceneSize = Math.max(1e-3, Math.hypot(b.max[0] - b.min[0], b.max[1] - b.min[1], b.max[2] - b.min[2]));
 }
 
-/* Takes the server's camera: always when forced (new scene, first connection), otherwise only
- * when it differs, the user is idle and nothing of ours waits to be sent. */
-async function adoptServerCamera(force) {
-  const before = camera.version;
-  const c = await api.get('/v1/camera');
-  if (!force && (camera.version !== before || camera.version !== sentVersion || !restored ||
-                 performance.now() - controls.lastInput < CAMERA_SYNC_IDLE_MS)) return;
-  if (force || camera.differsFrom(c)) {
-    camera.setFromServer(c);
-    sentVersion = camera.version;
+/* A scene document (an event, or the answer to our own upload): a new source or generation
+ * means a new scene, whose camera the server chose. The same document twice does nothing. */
+async function onScene(s) {
+  if (!s) return;
+  const isNew = !scene || s.source !== scene.source || s.generation !== scene.generation;
+  if (!restored) return; // restoreView takes it
+  setScene(s);
+  if (!isNew) return;
+  try {
+    await takeNewSceneCamera();
+  } catch (e) {
+    console.warn('probecast: reading the new scene\'s camera failed:', e.message);
   }
 }
+
+/* After a scene load: our view's camera from the server. Should the server have left our view
+ * where it was (camera unchanged), take the default view's camera (view 0, which the server
+ * points at every new scene) and send it to our view. */
+async function takeNewSceneCamera() {
+  const gen = stream.gen, before = camera.version;
+  let c = await api.get(ownCameraPath());
+  let ours = true;
+  if (v2() && camera.known && !camera.differsFrom(c)) {
+    c = await api.get('/v1/camera');
+    ours = false;
+  }
+  if (stream.gen !== gen || camera.version !== before) return; // reconnected, or the user moved meanwhile
+  if (!camera.known || camera.differsFrom(c)) {
+    camera.setFromServer(c);
+    if (ours) sentVersion = camera.version;
+    requestTick();
+  }
+}
+
+/* A 'views' event: the Views panel. The cameras in it are not adopted: views events come when
+ * views are created, freed, resized or followed, and one generated before the server took our
+ * latest camera message would move us back. (A camera set on our view through
+ * PATCH /v1/views/{id}/camera shows in the frames until our next input replaces it.) */
+function onViews(doc) {
+  viewsPanel.update({ doc });
+}
+
+stream.addEventListener('world', (e) => {
+  const { what, data } = e.detail;
+  if (what === 'scene') onScene(data);
+  else if (what === 'lights') lightsPanel.applyEvent(data);
+  else if (what === 'settings') renderPanel.applyEvent(data);
+  else if (what === 'views') onViews(data);
+  // 'node': no panel shows nodes; lights that hang on a moved node come as a 'lights' event.
+});
+
+/* ---- following another view -------------------------------------------------------------------- */
+/* Follow(id) watches view id, follow(null) returns to our own view. Camera input while
+ * following is not sent: the controls are switched off, so drags, the wheel and the fly keys
+ * do nothing (the frames are someone else's view; moving our hidden view would surprise on
+ * return). Stop (the top bar, the Views panel or Escape) shows our own view again, with the
+ * camera it had. The UI shows the requested view at once; the server's 'following' confirms,
+ * and an 'error' (an unknown view) or the followed view going away brings us back. */
+function follow(id) {
+  if (!stream.follow(id)) {
+    toasts.show(v2() ? 'Not connected to the stream.' : 'This server shows everyone one view: nothing to follow.', 'error');
+    return false;
+  }
+  syncFollow();
+  return true;
+}
+function syncFollow() {
+  const following = v2() && stream.expectView !== null && stream.expectView !== stream.ownView;
+  controls.setEnabled(!following);
+  viewsPanel.update({ own: v2() ? stream.ownView : null, watching: v2() ? stream.expectView : null, single: stream.protocol === 1 });
+  if (!following) requestTick(); // a camera that changed meanwhile (a new scene) goes out now
+}
+stream.addEventListener('following', (e) => {
+  const was = viewsPanel.following;
+  syncFollow();
+  if (was && e.detail.own && !stream.pendingFollow) toasts.show('Back to your own view.', 'ok');
+});
+stream.addEventListener('server-error', (e) => {
+  syncFollow();
+  toasts.show(e.detail.message, 'error');
+});
 
 /* ---- camera input: coalesced to one message per animation frame ---------------------------- */
 const controls = new CameraControls(canvas, camera, {
@@ -132,7 +248,7 @@ function tick(t) {
   const dt = lastTick ? (t - lastTick) / 1000 : 0;
   lastTick = t;
   controls.update(dt);
-  if (camera.version !== sentVersion && restored && stream.open) {
+  if (camera.version !== sentVersion && restored && stream.open && controls.enabled) {
     if (stream.sendCamera(camera.toMessage())) sentVersion = camera.version;
   }
   if (controls.keysHeld()) requestTick();
@@ -172,12 +288,12 @@ const lightsPanel = new LightsPanel(api, {
 const scenePanel = new ScenePanel(api, {
   toasts,
   onSceneChanged: async (s) => {
-    setScene(s);
-    await adoptServerCamera(true).catch(() => {}); // the server moved the camera to the new scene
-    lightsPanel.refresh();
-    renderPanel.refresh();
+    await onScene(s); // the event follows with the same document and changes nothing then
+    if (!v2()) { lightsPanel.refresh(); renderPanel.refresh(); }
   },
 });
+const viewsPanel = new ViewsPanel({ onFollow: follow });
+syncFollow();
 
 /* Which gi_mode and view values the API takes, read from /v1/openapi.yaml once: a server that
  * learns path tracing enables its button without a viewer change. */
@@ -197,30 +313,23 @@ async function loadCapabilities() {
   } catch { /* keep the v1 defaults */ }
 }
 
-/* Stats: the stream's own numbers four times a second, the server's once a second. A changed
- * scene generation (another viewer uploaded) refreshes the panels and the camera. */
+/* Stats: the stream's own numbers four times a second, the server's once a second. Only a
+ * version-1 server (no events) has the scene generation in the stats checked for an upload by
+ * someone else. */
 function renderStats() {
   statsPanel.render({ client: stream.metrics(), header: stream.lastHeader, server: serverStats });
 }
 setInterval(renderStats, 250);
-let pollCount = 0;
 async function pollStats() {
   try {
     if (!document.hidden) {
-      const n = ++pollCount;
       serverStats = await api.get('/v1/stats', { timeoutMs: 3000 });
-      const live = stream.open && restored;
       const gen = serverStats.scene && serverStats.scene.generation;
-      if (live && scene && gen !== undefined && gen !== scene.generation) {
-        setScene(await api.get('/v1/scene'));
-        await adoptServerCamera(true);
+      if (stream.open && restored && !v2() && scene && gen !== undefined && gen !== scene.generation) {
+        await onScene(await api.get('/v1/scene'));
         lightsPanel.refresh();
-      } else if (live && n % 2 === 0 && performance.now() - controls.lastInput > CAMERA_SYNC_IDLE_MS) {
-        await adoptServerCamera(false);
+        renderPanel.refresh();
       }
-      // Other viewers, the API and the demo animation change settings and lights too.
-      if (live && n % 5 === 0) renderPanel.refresh();
-      if (live && n % 3 === 0 && $('panel-lights').open && !lightsPanel.editing()) lightsPanel.refresh();
     }
   } catch {
     serverStats = null;
@@ -255,6 +364,7 @@ window.addEventListener('keydown', (e) => {
   if (e.ctrlKey || e.metaKey || e.altKey || (t && /^(INPUT|TEXTAREA|SELECT)$/.test(t.tagName))) return;
   if (e.code === 'KeyH') toggleUi();
   else if (e.code === 'KeyP') renderPanel.toggleProbes();
+  else if (e.code === 'Escape' && viewsPanel.following) follow(null);
 });
 let helpTimer = setTimeout(fadeHelp, 12000);
 function fadeHelp() {
@@ -276,10 +386,12 @@ document.addEventListener('visibilitychange', () => { if (!document.hidden) stre
 
 // For tests and the console: the live objects and a summary of the stream state.
 window.probecast = {
-  api, stream, camera, controls, view, renderPanel, lightsPanel, scenePanel,
+  api, stream, camera, controls, view, renderPanel, lightsPanel, scenePanel, viewsPanel, follow,
   state: () => ({
     state: stream.state, drawnId: stream.drawnId, frames: stream.counters.drawn, inputSeq: stream.lastHeader ? stream.lastHeader.inputSeq : 0,
     sentSeq: stream.nextSeq - 1, reconnects: stream.counters.reconnects, gen: stream.gen, header: stream.lastHeader,
+    protocol: stream.protocol, ownView: stream.ownView, watching: stream.watching, following: stream.following,
+    viewId: stream.lastHeader ? stream.lastHeader.viewId : null, restored,
   }),
 };
 

@@ -1,6 +1,10 @@
-// panels.js: the overlay panels: stats, lights, rendering settings, scene upload, plus toasts
-// and the token prompt. Each panel owns its DOM subtree (found by id in index.html), talks to
-// the server only through an Api (api.js) and reports failures with the server's own message.
+// panels.js: the overlay panels: stats, views (follow), lights, rendering settings, scene
+// upload, plus toasts and the token prompt. Each panel owns its DOM subtree (found by id in
+// index.html), talks to the server only through an Api (api.js) and reports failures with the
+// server's own message. The world's state reaches the panels through the stream's 'event'
+// messages (protocol/stream.md, version 2): applyEvent(doc) takes a document that is exactly
+// the body of the matching GET; the panels never poll. refresh() (one GET) is only for a
+// version-1 server, which sends no events.
 
 import { sceneContentType } from './api.js';
 
@@ -184,7 +188,7 @@ export class StatsPanel {
       : client.lastLatencyMs !== null ? `${fixed(client.lastLatencyMs, 0)} ms (idle)` : '–';
     f.kbps.textContent = `${client.kbps >= 10000 ? (client.kbps / 1000).toFixed(1) + ' Mbit/s' : fixed(client.kbps, 0) + ' kbit/s'}`;
     f.frame.innerHTML = header ? `#${header.frameId} <small>q${header.quality}${header.still ? ' still' : ''}</small>` : '–';
-    f.size.textContent = header ? `${header.width}×${header.height}` : '–';
+    f.size.innerHTML = header ? `${header.width}×${header.height}${header.version >= 2 ? ` <small>view ${header.viewId}</small>` : ''}` : '–';
     if (!server) {
       for (const k of ['rays', 'probes', 'gpu']) f[k].textContent = '–';
       this.renderPasses({}, 0);
@@ -235,7 +239,9 @@ export class RenderPanel {
   constructor(api, { toasts }) {
     this.api = api;
     this.toasts = toasts;
-    this.settings = null;
+    this.settings = null;     // what the controls show (optimistic while a change is on its way)
+    this.serverSettings = null; // the server's last word: an event or an answer
+    this.eventsLive = false;  // true while the stream delivers 'settings' events
     this.queue = new Coalescer((_, patch) => this.api.patch('/v1/settings', patch));
     this.gi = $('gi-modes');
     this.view = $('view-modes');
@@ -280,10 +286,19 @@ export class RenderPanel {
     if (this.settings) this.apply(this.settings);
   }
 
+  /* One GET /v1/settings (a version-1 server sends no events). */
   async refresh() {
     try {
-      this.apply(await this.api.get('/v1/settings'));
+      this.applyEvent(await this.api.get('/v1/settings'));
     } catch (e) { /* the status bar shows the connection; the next refresh fixes it */ }
+  }
+
+  /* A 'settings' event (the body of GET /v1/settings). While a change of ours is on its way the
+   * controls keep the user's choice; its answer (or the next event) shows the server's. */
+  applyEvent(s) {
+    if (!s) return;
+    this.serverSettings = s;
+    if (!this.queue.busy('s')) this.apply(s);
   }
 
   apply(s) {
@@ -303,10 +318,12 @@ export class RenderPanel {
     if (this.settings) this.apply({ ...this.settings, ...p });
     try {
       const s = await this.queue.send('s', p);
+      if (s) this.serverSettings = s;
       if (!this.queue.busy('s')) this.apply(s);
     } catch (e) {
       this.toasts.error(e);
-      this.refresh();
+      if (this.eventsLive) this.apply(this.serverSettings); // back to the server's state
+      else this.refresh();
     }
   }
 
@@ -317,8 +334,9 @@ export class RenderPanel {
 }
 
 /* ---- lights ------------------------------------------------------------------------------ */
-/* Lists the lights of GET /v1/lights; every control edits through PATCH /v1/lights/{id}
- * (coalesced per light), Add posts, × deletes. cameraTarget() and sceneSize() place new
+/* Lists the lights of GET /v1/lights (from 'lights' events); every control edits through
+ * PATCH /v1/lights/{id} (coalesced per light), Add posts, × deletes; the answers are shown at
+ * once and the events that follow confirm them. cameraTarget() and sceneSize() place new
  * lights where the user is looking, at a strength that suits the scene's size. */
 export class LightsPanel {
   constructor(api, { toasts, cameraTarget, sceneSize }) {
@@ -329,16 +347,33 @@ export class LightsPanel {
     this.root = $('lights');
     this.count = $('light-count');
     this.cards = new Map(); // id -> { el, light, inputs }
+    this.lights = [];       // the server's last list (an event, or our own answers applied to it)
+    this.eventsLive = false; // true while the stream delivers 'lights' events
     this.lastEdit = -Infinity;
     this.queue = new Coalescer((id, patch) => this.api.patch(`/v1/lights/${id}`, patch));
     $('light-add').addEventListener('click', () => this.add($('light-type').value));
   }
 
+  /* One GET /v1/lights (a version-1 server sends no events). */
   async refresh() {
     try {
-      const r = await this.api.get('/v1/lights');
-      this.render(r.lights || []);
+      this.applyEvent(await this.api.get('/v1/lights'));
     } catch (e) { /* offline: keep the list */ }
+  }
+
+  /* A 'lights' event (the body of GET /v1/lights). Cards being edited keep the user's values
+   * (render() skips them). */
+  applyEvent(doc) {
+    if (!doc || !Array.isArray(doc.lights)) return;
+    this.lights = doc.lights;
+    this.render(this.lights);
+  }
+
+  /* Applies one light of our own answers (PATCH, POST) to the list. */
+  upsert(l) {
+    if (!l || l.id === undefined) return;
+    const i = this.lights.findIndex((x) => x.id === l.id);
+    this.lights = i >= 0 ? this.lights.map((x) => (x.id === l.id ? l : x)) : [...this.lights, l];
   }
 
   /* Whether the user is working in the list (an edit in the last 2 s or on its way): periodic
@@ -350,6 +385,7 @@ export class LightsPanel {
   }
 
   render(lights) {
+    this.lights = lights;
     const seen = new Set();
     lights.forEach((l, i) => {
       seen.add(l.id);
@@ -436,10 +472,12 @@ export class LightsPanel {
     if (patch.color) c.swatch.style.background = linearToHex(patch.color);
     try {
       const l = await this.queue.send(c.light.id, patch);
+      this.upsert(l);
       if (!this.queue.busy(c.light.id) && l) this.fill(c, l);
     } catch (e) {
       this.toasts.error(e);
-      this.refresh();
+      if (this.eventsLive) { const l = this.lights.find((x) => x.id === c.light.id); if (l) this.fill(c, l); }
+      else this.refresh();
     } finally {
       if (!this.queue.busy(c.light.id)) c.el.classList.remove('busy');
     }
@@ -454,10 +492,11 @@ export class LightsPanel {
     try {
       await this.api.del(`/v1/lights/${c.light.id}`);
       this.toasts.show(`Deleted ${c.light.name || 'light ' + c.light.id}.`, 'ok');
+      this.render(this.lights.filter((x) => x.id !== c.light.id));
     } catch (e) {
       this.toasts.error(e);
+      if (!this.eventsLive) this.refresh();
     }
-    this.refresh();
   }
 
   async add(type) {
@@ -474,12 +513,74 @@ export class LightsPanel {
     }
     try {
       const l = await this.api.post('/v1/lights', body);
-      await this.refresh();
+      this.upsert(l);
+      this.render(this.lights);
       const c = l && this.cards.get(l.id);
       if (c) { c.el.open = true; c.el.scrollIntoView({ block: 'nearest' }); }
     } catch (e) {
       this.toasts.error(e);
     }
+  }
+}
+
+/* ---- views: follow another viewer --------------------------------------------------------- */
+/* Lists the views of GET /v1/views (from 'views' events) other than our own, each with a Follow
+ * button, and shows "Following view N — Stop" in the top bar while we watch another view.
+ * onFollow(id) asks to watch view id; onFollow(null) returns to the own view. */
+export class ViewsPanel {
+  constructor({ onFollow }) {
+    this.onFollow = onFollow;
+    this.root = $('views');
+    this.self = $('views-self');
+    this.count = $('view-count');
+    this.banner = $('following');
+    this.bannerId = $('following-id');
+    this.doc = null;
+    this.single = false;
+    this.own = null;       // our own view's id (null before the welcome or in version 1)
+    this.watching = null;  // the view we watch (the own one when not following)
+    $('following-stop').addEventListener('click', () => this.onFollow(null));
+    this.render();
+  }
+
+  /* doc: a 'views' event (the body of GET /v1/views) or null; own, watching: view ids (null
+   * while not connected); single: the server predates views (version 1: one shared view). */
+  update({ doc = this.doc, own = this.own, watching = this.watching, single = this.single } = {}) {
+    this.doc = doc;
+    this.own = own;
+    this.watching = watching;
+    this.single = single;
+    this.render();
+  }
+
+  get following() { return this.own !== null && this.watching !== null && this.watching !== this.own; }
+
+  render() {
+    const views = (this.doc && Array.isArray(this.doc.views)) ? this.doc.views : [];
+    const mine = views.find((v) => v.id === this.own);
+    if (this.own === null) this.self.textContent = this.single ? 'This server shows everyone one view.' : '–';
+    else this.self.replaceChildren(h('b', {}, `Your view ${this.own}`),
+      mine ? ` · ${mine.width}×${mine.height}` : '', this.following ? ` · not shown while you follow` : '');
+    const others = views.filter((v) => v.id !== this.own);
+    this.count.textContent = others.length ? `(${others.length})` : '';
+    this.root.replaceChildren(...others.map((v) => {
+      const on = v.id === this.watching;
+      const who = v.owner === 'http' ? 'HTTP' : String(v.owner || '');
+      const title = `${v.owner === 'http' ? 'The default view (/v1/camera)' : 'Another viewer\'s view'}` +
+        (Number.isFinite(v.watchers) ? `; ${v.watchers} watching` : '');
+      return h('div', { class: 'view-row' + (on ? ' on' : ''), 'data-id': String(v.id) },
+        h('span', { class: 'vid' }, `view ${v.id}`),
+        h('span', { class: 'vinfo', title }, `${v.width}×${v.height} · ${who}`),
+        h('button', {
+          type: 'button', class: 'btn small' + (on ? ' primary' : ''), 'aria-pressed': String(on),
+          'data-follow': String(v.id), disabled: this.own === null,
+          title: on ? 'Back to your own view' : `Watch view ${v.id} (your camera input pauses meanwhile)`,
+          onclick: () => this.onFollow(on ? null : v.id),
+        }, on ? 'Stop' : 'Follow'));
+    }));
+    this.banner.hidden = !this.following;
+    this.bannerId.textContent = this.following ? String(this.watching) : '';
+    document.body.classList.toggle('following', this.following);
   }
 }
 

@@ -1,15 +1,20 @@
-// stream.js: the frame stream (protocol/stream.md, version 1): WebSocket, header parsing, JPEG
-// decoding off the main thread, drawing, acknowledgements, input sequence numbers and reconnects.
+// stream.js: the frame stream (protocol/stream.md, version 2; version 1 as a fallback):
+// WebSocket, the server's text messages (welcome, events, following, errors), header parsing,
+// JPEG decoding off the main thread, drawing, acknowledgements, input sequence numbers, follow
+// requests and reconnects.
 
 export const MAGIC = 0x52464350; // 'PCFR' read as a little-endian uint32
 export const HEADER_V1_SIZE = 64;
+export const SUBPROTOCOL = 'probecast.v2';
 const FLAG_STILL = 1;
 const BACKOFF_MIN_MS = 250;
 const BACKOFF_MAX_MS = 5000;
 const CONNECT_TIMEOUT_MS = 5000;
 const WINDOW_MS = 1000; // fps and bit rate are measured over the last second
+const WORLD_KINDS = ['scene', 'lights', 'node', 'settings', 'views'];
 
-/* Parses a frame header from an ArrayBuffer; throws on a message that is not a v1 frame.
+/* Parses a frame header from an ArrayBuffer; throws on a message that is not a frame.
+ * Versions 1 and 2 share one layout (version 2 only changes what view_id names).
  * 64-bit fields become Numbers (exact below 2^53, i.e. for 285 years of microseconds). */
 export function parseHeader(buf) {
   if (!(buf instanceof ArrayBuffer) || buf.byteLength < HEADER_V1_SIZE) throw new Error('short frame message');
@@ -18,7 +23,7 @@ export function parseHeader(buf) {
   if (v.getUint32(0, true) !== MAGIC) throw new Error('bad frame magic');
   const version = v.getUint16(4, true);
   const headerSize = v.getUint16(6, true);
-  if (version !== 1) throw new Error('unsupported frame version ' + version);
+  if (version !== 1 && version !== 2) throw new Error('unsupported frame version ' + version);
   if (headerSize < HEADER_V1_SIZE) throw new Error('bad frame header size');
   const h = {
     version,
@@ -37,6 +42,13 @@ export function parseHeader(buf) {
   };
   if (headerSize + h.jpegSize > buf.byteLength) throw new Error('truncated frame');
   return h;
+}
+
+/* Parses a server text message (version 2); null when it is not a JSON object with a type. */
+export function parseServerMessage(text) {
+  let m;
+  try { m = JSON.parse(text); } catch { return null; }
+  return m && typeof m === 'object' && typeof m.type === 'string' ? m : null;
 }
 
 /* Decodes JPEG bytes to something drawImage takes. createImageBitmap on a Blob decodes on the
@@ -59,7 +71,7 @@ async function decodeJpeg(blob) {
 }
 
 /* CanvasView: draws decoded frames into a canvas whose backing store follows its CSS size times
- * devicePixelRatio, fitted without distortion (letterboxed when the shared view has another
+ * devicePixelRatio, fitted without distortion (letterboxed when the view shown (e.g. a followed one) has another
  * aspect). Keeps the last frame so a resize redraws at once. */
 export class CanvasView {
   constructor(canvas) {
@@ -110,11 +122,24 @@ export class CanvasView {
  *              wait, e.g. for a token); throwing schedules a retry.
  *   view:      a CanvasView that receives decoded frames.
  *
+ * Views (version 2): the connection owns a view (ownView, from the server's welcome) and
+ * watches one view (watching: its own, or the one it follows). follow(id) asks to watch
+ * another view, follow(null) returns to the own one; the server confirms with 'following'.
+ * Every connection, and so every reconnect, gets a new own view and watches it. On a
+ * version-1 server (the subprotocol it chose is not probecast.v2) ownView and watching are 0
+ * (the shared view), there are no text messages and follow() does nothing.
+ *
  * Frames: the newest wins. One decode runs at a time and one waits; a newer arrival replaces
  * the waiting one, so a slow decoder skips to the newest frame. A frame is never drawn after a
- * newer one, and each drawn frame is acknowledged ({"type":"ack","frame":id}).
+ * newer one of the same view, and each drawn frame is acknowledged ({"type":"ack","frame":id}).
+ * Frame ids are global over all views: a followed view's current frame may be older than the
+ * own view's last one, so the ordering starts over when the view shown changes; frames of the
+ * view left behind (still in flight after a follow request) are dropped.
  *
- * Events: 'state' (detail: { state, retryInMs, attempt, code, reason }), 'open', 'frame'
+ * Events: 'state' (detail: { state, retryInMs, attempt, code, reason }), 'open' (detail:
+ * { protocol: 1|2 }), 'welcome' (detail: the message), 'world' (detail: { what, data }: an
+ * 'event' message; the latest document of each kind is also kept in world[what]),
+ * 'following' (detail: { view, own }), 'server-error' (detail: { message }), 'frame'
  * (detail: header, after drawing). */
 export class FrameStream extends EventTarget {
   constructor({ resolve, view }) {
@@ -130,19 +155,35 @@ export class FrameStream extends EventTarget {
     this.retryAt = 0;
     this.nextSeq = 1;        // camera message sequence numbers, increasing for the page's life
     this.inputs = [];        // [{ seq, t }] sent and not yet seen in a frame
-    this.resetFrames();
-    this.counters = { received: 0, drawn: 0, skipped: 0, stale: 0, bad: 0, decodeErrors: 0, reconnects: 0 };
+    this.resetConnection();
+    this.counters = { received: 0, drawn: 0, skipped: 0, stale: 0, bad: 0, decodeErrors: 0, reconnects: 0, messages: 0 };
     this.recent = [];        // [{ t, bytes, drawn }] over the last WINDOW_MS
     this.latencies = [];     // [{ t, ms }] input-to-frame samples
     this.lastHeader = null;
   }
 
+  /* What belongs to one connection: its protocol, views, world documents and frame order. */
+  resetConnection() {
+    this.protocol = 0;       // 2 or 1 once open
+    this.ownView = null;     // the connection's own view (welcome); 0 in version 1
+    this.watching = null;    // the view the server says this connection watches
+    this.expectView = null;  // the view whose frames are drawn (a follow request sets it at once)
+    this.pendingFollow = false;
+    this.welcome = null;
+    this.world = {};         // what -> the latest 'event' document of this connection
+    this.resetFrames();
+  }
+
   resetFrames() {
-    this.newestId = 0;       // newest frame id received on this connection
-    this.drawnId = 0;        // newest frame id drawn on this connection
+    this.newestId = 0;       // newest frame id received of frameView on this connection
+    this.drawnId = 0;        // newest frame id drawn of frameView on this connection
+    this.frameView = null;   // the view of the frames newestId and drawnId count
     this.decoding = false;
     this.pending = null;
   }
+
+  /* Whether this connection watches a view other than its own. */
+  get following() { return this.protocol === 2 && this.watching !== null && this.watching !== this.ownView; }
 
   start() {
     if (!this.stopped) return;
@@ -175,6 +216,8 @@ export class FrameStream extends EventTarget {
     this.dispatchEvent(new CustomEvent('state', { detail: { state, attempt: this.attempt, ...extra } }));
   }
 
+  emit(type, detail) { this.dispatchEvent(new CustomEvent(type, { detail })); }
+
   async connect() {
     if (this.stopped) return;
     this.setState('connecting');
@@ -196,13 +239,16 @@ export class FrameStream extends EventTarget {
     ws.binaryType = 'arraybuffer';
     const gen = ++this.gen;
     this.ws = ws;
-    this.resetFrames();
+    this.resetConnection();
     const connectTimer = setTimeout(() => { if (ws.readyState === WebSocket.CONNECTING) ws.close(); }, CONNECT_TIMEOUT_MS);
     ws.onopen = () => {
       clearTimeout(connectTimer);
       if (this.ws !== ws) return;
+      // A server that predates views answers probecast.v1: it shows everyone view 0.
+      this.protocol = ws.protocol === SUBPROTOCOL ? 2 : 1;
+      if (this.protocol === 1) this.ownView = this.watching = this.expectView = 0;
       this.setState('open');
-      this.dispatchEvent(new Event('open'));
+      this.emit('open', { protocol: this.protocol });
     };
     ws.onmessage = (ev) => { if (this.ws === ws) this.onMessage(ev.data, gen); };
     ws.onclose = (ev) => {
@@ -210,6 +256,7 @@ export class FrameStream extends EventTarget {
       if (this.ws !== ws) return;
       this.ws = null;
       this.inputs = []; // never reflected now: the server forgets them with the connection
+      this.resetConnection(); // the next connection has a view of its own and watches it
       if (ev.code === 1008 || ev.code === 1009 || ev.code === 1003)
         console.warn(`probecast: the server closed the stream (${ev.code} ${ev.reason}): a viewer message was refused`);
       this.scheduleRetry({ code: ev.code, reason: ev.reason });
@@ -235,7 +282,8 @@ export class FrameStream extends EventTarget {
     return true;
   }
 
-  /* Sends a camera message with the next sequence number; returns the seq or 0. */
+  /* Sends a camera message with the next sequence number; returns the seq or 0. It moves the
+   * own view, also while following (main.js sends none then). */
   sendCamera(fields) {
     const seq = this.nextSeq;
     if (!this.send({ type: 'camera', seq, ...fields })) return 0;
@@ -254,8 +302,20 @@ export class FrameStream extends EventTarget {
     });
   }
 
+  /* Watches view id (null or the own id: the own view again). Frames of the requested view are
+   * drawn from now on; the server's 'following' confirms, an 'error' reverts. False when not
+   * possible (not connected, version 1, before the welcome). */
+  follow(id) {
+    if (this.protocol !== 2 || this.ownView === null) return false;
+    const own = id === null || id === undefined || id === this.ownView;
+    if (!this.send({ type: 'follow', view: own ? null : id })) return false;
+    this.expectView = own ? this.ownView : id;
+    this.pendingFollow = true;
+    return true;
+  }
+
   onMessage(data, gen) {
-    if (typeof data === 'string') return; // version 1 sends no text
+    if (typeof data === 'string') { this.onText(data); return; }
     const now = performance.now();
     let h;
     try {
@@ -267,6 +327,13 @@ export class FrameStream extends EventTarget {
     this.counters.received++;
     this.recent.push({ t: now, bytes: data.byteLength, drawn: false });
     if (this.attempt) this.attempt = 0; // frames flow: the next outage starts from the short backoff
+    if (this.expectView !== null && h.viewId !== this.expectView) { this.counters.stale++; return; } // a view left behind
+    if (h.viewId !== this.frameView) {
+      // Another view from now on: its frame ids are not comparable with the last view's.
+      this.newestId = 0;
+      this.drawnId = 0;
+      this.frameView = h.viewId;
+    }
     if (h.frameId <= this.newestId) { this.counters.stale++; return; }
     this.newestId = h.frameId;
     const job = { h, gen, blob: new Blob([new Uint8Array(data, h.headerSize, h.jpegSize)], { type: 'image/jpeg' }) };
@@ -278,11 +345,49 @@ export class FrameStream extends EventTarget {
     this.decode(job);
   }
 
+  /* Server text messages (version 2): welcome, event, following, error. */
+  onText(text) {
+    const m = parseServerMessage(text);
+    if (!m) { this.counters.bad++; return; }
+    this.counters.messages++;
+    switch (m.type) {
+      case 'welcome':
+        if (!Number.isInteger(m.view)) return;
+        this.welcome = m;
+        this.ownView = this.watching = this.expectView = m.view;
+        this.emit('welcome', m);
+        break;
+      case 'event':
+        if (!WORLD_KINDS.includes(m.what) || !m.data || typeof m.data !== 'object') return;
+        this.world[m.what] = m.data;
+        this.emit('world', { what: m.what, data: m.data });
+        break;
+      case 'following': {
+        if (!Number.isInteger(m.view)) return;
+        this.watching = m.view;
+        this.expectView = m.view;
+        this.pendingFollow = false;
+        this.emit('following', { view: m.view, own: m.view === this.ownView });
+        break;
+      }
+      case 'error':
+        // The only request answered with an error that changes what we draw is a follow.
+        if (this.pendingFollow) {
+          this.pendingFollow = false;
+          this.expectView = this.watching;
+        }
+        this.emit('server-error', { message: String(m.message || 'The server refused a request.') });
+        break;
+      default:
+        break; // newer servers may add messages
+    }
+  }
+
   async decode(job) {
     this.decoding = true;
     try {
       const frame = await decodeJpeg(job.blob);
-      if (job.gen !== this.gen || job.h.frameId <= this.drawnId) frame.close();
+      if (job.gen !== this.gen || job.h.viewId !== this.frameView || job.h.frameId <= this.drawnId) frame.close();
       else this.present(job.h, frame);
     } catch (e) {
       this.counters.decodeErrors++;
@@ -303,13 +408,15 @@ export class FrameStream extends EventTarget {
     this.lastHeader = h;
     this.recent.push({ t: now, bytes: 0, drawn: true });
     // Input-to-frame latency: every input this frame reflects gets its sample, measured to
-    // the moment the frame is on the canvas.
-    while (this.inputs.length && this.inputs[0].seq <= h.inputSeq) {
-      const i = this.inputs.shift();
-      this.latencies.push({ t: now, ms: now - i.t });
+    // the moment the frame is on the canvas. Only frames of the own view reflect our input.
+    if (h.viewId === this.ownView) {
+      while (this.inputs.length && this.inputs[0].seq <= h.inputSeq) {
+        const i = this.inputs.shift();
+        this.latencies.push({ t: now, ms: now - i.t });
+      }
     }
     if (this.latencies.length > 120) this.latencies.splice(0, this.latencies.length - 120);
-    this.dispatchEvent(new CustomEvent('frame', { detail: h }));
+    this.emit('frame', h);
   }
 
   /* Viewer-side numbers over the last second: { fps, kbps, latencyMs (median of the samples of
