@@ -21,6 +21,7 @@ static void slot_release_cmd(rd_vk *vk, rd_readback_slot *s)
 void rd_readback_dispose(rd_readback *rb)
 {
     if (!rb->vk) return;
+    rd_readback_abort(rb);
     for (int i = 0; i < RD_READBACK_SLOTS; i++) {
         rd_readback_slot *s = &rb->slots[i];
         if (s->busy && s->cmd.fence && !rb->vk->device_lost)
@@ -46,14 +47,11 @@ unsigned rd_readback_busy(const rd_readback *rb)
     return n;
 }
 
-rd_vk_result rd_readback_submit(rd_readback *rb, const rd_buffer *src, unsigned width,
-                                unsigned height, const void *info, size_t info_size, char *err,
-                                size_t errlen)
+rd_vk_result rd_readback_begin(rd_readback *rb, rd_cmd **cmd, char *err, size_t errlen)
 {
-    if (info_size > RD_READBACK_INFO_MAX || (info_size && !info)) {
-        rd_vk_errorf(err, errlen, "Readback record of %zu bytes (at most %d).", info_size,
-                     RD_READBACK_INFO_MAX);
-        return RD_VK_ERR_UNSUPPORTED;
+    if (rb->open) {
+        rd_vk_errorf(err, errlen, "A readback is already being recorded.");
+        return RD_VK_ERR_VULKAN;
     }
     rd_readback_slot *s = NULL;
     for (int i = 0; i < RD_READBACK_SLOTS && !s; i++)
@@ -62,8 +60,38 @@ rd_vk_result rd_readback_submit(rd_readback *rb, const rd_buffer *src, unsigned 
         rd_vk_errorf(err, errlen, "No free readback slot.");
         return RD_VK_ERR_VULKAN;
     }
+    rd_vk_result r = rd_cmd_begin(rb->vk, &s->cmd, err, errlen);
+    if (r != RD_VK_OK) return r;
+    rb->open = s;
+    *cmd = &s->cmd;
+    return RD_VK_OK;
+}
+
+void rd_readback_abort(rd_readback *rb)
+{
+    if (!rb->open) return;
+    rd_cmd_abandon(rb->vk, &rb->open->cmd);
+    rb->open = NULL;
+}
+
+rd_vk_result rd_readback_finish(rd_readback *rb, const rd_buffer *src, unsigned width,
+                                unsigned height, const void *info, size_t info_size, char *err,
+                                size_t errlen)
+{
+    rd_readback_slot *s = rb->open;
+    if (!s) {
+        rd_vk_errorf(err, errlen, "rd_readback_finish without rd_readback_begin.");
+        return RD_VK_ERR_VULKAN;
+    }
     VkDeviceSize bytes = (VkDeviceSize)width * height * 4;
+    if (info_size > RD_READBACK_INFO_MAX || (info_size && !info)) {
+        rd_readback_abort(rb);
+        rd_vk_errorf(err, errlen, "Readback record of %zu bytes (at most %d).", info_size,
+                     RD_READBACK_INFO_MAX);
+        return RD_VK_ERR_UNSUPPORTED;
+    }
     if (bytes > src->size) {
+        rd_readback_abort(rb);
         rd_vk_errorf(err, errlen, "Readback of %llu bytes from a %llu-byte buffer.",
                      (unsigned long long)bytes, (unsigned long long)src->size);
         return RD_VK_ERR_VULKAN;
@@ -73,11 +101,21 @@ rd_vk_result rd_readback_submit(rd_readback *rb, const rd_buffer *src, unsigned 
         rd_buffer_destroy(rb->vk, &s->buffer);
         rd_vk_result r =
             rd_buffer_create(rb->vk, &s->buffer, bytes, RD_MEMORY_READBACK, err, errlen);
-        if (r != RD_VK_OK) return r;
+        if (r != RD_VK_OK) {
+            rd_readback_abort(rb);
+            return r;
+        }
     }
-    rd_vk_result r = rd_cmd_begin(rb->vk, &s->cmd, err, errlen);
-    if (r != RD_VK_OK) return r;
+    rb->open = NULL;
     if (bytes > 0) {
+        /* the frame's passes (recorded before) finish writing src first */
+        VkMemoryBarrier before = {
+            .sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER,
+            .srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT,
+            .dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT,
+        };
+        vkCmdPipelineBarrier(s->cmd.cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                             VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 1, &before, 0, NULL, 0, NULL);
         VkBufferCopy region = {.srcOffset = 0, .dstOffset = 0, .size = bytes};
         vkCmdCopyBuffer(s->cmd.cb, src->buffer, s->buffer.buffer, 1, &region);
     }
@@ -113,6 +151,16 @@ rd_vk_result rd_readback_submit(rd_readback *rb, const rd_buffer *src, unsigned 
     memset(s->info, 0, sizeof s->info);
     if (info_size) memcpy(s->info, info, info_size);
     return RD_VK_OK;
+}
+
+rd_vk_result rd_readback_submit(rd_readback *rb, const rd_buffer *src, unsigned width,
+                                unsigned height, const void *info, size_t info_size, char *err,
+                                size_t errlen)
+{
+    rd_cmd *cmd;
+    rd_vk_result r = rd_readback_begin(rb, &cmd, err, errlen);
+    return r == RD_VK_OK ? rd_readback_finish(rb, src, width, height, info, info_size, err, errlen)
+                         : r;
 }
 
 static rd_readback_slot *oldest(rd_readback *rb)

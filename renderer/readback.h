@@ -20,7 +20,7 @@
 #include "vk_buffer.h"
 #include "vk_compute.h"
 
-#define RD_READBACK_SLOTS 3
+#define RD_READBACK_SLOTS 8     /* frames in flight: the GPU works while the CPU records the next */
 #define RD_READBACK_INFO_MAX 64 /* bytes of caller record per frame */
 
 typedef struct rd_readback_slot {
@@ -36,6 +36,7 @@ typedef struct rd_readback_slot {
 typedef struct rd_readback {
     rd_vk *vk;
     rd_readback_slot slots[RD_READBACK_SLOTS];
+    rd_readback_slot *open; /* begun by rd_readback_begin, not yet finished */
     uint64_t next_seq;
 } rd_readback;
 
@@ -52,6 +53,16 @@ rd_vk_result rd_readback_submit(rd_readback *rb, const rd_buffer *src, unsigned 
 
 /* info: the slot's copy of the submitted record (aligned to 16 bytes, valid during the call);
  * rgba: width * height * 4 bytes, valid during the call. */
+/* A frame and its copy in one submission, without waiting: rd_readback_begin takes a free slot
+ * and begins its command buffer (*cmd) for the caller to record the frame into; rd_readback_finish
+ * appends the copy of src and submits with the slot's fence; rd_readback_abort drops a begun slot
+ * (an error while recording). rd_readback_submit is begin + finish around nothing. */
+rd_vk_result rd_readback_begin(rd_readback *rb, rd_cmd **cmd, char *err, size_t errlen);
+rd_vk_result rd_readback_finish(rd_readback *rb, const rd_buffer *src, unsigned width,
+                                unsigned height, const void *info, size_t info_size, char *err,
+                                size_t errlen);
+void rd_readback_abort(rd_readback *rb);
+
 typedef void (*rd_readback_fn)(void *user, const void *info, unsigned width, unsigned height,
                                const uint8_t *rgba);
 /* Delivers every completed copy, oldest first, stopping at the first one still running; with

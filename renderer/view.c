@@ -157,7 +157,9 @@ static rd_vk_result render_pathtraced(rd_view *v, const rd_view_settings *s, cha
     return res;
 }
 
-rd_vk_result rd_view_render(rd_view *v, const rd_world *w, const rd_view_camera *camera,
+/* Sizes the images and writes this frame's globals (the world's part copied, the camera's part
+ * filled here). */
+static rd_vk_result prepare(rd_view *v, const rd_world *w, const rd_view_camera *camera,
                             const rd_view_settings *s, char *err, size_t errlen)
 {
     memset(&v->stats, 0, sizeof v->stats);
@@ -173,8 +175,6 @@ rd_vk_result rd_view_render(rd_view *v, const rd_world *w, const rd_view_camera 
     }
     rd_vk_result res = ensure_size(v, width, height, err, errlen);
     if (res != RD_VK_OK) return res;
-
-    /* this view's globals: the world's part copied, the camera's part filled here */
     pc_globals g;
     memset(&g, 0, sizeof g);
     rd_world_fill_globals(w, &g);
@@ -186,42 +186,72 @@ rd_vk_result rd_view_render(rd_view *v, const rd_world *w, const rd_view_camera 
     g.view.tonemap = (pc_vec4){exp2f(s->exposure_ev), (float)s->tonemap, (float)s->view, 0};
     memcpy(v->globals.mapped, &g, sizeof g);
     memset(v->counters.mapped, 0, sizeof(pc_counters));
+    return RD_VK_OK;
+}
 
-    if (s->pathtrace_spp > 0) return render_pathtraced(v, s, err, errlen);
-    v->pathtrace_samples = 0; /* this frame overwrites the accumulation */
-
-    const rd_view_passes *p = v->passes;
-    rd_cmd cmd;
-    res = rd_cmd_begin(v->vk, &cmd, err, errlen);
+rd_vk_result rd_view_record(rd_view *v, const rd_world *w, const rd_view_camera *camera,
+                            const rd_view_settings *s, rd_cmd *cmd, char *err, size_t errlen)
+{
+    if (s->pathtrace_spp > 0) {
+        snprintf(err, errlen, "path tracing is rendered with rd_view_render");
+        return RD_VK_ERR_UNSUPPORTED;
+    }
+    rd_vk_result res = prepare(v, w, camera, s, err, errlen);
     if (res != RD_VK_OK) return res;
-    uint32_t gx = (width + PC_WG_2D_X - 1) / PC_WG_2D_X;
-    uint32_t gy = (height + PC_WG_2D_Y - 1) / PC_WG_2D_Y;
-    rd_timer_begin(&cmd, &v->timer);
+    v->pathtrace_samples = 0; /* this frame overwrites the accumulation */
+    const rd_view_passes *p = v->passes;
+    uint32_t gx = (v->width + PC_WG_2D_X - 1) / PC_WG_2D_X;
+    uint32_t gy = (v->height + PC_WG_2D_Y - 1) / PC_WG_2D_Y;
+    rd_timer_begin(cmd, &v->timer);
     pc_push push = {.globals = v->globals.address,
                     .buf0 = v->gbuffer.address,
                     .buf1 = v->counters.address,
                     .buf2 = v->radiance.address};
-    rd_cmd_dispatch(&cmd, &p->primary, &push, gx, gy, 1);
-    rd_cmd_barrier(&cmd);
-    rd_timer_mark(&cmd, &v->timer, "primary");
-    rd_cmd_dispatch(&cmd, &p->shade, &push, gx, gy, 1);
-    rd_cmd_barrier(&cmd);
-    rd_timer_mark(&cmd, &v->timer, "shade");
+    rd_cmd_dispatch(cmd, &p->primary, &push, gx, gy, 1);
+    rd_cmd_barrier(cmd);
+    rd_timer_mark(cmd, &v->timer, "primary");
+    rd_cmd_dispatch(cmd, &p->shade, &push, gx, gy, 1);
+    rd_cmd_barrier(cmd);
+    rd_timer_mark(cmd, &v->timer, "shade");
     if (w->gi) {
-        rd_cmd_dispatch(&cmd, &p->gi_sample, &push, gx, gy, 1);
-        rd_cmd_barrier(&cmd);
-        rd_timer_mark(&cmd, &v->timer, "gi sample");
+        rd_cmd_dispatch(cmd, &p->gi_sample, &push, gx, gy, 1);
+        rd_cmd_barrier(cmd);
+        rd_timer_mark(cmd, &v->timer, "gi sample");
     }
     push.buf0 = v->radiance.address;
     push.buf1 = v->rgba8.address;
-    rd_cmd_dispatch(&cmd, &p->tonemap, &push, gx, gy, 1);
-    rd_cmd_barrier(&cmd);
-    rd_timer_mark(&cmd, &v->timer, "tonemap");
-    res = rd_cmd_submit_wait(v->vk, &cmd, err, errlen);
-    if (res != RD_VK_OK) return res;
+    rd_cmd_dispatch(cmd, &p->tonemap, &push, gx, gy, 1);
+    rd_cmd_barrier(cmd);
+    rd_timer_mark(cmd, &v->timer, "tonemap");
     v->frame_index++;
+    return RD_VK_OK;
+}
+
+rd_vk_result rd_view_collect(rd_view *v, char *err, size_t errlen)
+{
+    memset(&v->stats, 0, sizeof v->stats);
     memcpy(&v->stats.rays, v->counters.mapped, sizeof v->stats.rays);
     return collect_times(v, err, errlen);
+}
+
+rd_vk_result rd_view_render(rd_view *v, const rd_world *w, const rd_view_camera *camera,
+                            const rd_view_settings *s, char *err, size_t errlen)
+{
+    if (s->pathtrace_spp > 0) {
+        rd_vk_result res = prepare(v, w, camera, s, err, errlen);
+        return res == RD_VK_OK ? render_pathtraced(v, s, err, errlen) : res;
+    }
+    rd_cmd cmd;
+    rd_vk_result res = rd_cmd_begin(v->vk, &cmd, err, errlen);
+    if (res != RD_VK_OK) return res;
+    res = rd_view_record(v, w, camera, s, &cmd, err, errlen);
+    if (res != RD_VK_OK) {
+        rd_cmd_abandon(v->vk, &cmd);
+        return res;
+    }
+    res = rd_cmd_submit_wait(v->vk, &cmd, err, errlen);
+    if (res != RD_VK_OK) return res;
+    return rd_view_collect(v, err, errlen);
 }
 
 rd_vk_result rd_view_read_rgba8(rd_view *v, uint8_t *out, char *err, size_t errlen)

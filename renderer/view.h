@@ -55,6 +55,14 @@ void rd_view_destroy(rd_view *v);
  * waits for the device and reallocates the buffers. */
 rd_vk_result rd_view_render(rd_view *v, const rd_world *w, const rd_view_camera *camera,
                             const rd_view_settings *s, char *err, size_t errlen);
+/* The same frame without waiting: records it into cmd (begun by the caller, who submits it, e.g.
+ * with a readback copy of rgba8 behind it: renderer/readback.h). The view must have no frame in
+ * flight, since its globals, counters and timer are rewritten; path tracing is refused (it
+ * submits batches of its own). After the submission has completed, rd_view_collect reads the
+ * frame's GPU times and ray counts into v->stats. */
+rd_vk_result rd_view_record(rd_view *v, const rd_world *w, const rd_view_camera *camera,
+                            const rd_view_settings *s, rd_cmd *cmd, char *err, size_t errlen);
+rd_vk_result rd_view_collect(rd_view *v, char *err, size_t errlen);
 /* Reads back the last frame: tone-mapped RGBA8 (width*height*4 bytes) or linear radiance
  * (width*height*3 floats). */
 rd_vk_result rd_view_read_rgba8(rd_view *v, uint8_t *out, char *err, size_t errlen);

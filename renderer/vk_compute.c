@@ -108,6 +108,12 @@ static void cmd_free(rd_vk *vk, rd_cmd *c)
     c->cb = VK_NULL_HANDLE;
 }
 
+void rd_cmd_abandon(rd_vk *vk, rd_cmd *c)
+{
+    if (c->cb) vkEndCommandBuffer(c->cb);
+    cmd_free(vk, c);
+}
+
 rd_vk_result rd_cmd_begin(rd_vk *vk, rd_cmd *c, char *err, size_t errlen)
 {
     memset(c, 0, sizeof *c);
@@ -142,6 +148,17 @@ rd_vk_result rd_cmd_begin(rd_vk *vk, rd_cmd *c, char *err, size_t errlen)
         cmd_free(vk, c);
         return rd_vk_fail(vk, r, "vkBeginCommandBuffer", err, errlen);
     }
+    /* Submissions may be in flight together (a view's frame while the next is recorded, a world
+     * update after frames that read the probe field): every command buffer first waits for all
+     * work submitted before it on the queue, so the GPU runs submissions one after another. */
+    VkMemoryBarrier mb = {
+        .sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER,
+        .srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT,
+        .dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT |
+                         VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT,
+    };
+    vkCmdPipelineBarrier(c->cb, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT,
+                         VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, 0, 1, &mb, 0, NULL, 0, NULL);
     return RD_VK_OK;
 }
 

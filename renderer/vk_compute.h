@@ -16,9 +16,8 @@ typedef struct rd_pipeline {
     const char *name;
 } rd_pipeline;
 
-rd_vk_result rd_pipeline_create(rd_vk *vk, rd_pipeline *p, const char *name,
-                                const uint32_t *spirv, size_t spirv_bytes, uint32_t push_size,
-                                char *err, size_t errlen);
+rd_vk_result rd_pipeline_create(rd_vk *vk, rd_pipeline *p, const char *name, const uint32_t *spirv,
+                                size_t spirv_bytes, uint32_t push_size, char *err, size_t errlen);
 void rd_pipeline_destroy(rd_vk *vk, rd_pipeline *p); /* idempotent */
 
 /* A one-shot command buffer with its fence. */
@@ -30,6 +29,8 @@ typedef struct rd_cmd {
 rd_vk_result rd_cmd_begin(rd_vk *vk, rd_cmd *c, char *err, size_t errlen);
 /* Ends, submits, waits for completion and frees the command buffer and fence. */
 rd_vk_result rd_cmd_submit_wait(rd_vk *vk, rd_cmd *c, char *err, size_t errlen);
+/* Frees a begun command buffer that will not be submitted (an error while recording). */
+void rd_cmd_abandon(rd_vk *vk, rd_cmd *c);
 /* Binds p, pushes push (p->push_size bytes) and dispatches groups. */
 void rd_cmd_dispatch(rd_cmd *c, const rd_pipeline *p, const void *push, uint32_t gx, uint32_t gy,
                      uint32_t gz);
@@ -41,10 +42,10 @@ void rd_cmd_barrier(rd_cmd *c);
 /* GPU timestamps around named passes: mark(start) ... mark(name) ... ; resolve -> ms each. */
 typedef struct rd_timer {
     VkQueryPool pool;
-    uint32_t count;                /* timestamps written this frame */
+    uint32_t count; /* timestamps written this frame */
     const char *names[RD_TIMER_MAX];
-    double ms[RD_TIMER_MAX];       /* ms[i]: time between timestamp i-1 and i (ms[0] = 0) */
-    bool valid;                    /* false when the device has no timestamps */
+    double ms[RD_TIMER_MAX]; /* ms[i]: time between timestamp i-1 and i (ms[0] = 0) */
+    bool valid;              /* false when the device has no timestamps */
 } rd_timer;
 
 rd_vk_result rd_timer_create(rd_vk *vk, rd_timer *t, char *err, size_t errlen);

@@ -226,7 +226,15 @@ static void on_readback(void *user, const void *blob, unsigned w, unsigned h, co
     srv_frame_info info;
     memcpy(&info, blob, sizeof info);
     srv_view *v = srv_views_find(&l->views, info.view_id);
-    if (!v) return; /* the view went away while its frame was copied */
+    if (!v) return;     /* the view went away while its frame was copied */
+    if (v->in_flight) { /* an asynchronous frame: its GPU times are ready now */
+        v->in_flight = false;
+        char err[256];
+        if (rd_view_collect(&v->gpu, err, sizeof err) != RD_VK_OK)
+            srv_warn("render", "view %u: frame statistics lost: %s", v->id, err);
+        srv_stats_board_frame(&l->stats, &v->gpu.stats, w, h, v->last_render_ms,
+                              srv_mono_ms() - v->last_render_ms);
+    }
     srv_image *img = srv_image_new(w, h);
     memcpy(img->rgba, rgba, (size_t)w * h * 4);
     srv_image_unref(v->last_image);
@@ -284,15 +292,33 @@ static void render_view(srv_render_loop *l, srv_view *v, double now)
     v->requests = 0;
     v->renders_since_tick++;
     v->last_render_ms = now;
-    rd_vk_result vr = rd_view_render(&v->gpu, &l->svc.world, &cam, &vs, err, sizeof err);
-    double wall = srv_mono_ms() - now;
+    rd_vk_result vr;
     if (vs.pathtrace_spp) {
+        /* path tracing submits batches of its own and waits for them */
+        vr = rd_view_render(&v->gpu, &l->svc.world, &cam, &vs, err, sizeof err);
         v->pt_samples = vr == RD_VK_OK ? v->gpu.pathtrace_samples : 0;
         if (v->pt_samples < l->svc.pt_target) v->dirty = true; /* keep accumulating */
+        if (vr == RD_VK_OK)
+            vr = rd_readback_submit(&l->rb, &v->gpu.rgba8, v->gpu.width, v->gpu.height, &info,
+                                    sizeof info, err, sizeof err);
+        if (vr == RD_VK_OK)
+            srv_stats_board_frame(&l->stats, &v->gpu.stats, v->gpu.width, v->gpu.height, now,
+                                  srv_mono_ms() - now);
+    } else {
+        /* the frame and its readback in one submission, not waited for: the GPU renders it while
+         * this thread records the next view; on_readback delivers it */
+        rd_cmd *cmd;
+        vr = rd_readback_begin(&l->rb, &cmd, err, sizeof err);
+        if (vr == RD_VK_OK) {
+            vr = rd_view_record(&v->gpu, &l->svc.world, &cam, &vs, cmd, err, sizeof err);
+            if (vr == RD_VK_OK)
+                vr = rd_readback_finish(&l->rb, &v->gpu.rgba8, v->gpu.width, v->gpu.height, &info,
+                                        sizeof info, err, sizeof err);
+            else
+                rd_readback_abort(&l->rb);
+        }
+        v->in_flight = vr == RD_VK_OK;
     }
-    if (vr == RD_VK_OK)
-        vr = rd_readback_submit(&l->rb, &v->gpu.rgba8, v->gpu.width, v->gpu.height, &info,
-                                sizeof info, err, sizeof err);
     if (vr != RD_VK_OK) {
         srv_error("render", "frame %llu of view %u failed: %s", (unsigned long long)info.frame_id,
                   v->id, err);
@@ -301,10 +327,9 @@ static void render_view(srv_render_loop *l, srv_view *v, double now)
     }
     v->need_still = !info.still;
     v->last_frame_id = info.frame_id;
-    srv_stats_board_frame(&l->stats, &v->gpu.stats, v->gpu.width, v->gpu.height, now, wall);
-    srv_debug("render", "frame %llu: view %u, %ux%u, %s, %.1f ms",
+    srv_debug("render", "frame %llu: view %u, %ux%u, %s, %.2f ms to submit",
               (unsigned long long)info.frame_id, v->id, v->width, v->height,
-              info.still ? "still" : "interactive", wall);
+              info.still ? "still" : "interactive", srv_mono_ms() - now);
 }
 
 /* Re-encodes a view's last image at still quality as a new frame (nothing is rendered). */
@@ -406,9 +431,10 @@ static void *render_main(void *arg)
                                      .behind_world = v->behind_world,
                                      .need_still = v->need_still,
                                      .renders_since_tick = v->renders_since_tick,
+                                     .busy = v->in_flight,
                                      .last_render_ms = v->last_render_ms,
                                      .last_input_ms = v->last_input_ms};
-            any_watched_dirty |= sv[i].watched && v->dirty;
+            any_watched_dirty |= sv[i].watched && (v->dirty || v->in_flight);
         }
         bool converging = srv_scene_service_converging(&l->svc);
         srv_sched_state ss = {
@@ -431,14 +457,9 @@ static void *render_main(void *arg)
             continue;
         case SRV_SCHED_RENDER_VIEW:
             l->views.cursor = (step.view + 1) % n;
-            /* rd_view_render blocks until its frame is done, so a copy still in flight would
-             * otherwise wait a whole frame to be delivered: collect it first (it is queued ahead
-             * of the next frame's work, so this costs only the copy) */
-            if (rd_readback_busy(&l->rb) > 0) poll_readback(l, 100ull * 1000 * 1000);
             render_view(l, l->views.items[step.view], now);
             continue;
         case SRV_SCHED_EMIT_STILL:
-            if (rd_readback_busy(&l->rb) > 0) break; /* its newest image is still on the way */
             emit_still(l, l->views.items[step.view]);
             continue;
         case SRV_SCHED_SLEEP:

@@ -10,7 +10,7 @@ static int pick(const srv_sched_state *s, bool (*pred)(const srv_sched_view *))
     for (unsigned n = 0; n < s->view_count; n++) {
         unsigned k = (s->cursor + n) % s->view_count;
         const srv_sched_view *v = &s->views[k];
-        if (v->watched && v->dirty && pred(v) &&
+        if (v->watched && v->dirty && !v->busy && pred(v) &&
             v->last_render_ms + s->frame_interval_ms <= s->now_ms)
             return (int)k;
     }
@@ -45,6 +45,7 @@ srv_sched_step srv_sched_next(const srv_sched_state *s)
             interacting = true;
         if (!v->dirty) continue;
         if (v->behind_world) any_owed = true;
+        if (v->busy) continue; /* woken by its completion */
         double due = v->last_render_ms + s->frame_interval_ms;
         if (due > s->now_ms) {
             if (due < step.wake_ms) step.wake_ms = due;
@@ -89,7 +90,7 @@ srv_sched_step srv_sched_next(const srv_sched_state *s)
     for (unsigned n = 0; n < s->view_count; n++) {
         unsigned i = (s->cursor + n) % s->view_count;
         const srv_sched_view *v = &s->views[i];
-        if (!v->watched || v->dirty || !v->need_still) continue;
+        if (!v->watched || v->dirty || v->busy || !v->need_still) continue;
         double due = v->last_input_ms + s->still_delay_ms;
         if (due <= s->now_ms) {
             step.action = SRV_SCHED_EMIT_STILL;

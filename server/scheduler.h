@@ -27,6 +27,7 @@ typedef struct srv_sched_view {
     bool behind_world;           /* it has not shown the world's last tick yet (implies dirty) */
     bool need_still;             /* its last frame was interactive */
     unsigned renders_since_tick; /* frames of it since the world last advanced */
+    bool busy;                   /* its last frame is still on the GPU: not renderable yet */
     double last_render_ms;
     double last_input_ms;
 } srv_sched_view;
@@ -50,6 +51,9 @@ typedef enum srv_sched_action {
     SRV_SCHED_RENDER_VIEW,
     SRV_SCHED_EMIT_STILL,
 } srv_sched_action;
+
+/* A busy view's frame is in flight; the caller polls for its completion, which makes the view
+ * renderable again (no wake-up deadline is given for it). */
 
 /* Probe updates per tick while the probes converge and no input arrives: the field settles in a
  * quarter of the ticks; right after an input a tick carries one update only, so the viewer's

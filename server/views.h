@@ -27,6 +27,7 @@ typedef struct srv_view {
     bool behind_world;           /* has not shown the world's last tick */
     bool need_still;             /* its last frame was interactive */
     unsigned renders_since_tick; /* frames since the world last advanced (scheduler.h) */
+    bool in_flight; /* a frame of it is on the GPU (its images must not be written again) */
     double last_input_ms, last_render_ms;
     uint64_t input_ticket;  /* newest input command applied to it (frames carry it) */
     uint64_t last_frame_id; /* of its newest frame handed to the encoders */

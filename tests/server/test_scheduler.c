@@ -111,6 +111,19 @@ static void test_pacing(void)
     st = srv_sched_next(&s);
     CHECKF(st.action == SRV_SCHED_SLEEP && st.wake_ms <= s.now_ms + 1,
            "full readback ring: look again soon");
+    /* a view whose last frame is still on the GPU is neither rendered nor given a still */
+    s.readback_free = true;
+    v[0].busy = true;
+    st = srv_sched_next(&s);
+    CHECKF(st.action == SRV_SCHED_SLEEP, "busy view not rendered");
+    v[0].dirty = false;
+    v[0].need_still = true;
+    v[0].last_input_ms = s.now_ms - 1000;
+    st = srv_sched_next(&s);
+    CHECKF(st.action == SRV_SCHED_SLEEP, "busy view gets no still yet");
+    v[0].busy = false;
+    st = srv_sched_next(&s);
+    CHECKF(st.action == SRV_SCHED_EMIT_STILL, "its still once the frame is back");
 }
 
 /* With N watched views the world advances once per round of N renders. */
