@@ -21,14 +21,63 @@ static void *xcalloc(size_t n, size_t size)
 
 /* ---- images and frames ----------------------------------------------------------------------- */
 
+/* Freed pixel buffers kept for reuse: a frame of the same size follows soon, and a fresh
+ * allocation of megabytes costs page faults on every first touch (about as much as the copy). */
+#define IMAGE_POOL 32
+static pthread_mutex_t pool_mu = PTHREAD_MUTEX_INITIALIZER;
+static struct {
+    uint8_t *data;
+    size_t cap;
+} pool[IMAGE_POOL];
+static unsigned pool_count;
+
+static uint8_t *pixels_take(size_t need, size_t *cap)
+{
+    uint8_t *p = NULL;
+    pthread_mutex_lock(&pool_mu);
+    for (unsigned i = 0; i < pool_count; i++) {
+        if (pool[i].cap >= need && pool[i].cap <= 2 * need) {
+            p = pool[i].data;
+            *cap = pool[i].cap;
+            pool[i] = pool[--pool_count];
+            break;
+        }
+    }
+    pthread_mutex_unlock(&pool_mu);
+    if (!p) {
+        p = malloc(need ? need : 1);
+        if (!p) abort();
+        *cap = need;
+    }
+    return p;
+}
+
+static void pixels_give(uint8_t *p, size_t cap)
+{
+    pthread_mutex_lock(&pool_mu);
+    if (pool_count < IMAGE_POOL) {
+        pool[pool_count].data = p;
+        pool[pool_count++].cap = cap;
+        p = NULL;
+    }
+    pthread_mutex_unlock(&pool_mu);
+    free(p);
+}
+
+void srv_image_pool_drain(void)
+{
+    pthread_mutex_lock(&pool_mu);
+    while (pool_count) free(pool[--pool_count].data);
+    pthread_mutex_unlock(&pool_mu);
+}
+
 srv_image *srv_image_new(unsigned width, unsigned height)
 {
     srv_image *img = xcalloc(1, sizeof *img);
     atomic_init(&img->refs, 1);
     img->width = width;
     img->height = height;
-    img->rgba = malloc((size_t)width * height * 4);
-    if (!img->rgba) abort();
+    img->rgba = pixels_take((size_t)width * height * 4, &img->cap);
     return img;
 }
 
@@ -41,7 +90,7 @@ srv_image *srv_image_ref(srv_image *img)
 void srv_image_unref(srv_image *img)
 {
     if (img && atomic_fetch_sub(&img->refs, 1) == 1) {
-        free(img->rgba);
+        pixels_give(img->rgba, img->cap);
         free(img);
     }
 }
@@ -233,6 +282,7 @@ void srv_encoder_pool_destroy(srv_encoder_pool *p)
         srv_frame_unref(p->latest[i].frame);
     free(p->latest);
     free(p->threads);
+    srv_image_pool_drain();
     pthread_cond_destroy(&p->published);
     pthread_cond_destroy(&p->cv);
     pthread_mutex_destroy(&p->mu);

@@ -25,11 +25,14 @@ typedef struct srv_image {
     atomic_int refs;
     unsigned width, height;
     uint8_t *rgba; /* width * height * 4 bytes, top row first */
+    size_t cap;    /* bytes allocated (pixel buffers are recycled) */
 } srv_image;
 
 srv_image *srv_image_new(unsigned width, unsigned height);
 srv_image *srv_image_ref(srv_image *img);
 void srv_image_unref(srv_image *img); /* NULL is fine */
+/* Frees the recycled pixel buffers (srv_encoder_pool_destroy does this). */
+void srv_image_pool_drain(void);
 
 typedef struct srv_frame_info {
     uint64_t frame_id;

@@ -41,6 +41,7 @@ struct srv_render_loop {
     /* render thread only */
     uint64_t next_frame_id;
     double last_tick_ms;
+    double update_ms; /* wall time of one probe update, smoothed */
     bool persist_dirty;
     double last_persist_ms;
 };
@@ -352,6 +353,10 @@ static void advance_world(srv_render_loop *l, bool animating, unsigned updates, 
     char err[256];
     rd_vk_result vr = srv_scene_service_advance(&l->svc, animating, updates, now, err, sizeof err);
     l->last_tick_ms = now;
+    if (updates && vr == RD_VK_OK) {
+        double ms = (srv_mono_ms() - now) / updates;
+        l->update_ms = l->update_ms > 0 ? 0.8 * l->update_ms + 0.2 * ms : ms;
+    }
     if (vr != RD_VK_OK) {
         srv_error("render", "probe update failed: %s", err);
         srv_stats_board_error(&l->stats, err, l->vk.device_lost);
@@ -443,6 +448,7 @@ static void *render_main(void *arg)
             .still_delay_ms = s->still_delay_ms,
             .world_wants_update = !lost && (converging || animating),
             .world_updates_left = srv_scene_service_updates_left(&l->svc),
+            .update_ms = l->update_ms,
             .last_tick_ms = l->last_tick_ms,
             .readback_free = rd_readback_has_free(&l->rb),
             .views = sv,

@@ -71,7 +71,12 @@ srv_sched_step srv_sched_next(const srv_sched_state *s)
         double due = s->last_tick_ms + s->frame_interval_ms;
         if (due <= s->now_ms) {
             step.action = SRV_SCHED_ADVANCE_WORLD;
-            unsigned per_tick = interacting ? 1u : SRV_SCHED_CONVERGE_UPDATES;
+            unsigned per_tick = SRV_SCHED_CONVERGE_UPDATES;
+            if (s->update_ms > 0) {
+                double fit = floor(s->frame_interval_ms / s->update_ms);
+                if (fit < per_tick) per_tick = fit < 1 ? 1u : (unsigned)fit;
+            }
+            if (interacting) per_tick = 1;
             step.world_updates =
                 s->world_updates_left < per_tick ? s->world_updates_left : per_tick;
             return step;

@@ -38,6 +38,7 @@ typedef struct srv_sched_state {
     double still_delay_ms;
     bool world_wants_update;     /* probes converging or animation running */
     unsigned world_updates_left; /* probe updates still wanted (0: only the animation moves) */
+    double update_ms;            /* measured wall time of one probe update (0: not known yet) */
     double last_tick_ms;         /* when the world last advanced */
     bool readback_free;          /* a frame can be handed to the readback ring now */
     const srv_sched_view *views;
@@ -56,8 +57,8 @@ typedef enum srv_sched_action {
  * renderable again (no wake-up deadline is given for it). */
 
 /* Probe updates per tick while the probes converge and no input arrives: the field settles in a
- * quarter of the ticks; right after an input a tick carries one update only, so the viewer's
- * next frame is not delayed by the extra updates. */
+ * quarter of the ticks. Fewer when the updates would hold a tick longer than a frame interval (a
+ * CPU device), and one only while someone interacts, so their next frame is not delayed. */
 #define SRV_SCHED_CONVERGE_UPDATES 4u
 
 typedef struct srv_sched_step {

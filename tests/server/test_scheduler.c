@@ -168,6 +168,17 @@ static void test_world(void)
     st = srv_sched_next(&s);
     CHECKF(st.action == SRV_SCHED_ADVANCE_WORLD && st.world_updates == 2,
            "the last updates: only what is left (%u)", st.world_updates);
+    /* slow updates (a CPU device): a tick holds no more than a frame interval of them */
+    s.world_updates_left = 100;
+    s.update_ms = 4;
+    st = srv_sched_next(&s);
+    CHECKF(st.action == SRV_SCHED_ADVANCE_WORLD && st.world_updates == 2,
+           "10 ms frames, 4 ms updates: %u per tick", st.world_updates);
+    s.update_ms = 400;
+    st = srv_sched_next(&s);
+    CHECKF(st.action == SRV_SCHED_ADVANCE_WORLD && st.world_updates == 1,
+           "updates slower than a frame: %u per tick", st.world_updates);
+    s.update_ms = 0;
     /* input keeps a tick to one update */
     s.world_updates_left = 100;
     v[0].last_input_ms = s.now_ms - 20;
