@@ -542,6 +542,11 @@ void rd_vk_destroy(rd_vk *vk)
     vk->instance = VK_NULL_HANDLE;
 }
 
+void rd_vk_wait_idle(rd_vk *vk)
+{
+    if (vk->device && !vk->device_lost) vkDeviceWaitIdle(vk->device);
+}
+
 unsigned rd_vk_validation_messages(rd_vk *vk)
 {
     return atomic_load(&vk->validation_messages);

@@ -69,6 +69,8 @@ typedef struct rd_vk {
 rd_vk_result rd_vk_create(rd_vk *vk, const rd_vk_options *opt, char *err, size_t errlen);
 /* Waits for the device, destroys in reverse order; idempotent. */
 void rd_vk_destroy(rd_vk *vk);
+/* Waits until the device has finished all submitted work (nothing when it was lost). */
+void rd_vk_wait_idle(rd_vk *vk);
 /* Number of validation warnings/errors reported so far. */
 unsigned rd_vk_validation_messages(rd_vk *vk);
 /* Writes one line per physical device ("INDEX: NAME (TYPE)") to out. */

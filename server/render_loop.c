@@ -582,7 +582,7 @@ void srv_render_loop_destroy(srv_render_loop *l)
     srv_render_loop_stop(l);
     srv_mailbox_dispose(&l->mb);
     if (l->vk_ok) {
-        if (l->vk.device && !l->vk.device_lost) vkDeviceWaitIdle(l->vk.device);
+        rd_vk_wait_idle(&l->vk);
         if (l->rb_ok) rd_readback_dispose(&l->rb);
         srv_views_dispose(&l->views);
         if (l->svc_ok) srv_scene_service_dispose(&l->svc);

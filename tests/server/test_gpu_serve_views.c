@@ -292,5 +292,45 @@ int main(void)
     for (int i = 0; i < 3; i++)
         pc_frame_free(&more[i].last);
     CHECKF(pc_daemon_stop(&d) == 0, "clean exit after SIGTERM");
+
+    /* limits: views in all, and pixels over all views */
+    const char *limited[] = {"--no-animate",
+                             "--width",
+                             "64",
+                             "--height",
+                             "48",
+                             "--max-views",
+                             "2",
+                             "--gi",
+                             "off",
+                             "--scene",
+                             "builtin:cornell",
+                             "--max-total-pixels",
+                             "10000",
+                             NULL};
+    pc_daemon d2 = {0};
+    if (!pc_daemon_start(&d2, limited)) {
+        CHECK(!"limited daemon started");
+        return test_finish();
+    }
+    viewer c = {0}, e = {0};
+    CHECK(pc_stream_open_v2(&d2, &c.ws, &c.view));
+    CHECK(pc_ws_connect(&e.ws, "127.0.0.1", d2.ws_port, "/v1/stream",
+                        "Sec-WebSocket-Protocol: probecast.v2\r\n", 10000) != 0 &&
+          e.ws.http_status == 403);
+    pc_ws_close(&e.ws);
+    CHECK(pc_stream_open(&d2, &e.ws)); /* version 1 still shares view 0 */
+    pc_ws_close(&e.ws);
+    send(&c, "{\"type\":\"resize\",\"width\":200,\"height\":200}");
+    bool resized = false;
+    for (int i = 0; i < 20 && !resized; i++)
+        resized = frame_where(&c, 30000, c.view, 0, 0, 0) && c.last.h.width != 64;
+    unsigned px = c.last.h.width * c.last.h.height;
+    CHECKF(resized && px <= 10000 - 64 * 48 && c.last.h.width >= 16 && c.last.h.height >= 16,
+           "a 200x200 view under a 10000-pixel total beside 64x48: got %ux%u", c.last.h.width,
+           c.last.h.height);
+    pc_ws_close(&c.ws);
+    pc_frame_free(&c.last);
+    CHECKF(pc_daemon_stop(&d2) == 0, "clean exit after SIGTERM");
     return test_finish();
 }
