@@ -176,6 +176,15 @@ static void lighting_changed(srv_scene_service *svc)
     if (svc->was_converged) publish_probes(svc);
 }
 
+/* After a light was added, changed or removed: upload, reconverge, tell everyone. */
+static bool lights_changed(srv_scene_service *svc, srv_cmd *c)
+{
+    if (!upload_lights(svc, c)) return false;
+    lighting_changed(svc);
+    publish_lights(svc, false);
+    return true;
+}
+
 static unsigned replace_scene(srv_scene_service *svc, srv_cmd *c)
 {
     char err[256];
@@ -276,9 +285,7 @@ unsigned srv_scene_service_apply(srv_scene_service *svc, srv_cmd *c)
             return 0;
         }
         if (svc->anim.valid && svc->anim.light == c->id) srv_animation_reset(&svc->anim);
-        if (!upload_lights(svc, c)) return 0;
-        lighting_changed(svc);
-        publish_lights(svc, false);
+        if (!lights_changed(svc, c)) return 0;
         srv_cmd_complete_json(c, 200, srv_json_light(c->id, &st->scene.lights[i]));
         return SRV_CHANGE_VIEWS | SRV_CHANGE_PERSIST;
     }
@@ -288,9 +295,7 @@ unsigned srv_scene_service_apply(srv_scene_service *svc, srv_cmd *c)
             srv_cmd_complete_error(c, &e);
             return 0;
         }
-        if (!upload_lights(svc, c)) return 0;
-        lighting_changed(svc);
-        publish_lights(svc, false);
+        if (!lights_changed(svc, c)) return 0;
         srv_cmd_complete_json(c, 201,
                               srv_json_light(id, &st->scene.lights[st->scene.light_count - 1]));
         return SRV_CHANGE_VIEWS | SRV_CHANGE_PERSIST;
@@ -301,9 +306,7 @@ unsigned srv_scene_service_apply(srv_scene_service *svc, srv_cmd *c)
             return 0;
         }
         if (svc->anim.valid && svc->anim.light == c->id) srv_animation_reset(&svc->anim);
-        if (!upload_lights(svc, c)) return 0;
-        lighting_changed(svc);
-        publish_lights(svc, false);
+        if (!lights_changed(svc, c)) return 0;
         srv_cmd_complete(c, 204, NULL);
         return SRV_CHANGE_VIEWS | SRV_CHANGE_PERSIST;
     case SRV_CMD_PATCH_NODE: {
