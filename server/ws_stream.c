@@ -1,185 +1,17 @@
-/* ws_stream.c: the frame stream on libwebsockets (one service thread). */
-#include "ws_stream.h"
-#include "clock.h"
+/* ws_stream.c: the frame stream on libwebsockets (one service thread): connections, handshake
+ * checks, flow control and sending frames; text messages are in ws_messages.c. */
+#include "ws_internal.h"
 
-#include <libwebsockets.h>
 #include <math.h>
-#include <stdarg.h>
-#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
 #include <time.h>
 
-#include "api_json.h"
+#include "access.h"
+#include "clock.h"
 #include "log.h"
-#include "protocol/stream.h"
-
-#define FRAGMENT_BYTES (64 * 1024) /* payload per WebSocket fragment */
-#define INPUT_RING 64              /* remembered (ticket, seq) pairs per viewer */
-#define SENT_RING 16               /* remembered send times per viewer */
-#define MAX_UNACKED 4              /* frames sent ahead of the viewer's acks */
-#define ACK_STALL_MS 1000          /* after this long without acks, stop waiting for them */
-#define RATE_LIMIT_PER_S 1000      /* viewer messages per second before the connection is closed */
-#define STOP_GRACE_MS 1000
-#define TEXT_QUEUE 16              /* server text messages waiting per viewer (v2) */
-#define EVENT_MAX (4u << 20)       /* the largest event document sent (bytes) */
-
-typedef struct viewer {
-    struct lws *wsi;
-    struct viewer *prev, *next;
-    uint32_t id;
-    char ip[64];
-    /* views (protocol/stream.md): version 2 owns a view; version 1 shares view 0 */
-    unsigned version;
-    uint32_t own_view;  /* 0 for version 1 */
-    uint32_t watching;  /* the view whose frames it is sent */
-    /* server text messages (version 2): a small queue, then the newest events */
-    char *texts[TEXT_QUEUE];
-    unsigned text_head, text_count;
-    uint64_t seen[SRV_DOC_COUNT], seen_node;
-    /* input: which ticket carried which seq */
-    struct {
-        uint64_t ticket;
-        uint32_t seq;
-    } inputs[INPUT_RING];
-    unsigned input_head, input_count;
-    uint32_t evicted_seq;
-    /* receive */
-    char rx[SRV_VIEWER_MSG_MAX + 1];
-    size_t rx_len;
-    double rate_window_ms;
-    unsigned rate_count;
-    /* send */
-    uint8_t *tx; /* LWS_PRE + FRAGMENT_BYTES */
-    srv_frame *cur;
-    const srv_jpeg *cur_jpeg;
-    size_t cur_pos; /* bytes of the current message sent (header included) */
-    uint8_t cur_header[PROTO_STREAM_HEADER_SIZE];
-    uint64_t last_sent_id; /* of the watched view (frame ids are global over views) */
-    struct {
-        uint64_t id;
-        double ms;
-    } sent[SENT_RING];
-    unsigned sent_head;
-    uint64_t acked_id;
-    bool acked_any;
-    double lag_ms, last_ack_ms;
-    unsigned cap; /* quality cap from lag (100 = none) */
-    /* closing */
-    int close_code;
-    char close_reason[64];
-} viewer;
-
-struct srv_ws_stream {
-    srv_ws_config cfg;
-    char token[256], http_host[256];
-    struct lws_context *ctx;
-    struct lws_vhost *vhost;
-    struct lws_protocols protocols[3];
-    lws_retry_bo_t retry;
-    lws_sorted_usec_list_t tick;
-    pthread_t thread;
-    bool started;
-    atomic_bool stopping, frame_pending, event_pending;
-    bool exit_loop;
-    double stop_deadline_ms;
-    viewer *viewers; /* service thread only */
-    unsigned viewer_count, v2_count;
-    uint32_t next_viewer_id;
-    uint64_t bytes_at_tick;
-    double tick_ms;
-    pthread_mutex_t stats_mu;
-    srv_ws_stats stats;
-};
-
-
-
-/* ---- handshake checks --------------------------------------------------------------------- */
-
-bool srv_token_equal(const char *given, size_t given_len, const char *token)
-{
-    size_t n = strlen(token);
-    unsigned char diff = given_len != n;
-    for (size_t i = 0; i < given_len; i++)
-        diff |= (unsigned char)(given[i] ^ token[i % (n ? n : 1)]);
-    return diff == 0 && n > 0;
-}
-
-static bool is_loopback_name(const char *h)
-{
-    return strcasecmp(h, "localhost") == 0 || strncmp(h, "127.", 4) == 0 || strcmp(h, "::1") == 0 ||
-           strcmp(h, "[::1]") == 0;
-}
-
-/* Splits "host[:port]" or "[v6]:port"; port stays dflt when absent. */
-static bool split_host_port(const char *s, size_t len, char *host, size_t hostlen, unsigned *port,
-                            unsigned dflt)
-{
-    *port = dflt;
-    const char *end = s + len, *colon = NULL;
-    if (len > 0 && s[0] == '[') {
-        const char *rb = memchr(s, ']', len);
-        if (!rb) return false;
-        if (rb + 1 < end) {
-            if (rb[1] != ':') return false;
-            colon = rb + 1;
-        }
-        size_t hl = (size_t)(rb - s - 1);
-        if (hl + 1 > hostlen) return false;
-        memcpy(host, s + 1, hl);
-        host[hl] = 0;
-    } else {
-        colon = memchr(s, ':', len);
-        size_t hl = colon ? (size_t)(colon - s) : len;
-        if (hl == 0 || hl + 1 > hostlen) return false;
-        memcpy(host, s, hl);
-        host[hl] = 0;
-    }
-    if (colon) {
-        char *e = NULL;
-        char buf[8];
-        size_t pl = (size_t)(end - colon - 1);
-        if (pl == 0 || pl >= sizeof buf) return false;
-        memcpy(buf, colon + 1, pl);
-        buf[pl] = 0;
-        unsigned long p = strtoul(buf, &e, 10);
-        if (*e || p == 0 || p > 65535) return false;
-        *port = (unsigned)p;
-    }
-    return true;
-}
-
-bool srv_ws_origin_allowed(const char *origin, const char *http_host, unsigned http_port,
-                           const char *request_host)
-{
-    unsigned dflt;
-    const char *rest;
-    if (strncasecmp(origin, "http://", 7) == 0)
-        dflt = 80, rest = origin + 7;
-    else if (strncasecmp(origin, "https://", 8) == 0)
-        dflt = 443, rest = origin + 8;
-    else
-        return false; /* "null", file://, other schemes */
-    char host[256];
-    unsigned port;
-    size_t len = strcspn(rest, "/");
-    if (!split_host_port(rest, len, host, sizeof host, &port, dflt)) return false;
-    if (port != http_port) return false;
-    bool wildcard = strcmp(http_host, "0.0.0.0") == 0 || strcmp(http_host, "::") == 0;
-    if (wildcard) {
-        /* listening everywhere: the page must come from the host name this request used */
-        char rhost[256];
-        unsigned rport;
-        if (!request_host ||
-            !split_host_port(request_host, strlen(request_host), rhost, sizeof rhost, &rport, 80))
-            return false;
-        return strcasecmp(host, rhost) == 0 || (is_loopback_name(host) && is_loopback_name(rhost));
-    }
-    return strcasecmp(host, http_host) == 0 ||
-           (is_loopback_name(host) && is_loopback_name(http_host));
-}
 
 /* Token from "Authorization: Bearer T", "?token=T" or a "bearer.T" subprotocol entry. */
 static bool token_ok(srv_ws_stream *ws, struct lws *wsi)
@@ -262,7 +94,7 @@ static const char *handshake_refusal(srv_ws_stream *ws, struct lws *wsi)
 /* ---- quality and flow --------------------------------------------------------------------- */
 
 /* Guacamole's rule: quality = 90 - (lag_ms - 20), clamped to [30, 90]; 90 means no cap. */
-static unsigned cap_from_lag(double lag_ms)
+unsigned srv_ws_cap_from_lag(double lag_ms)
 {
     double q = 90 - (lag_ms - 20);
     if (q >= 90) return 100;
@@ -270,7 +102,7 @@ static unsigned cap_from_lag(double lag_ms)
     return (unsigned)(q / 10) * 10;
 }
 
-static void update_caps(srv_ws_stream *ws)
+void srv_ws_update_caps(srv_ws_stream *ws)
 {
     uint32_t mask = 0;
     double lag_max = 0;
@@ -316,132 +148,12 @@ static bool has_new_frame(srv_ws_stream *ws, const viewer *v)
     return fresh;
 }
 
-static void close_viewer(viewer *v, int code, const char *reason)
+void srv_ws_close_viewer(viewer *v, int code, const char *reason)
 {
     if (v->close_code) return;
     v->close_code = code;
     snprintf(v->close_reason, sizeof v->close_reason, "%s", reason);
     lws_callback_on_writable(v->wsi);
-}
-
-/* ---- server text messages (version 2) ------------------------------------------------------ */
-
-/* Queues a text message (taken); a viewer that lets TEXT_QUEUE pile up is too slow to keep. */
-static void queue_text(viewer *v, char *text)
-{
-    if (v->version < 2) {
-        free(text);
-        return;
-    }
-    if (v->text_count == TEXT_QUEUE) {
-        free(text);
-        close_viewer(v, LWS_CLOSE_STATUS_POLICY_VIOLATION, "not reading messages");
-        return;
-    }
-    v->texts[(v->text_head + v->text_count++) % TEXT_QUEUE] = text;
-    lws_callback_on_writable(v->wsi);
-}
-
-static void queue_textf(viewer *v, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static void queue_textf(viewer *v, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    char *text = NULL;
-    if (vasprintf(&text, fmt, ap) < 0) abort();
-    va_end(ap);
-    queue_text(v, text);
-}
-
-static char *event_text(const char *what, const char *doc)
-{
-    char *text = NULL;
-    if (asprintf(&text, "{\"type\":\"event\",\"what\":\"%s\",\"data\":%s}", what, doc) < 0)
-        abort();
-    return text;
-}
-
-/* The next text message for v (malloc'd), or NULL: the queue first, then each kind of event
- * whose document changed since v saw it (only the newest document of a kind is sent). */
-static char *next_text(srv_ws_stream *ws, viewer *v)
-{
-    if (v->version < 2) return NULL;
-    if (v->text_count) {
-        char *t = v->texts[v->text_head];
-        v->text_head = (v->text_head + 1) % TEXT_QUEUE;
-        v->text_count--;
-        return t;
-    }
-    for (int k = 0; k < SRV_DOC_COUNT; k++) {
-        if (srv_snapshot_version(ws->cfg.snapshot, (srv_doc)k) <= v->seen[k]) continue;
-        char *doc = srv_snapshot_print(ws->cfg.snapshot, (srv_doc)k, &v->seen[k]);
-        if (!doc) continue;
-        char *t = strlen(doc) <= EVENT_MAX ? event_text(srv_doc_name((srv_doc)k), doc) : NULL;
-        free(doc);
-        if (t) return t;
-    }
-    uint64_t ver;
-    char *doc = srv_snapshot_next_node(ws->cfg.snapshot, v->seen_node, &ver);
-    if (doc) {
-        v->seen_node = ver;
-        char *t = event_text("node", doc);
-        free(doc);
-        return t;
-    }
-    return NULL;
-}
-
-static bool has_news(srv_ws_stream *ws, const viewer *v)
-{
-    if (v->version < 2) return false;
-    if (v->text_count) return true;
-    for (int k = 0; k < SRV_DOC_COUNT; k++)
-        if (srv_snapshot_version(ws->cfg.snapshot, (srv_doc)k) > v->seen[k]) return true;
-    return srv_snapshot_node_version(ws->cfg.snapshot) > v->seen_node;
-}
-
-/* Sends one text message; -1 when the connection must close. */
-static int send_text(srv_ws_stream *ws, viewer *v, char *text)
-{
-    size_t len = strlen(text);
-    uint8_t *buf = malloc(LWS_PRE + len);
-    if (!buf) abort();
-    memcpy(buf + LWS_PRE, text, len);
-    free(text);
-    int n = lws_write(v->wsi, buf + LWS_PRE, len, LWS_WRITE_TEXT);
-    free(buf);
-    if (n < (int)len) return -1;
-    pthread_mutex_lock(&ws->stats_mu);
-    ws->stats.bytes_sent += len;
-    ws->stats.events_sent++;
-    pthread_mutex_unlock(&ws->stats_mu);
-    lws_callback_on_writable(v->wsi); /* more news, or the frame */
-    return 0;
-}
-
-/* Points v at view `view` (its own, or one it follows), moving its watch there. */
-static void watch(srv_ws_stream *ws, viewer *v, uint32_t view)
-{
-    if (view == v->watching) return;
-    srv_cmd *c = srv_cmd_new(SRV_CMD_VIEW_WATCH);
-    c->view = v->watching;
-    c->delta = -1;
-    srv_render_post(ws->cfg.loop, c);
-    c = srv_cmd_new(SRV_CMD_VIEW_WATCH);
-    c->view = view;
-    c->delta = 1;
-    srv_render_post(ws->cfg.loop, c);
-    v->watching = view;
-    v->last_sent_id = 0; /* frame ids of another view are not comparable */
-    queue_textf(v, "{\"type\":\"following\",\"view\":%u}", view);
-    lws_callback_on_writable(v->wsi);
-}
-
-/* Connections that follow a view whose owner left go back to their own view. */
-static void release_followers(srv_ws_stream *ws, uint32_t view)
-{
-    for (viewer *x = ws->viewers; x; x = x->next)
-        if (x->watching == view && x->own_view != view) watch(ws, x, x->own_view);
 }
 
 /* Sends the next fragment of the viewer's frame, starting the newest frame when idle (text
@@ -450,8 +162,8 @@ static int send_some(srv_ws_stream *ws, viewer *v)
 {
     double now = srv_mono_ms();
     if (!v->cur) {
-        char *text = next_text(ws, v);
-        if (text) return send_text(ws, v, text);
+        char *text = srv_ws_next_text(ws, v);
+        if (text) return srv_ws_send_text(ws, v, text);
         if (flow_blocked(v, now)) return 0;
         srv_frame *f = srv_encoder_latest(ws->cfg.encoders, v->watching);
         if (!f || f->info.frame_id <= v->last_sent_id) {
@@ -513,85 +225,6 @@ static int send_some(srv_ws_stream *ws, viewer *v)
     return 0;
 }
 
-/* ---- viewer messages ---------------------------------------------------------------------- */
-
-static void handle_message(srv_ws_stream *ws, viewer *v)
-{
-    srv_viewer_msg m;
-    srv_api_error e;
-    pthread_mutex_lock(&ws->stats_mu);
-    ws->stats.messages_received++;
-    pthread_mutex_unlock(&ws->stats_mu);
-    if (!srv_json_viewer_msg(v->rx, v->rx_len, &m, &e)) {
-        srv_info("stream", "viewer %u (%s) sent an invalid message: %s", v->id, v->ip, e.message);
-        close_viewer(v, LWS_CLOSE_STATUS_POLICY_VIOLATION, "invalid message");
-        return;
-    }
-    switch (m.type) {
-    case SRV_VIEWER_CAMERA: {
-        srv_cmd *c = srv_cmd_new(SRV_CMD_VIEWER_CAMERA);
-        c->view = v->own_view;
-        c->camera = m.camera;
-        uint64_t ticket = srv_render_post(ws->cfg.loop, c);
-        if (!ticket) {
-            srv_debug("stream", "viewer %u: input dropped (render queue full)", v->id);
-            break;
-        }
-        if (v->input_count == INPUT_RING) {
-            v->evicted_seq = v->inputs[v->input_head].seq; /* the oldest is overwritten */
-            v->input_count--;
-        }
-        v->inputs[v->input_head].ticket = ticket;
-        v->inputs[v->input_head].seq = m.seq;
-        v->input_head = (v->input_head + 1) % INPUT_RING;
-        v->input_count++;
-        break;
-    }
-    case SRV_VIEWER_RESIZE: {
-        srv_cmd *c = srv_cmd_new(SRV_CMD_VIEWER_RESIZE);
-        c->view = v->own_view;
-        c->width = (unsigned)lroundf(m.width * m.dpr);
-        c->height = (unsigned)lroundf(m.height * m.dpr);
-        srv_render_post(ws->cfg.loop, c);
-        break;
-    }
-    case SRV_VIEWER_FOLLOW: {
-        if (v->version < 2) {
-            close_viewer(v, LWS_CLOSE_STATUS_POLICY_VIOLATION, "follow needs probecast.v2");
-            break;
-        }
-        uint32_t target = m.follow_own ? v->own_view : m.view;
-        srv_view_info info;
-        if (target != v->own_view && !srv_snapshot_view(ws->cfg.snapshot, target, &info)) {
-            queue_textf(v, "{\"type\":\"error\",\"message\":\"There is no view with id %u.\"}",
-                        target);
-            break;
-        }
-        watch(ws, v, target);
-        break;
-    }
-    case SRV_VIEWER_ACK: {
-        double now = srv_mono_ms();
-        for (unsigned i = 0; i < SENT_RING; i++) {
-            if (v->sent[i].id != m.frame || m.frame == 0) continue;
-            double lag = now - v->sent[i].ms;
-            v->lag_ms = v->acked_any ? 0.7 * v->lag_ms + 0.3 * lag : lag;
-            v->acked_any = true;
-            v->last_ack_ms = now;
-            if (m.frame > v->acked_id) v->acked_id = m.frame;
-            unsigned cap = cap_from_lag(v->lag_ms);
-            if (cap != v->cap) {
-                v->cap = cap;
-                update_caps(ws);
-            }
-            break;
-        }
-        if (!v->cur) lws_callback_on_writable(v->wsi); /* the window may have opened */
-        break;
-    }
-    }
-}
-
 /* ---- the lws callback --------------------------------------------------------------------- */
 
 static void set_viewer_count(srv_ws_stream *ws)
@@ -649,9 +282,10 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
             ws->v2_count++;
             v->seen_node = srv_snapshot_node_version(ws->cfg.snapshot);
             const srv_settings_view_size sz = default_size(ws);
-            queue_textf(v, "{\"type\":\"welcome\",\"protocol\":2,\"view\":%u,\"width\":%u,"
-                           "\"height\":%u}",
-                        v->own_view, sz.width, sz.height);
+            srv_ws_queue_textf(v,
+                               "{\"type\":\"welcome\",\"protocol\":2,\"view\":%u,\"width\":%u,"
+                               "\"height\":%u}",
+                               v->own_view, sz.width, sz.height);
         } else {
             srv_cmd *c = srv_cmd_new(SRV_CMD_VIEW_WATCH);
             c->view = SRV_DEFAULT_VIEW;
@@ -687,7 +321,7 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
             if (v->version == 2) {
                 ws->v2_count--;
                 v->watching = v->own_view; /* its followers are released below */
-                release_followers(ws, v->own_view);
+                srv_ws_release_followers(ws, v->own_view);
                 c = srv_cmd_new(SRV_CMD_VIEW_CLOSE);
                 c->view = v->own_view;
                 srv_render_post(ws->cfg.loop, c);
@@ -704,7 +338,7 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
         v->tx = NULL;
         v->wsi = NULL;
         set_viewer_count(ws);
-        update_caps(ws);
+        srv_ws_update_caps(ws);
         srv_info("stream", "viewer %u disconnected (%u watching)", v->id, ws->viewer_count);
         return 0;
 
@@ -712,17 +346,17 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
         double now = srv_mono_ms();
         if (now - v->rate_window_ms >= 1000) v->rate_window_ms = now, v->rate_count = 0;
         if (lws_frame_is_binary(wsi)) {
-            close_viewer(v, LWS_CLOSE_STATUS_UNACCEPTABLE_OPCODE, "text messages only");
+            srv_ws_close_viewer(v, LWS_CLOSE_STATUS_UNACCEPTABLE_OPCODE, "text messages only");
         } else if (v->rx_len + len > SRV_VIEWER_MSG_MAX) {
-            close_viewer(v, LWS_CLOSE_STATUS_MESSAGE_TOO_LARGE, "message too large");
+            srv_ws_close_viewer(v, LWS_CLOSE_STATUS_MESSAGE_TOO_LARGE, "message too large");
         } else {
             memcpy(v->rx + v->rx_len, in, len);
             v->rx_len += len;
             if (lws_is_final_fragment(wsi) && lws_remaining_packet_payload(wsi) == 0) {
                 if (++v->rate_count > RATE_LIMIT_PER_S)
-                    close_viewer(v, LWS_CLOSE_STATUS_POLICY_VIOLATION, "too many messages");
+                    srv_ws_close_viewer(v, LWS_CLOSE_STATUS_POLICY_VIOLATION, "too many messages");
                 else
-                    handle_message(ws, v);
+                    srv_ws_handle_message(ws, v);
                 v->rx_len = 0;
             }
         }
@@ -745,12 +379,12 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
     case LWS_CALLBACK_EVENT_WAIT_CANCELLED:
         if (atomic_load(&ws->stopping)) {
             for (viewer *x = ws->viewers; x; x = x->next)
-                close_viewer(x, LWS_CLOSE_STATUS_GOINGAWAY, "server stopping");
+                srv_ws_close_viewer(x, LWS_CLOSE_STATUS_GOINGAWAY, "server stopping");
         } else {
             bool frames = atomic_exchange(&ws->frame_pending, false);
             bool events = atomic_exchange(&ws->event_pending, false);
             for (viewer *x = ws->viewers; x; x = x->next)
-                if (!x->cur && (frames || (events && has_news(ws, x))))
+                if (!x->cur && (frames || (events && srv_ws_has_news(ws, x))))
                     lws_callback_on_writable(x->wsi);
         }
         return 0;

@@ -17,6 +17,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "access.h"
 #include "encoder_pool.h"
 #include "render_loop.h"
 
@@ -56,10 +57,5 @@ void srv_ws_frame_ready(void *ws);
 /* The snapshot's listener: the world changed, viewers get events (any thread). */
 void srv_ws_event_ready(void *ws);
 void srv_ws_get_stats(srv_ws_stream *ws, srv_ws_stats *out);
-
-/* The checks the handshake applies, exposed for tests. */
-bool srv_ws_origin_allowed(const char *origin, const char *http_host, unsigned http_port,
-                           const char *request_host);
-bool srv_token_equal(const char *given, size_t given_len, const char *token);
 
 #endif
