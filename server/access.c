@@ -1,6 +1,7 @@
 /* access.c: who may connect — token comparison, Host and Origin parsing and checks. */
 #include "access.h"
 
+#include <arpa/inet.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -88,4 +89,54 @@ bool srv_ws_origin_allowed(const char *origin, const char *http_host, unsigned h
     }
     return strcasecmp(host, http_host) == 0 ||
            (srv_host_is_loopback(host) && srv_host_is_loopback(http_host));
+}
+
+static bool is_ip_literal(const char *host)
+{
+    unsigned char buf[16];
+    return inet_pton(AF_INET, host, buf) == 1 || inet_pton(AF_INET6, host, buf) == 1;
+}
+
+static bool listed(const char *host, const char *names)
+{
+    size_t n = strlen(host);
+    for (const char *p = names; p && *p;) {
+        size_t len = strcspn(p, ",");
+        if (len == n && strncasecmp(p, host, n) == 0) return true;
+        p += len;
+        if (*p == ',') p++;
+    }
+    return false;
+}
+
+bool srv_host_allowed(const char *host_header, const char *public_names)
+{
+    char host[256];
+    unsigned port;
+    if (!host_header ||
+        !srv_split_host_port(host_header, strlen(host_header), host, sizeof host, &port, 80))
+        return false;
+    return srv_host_is_loopback(host) || is_ip_literal(host) || listed(host, public_names);
+}
+
+bool srv_origin_same_host(const char *origin, const char *host_header, const char *public_names)
+{
+    if (!origin) return true;
+    if (!srv_host_allowed(host_header, public_names)) return false;
+    unsigned dflt;
+    const char *rest;
+    if (strncasecmp(origin, "http://", 7) == 0)
+        dflt = 80, rest = origin + 7;
+    else if (strncasecmp(origin, "https://", 8) == 0)
+        dflt = 443, rest = origin + 8;
+    else
+        return false; /* "null", file:, other schemes */
+    char ohost[256], hhost[256];
+    unsigned oport, hport;
+    if (!srv_split_host_port(rest, strcspn(rest, "/"), ohost, sizeof ohost, &oport, dflt) ||
+        !srv_split_host_port(host_header, strlen(host_header), hhost, sizeof hhost, &hport, dflt))
+        return false;
+    bool same_host = strcasecmp(ohost, hhost) == 0 ||
+                     (srv_host_is_loopback(ohost) && srv_host_is_loopback(hhost));
+    return same_host && oport == hport;
 }

@@ -22,4 +22,12 @@ bool srv_split_host_port(const char *s, size_t len, char *host, size_t hostlen, 
 bool srv_ws_origin_allowed(const char *origin, const char *http_host, unsigned http_port,
                            const char *request_host);
 
+/* Whether a request's Host header (host[:port]) names this server: a loopback name, an IP address
+ * literal, or one of public_names (comma-separated, may be NULL). A page that rebinds its own DNS
+ * name to this address still sends its own name as Host, so it is refused here. */
+bool srv_host_allowed(const char *host_header, const char *public_names);
+/* Whether a request with this Origin may change something: no Origin (not a browser), or a page
+ * of this very server: the same host and port as host_header, which srv_host_allowed accepts. */
+bool srv_origin_same_host(const char *origin, const char *host_header, const char *public_names);
+
 #endif

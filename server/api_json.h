@@ -21,6 +21,7 @@
 #define SRV_ERR_NOT_FOUND "not_found"
 #define SRV_ERR_METHOD "method_not_allowed"
 #define SRV_ERR_UNAUTHORIZED "unauthorized"
+#define SRV_ERR_FORBIDDEN "forbidden"
 #define SRV_ERR_TOO_LARGE "payload_too_large"
 #define SRV_ERR_MEDIA_TYPE "unsupported_media_type"
 #define SRV_ERR_INVALID_GLTF "invalid_gltf"

@@ -41,6 +41,9 @@ static void serve_usage(FILE *f)
         "  --ws ADDR:PORT         WebSocket frame stream (default 127.0.0.1:8081)\n"
         "  --token T              require 'Authorization: Bearer T' for changes, frames and the\n"
         "                         stream (default: $PROBECAST_TOKEN; needed off loopback)\n"
+        "  --public-name NAME     a host name (or NAME:PORT's NAME) browsers use to reach this\n"
+        "                         server, besides loopback names and IP addresses; repeatable.\n"
+        "                         Requests naming any other Host are refused (DNS rebinding)\n"
         "  --data-dir DIR         keep the last uploaded scene, camera, lights and settings\n"
         "                         in DIR and restore them at start-up (a saved upload is\n"
         "                         used instead of --scene)\n"
@@ -66,6 +69,7 @@ static void serve_usage(FILE *f)
 
 typedef struct serve_args {
     const char *scene, *http, *ws, *token, *data_dir, *web_dir, *device;
+    char public_names[1024]; /* --public-name values, comma-separated */
     size_t max_upload;
     unsigned max_viewers, max_per_ip, http_connections, encoders, max_views, max_total_pixels;
     srv_settings settings;
@@ -174,6 +178,15 @@ static int parse(int argc, char **argv, serve_args *a)
             NEED_VALUE a->ws = v;
         } else if (IS("--token")) {
             NEED_VALUE a->token = v;
+        } else if (IS("--public-name")) {
+            NEED_VALUE if (!*v || strlen(v) > 200 || strchr(v, ',') ||
+                           strlen(a->public_names) + strlen(v) + 2 > sizeof a->public_names)
+            {
+                fprintf(stderr, "probecast serve: --public-name expects a host name\n");
+                return 2;
+            }
+            if (a->public_names[0]) strcat(a->public_names, ",");
+            strcat(a->public_names, v);
         } else if (IS("--data-dir")) {
             NEED_VALUE a->data_dir = v;
         } else if (IS("--web-dir")) {
@@ -365,6 +378,7 @@ int cli_serve(int argc, char **argv)
         .address = ws_host,
         .port = ws_port,
         .token = a.token,
+        .public_names = a.public_names,
         .http_host = http_host,
         .max_viewers = a.max_viewers,
         .max_per_ip = a.max_per_ip,
@@ -382,6 +396,7 @@ int cli_serve(int argc, char **argv)
         .address = http_host,
         .port = http_port,
         .token = a.token,
+        .public_names = a.public_names,
         .max_upload = a.max_upload,
         .max_connections = a.http_connections,
         .web_dir = a.web_dir ? a.web_dir : find_resource("web", web_buf, sizeof web_buf),

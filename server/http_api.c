@@ -2,6 +2,8 @@
  * themselves are in http_routes.c, the viewer's files in http_static.c. */
 #include "http_internal.h"
 
+#include "access.h"
+
 #include <arpa/inet.h>
 #include <errno.h>
 #include <fcntl.h>
@@ -243,6 +245,19 @@ static bool refuse_early(srv_http *h, struct MHD_Connection *conn, request *rq,
     if (!(route_methods[rq->route] & rq->method))
         return REFUSE(405, SRV_ERR_METHOD, "This resource does not allow that method.");
     bool mutating = rq->method & (M_PUT | M_PATCH | M_POST | M_DELETE);
+    /* DNS rebinding and foreign pages: the Host must name this server, and a browser page may
+     * change something only from this server's own origin */
+    const char *host = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_HOST);
+    if (!srv_host_allowed(host, h->cfg.public_names))
+        return REFUSE(403, SRV_ERR_FORBIDDEN,
+                      "Host '%.80s' is not a name of this server (loopback, an IP address, or "
+                      "--public-name).",
+                      host ? host : "");
+    const char *origin = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_ORIGIN);
+    if (mutating && !srv_origin_same_host(origin, host, h->cfg.public_names))
+        return REFUSE(403, SRV_ERR_FORBIDDEN,
+                      "A page from '%.80s' may not change this server; use its own address.",
+                      origin);
     if ((mutating || rq->route == R_FRAME) && !auth_ok(h, conn))
         return REFUSE(401, SRV_ERR_UNAUTHORIZED,
                       "A valid 'Authorization: Bearer <token>' header is required.");

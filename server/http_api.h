@@ -23,6 +23,7 @@ typedef struct srv_http_config {
     const char *address;      /* numeric IP to listen on */
     unsigned port;            /* 0 = any free port */
     const char *token;        /* NULL or "" = no token */
+    const char *public_names; /* Host names besides loopback and IP literals (comma-separated) */
     size_t max_upload;        /* bytes of a scene upload (0 = 256 MiB) */
     unsigned max_connections; /* 0 = 64 */
     unsigned max_per_ip;      /* 0 = 16 */

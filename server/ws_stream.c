@@ -65,6 +65,8 @@ static const char *handshake_refusal(srv_ws_stream *ws, struct lws *wsi)
     if (lws_hdr_copy(wsi, buf, sizeof buf, WSI_TOKEN_GET_URI) <= 0 ||
         strcmp(buf, "/v1/stream") != 0)
         return "unknown path";
+    lws_hdr_copy(wsi, host, sizeof host, WSI_TOKEN_HOST);
+    if (!srv_host_allowed(host, ws->cfg.public_names)) return "host not allowed";
     if (lws_hdr_total_length(wsi, WSI_TOKEN_ORIGIN) > 0) {
         if (lws_hdr_total_length(wsi, WSI_TOKEN_ORIGIN) >= (int)sizeof buf)
             return "origin too long";

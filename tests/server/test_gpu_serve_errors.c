@@ -259,6 +259,66 @@ static void test_garbage(void)
     CHECK(pc_daemon_alive(&d));
 }
 
+/* Sends a raw request (for a Host header of our choosing) and returns the status. */
+static int raw_status(unsigned port, const char *request)
+{
+    int fd = pc_dial("127.0.0.1", port, 10000);
+    if (fd < 0) return -1;
+    int status = -1;
+    if (pc_send_all(fd, request, strlen(request)) == 0) {
+        char buf[256];
+        ssize_t n = recv(fd, buf, sizeof buf - 1, 0);
+        if (n > 12) {
+            buf[n] = 0;
+            sscanf(buf, "HTTP/1.%*d %d", &status);
+        }
+    }
+    close(fd);
+    return status;
+}
+
+/* DNS rebinding and foreign pages: a Host that is not a name of this server is refused on every
+ * route and on the stream; a change from another page's Origin is refused. */
+static void test_foreign_hosts(void)
+{
+    char req[512];
+    snprintf(req, sizeof req,
+             "POST /v1/lights HTTP/1.1\r\nHost: evil.example:%u\r\nOrigin: http://evil.example:%u"
+             "\r\nAuthorization: Bearer s3cret\r\nContent-Type: application/json\r\n"
+             "Content-Length: 16\r\nConnection: close\r\n\r\n{\"type\":\"point\"}",
+             d.http_port, d.http_port);
+    CHECK(raw_status(d.http_port, req) == 403);
+    snprintf(req, sizeof req,
+             "GET /v1/scene HTTP/1.1\r\nHost: evil.example:%u\r\nConnection: close\r\n\r\n",
+             d.http_port);
+    CHECK(raw_status(d.http_port, req) == 403);
+    snprintf(req, sizeof req,
+             "GET / HTTP/1.1\r\nHost: evil.example:%u\r\nConnection: close\r\n\r\n", d.http_port);
+    CHECK(raw_status(d.http_port, req) == 403);
+    /* an IP address or a loopback name is fine */
+    snprintf(req, sizeof req,
+             "GET /v1/scene HTTP/1.1\r\nHost: localhost:%u\r\nConnection: close\r\n\r\n",
+             d.http_port);
+    CHECK(raw_status(d.http_port, req) == 200);
+    /* a change from a foreign page, Host ours */
+    snprintf(req, sizeof req,
+             "POST /v1/lights HTTP/1.1\r\nHost: 127.0.0.1:%u\r\nOrigin: http://evil.example"
+             "\r\nAuthorization: Bearer s3cret\r\nContent-Type: application/json\r\n"
+             "Content-Length: 16\r\nConnection: close\r\n\r\n{\"type\":\"point\"}",
+             d.http_port);
+    CHECK(raw_status(d.http_port, req) == 403);
+    call("foreign origin", "PATCH", "/v1/settings",
+         "Content-Type: application/json\r\nOrigin: http://evil.example\r\n", "{}", 2, 403,
+         "forbidden");
+    /* the stream */
+    snprintf(req, sizeof req,
+             "GET /v1/stream?token=s3cret HTTP/1.1\r\nHost: evil.example:%u\r\nUpgrade: "
+             "websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Key: "
+             "dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n",
+             d.ws_port);
+    CHECK(raw_status(d.ws_port, req) == 403);
+}
+
 int main(void)
 {
     const char *args[] = {
@@ -295,6 +355,7 @@ int main(void)
     test_stream_refusals();
     test_stream_abuse();
     test_garbage();
+    test_foreign_hosts();
 
     /* the previous scene is still there and still renders */
     scene = pc_api_get_json(&d, "/v1/scene");
