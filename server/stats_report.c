@@ -130,11 +130,11 @@ char *srv_stats_prometheus(const srv_stats_snapshot *s)
     metric(&t, "probecast_fps", "gauge", "Frames rendered in the last second.", r->fps);
     metric(&t, "probecast_frames_rendered_total", "counter", "Frames rendered.",
            (double)r->frames_rendered);
-    metric(&t, "probecast_frame_gpu_milliseconds", "gauge", "GPU time of the last frame.",
-           r->view_passes.total_ms);
-    put(&t, "# HELP probecast_pass_gpu_milliseconds GPU time of each pass of the last frame "
+    metric(&t, "probecast_frame_gpu_seconds", "gauge", "GPU time of the last frame.",
+           r->view_passes.total_ms / 1000.0);
+    put(&t, "# HELP probecast_pass_gpu_seconds GPU time of each pass of the last frame "
             "and of the last world update.\n"
-            "# TYPE probecast_pass_gpu_milliseconds gauge\n");
+            "# TYPE probecast_pass_gpu_seconds gauge\n");
     const srv_pass_times *sets[2] = {&r->view_passes, &r->world_passes};
     for (int k = 0; k < 2; k++)
         for (unsigned i = 0; i < sets[k]->count; i++) {
@@ -142,8 +142,8 @@ char *srv_stats_prometheus(const srv_stats_snapshot *s)
             snprintf(label, sizeof label, "%s", sets[k]->name[i]);
             for (char *q = label; *q; q++)
                 if (*q == '"' || *q == '\\' || *q == '\n') *q = '_';
-            put(&t, "probecast_pass_gpu_milliseconds{pass=\"%s\"} %.17g\n", label,
-                sets[k]->ms[i]);
+            put(&t, "probecast_pass_gpu_seconds{pass=\"%s\"} %.17g\n", label,
+                sets[k]->ms[i] / 1000.0);
         }
     metric(&t, "probecast_world_ticks_total", "counter", "Times the shared world advanced.",
            (double)r->world_ticks);
@@ -156,23 +156,24 @@ char *srv_stats_prometheus(const srv_stats_snapshot *s)
     metric(&t, "probecast_probes", "gauge", "DDGI probes.", r->probes);
     metric(&t, "probecast_probe_updates_since_change", "gauge",
            "Probe updates since the lighting changed.", r->gi_updates);
-    metric(&t, "probecast_encode_milliseconds", "gauge", "Mean JPEG encoding time.",
-           s->encoder.encode_ms_avg);
+    metric(&t, "probecast_jpeg_encode_seconds", "gauge", "Mean JPEG encoding time.",
+           s->encoder.encode_ms_avg / 1000.0);
     metric(&t, "probecast_jpegs_encoded_total", "counter", "JPEG images encoded.",
            (double)s->encoder.jpegs_encoded);
     metric(&t, "probecast_frames_published_total", "counter", "Frames published to viewers.",
            (double)s->encoder.frames_published);
     metric(&t, "probecast_viewers", "gauge", "Connected viewers.", s->stream.viewers);
-    metric(&t, "probecast_stream_bandwidth_bits_per_second", "gauge",
-           "Bits per second sent to viewers.", s->stream.bandwidth_bps);
+    metric(&t, "probecast_stream_bandwidth_bytes_per_second", "gauge",
+           "Bytes per second sent to viewers over the last second.",
+           s->stream.bandwidth_bps / 8.0);
     metric(&t, "probecast_stream_bytes_total", "counter", "Bytes sent to viewers.",
            (double)s->stream.bytes_sent);
     metric(&t, "probecast_stream_frames_sent_total", "counter", "Frames sent to viewers.",
            (double)s->stream.frames_sent);
     metric(&t, "probecast_stream_frames_skipped_total", "counter",
            "Frames viewers skipped (latest frame wins).", (double)s->stream.frames_skipped);
-    metric(&t, "probecast_stream_lag_milliseconds_max", "gauge", "Largest smoothed viewer lag.",
-           s->stream.lag_ms_max);
+    metric(&t, "probecast_stream_lag_seconds_max", "gauge", "Largest smoothed viewer lag.",
+           s->stream.lag_ms_max / 1000.0);
     put(&t,
         "# HELP probecast_http_responses_total HTTP responses by status class.\n"
         "# TYPE probecast_http_responses_total counter\n"
