@@ -38,7 +38,9 @@ let serverStats = null;
 
 /* ---- the stream ------------------------------------------------------------------------------ */
 
-/* Where the stream is: the --ws port from /v1/health, on the host that served this page. The
+/* Where the stream is: the --ws port from /v1/health, on the host that served this page; or, when
+ * this page came through a proxy (its port is not the daemon's HTTP port), /v1/stream of the
+ * page's own origin, which the proxy routes to the stream (deploy/nginx). The
  * token goes as a 'bearer.TOKEN' subprotocol next to 'probecast.v2' (protocol/stream.md); a
  * server that names another subprotocol (probecast.v1: before views) is offered that one. */
 async function resolveStream() {
@@ -49,7 +51,11 @@ async function resolveStream() {
   const scheme = location.protocol === 'https:' ? 'wss:' : 'ws:';
   const protocols = [st.subprotocol || SUBPROTOCOL];
   if (api.token) protocols.push('bearer.' + api.token);
-  return { url: `${scheme}//${location.hostname}:${st.port}${st.path || '/v1/stream'}`, protocols };
+  const pagePort = Number(location.port || (location.protocol === 'https:' ? 443 : 80));
+  const proxied = st.http_port && pagePort !== st.http_port;
+  const url = proxied ? `${scheme}//${location.host}${st.path || '/v1/stream'}`
+                      : `${scheme}//${location.hostname}:${st.port}${st.path || '/v1/stream'}`;
+  return { url, protocols };
 }
 
 const stream = new FrameStream({ resolve: resolveStream, view });
