@@ -119,6 +119,15 @@ bool srv_host_allowed(const char *host_header, const char *public_names)
     return srv_host_is_loopback(host) || is_ip_literal(host) || listed(host, public_names);
 }
 
+bool srv_host_is_public(const char *host_header, const char *public_names)
+{
+    char host[256];
+    unsigned port;
+    return host_header &&
+           srv_split_host_port(host_header, strlen(host_header), host, sizeof host, &port, 80) &&
+           listed(host, public_names);
+}
+
 bool srv_origin_same_host(const char *origin, const char *host_header, const char *public_names)
 {
     if (!origin) return true;

@@ -26,6 +26,9 @@ bool srv_ws_origin_allowed(const char *origin, const char *http_host, unsigned h
  * literal, or one of public_names (comma-separated, may be NULL). A page that rebinds its own DNS
  * name to this address still sends its own name as Host, so it is refused here. */
 bool srv_host_allowed(const char *host_header, const char *public_names);
+/* Whether host_header (host[:port]) is one of public_names: a name the operator gave for a
+ * public origin (behind a TLS proxy). */
+bool srv_host_is_public(const char *host_header, const char *public_names);
 /* Whether a request with this Origin may change something: no Origin (not a browser), or a page
  * of this very server: the same host and port as host_header, which srv_host_allowed accepts. */
 bool srv_origin_same_host(const char *origin, const char *host_header, const char *public_names);

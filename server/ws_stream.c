@@ -72,10 +72,11 @@ static const char *handshake_refusal(srv_ws_stream *ws, struct lws *wsi)
             return "origin too long";
         lws_hdr_copy(wsi, buf, sizeof buf, WSI_TOKEN_ORIGIN);
         lws_hdr_copy(wsi, host, sizeof host, WSI_TOKEN_HOST);
-        /* the API's own page, or (behind a TLS proxy that forwards Host) a page of the origin
-         * this very request was sent to */
+        /* the API's own page, or (behind a TLS proxy that forwards Host, under a --public-name)
+         * a page of the public origin this very request was sent to */
         if (!srv_ws_origin_allowed(buf, ws->http_host, ws->cfg.http_port, host) &&
-            !srv_origin_same_host(buf, host, ws->cfg.public_names))
+            !(srv_host_is_public(host, ws->cfg.public_names) &&
+              srv_origin_same_host(buf, host, ws->cfg.public_names)))
             return "origin not allowed";
     }
     if (!token_ok(ws, wsi)) return "missing or wrong token";

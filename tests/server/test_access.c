@@ -44,6 +44,10 @@ int main(void)
     CHECK(!srv_origin_same_host("null", "127.0.0.1:8080", NULL));
     CHECK(!srv_origin_same_host("file:///x.html", "127.0.0.1:8080", NULL));
 
+    CHECK(srv_host_is_public("render.example.org:443", "gpu1,render.example.org"));
+    CHECK(!srv_host_is_public("127.0.0.1:8081", "render.example.org"));
+    CHECK(!srv_host_is_public("127.0.0.1:8081", NULL));
+
     /* the stream's Origin check (the API's own origin) */
     CHECK(srv_ws_origin_allowed("http://127.0.0.1:8080", "127.0.0.1", 8080, "127.0.0.1:8081"));
     CHECK(!srv_ws_origin_allowed("http://evil.example:8080", "127.0.0.1", 8080, NULL));
