@@ -60,22 +60,27 @@ bool srv_split_host_port(const char *s, size_t len, char *host, size_t hostlen, 
     return true;
 }
 
+/* An Origin "http[s]://host[:port][/...]" into host and port (the scheme's default when absent);
+ * *dflt gets that default. False for "null", file: and other schemes, or a malformed value. */
+static bool parse_origin(const char *origin, char *host, size_t hostlen, unsigned *port,
+                         unsigned *dflt)
+{
+    const char *rest;
+    if (strncasecmp(origin, "http://", 7) == 0)
+        *dflt = 80, rest = origin + 7;
+    else if (strncasecmp(origin, "https://", 8) == 0)
+        *dflt = 443, rest = origin + 8;
+    else
+        return false;
+    return srv_split_host_port(rest, strcspn(rest, "/"), host, hostlen, port, *dflt);
+}
+
 bool srv_ws_origin_allowed(const char *origin, const char *http_host, unsigned http_port,
                            const char *request_host)
 {
-    unsigned dflt;
-    const char *rest;
-    if (strncasecmp(origin, "http://", 7) == 0)
-        dflt = 80, rest = origin + 7;
-    else if (strncasecmp(origin, "https://", 8) == 0)
-        dflt = 443, rest = origin + 8;
-    else
-        return false; /* "null", file://, other schemes */
     char host[256];
-    unsigned port;
-    size_t len = strcspn(rest, "/");
-    if (!srv_split_host_port(rest, len, host, sizeof host, &port, dflt)) return false;
-    if (port != http_port) return false;
+    unsigned port, dflt;
+    if (!parse_origin(origin, host, sizeof host, &port, &dflt) || port != http_port) return false;
     bool wildcard = strcmp(http_host, "0.0.0.0") == 0 || strcmp(http_host, "::") == 0;
     if (wildcard) {
         /* listening everywhere: the page must come from the host name this request used */
@@ -132,17 +137,9 @@ bool srv_origin_same_host(const char *origin, const char *host_header, const cha
 {
     if (!origin) return true;
     if (!srv_host_allowed(host_header, public_names)) return false;
-    unsigned dflt;
-    const char *rest;
-    if (strncasecmp(origin, "http://", 7) == 0)
-        dflt = 80, rest = origin + 7;
-    else if (strncasecmp(origin, "https://", 8) == 0)
-        dflt = 443, rest = origin + 8;
-    else
-        return false; /* "null", file:, other schemes */
     char ohost[256], hhost[256];
-    unsigned oport, hport;
-    if (!srv_split_host_port(rest, strcspn(rest, "/"), ohost, sizeof ohost, &oport, dflt) ||
+    unsigned oport, hport, dflt;
+    if (!parse_origin(origin, ohost, sizeof ohost, &oport, &dflt) ||
         !srv_split_host_port(host_header, strlen(host_header), hhost, sizeof hhost, &hport, dflt))
         return false;
     bool same_host = strcasecmp(ohost, hhost) == 0 ||
