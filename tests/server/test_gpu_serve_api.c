@@ -12,6 +12,7 @@
 typedef struct op {
     char path[64];
     char method[8];
+    char id[48]; /* operationId */
     int codes[16];
     int ncodes;
 } op;
@@ -64,6 +65,8 @@ static void parse_spec(const char *text)
                         cur->method[k] = (char)(methods[i][k] - 32);
                 }
             }
+        } else if (cur && strncmp(l, "      operationId: ", 19) == 0) {
+            snprintf(cur->id, sizeof cur->id, "%.47s", l + 19);
         } else if (cur && strncmp(l, "        '", 9) == 0 && l[9] != ' ' && cur->ncodes < 16) {
             cur->codes[cur->ncodes++] = atoi(l + 9);
         }
@@ -140,6 +143,18 @@ int main(void)
     if (!spec) return test_finish();
     parse_spec(spec);
     CHECKF(nops >= 22, "%d operations found in the spec", nops);
+    /* every operation is named (uniquely) and documents its client errors */
+    for (int i = 0; i < nops; i++) {
+        int client_errors = 0;
+        for (int k = 0; k < ops[i].ncodes; k++)
+            client_errors += ops[i].codes[k] >= 400 && ops[i].codes[k] < 500;
+        CHECKF(ops[i].id[0] != 0, "%s %s has an operationId", ops[i].method, ops[i].path);
+        CHECKF(client_errors > 0, "%s %s documents a 4xx", ops[i].method, ops[i].path);
+        for (int k = 0; k < i; k++)
+            CHECKF(strcmp(ops[i].id, ops[k].id) != 0, "operationId %s twice", ops[i].id);
+    }
+    CHECK(strstr(spec, "securitySchemes:") && strstr(spec, "scheme: bearer") &&
+          strstr(spec, "license:"));
 
     const char *args[] = {
         "--no-animate",    "--width", "64",           "--height", "48",      "--probes", "2,2,2",
