@@ -12,8 +12,6 @@ packages=(
   libtinygltf-dev libstb-dev nlohmann-json3-dev  # glTF / GLB loading, image decoding
   libpng-dev libturbojpeg0-dev                   # PNG and JPEG output
   libmicrohttpd-dev libwebsockets-dev libcjson-dev  # probecast serve: HTTP API, frame stream, JSON
-  python3 python3-prometheus-client  # tests: /metrics read by the Prometheus text-format parser
-  nginx-light openssl                # tests: deploy/nginx/probecast.conf with a self-signed certificate
 )
 
 missing=()

@@ -5,6 +5,7 @@
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 "$root/deploy/install-deps.sh"
+"$root/deploy/install-test-deps.sh"
 "$root/deploy/install-web-test-deps.sh"
 jobs="$(nproc)"
 
