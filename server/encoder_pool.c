@@ -29,7 +29,7 @@ static struct {
     uint8_t *data;
     size_t cap;
 } pool[IMAGE_POOL];
-static unsigned pool_count;
+static unsigned pool_count, pool_evict;
 
 static uint8_t *pixels_take(size_t need, size_t *cap)
 {
@@ -54,14 +54,21 @@ static uint8_t *pixels_take(size_t need, size_t *cap)
 
 static void pixels_give(uint8_t *p, size_t cap)
 {
+    uint8_t *evicted = NULL;
     pthread_mutex_lock(&pool_mu);
-    if (pool_count < IMAGE_POOL) {
+    if (pool_count == IMAGE_POOL) {
+        /* full: the newest buffer replaces one in turn, so buffers of a size no longer rendered
+         * (a view was resized or left) age out instead of blocking the pool */
+        evicted = pool[pool_evict].data;
+        pool[pool_evict].data = p;
+        pool[pool_evict].cap = cap;
+        pool_evict = (pool_evict + 1) % IMAGE_POOL;
+    } else {
         pool[pool_count].data = p;
         pool[pool_count++].cap = cap;
-        p = NULL;
     }
     pthread_mutex_unlock(&pool_mu);
-    free(p);
+    free(evicted);
 }
 
 void srv_image_pool_drain(void)
