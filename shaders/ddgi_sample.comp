@@ -34,7 +34,8 @@ void main()
         vec3 o = g.view.eye.xyz, d = camera_dir(g.view, px);
         float tmax = t.position.w >= 0.0 ? t.position.w : 1e30;
         float radius = 0.1 * min(g.ddgi.spacing.x, min(g.ddgi.spacing.y, g.ddgi.spacing.z));
-        uint n = ddgi_probe_count(g.ddgi);
+        uint n = ddgi_probe_count(g.ddgi), hit = n;
+        vec3 nrm = vec3(0.0, 0.0, 1.0);
         for (uint k = 0u; k < n; k++) {
             vec3 c = ddgi_probe_position(g.ddgi, k);
             vec3 oc = o - c;
@@ -43,9 +44,12 @@ void main()
             float th = -b - sqrt(disc);
             if (th <= 0.0 || th >= tmax) continue;
             tmax = th;
-            vec3 nrm = normalize(o + th * d - c);
-            l = ddgi_probe_active(g.ddgi, k) ? ddgi_sample_irradiance(g.ddgi, k, nrm) : vec3(0.3, 0.0, 0.0);
+            hit = k;
+            nrm = normalize(o + th * d - c);
         }
+        if (hit < n)
+            l = ddgi_probe_active(g.ddgi, hit) ? ddgi_sample_irradiance(g.ddgi, hit, nrm)
+                                               : vec3(0.3, 0.0, 0.0);
     }
     RadianceRef(pc.buf2).v[i] = vec4(l, 1.0);
 }

@@ -235,6 +235,26 @@ static void test_debug_views(void)
     CHECK(bad1 == 0 && bad2 == 0);
     free(irr);
     free(probes);
+
+    /* the probe spheres show their stored irradiance: every probe of the Cornell box's 3x3x3 grid
+     * is active, so none is drawn in the marker colour of an off probe (0.3, 0, 0) — they all were
+     * once, when the sphere loop looked the probe up inside its own body */
+    d.width = 64, d.height = 48;
+    d.view = PC_VIEW_FINAL;
+    float *final = test_render(&vk, &d, NULL, NULL);
+    d.view = PC_VIEW_PROBES;
+    probes = test_render(&vk, &d, NULL, NULL);
+    if (!final || !probes) return;
+    unsigned spheres = 0, off_marker = 0;
+    for (size_t i = 0; i < (size_t)d.width * d.height; i++) {
+        const float *p = &probes[i * 3], *f = &final[i * 3];
+        if (p[0] != f[0] || p[1] != f[1] || p[2] != f[2]) spheres++;
+        if (p[0] == 0.3f && p[1] == 0.0f && p[2] == 0.0f) off_marker++;
+    }
+    CHECKF(spheres > 20, "%u pixels show probe spheres", spheres);
+    CHECKF(off_marker == 0, "%u sphere pixels in the off-probe colour", off_marker);
+    free(final);
+    free(probes);
 }
 
 int main(void)
