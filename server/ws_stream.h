@@ -22,11 +22,11 @@
 #include "render_loop.h"
 
 typedef struct srv_ws_config {
-    const char *address;   /* numeric IP to listen on */
-    unsigned port;         /* 0 = any free port */
-    const char *token;     /* NULL or "" = no token required */
+    const char *address;      /* numeric IP to listen on */
+    unsigned port;            /* 0 = any free port */
+    const char *token;        /* NULL or "" = no token required */
     const char *public_names; /* Host names besides loopback and IP literals (comma-separated) */
-    const char *http_host; /* the HTTP API's address, for the Origin check */
+    const char *http_host;    /* the HTTP API's address, for the Origin check */
     unsigned http_port;
     unsigned max_viewers; /* 0 = 100 */
     unsigned max_per_ip;  /* 0 = 64 */
