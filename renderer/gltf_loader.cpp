@@ -71,6 +71,7 @@ const int kMaxImageDim = 16384;
 const uint64_t kMaxImagePixels = 1ull << 26;     /* 256 MiB as RGBA8 */
 const uint64_t kMaxDecodedBytes = 2ull << 30;    /* all images together */
 const uint64_t kMaxExternalFile = 0xffffffffull; /* tinygltf sizes are 32-bit */
+const uint64_t kMaxAnimationFloats = 1ull << 26; /* 256 MiB of animation keys and values */
 const char *const kSupportedExtensions[] = {"KHR_lights_punctual",
                                             "KHR_materials_emissive_strength"};
 
@@ -706,7 +707,10 @@ Accessor make_accessor(const Model &m, int index, const std::string &what_s, int
              what);
     if (a.count == 0) fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has count 0", index, what);
     r.ctype = a.componentType;
-    r.ncomp = type == TINYGLTF_TYPE_SCALAR ? 1 : type == TINYGLTF_TYPE_VEC2 ? 2 : 3;
+    r.ncomp = type == TINYGLTF_TYPE_SCALAR ? 1
+              : type == TINYGLTF_TYPE_VEC2 ? 2
+              : type == TINYGLTF_TYPE_VEC3 ? 3
+                                           : 4;
     r.elem = component_size(a.componentType) * (size_t)r.ncomp;
     r.count = a.count;
     r.normalized = a.normalized;
@@ -793,6 +797,12 @@ void read_floats(const Accessor &a, size_t i, float *out)
             memcpy(&out[c], p + c * 4, 4);
         } else if (a.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) {
             out[c] = p[c] / 255.0f;
+        } else if (a.ctype == TINYGLTF_COMPONENT_TYPE_BYTE) {
+            out[c] = std::max((int8_t)p[c] / 127.0f, -1.0f);
+        } else if (a.ctype == TINYGLTF_COMPONENT_TYPE_SHORT) {
+            int16_t s;
+            memcpy(&s, p + c * 2, 2);
+            out[c] = std::max(s / 32767.0f, -1.0f);
         } else { /* normalized unsigned short */
             uint16_t s;
             memcpy(&s, p + c * 2, 2);
@@ -844,6 +854,9 @@ class Converter
     void fill_mesh(size_t mesh, const std::vector<Primitive> &prims, rd_mesh *out);
     void node_transform(size_t index, rd_node *n);
     void lights_and_cameras();
+    void animations();
+    void anim_sampler(const std::string &where, const tinygltf::AnimationSampler &gs, bool rotation,
+                      rd_anim_sampler *out, std::vector<float> *times, std::vector<float> *values);
     void warnings();
 
     const Model &m_;
@@ -855,6 +868,7 @@ class Converter
     std::vector<int32_t> node_map_;  /* glTF node -> rd node (-1: not in the scene) */
     std::vector<int32_t> mesh_map_;  /* glTF mesh -> rd mesh (-1: unused or empty) */
     std::map<int, int32_t> tex_map_; /* glTF texture -> rd texture */
+    uint64_t anim_floats_ = 0;       /* animation times and values kept so far */
 };
 
 void Converter::run()
@@ -875,6 +889,7 @@ void Converter::run()
         node_map_[gi] = (int32_t)rd_scene_add_node(s_, &n);
     }
     lights_and_cameras();
+    animations();
     char err[256];
     if (!rd_scene_update(s_, err, sizeof err)) fail(RD_GLTF_ERR_INVALID, "%s", err);
 }
@@ -1400,6 +1415,150 @@ void Converter::lights_and_cameras()
         rd_vec3_set(l.direction, 0.0f, 0.0f, -1.0f);
         rd_scene_add_light(s_, &l);
     }
+}
+
+/* Validates an animation sampler for a translation/scale (VEC3 float) or rotation (VEC4 float
+ * or normalized integers) channel and reads its keys (glTF 2.0 section 3.11). */
+void Converter::anim_sampler(const std::string &where, const tinygltf::AnimationSampler &gs,
+                             bool rotation, rd_anim_sampler *out, std::vector<float> *times,
+                             std::vector<float> *values)
+{
+    const std::string &ip = gs.interpolation;
+    out->interpolation = ip == "LINEAR"        ? (uint32_t)RD_INTERP_LINEAR
+                         : ip == "STEP"        ? (uint32_t)RD_INTERP_STEP
+                         : ip == "CUBICSPLINE" ? (uint32_t)RD_INTERP_CUBICSPLINE
+                                               : UINT32_MAX;
+    if (out->interpolation == UINT32_MAX)
+        fail(RD_GLTF_ERR_INVALID, "%s has an unknown interpolation '%s'", where.c_str(),
+             clean(ip, 32).c_str());
+    Accessor in = make_accessor(m_, gs.input, "input of " + where, TINYGLTF_TYPE_SCALAR,
+                                {TINYGLTF_COMPONENT_TYPE_FLOAT});
+    Accessor val =
+        rotation
+            ? make_accessor(m_, gs.output, "output of " + where, TINYGLTF_TYPE_VEC4,
+                            {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_BYTE,
+                             TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_SHORT,
+                             TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT})
+            : make_accessor(m_, gs.output, "output of " + where, TINYGLTF_TYPE_VEC3,
+                            {TINYGLTF_COMPONENT_TYPE_FLOAT});
+    size_t keys = in.count, per_key = out->interpolation == RD_INTERP_CUBICSPLINE ? 3 : 1;
+    if (val.count / per_key != keys || val.count % per_key != 0)
+        fail(RD_GLTF_ERR_INVALID, "%s has %zu output values for %zu input times (%s needs %zu)",
+             where.c_str(), val.count, keys, ip.c_str(), keys * per_key);
+    out->components = rotation ? 4 : 3;
+    if (val.count <= kMaxAnimationFloats) anim_floats_ += keys + val.count * out->components;
+    if (val.count > kMaxAnimationFloats || anim_floats_ > kMaxAnimationFloats)
+        fail(RD_GLTF_ERR_TOO_LARGE,
+             "the animations hold more than %llu keys and values (the limit)",
+             (unsigned long long)kMaxAnimationFloats);
+    out->key_count = (uint32_t)keys;
+    times->resize(keys);
+    values->resize(val.count * out->components);
+    for (size_t i = 0; i < keys; i++) {
+        float *t = &(*times)[i];
+        read_floats(in, i, t);
+        if (!std::isfinite(*t) || *t < 0.0f || (i > 0 && *t < t[-1]))
+            fail(RD_GLTF_ERR_INVALID,
+                 "%s has input time %g at key %zu; times must be finite, >= 0 and not decrease",
+                 where.c_str(), (double)*t, i);
+    }
+    for (size_t i = 0; i < val.count; i++) {
+        float *v = &(*values)[i * out->components];
+        read_floats(val, i, v);
+        for (uint32_t k = 0; k < out->components; k++)
+            if (!std::isfinite(v[k]))
+                fail(RD_GLTF_ERR_INVALID, "%s has an output value that is NaN or infinite (%zu)",
+                     where.c_str(), i);
+    }
+}
+
+/* Node animations (glTF 2.0 section 3.11). Channels that animate morph weights or an
+ * extension's target are skipped with one warning; so are nodes outside the scene shown. */
+void Converter::animations()
+{
+    size_t skipped_weights = 0, skipped_other = 0;
+    for (size_t ai = 0; ai < m_.animations.size(); ai++) {
+        const tinygltf::Animation &ga = m_.animations[ai];
+        std::string an = label("animation", ai, ga.name);
+        std::map<std::pair<int, uint32_t>, size_t> targets; /* (node, path) -> channel */
+        std::map<std::pair<int, uint32_t>, uint32_t> kept;  /* (sampler, path) -> rd sampler */
+        std::vector<rd_anim_sampler> samplers;
+        std::vector<std::vector<float>> times, values;
+        std::vector<rd_anim_channel> channels;
+        std::vector<uint8_t> used(ga.samplers.size(), 0); /* by any channel, even skipped */
+        for (size_t ci = 0; ci < ga.channels.size(); ci++) {
+            const tinygltf::AnimationChannel &gc = ga.channels[ci];
+            std::string where = fmt("%s channel %zu", an.c_str(), ci);
+            const std::string &path = gc.target_path;
+            int node = gc.target_node;
+            if (gc.sampler < 0 || (size_t)gc.sampler >= ga.samplers.size())
+                fail(RD_GLTF_ERR_INVALID, "%s refers to sampler %d, but %s has only %zu samplers",
+                     where.c_str(), gc.sampler, an.c_str(), ga.samplers.size());
+            if (node < -1 || (node >= 0 && (size_t)node >= m_.nodes.size()))
+                fail(RD_GLTF_ERR_INVALID, "%s targets node %d, but there are only %zu nodes",
+                     where.c_str(), node, m_.nodes.size());
+            used[(size_t)gc.sampler] = 1;
+            uint32_t p = path == "translation" ? (uint32_t)RD_ANIM_TRANSLATION
+                         : path == "rotation"  ? (uint32_t)RD_ANIM_ROTATION
+                         : path == "scale"     ? (uint32_t)RD_ANIM_SCALE
+                                               : UINT32_MAX;
+            if (path.empty()) fail(RD_GLTF_ERR_INVALID, "%s has no target path", where.c_str());
+            skipped_weights += p == UINT32_MAX && path == "weights";
+            skipped_other += p == UINT32_MAX && path != "weights";
+            if (p == UINT32_MAX || node < 0) continue; /* no node: ignored, as the spec says */
+            if (!m_.nodes[(size_t)node].matrix.empty())
+                fail(RD_GLTF_ERR_INVALID,
+                     "%s animates node %d, which has a matrix; glTF allows animating only "
+                     "nodes given by translation, rotation and scale",
+                     where.c_str(), node);
+            auto dup = targets.emplace(std::make_pair(node, p), ci);
+            if (!dup.second)
+                fail(RD_GLTF_ERR_INVALID, "%s animates the %s of node %d, as channel %zu does",
+                     where.c_str(), path.c_str(), node, dup.first->second);
+            if (node_map_[(size_t)node] < 0) continue; /* not in the scene shown */
+            auto k = kept.emplace(std::make_pair(gc.sampler, p), (uint32_t)samplers.size());
+            if (k.second) {
+                samplers.emplace_back();
+                times.emplace_back();
+                values.emplace_back();
+                anim_sampler(fmt("%s sampler %d", an.c_str(), gc.sampler),
+                             ga.samplers[(size_t)gc.sampler], p == RD_ANIM_ROTATION,
+                             &samplers.back(), &times.back(), &values.back());
+            }
+            channels.push_back({(uint32_t)node_map_[(size_t)node], p, k.first->second});
+        }
+        if (channels.empty()) continue;
+        for (size_t i = 0; i < samplers.size(); i++) {
+            samplers[i].times = times[i].data();
+            samplers[i].values = values[i].data();
+        }
+        rd_animation a;
+        memset(&a, 0, sizeof a);
+        /* the loop spans every channel's keys, skipped ones too (as viewers that play them) */
+        for (size_t si = 0; si < ga.samplers.size(); si++) {
+            if (!used[si]) continue;
+            Accessor in = make_accessor(m_, ga.samplers[si].input,
+                                        fmt("input of %s sampler %zu", an.c_str(), si),
+                                        TINYGLTF_TYPE_SCALAR, {TINYGLTF_COMPONENT_TYPE_FLOAT});
+            float last;
+            read_floats(in, in.count - 1, &last);
+            if (std::isfinite(last) && last > a.duration) a.duration = last;
+        }
+        a.name = ga.name.empty() ? nullptr : const_cast<char *>(ga.name.c_str());
+        a.samplers = samplers.data();
+        a.sampler_count = (uint32_t)samplers.size();
+        a.channels = channels.data();
+        a.channel_count = (uint32_t)channels.size();
+        rd_scene_add_animation(s_, &a);
+    }
+    if (skipped_weights)
+        rd_scene_warn(s_,
+                      "%zu animation channel(s) animate morph target weights, which are not "
+                      "supported; they are ignored",
+                      skipped_weights);
+    if (skipped_other)
+        rd_scene_warn(s_, "%zu animation channel(s) have an unknown target path; they are ignored",
+                      skipped_other);
 }
 
 /* One readable line, no control or non-ASCII bytes (messages may end up in JSON or logs). */

@@ -40,8 +40,12 @@ static void build_plane_directional(rd_scene *s)
     floor_plane(&t, 5.0f, rd_build_material(s, "grey", 0.5f, 0.5f, 0.5f, 0, 0, 0));
     rd_tris_commit(&t, s, "plane");
     float a = 60.0f * (float)M_PI / 180.0f;
-    rd_light l = {.name = "sun", .type = RD_LIGHT_DIRECTIONAL, .color = {1, 1, 1},
-                  .intensity = 3.0f, .node = -1, .direction = {sinf(a), -cosf(a), 0}};
+    rd_light l = {.name = "sun",
+                  .type = RD_LIGHT_DIRECTIONAL,
+                  .color = {1, 1, 1},
+                  .intensity = 3.0f,
+                  .node = -1,
+                  .direction = {sinf(a), -cosf(a), 0}};
     rd_scene_add_light(s, &l);
     const float eye[3] = {0, 4, 0};
     rd_build_camera(s, eye, DOWN, NEG_Z, 40);
@@ -130,6 +134,24 @@ static void build_two_rooms(rd_scene *s)
     rd_build_point_light(s, -1.0f, 1.5f, 0.0f, 20.0f);
     const float eye[3] = {1.9f, 1.0f, 0.0f}, fwd[3] = {-1, 0, 0};
     rd_build_camera(s, eye, fwd, UP_Y, 70);
+    /* camera 1: inside the lit room, looking at its far wall */
+    const float eye_a[3] = {-0.1f, 1.0f, 0.0f}, fwd_a[3] = {-1, 0, 0};
+    rd_build_camera(s, eye_a, fwd_a, UP_Y, 70);
+}
+
+/* A closed 2 x 2 x 2 m white room (albedo 0.8) lit by a 20 cd point light below its ceiling:
+ * four fifths of the light that reaches the eye has bounced (indirect / direct = 0.8 / 0.2 for
+ * a closed room), so a truncated or slow multi-bounce solution shows as a dark image. */
+static void build_white_room(rd_scene *s)
+{
+    rd_tri_list t = {0};
+    uint32_t white = rd_build_material(s, "white", 0.8f, 0.8f, 0.8f, 0, 0, 0);
+    const float lo[3] = {-1, 0, -1}, hi[3] = {1, 2, 1};
+    rd_tris_room(&t, lo, hi, white);
+    rd_tris_commit(&t, s, "room");
+    rd_build_point_light(s, 0.3f, 1.6f, 0.2f, 20.0f);
+    const float eye[3] = {0, 1.0f, 0.95f};
+    rd_build_camera(s, eye, NEG_Z, UP_Y, 70);
 }
 
 /* Benchmark scene: floor, back wall and a grid of spheres with >= min_tris triangles. */
@@ -139,7 +161,8 @@ static void build_spheres(rd_scene *s, uint64_t min_tris)
     uint32_t warm = rd_build_material(s, "warm", 0.8f, 0.5f, 0.3f, 0, 0, 0);
     rd_tri_list t = {0};
     floor_plane(&t, 12.0f, white);
-    const float a[3] = {-12, 0, -12}, b[3] = {12, 0, -12}, c[3] = {12, 8, -12}, d[3] = {-12, 8, -12};
+    const float a[3] = {-12, 0, -12}, b[3] = {12, 0, -12}, c[3] = {12, 8, -12},
+                d[3] = {-12, 8, -12};
     rd_tris_quad(&t, a, b, c, d, white);
     rd_tris_commit(&t, s, "room");
     const uint32_t grid = 8, rings = 64, seg = 128; /* one sphere: 2*128*63 = 16128 tris */
@@ -158,8 +181,12 @@ static void build_spheres(rd_scene *s, uint64_t min_tris)
         rd_tris_commit(&sp, s, "spheres");
     }
     rd_build_point_light(s, 0, 9.0f, 4.0f, 400.0f);
-    rd_light sun = {.name = "sun", .type = RD_LIGHT_DIRECTIONAL, .color = {1, 0.95f, 0.9f},
-                    .intensity = 2.0f, .node = -1, .direction = {0.3f, -0.8f, -0.5f}};
+    rd_light sun = {.name = "sun",
+                    .type = RD_LIGHT_DIRECTIONAL,
+                    .color = {1, 0.95f, 0.9f},
+                    .intensity = 2.0f,
+                    .node = -1,
+                    .direction = {0.3f, -0.8f, -0.5f}};
     rd_scene_add_light(s, &sun);
     float fwd[3];
     const float dir[3] = {0, -0.45f, -1};
@@ -171,6 +198,7 @@ static void build_spheres(rd_scene *s, uint64_t min_tris)
 const char *rd_procedural_names(void)
 {
     return "cornell, plane-point, plane-directional, emissive, shadow, furnace, two-rooms, "
+           "white-room, "
            "spheres[:TRIANGLES], hard:CASE (the stability suite: probecast eval --list)";
 }
 
@@ -185,13 +213,22 @@ bool rd_procedural_build(const char *name, rd_scene *s, char *err, size_t errlen
         snprintf(err, errlen, "builtin scene '%.*s' takes no argument", (int)len, name);
         return false;
     }
-    if (IS("cornell")) build_cornell(s);
-    else if (IS("plane-point")) build_plane_point(s, false);
-    else if (IS("shadow")) build_plane_point(s, true);
-    else if (IS("plane-directional")) build_plane_directional(s);
-    else if (IS("emissive")) build_emissive(s);
-    else if (IS("furnace")) build_furnace(s);
-    else if (IS("two-rooms")) build_two_rooms(s);
+    if (IS("cornell"))
+        build_cornell(s);
+    else if (IS("plane-point"))
+        build_plane_point(s, false);
+    else if (IS("shadow"))
+        build_plane_point(s, true);
+    else if (IS("plane-directional"))
+        build_plane_directional(s);
+    else if (IS("emissive"))
+        build_emissive(s);
+    else if (IS("furnace"))
+        build_furnace(s);
+    else if (IS("two-rooms"))
+        build_two_rooms(s);
+    else if (IS("white-room"))
+        build_white_room(s);
     else if (IS("spheres")) {
         uint64_t n = 1000000;
         if (colon) {

@@ -6,6 +6,7 @@
  */
 #include "scene.h"
 
+#include <assert.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -121,6 +122,17 @@ void rd_scene_destroy(rd_scene *s)
         free(s->cameras[i].name);
     free(s->cameras);
     free(s->instances);
+    for (uint32_t i = 0; i < s->animation_count; i++) {
+        rd_animation *a = &s->animations[i];
+        free(a->name);
+        for (uint32_t k = 0; k < a->sampler_count; k++) {
+            free(a->samplers[k].times);
+            free(a->samplers[k].values);
+        }
+        free(a->samplers);
+        free(a->channels);
+    }
+    free(s->animations);
     for (uint32_t i = 0; i < s->warning_count; i++)
         free(s->warnings[i]);
     free(s->warnings);
@@ -186,6 +198,41 @@ uint32_t rd_scene_add_camera(rd_scene *s, const rd_camera *c)
     uint32_t i = grow((void **)&s->cameras, &s->camera_count, sizeof *s->cameras);
     s->cameras[i] = *c;
     s->cameras[i].name = xstrdup(c->name);
+    return i;
+}
+
+static void *copy_array(const void *src, size_t count, size_t size)
+{
+    void *d = xcalloc(count, size);
+    if (d) memcpy(d, src, count * size);
+    return d;
+}
+
+uint32_t rd_scene_add_animation(rd_scene *s, const rd_animation *a)
+{
+    uint32_t i = grow((void **)&s->animations, &s->animation_count, sizeof *s->animations);
+    rd_animation *d = &s->animations[i];
+    memset(d, 0, sizeof *d);
+    d->name = xstrdup(a->name);
+    d->duration = a->duration > 0.0f && isfinite(a->duration) ? a->duration : 0.0f;
+    d->sampler_count = a->sampler_count;
+    d->samplers = xcalloc(a->sampler_count, sizeof *d->samplers);
+    for (uint32_t k = 0; k < a->sampler_count; k++) {
+        const rd_anim_sampler *src = &a->samplers[k];
+        assert(src->key_count >= 1 && (src->components == 3 || src->components == 4));
+        assert(src->interpolation <= RD_INTERP_CUBICSPLINE);
+        size_t values = (size_t)src->key_count * src->components *
+                        (src->interpolation == RD_INTERP_CUBICSPLINE ? 3 : 1);
+        d->samplers[k] = *src;
+        d->samplers[k].times = copy_array(src->times, src->key_count, sizeof(float));
+        d->samplers[k].values = copy_array(src->values, values, sizeof(float));
+        float last = src->times[src->key_count - 1];
+        if (last > d->duration) d->duration = last;
+    }
+    d->channel_count = a->channel_count;
+    d->channels = copy_array(a->channels, a->channel_count, sizeof *d->channels);
+    for (uint32_t k = 0; k < a->channel_count; k++)
+        assert(a->channels[k].sampler < a->sampler_count && a->channels[k].path <= RD_ANIM_SCALE);
     return i;
 }
 

@@ -88,6 +88,36 @@ typedef struct rd_instance {
     uint32_t mesh;
 } rd_instance;
 
+/* Node animation (glTF 2.0 animations targeting translation, rotation or scale).
+ * renderer/animation_clip.h samples them into the nodes' TRS. */
+enum { RD_ANIM_TRANSLATION = 0, RD_ANIM_ROTATION = 1, RD_ANIM_SCALE = 2 };
+enum { RD_INTERP_LINEAR = 0, RD_INTERP_STEP = 1, RD_INTERP_CUBICSPLINE = 2 };
+
+typedef struct rd_anim_sampler {
+    uint32_t interpolation; /* RD_INTERP_* */
+    uint32_t components;    /* per value: 3 (translation, scale) or 4 (quaternion x, y, z, w) */
+    uint32_t key_count;     /* >= 1 */
+    float *times;           /* key_count finite seconds >= 0, non-decreasing */
+    /* key_count * components floats; CUBICSPLINE: key_count * 3 * components, each key
+     * stored as in-tangent, value, out-tangent (glTF 2.0 appendix C) */
+    float *values;
+} rd_anim_sampler;
+
+typedef struct rd_anim_channel {
+    uint32_t node;    /* rd node index (a TRS node) */
+    uint32_t path;    /* RD_ANIM_* */
+    uint32_t sampler; /* index into the animation's samplers */
+} rd_anim_channel;
+
+typedef struct rd_animation {
+    char *name;
+    float duration; /* loop length, >= the last key time of every sampler */
+    rd_anim_sampler *samplers;
+    uint32_t sampler_count;
+    rd_anim_channel *channels;
+    uint32_t channel_count;
+} rd_animation;
+
 typedef struct rd_scene {
     rd_mesh *meshes;
     uint32_t mesh_count;
@@ -103,6 +133,8 @@ typedef struct rd_scene {
     uint32_t camera_count;
     rd_instance *instances;
     uint32_t instance_count;
+    rd_animation *animations;
+    uint32_t animation_count;
     char **warnings; /* human sentences about ignored features */
     uint32_t warning_count;
     float bounds_min[3], bounds_max[3]; /* world bounds of all instances (rd_scene_update) */
@@ -123,6 +155,11 @@ uint32_t rd_scene_add_mesh(rd_scene *s, const char *name, uint32_t tri_count);
 uint32_t rd_scene_add_node(rd_scene *s, const rd_node *n);
 uint32_t rd_scene_add_light(rd_scene *s, const rd_light *l);
 uint32_t rd_scene_add_camera(rd_scene *s, const rd_camera *c);
+/* Deep-copies a (name, samplers with their times and values, channels); the copy's duration
+ * is the largest of a->duration and its samplers' last key times. Asserts that key counts,
+ * component counts and channel indices are consistent (node indices are checked when
+ * sampling, as nodes may be added later). */
+uint32_t rd_scene_add_animation(rd_scene *s, const rd_animation *a);
 /* Removes light index (later lights move down by one); out-of-range indices are ignored. */
 void rd_scene_remove_light(rd_scene *s, uint32_t index);
 void rd_scene_warn(rd_scene *s, const char *fmt, ...);

@@ -221,6 +221,15 @@ void rd_cmd_dispatch(rd_cmd *c, const rd_pipeline *p, const void *push, uint32_t
     vkCmdDispatch(c->cb, gx, gy, gz);
 }
 
+void rd_cmd_dispatch_indirect(rd_cmd *c, const rd_pipeline *p, const void *push,
+                              const rd_buffer *args, VkDeviceSize offset)
+{
+    vkCmdBindPipeline(c->cb, VK_PIPELINE_BIND_POINT_COMPUTE, p->pipeline);
+    if (p->push_size && push)
+        vkCmdPushConstants(c->cb, p->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, p->push_size, push);
+    vkCmdDispatchIndirect(c->cb, args->buffer, offset);
+}
+
 void rd_cmd_barrier(rd_cmd *c)
 {
     VkMemoryBarrier mb = {
@@ -228,12 +237,12 @@ void rd_cmd_barrier(rd_cmd *c)
         .srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT,
         .dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT |
                          VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT |
-                         VK_ACCESS_HOST_READ_BIT,
+                         VK_ACCESS_HOST_READ_BIT | VK_ACCESS_INDIRECT_COMMAND_READ_BIT,
     };
     vkCmdPipelineBarrier(c->cb,
                          VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
                          VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT |
-                             VK_PIPELINE_STAGE_HOST_BIT,
+                             VK_PIPELINE_STAGE_HOST_BIT | VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT,
                          0, 1, &mb, 0, NULL, 0, NULL);
 }
 

@@ -6,6 +6,7 @@
 #ifndef RD_VK_COMPUTE_H
 #define RD_VK_COMPUTE_H
 
+#include "vk_buffer.h"
 #include "vk_context.h"
 
 typedef struct rd_pipeline {
@@ -34,7 +35,10 @@ void rd_cmd_abandon(rd_vk *vk, rd_cmd *c);
 /* Binds p, pushes push (p->push_size bytes) and dispatches groups. */
 void rd_cmd_dispatch(rd_cmd *c, const rd_pipeline *p, const void *push, uint32_t gx, uint32_t gy,
                      uint32_t gz);
-/* Full compute->compute and transfer->compute memory barrier. */
+/* Same, with the group counts read by the GPU from args at offset (three uint32_t). */
+void rd_cmd_dispatch_indirect(rd_cmd *c, const rd_pipeline *p, const void *push,
+                              const rd_buffer *args, VkDeviceSize offset);
+/* Full compute->compute, compute->indirect-args and transfer->compute memory barrier. */
 void rd_cmd_barrier(rd_cmd *c);
 
 #define RD_TIMER_MAX 32

@@ -110,3 +110,41 @@ rd_vk_result rd_world_update(rd_world *w, unsigned n, char *err, size_t errlen)
     memcpy(&w->stats.rays, w->counters.mapped, sizeof w->stats.rays);
     return res;
 }
+
+rd_vk_result rd_world_converge(rd_world *w, unsigned cap, unsigned *done, char *err, size_t errlen)
+{
+    *done = 0;
+    rd_frame_stats sum;
+    memset(&sum, 0, sizeof sum);
+    rd_vk_result res = RD_VK_OK;
+    while (res == RD_VK_OK && *done < cap && !rd_world_converged(w)) {
+        res = rd_world_update(w, 1, err, errlen);
+        if (res != RD_VK_OK) break;
+        (*done)++;
+        rd_frame_stats_add(&sum, &w->stats);
+    }
+    w->stats = sum;
+    return res;
+}
+
+bool rd_world_converged(const rd_world *w)
+{
+    return !w->gi || rd_ddgi_converged(&w->ddgi);
+}
+
+void rd_world_wake_box(rd_world *w, const float lo[3], const float hi[3], float age)
+{
+    if (!w->gi) return;
+    float a[3], b[3];
+    for (int k = 0; k < 3; k++) {
+        float shift = w->scene ? w->scene->origin_shift[k] : 0;
+        a[k] = lo[k] - shift;
+        b[k] = hi[k] - shift;
+    }
+    rd_ddgi_wake_box(&w->ddgi, a, b, age);
+}
+
+void rd_world_wake_all(rd_world *w, float age)
+{
+    if (w->gi) rd_ddgi_wake_all(&w->ddgi, age);
+}

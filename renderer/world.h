@@ -44,6 +44,14 @@ rd_vk_result rd_world_configure_gi(rd_world *w, const float bmin[3], const float
  * n == 0. Fills w->stats with the summed pass times ("probe trace", "probe shade", ...) and
  * rays. Needs a scene. */
 rd_vk_result rd_world_update(rd_world *w, unsigned n, char *err, size_t errlen);
+/* Runs probe updates until the field has converged (rd_ddgi_converged) or `cap` updates ran;
+ * *done gets the number run. OK with *done = 0 when GI is off or the field is converged. */
+rd_vk_result rd_world_converge(rd_world *w, unsigned cap, unsigned *done, char *err, size_t errlen);
+/* No probe work is wanted: GI is off, or the field has converged and nothing woke it. */
+bool rd_world_converged(const rd_world *w);
+/* Wake events (world coordinates; see rd_ddgi_wake_box). No-ops when GI is off. */
+void rd_world_wake_box(rd_world *w, const float lo[3], const float hi[3], float age);
+void rd_world_wake_all(rd_world *w, float age);
 /* Fills the world part of a pass's globals: scene refs, the probe volume shifted by the scene's
  * floating origin (zero when GI is off), sky. Leaves g->view alone. */
 void rd_world_fill_globals(const rd_world *w, pc_globals *g);

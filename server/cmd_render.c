@@ -1,4 +1,5 @@
 /* probecast render: offline rendering of one scene to PNG/JPEG and/or linear PFM. */
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -6,9 +7,12 @@
 #include <time.h>
 
 #include "cli.h"
+#include "renderer/animation_clip.h"
 #include "renderer/image_io.h"
 #include "renderer/procedural.h"
 #include "renderer/render.h"
+
+#define RENDER_MAX_UPDATES 2000u /* default cap of the convergence without --frames */
 
 static void render_usage(FILE *f)
 {
@@ -22,6 +26,9 @@ static void render_usage(FILE *f)
             "  --width W, --height H  image size in pixels (default 960 x 540)\n"
             "  --camera INDEX         the scene's camera to use (default: the first, else one\n"
             "                         framing the scene bounds)\n"
+            "  --time T               pose the scene's glTF animations at T seconds (T >= 0;\n"
+            "                         each animation loops over its own duration); without it\n"
+            "                         nodes keep the file's static transforms\n"
             "  -o FILE                tone-mapped output, .png or .jpg (default render.png)\n"
             "  --hdr FILE             linear un-tonemapped radiance as little-endian PFM\n"
             "  --exposure EV          exposure in stops before tone mapping (default 0)\n"
@@ -36,8 +43,11 @@ static void render_usage(FILE *f)
             "  --probes X,Y,Z         probe counts (default: fitted to the scene bounds)\n"
             "  --probe-spacing S      probe spacing in metres (default: from the scene size)\n"
             "  --rays N               rays per probe per update (default %u)\n"
-            "  --frames N             probe updates before the image is taken (default 32)\n"
-            "  --hysteresis H         temporal blend weight of the old probe value (default %g)\n"
+            "  --frames N             probe updates before the image is taken (default: until\n"
+            "                         every probe has converged, at most --max-updates)\n"
+            "  --max-updates N        cap of the default convergence (default %u)\n"
+            "  --hysteresis H         maximum temporal blend weight of the old probe value\n"
+            "                         (default %g; each probe ramps up to it as it settles)\n"
             "  --seed S               seed of the probe ray rotations (same seed, same image)\n"
             "  --view final|irradiance|probes  debug views: indirect irradiance only, or probe\n"
             "                         spheres shaded with their stored irradiance\n"
@@ -49,16 +59,21 @@ static void render_usage(FILE *f)
             "                         GPU, else lavapipe)\n"
             "  --list-devices         list the Vulkan devices and exit\n"
             "  --help                 this text\n",
-            rd_procedural_names(), RD_DDGI_DEFAULT_RAYS, (double)RD_DDGI_DEFAULT_HYSTERESIS);
+            rd_procedural_names(), RD_DDGI_DEFAULT_RAYS, RENDER_MAX_UPDATES,
+            (double)RD_DDGI_DEFAULT_HYSTERESIS);
 }
+
+#define RENDER_MAX_UPDATES 2000u
 
 typedef struct render_args {
     const char *scene, *out, *hdr, *device, *dump;
     rd_frame_settings fs;
     rd_ddgi_settings gi;
-    unsigned frames, spp;
+    unsigned frames, max_updates, spp; /* frames 0: converge (at most max_updates) */
     bool pathtrace;
     int camera;
+    bool has_time;
+    double time;
     unsigned quality, repeat;
     bool timings, list_devices;
 } render_args;
@@ -73,16 +88,17 @@ static int parse(int argc, char **argv, render_args *a)
     a->fs.width = 960;
     a->fs.height = 540;
     a->gi.mode = PC_GI_DDGI;
-    a->frames = 32;
+    a->frames = 0;
+    a->max_updates = RENDER_MAX_UPDATES;
     a->spp = 256;
     for (int i = 1; i < argc; i++) {
         const char *o = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
-#define NEED_VALUE                                                                               \
-    if (!v) {                                                                                    \
-        fprintf(stderr, "probecast render: %s needs a value\n", o);                              \
-        return 2;                                                                                \
-    }                                                                                            \
+#define NEED_VALUE                                                                                 \
+    if (!v) {                                                                                      \
+        fprintf(stderr, "probecast render: %s needs a value\n", o);                                \
+        return 2;                                                                                  \
+    }                                                                                              \
     i++;
         if (strcmp(o, "--help") == 0 || strcmp(o, "-h") == 0) {
             render_usage(stdout);
@@ -102,6 +118,16 @@ static int parse(int argc, char **argv, render_args *a)
             unsigned c;
             if (!cli_parse_uint(o, v, 0, 1u << 20, &c)) return 2;
             a->camera = (int)c;
+        } else if (strcmp(o, "--time") == 0) {
+            NEED_VALUE
+            char *end = NULL;
+            errno = 0;
+            a->time = strtod(v, &end);
+            if (end == v || *end != '\0' || errno || !isfinite(a->time) || a->time < 0) {
+                fprintf(stderr, "probecast render: --time expects seconds >= 0, got '%s'\n", v);
+                return 2;
+            }
+            a->has_time = true;
         } else if (strcmp(o, "-o") == 0 || strcmp(o, "--output") == 0) {
             NEED_VALUE
             a->out = v;
@@ -113,8 +139,10 @@ static int parse(int argc, char **argv, render_args *a)
             if (!cli_parse_float(o, v, &a->fs.exposure_ev)) return 2;
         } else if (strcmp(o, "--tonemap") == 0) {
             NEED_VALUE
-            if (strcmp(v, "aces") == 0) a->fs.tonemap = PC_TONEMAP_ACES;
-            else if (strcmp(v, "clamp") == 0) a->fs.tonemap = PC_TONEMAP_CLAMP;
+            if (strcmp(v, "aces") == 0)
+                a->fs.tonemap = PC_TONEMAP_ACES;
+            else if (strcmp(v, "clamp") == 0)
+                a->fs.tonemap = PC_TONEMAP_CLAMP;
             else {
                 fprintf(stderr, "probecast render: --tonemap expects aces or clamp\n");
                 return 2;
@@ -130,10 +158,14 @@ static int parse(int argc, char **argv, render_args *a)
             if (!cli_parse_uint(o, v, 1, 1000, &a->repeat)) return 2;
         } else if (strcmp(o, "--gi") == 0) {
             NEED_VALUE
-            if (strcmp(v, "off") == 0) a->gi.mode = PC_GI_OFF;
-            else if (strcmp(v, "classic") == 0) a->gi.mode = PC_GI_CLASSIC;
-            else if (strcmp(v, "ddgi") == 0) a->gi.mode = PC_GI_DDGI;
-            else if (strcmp(v, "pathtrace") == 0) a->pathtrace = true;
+            if (strcmp(v, "off") == 0)
+                a->gi.mode = PC_GI_OFF;
+            else if (strcmp(v, "classic") == 0)
+                a->gi.mode = PC_GI_CLASSIC;
+            else if (strcmp(v, "ddgi") == 0)
+                a->gi.mode = PC_GI_DDGI;
+            else if (strcmp(v, "pathtrace") == 0)
+                a->pathtrace = true;
             else {
                 fprintf(stderr, "probecast render: --gi expects off, classic, ddgi or pathtrace\n");
                 return 2;
@@ -144,7 +176,8 @@ static int parse(int argc, char **argv, render_args *a)
             if (!cli_parse_floats(o, v, c, 3)) return 2;
             for (int k = 0; k < 3; k++) {
                 if (c[k] < 1 || c[k] > 256 || c[k] != (float)(unsigned)c[k]) {
-                    fprintf(stderr, "probecast render: --probes expects three integers in 1..256\n");
+                    fprintf(stderr,
+                            "probecast render: --probes expects three integers in 1..256\n");
                     return 2;
                 }
                 a->gi.counts[k] = (unsigned)c[k];
@@ -170,6 +203,9 @@ static int parse(int argc, char **argv, render_args *a)
         } else if (strcmp(o, "--frames") == 0) {
             NEED_VALUE
             if (!cli_parse_uint(o, v, 1, 100000, &a->frames)) return 2;
+        } else if (strcmp(o, "--max-updates") == 0) {
+            NEED_VALUE
+            if (!cli_parse_uint(o, v, 1, 100000, &a->max_updates)) return 2;
         } else if (strcmp(o, "--hysteresis") == 0) {
             NEED_VALUE
             if (!cli_parse_float(o, v, &a->gi.hysteresis)) return 2;
@@ -184,9 +220,12 @@ static int parse(int argc, char **argv, render_args *a)
             a->fs.seed = a->gi.seed;
         } else if (strcmp(o, "--view") == 0) {
             NEED_VALUE
-            if (strcmp(v, "final") == 0) a->fs.view = PC_VIEW_FINAL;
-            else if (strcmp(v, "irradiance") == 0) a->fs.view = PC_VIEW_IRRADIANCE;
-            else if (strcmp(v, "probes") == 0) a->fs.view = PC_VIEW_PROBES;
+            if (strcmp(v, "final") == 0)
+                a->fs.view = PC_VIEW_FINAL;
+            else if (strcmp(v, "irradiance") == 0)
+                a->fs.view = PC_VIEW_IRRADIANCE;
+            else if (strcmp(v, "probes") == 0)
+                a->fs.view = PC_VIEW_PROBES;
             else {
                 fprintf(stderr, "probecast render: --view expects final, irradiance or probes\n");
                 return 2;
@@ -314,6 +353,17 @@ int cli_render(int argc, char **argv)
     rd_scene scene;
     double t0 = now_ms();
     if (!cli_load_scene(a.scene, &scene)) return 1;
+    if (a.has_time) {
+        if (scene.animation_count == 0)
+            fprintf(stderr, "probecast: warning: the scene has no animations; --time changes "
+                            "nothing\n");
+        rd_scene_animate(&scene, a.time);
+        if (!rd_scene_update(&scene, err, sizeof err)) {
+            fprintf(stderr, "probecast: %s\n", err);
+            rd_scene_destroy(&scene);
+            return 1;
+        }
+    }
     double load_ms = now_ms() - t0;
 
     rd_view_camera cam;
@@ -340,11 +390,30 @@ int cli_render(int argc, char **argv)
     if (vr == RD_VK_OK)
         vr = rd_renderer_configure_gi(&r, scene.bounds_min, scene.bounds_max, &a.gi, err,
                                       sizeof err);
+    if (vr == RD_VK_OK && r.world.gi && !a.pathtrace && a.frames == 0) {
+        /* no --frames: update until every probe has converged (they then sleep) */
+        unsigned done = 0;
+        rd_world_set_scene(&r.world, &gs);
+        rd_world_set_sky(&r.world, a.fs.sky);
+        vr = rd_world_converge(&r.world, a.max_updates, &done, err, sizeof err);
+        const rd_ddgi_census *c = &r.world.ddgi.census;
+        if (vr == RD_VK_OK && !rd_world_converged(&r.world))
+            fprintf(stderr,
+                    "probecast: GI not converged after %u probe updates (--max-updates): %u of "
+                    "%u probes still change; the image shows the field as it is\n",
+                    done, c->awake, rd_ddgi_probe_count(&r.world.ddgi));
+        else if (vr == RD_VK_OK)
+            fprintf(stderr,
+                    "probecast: GI converged after %u probe updates (%u probes asleep, %u off "
+                    "inside geometry)\n",
+                    done, c->sleeping, c->off);
+    }
     unsigned frames = a.timings ? a.repeat : 1;
     rd_frame_stats sum = {0};
     for (unsigned f = 0; vr == RD_VK_OK && f < frames + (a.timings ? 1 : 0); f++) {
-        /* the first frame converges the probes; timed frames after it do one update each */
-        a.fs.gi_updates = f == 0 ? a.frames : 1;
+        /* the first frame takes --frames updates (after the convergence above: one, which
+         * finds every probe asleep); timed frames after it do one update each */
+        a.fs.gi_updates = f == 0 && a.frames ? a.frames : 1;
         vr = rd_renderer_render(&r, &gs, &cam, &a.fs, err, sizeof err);
         if (vr != RD_VK_OK || (a.timings && f == 0)) continue; /* frame 0 warms up */
         const rd_frame_stats *st = &r.stats;
@@ -361,9 +430,8 @@ int cli_render(int argc, char **argv)
         uint8_t *rgba = malloc(px * 4);
         if (!rgba) abort();
         vr = rd_renderer_read_rgba8(&r, rgba, err, sizeof err);
-        if (vr == RD_VK_OK &&
-            rd_image_write_rgba8(a.out, rgba, a.fs.width, a.fs.height, (int)a.quality, err,
-                                 sizeof err) != RD_IMAGE_OK)
+        if (vr == RD_VK_OK && rd_image_write_rgba8(a.out, rgba, a.fs.width, a.fs.height,
+                                                   (int)a.quality, err, sizeof err) != RD_IMAGE_OK)
             vr = RD_VK_ERR_VULKAN; /* reported below through err */
         free(rgba);
     }

@@ -391,7 +391,11 @@ static void share_state(srv_render_loop *l, bool rendering)
     srv_render_stats *s = &l->stats.s;
     s->rendering = rendering;
     s->gi_updates = l->svc.gi_updates;
-    s->gi_converge_updates = l->svc.gi_converge;
+    s->gi_converged = rd_world_converged(w);
+    s->probes_awake = w->gi ? w->ddgi.census.awake : 0;
+    s->probes_sleeping = w->gi ? w->ddgi.census.sleeping : 0;
+    s->probes_off = w->gi ? w->ddgi.census.off : 0;
+    s->gi_drift = w->gi ? w->ddgi.drift : 0;
     s->device_lost = l->vk.device_lost;
     s->gi_mode = w->gi || l->svc.pt_target ? l->svc.st.settings.gi_mode : 0;
     s->probe_counts[0] = w->gi ? w->ddgi.vol.counts.x : 0;
@@ -447,7 +451,8 @@ static void *render_main(void *arg)
             .frame_interval_ms = 1000.0 / (s->max_fps ? s->max_fps : 1),
             .still_delay_ms = s->still_delay_ms,
             .world_wants_update = !lost && (converging || animating),
-            .world_updates_left = srv_scene_service_updates_left(&l->svc),
+            /* the service stops a tick's updates early once every probe sleeps */
+            .world_updates_left = converging ? SRV_SCHED_CONVERGE_UPDATES : 0,
             .update_ms = l->update_ms,
             .last_tick_ms = l->last_tick_ms,
             .readback_free = rd_readback_has_free(&l->rb),

@@ -38,7 +38,11 @@ typedef struct srv_render_stats {
     srv_pass_times world_passes;  /* the last tick's probe updates */
     double world_updates_per_second;
     unsigned gi_mode;
-    unsigned probes, probe_counts[3], rays_per_probe, gi_updates, gi_converge_updates;
+    unsigned probes, probe_counts[3], rays_per_probe;
+    unsigned gi_updates;                                /* since the last change that woke probes */
+    unsigned probes_awake, probes_sleeping, probes_off; /* per state (renderer/ddgi.h) */
+    bool gi_converged;                                  /* no probe awake: no probe work */
+    double gi_drift; /* mean relative change per update of the awake probes (smoothed) */
     uint64_t scene_generation, triangles;
     /* views */
     unsigned views, views_watched;

@@ -117,16 +117,6 @@ static void publish_probes(srv_scene_service *svc)
 
 /* ---- GI ------------------------------------------------------------------------------------- */
 
-static unsigned converge_updates(const srv_settings *s)
-{
-    if (s->gi_mode != PC_GI_CLASSIC && s->gi_mode != PC_GI_DDGI) return 0;
-    /* updates until the old value's weight falls below 1%: h^n < 0.01 (h = 0: one update
-     * replaces everything; a few more let the bounces settle) */
-    double h = s->hysteresis < 0.999f ? s->hysteresis : 0.999;
-    double n = h > 0 ? ceil(log(0.01) / log(h)) : 1;
-    return n < 4 ? 4 : n > 1000 ? 1000 : (unsigned)n;
-}
-
 static rd_vk_result configure_gi(srv_scene_service *svc, char *err, size_t errlen)
 {
     rd_ddgi_settings gi;
@@ -135,7 +125,6 @@ static rd_vk_result configure_gi(srv_scene_service *svc, char *err, size_t errle
     rd_vk_result vr = rd_world_configure_gi(&svc->world, svc->st.scene.bounds_min,
                                             svc->st.scene.bounds_max, &gi, err, errlen);
     svc->gi_updates = 0;
-    svc->gi_converge = svc->world.gi ? converge_updates(&svc->st.settings) : 0;
     svc->pt_target =
         svc->st.settings.gi_mode == SRV_GI_PATHTRACE ? (svc->vk->is_cpu ? 64 : 4096) : 0;
     return vr;
@@ -143,12 +132,7 @@ static rd_vk_result configure_gi(srv_scene_service *svc, char *err, size_t errle
 
 bool srv_scene_service_converging(const srv_scene_service *svc)
 {
-    return svc->world.gi && svc->gi_updates < svc->gi_converge;
-}
-
-unsigned srv_scene_service_updates_left(const srv_scene_service *svc)
-{
-    return srv_scene_service_converging(svc) ? svc->gi_converge - svc->gi_updates : 0;
+    return !rd_world_converged(&svc->world);
 }
 
 bool srv_scene_service_animating(const srv_scene_service *svc, unsigned viewers)
@@ -169,18 +153,62 @@ static bool upload_lights(srv_scene_service *svc, srv_cmd *c)
     return true;
 }
 
-/* The lighting changed: the probe field must converge again. */
-static void lighting_changed(srv_scene_service *svc)
+/* The lighting changed: every probe may see it (a light's reach is not tracked), so all wake
+ * with their hysteresis lowered by `age` (PC_DDGI_WAKE_AGE_*). */
+static void lighting_changed(srv_scene_service *svc, float age)
 {
+    rd_world_wake_all(&svc->world, age);
     svc->gi_updates = 0;
     if (svc->was_converged) publish_probes(svc);
+}
+
+/* node or one of its descendants places a light */
+static bool node_carries_light(const rd_scene *s, uint32_t node)
+{
+    for (uint32_t i = 0; i < s->light_count; i++) {
+        int32_t n = s->lights[i].node;
+        unsigned depth = 0;
+        while (n >= 0 && (uint32_t)n != node && depth++ < s->node_count)
+            n = s->nodes[n].parent;
+        if (n >= 0 && (uint32_t)n == node) return true;
+    }
+    return false;
+}
+
+/* World bounds of the instances that node moves (itself and its descendants); false when it
+ * places no mesh. */
+static bool node_bounds(const srv_scene_service *svc, uint32_t node, float lo[3], float hi[3])
+{
+    const rd_scene *s = &svc->st.scene;
+    bool any = false;
+    for (int k = 0; k < 3; k++)
+        lo[k] = INFINITY, hi[k] = -INFINITY;
+    for (uint32_t i = 0; i < s->instance_count; i++) {
+        int32_t n = (int32_t)s->instances[i].node;
+        unsigned depth = 0;
+        while (n >= 0 && (uint32_t)n != node && depth++ < s->node_count)
+            n = s->nodes[n].parent;
+        if (n < 0 || (uint32_t)n != node) continue;
+        const float *m = s->nodes[s->instances[i].node].world;
+        const float *b = &svc->gs.mesh_bounds[6 * s->instances[i].mesh];
+        for (int c = 0; c < 8; c++) { /* the 8 corners of the mesh's box, transformed */
+            float p[3] = {b[(c & 1) ? 3 : 0], b[(c & 2) ? 4 : 1], b[(c & 4) ? 5 : 2]};
+            for (int k = 0; k < 3; k++) {
+                float w = m[k] * p[0] + m[4 + k] * p[1] + m[8 + k] * p[2] + m[12 + k];
+                lo[k] = fminf(lo[k], w);
+                hi[k] = fmaxf(hi[k], w);
+            }
+        }
+        any = true;
+    }
+    return any;
 }
 
 /* After a light was added, changed or removed: upload, reconverge, tell everyone. */
 static bool lights_changed(srv_scene_service *svc, srv_cmd *c)
 {
     if (!upload_lights(svc, c)) return false;
-    lighting_changed(svc);
+    lighting_changed(svc, PC_DDGI_WAKE_AGE_LIGHT);
     publish_lights(svc, false);
     return true;
 }
@@ -248,10 +276,9 @@ static unsigned patch_settings(srv_scene_service *svc, srv_cmd *c)
     }
     if (c->settings.has & SRV_SET_SKY) {
         rd_world_set_sky(&svc->world, svc->st.settings.sky);
-        lighting_changed(svc);
+        lighting_changed(svc, PC_DDGI_WAKE_AGE_LIGHT);
     }
     if (!svc->st.settings.animate) srv_animation_pause(&svc->anim);
-    svc->gi_converge = svc->world.gi ? converge_updates(&svc->st.settings) : 0;
     srv_snapshot_publish(svc->snap, SRV_DOC_SETTINGS, srv_json_settings(&svc->st.settings), false);
     srv_cmd_complete_json(c, 200, srv_json_settings(&svc->st.settings));
     unsigned changes = SRV_CHANGE_VIEWS | SRV_CHANGE_PERSIST;
@@ -310,6 +337,8 @@ unsigned srv_scene_service_apply(srv_scene_service *svc, srv_cmd *c)
         srv_cmd_complete(c, 204, NULL);
         return SRV_CHANGE_VIEWS | SRV_CHANGE_PERSIST;
     case SRV_CMD_PATCH_NODE: {
+        float old_lo[3], old_hi[3], lo[3], hi[3];
+        bool had_mesh = c->id < st->scene.node_count && node_bounds(svc, c->id, old_lo, old_hi);
         if (!srv_state_node_apply(st, c->id, &c->node, &e)) {
             srv_cmd_complete_error(c, &e);
             return 0;
@@ -322,7 +351,16 @@ unsigned srv_scene_service_apply(srv_scene_service *svc, srv_cmd *c)
             return 0;
         }
         if (!upload_lights(svc, c)) return 0;
-        lighting_changed(svc);
+        /* probes near the node's old and new place wake (rd_world_wake_box grows the boxes by
+         * a probe spacing); lights it carries may reach anywhere */
+        if (had_mesh && node_bounds(svc, c->id, lo, hi)) {
+            rd_world_wake_box(&svc->world, old_lo, old_hi, PC_DDGI_WAKE_AGE_GEOMETRY);
+            rd_world_wake_box(&svc->world, lo, hi, PC_DDGI_WAKE_AGE_GEOMETRY);
+        }
+        if (node_carries_light(&st->scene, c->id))
+            rd_world_wake_all(&svc->world, PC_DDGI_WAKE_AGE_LIGHT);
+        svc->gi_updates = 0;
+        if (svc->was_converged) publish_probes(svc);
         srv_snapshot_set_node(svc->snap, c->id, srv_json_node(c->id, &st->scene.nodes[c->id]));
         publish_lights(svc, true); /* attached lights moved along */
         srv_cmd_complete_json(c, 200, srv_json_node(c->id, &st->scene.nodes[c->id]));
@@ -339,7 +377,7 @@ rd_vk_result srv_scene_service_advance(srv_scene_service *svc, bool animating, u
 {
     if (animating) {
         if (srv_animation_step(&svc->anim, &svc->st, now_ms) && upload_lights(svc, NULL)) {
-            lighting_changed(svc);
+            lighting_changed(svc, PC_DDGI_WAKE_AGE_NUDGE); /* a small step each frame */
             publish_lights(svc, true); /* GET answers follow; no event per frame */
         }
     } else {
@@ -347,8 +385,18 @@ rd_vk_result srv_scene_service_advance(srv_scene_service *svc, bool animating, u
     }
     if (!svc->world.gi) updates = 0;
     if (animating && svc->world.gi && updates == 0) updates = 1;
-    rd_vk_result vr = rd_world_update(&svc->world, updates, err, errlen);
-    if (vr == RD_VK_OK && svc->gi_updates < UINT32_MAX - updates) svc->gi_updates += updates;
+    rd_vk_result vr = RD_VK_OK;
+    rd_frame_stats sum;
+    memset(&sum, 0, sizeof sum);
+    unsigned done = 0;
+    /* updates stop as soon as the field has converged: then every probe sleeps */
+    while (vr == RD_VK_OK && done < updates && !rd_world_converged(&svc->world)) {
+        vr = rd_world_update(&svc->world, 1, err, errlen);
+        if (vr == RD_VK_OK) rd_frame_stats_add(&sum, &svc->world.stats);
+        done++;
+    }
+    svc->world.stats = sum;
+    if (vr == RD_VK_OK && svc->gi_updates < UINT32_MAX - done) svc->gi_updates += done;
     if (svc->was_converged != !srv_scene_service_converging(svc)) publish_probes(svc);
     return vr;
 }

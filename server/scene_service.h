@@ -37,8 +37,7 @@ typedef struct srv_scene_service {
     rd_world world;
     bool world_ok;
     uint64_t generation_counter;
-    unsigned gi_updates;  /* probe updates since the last lighting change */
-    unsigned gi_converge; /* updates after which the field counts as converged */
+    unsigned gi_updates;  /* probe updates since the last change that woke probes */
     unsigned pt_target;   /* path tracing: samples per view to accumulate (0: not path tracing) */
     bool was_converged;   /* as last published in the scene document */
     srv_animation anim;
@@ -56,12 +55,12 @@ void srv_scene_service_dispose(srv_scene_service *svc); /* idempotent; the devic
 /* Applies a world command and completes it; returns SRV_CHANGE_* bits. */
 unsigned srv_scene_service_apply(srv_scene_service *svc, srv_cmd *c);
 
-/* The probe field still wants updates (and how many). */
+/* The probe field still wants updates: some probe is awake (rd_world_converged). */
 bool srv_scene_service_converging(const srv_scene_service *svc);
-unsigned srv_scene_service_updates_left(const srv_scene_service *svc);
 /* The demo animation runs (enabled, the scene has a light, viewers is not 0). */
 bool srv_scene_service_animating(const srv_scene_service *svc, unsigned viewers);
-/* One world tick: moves the animation (when animating) and runs `updates` probe updates. */
+/* One world tick: moves the animation (when animating) and runs up to `updates` probe updates,
+ * fewer when the field converges first. */
 rd_vk_result srv_scene_service_advance(srv_scene_service *svc, bool animating, unsigned updates,
                                        double now_ms, char *err, size_t errlen);
 /* The saved-state document (the default view's camera passed in). */

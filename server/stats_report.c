@@ -56,9 +56,16 @@ cJSON *srv_stats_json(const srv_stats_snapshot *s)
     cJSON_AddNumberToObject(p, "total", r->probes);
     cJSON_AddNumberToObject(p, "rays_per_probe", r->rays_per_probe);
     cJSON_AddNumberToObject(p, "updates_since_change", r->gi_updates);
-    cJSON_AddNumberToObject(p, "updates_to_converge", r->gi_converge_updates);
-    cJSON_AddBoolToObject(p, "converged",
-                          r->gi_mode == 0 || r->gi_updates >= r->gi_converge_updates);
+    cJSON *states = cJSON_AddObjectToObject(p, "states");
+    cJSON_AddNumberToObject(states, "awake", r->probes_awake);
+    cJSON_AddNumberToObject(states, "sleeping", r->probes_sleeping);
+    cJSON_AddNumberToObject(states, "off", r->probes_off);
+    cJSON_AddBoolToObject(p, "converged", r->gi_converged);
+    /* convergence: the share of the probes that light the scene (not off) that have settled */
+    unsigned lit = r->probes_awake + r->probes_sleeping;
+    cJSON_AddNumberToObject(p, "convergence", lit ? (double)r->probes_sleeping / lit : 1.0);
+    cJSON_AddNumberToObject(p, "drift_per_update", r->gi_drift);
+    cJSON_AddNumberToObject(p, "updates_per_second", r->world_updates_per_second);
     cJSON *st = cJSON_AddObjectToObject(j, "stream");
     cJSON_AddNumberToObject(st, "viewers", s->stream.viewers);
     cJSON_AddNumberToObject(st, "bandwidth_bps", s->stream.bandwidth_bps);
@@ -155,7 +162,13 @@ char *srv_stats_prometheus(const srv_stats_snapshot *s)
            "Rays per second of GPU time in the last frame.", r->rays_per_second);
     metric(&t, "probecast_probes", "gauge", "DDGI probes.", r->probes);
     metric(&t, "probecast_probe_updates_since_change", "gauge",
-           "Probe updates since the lighting changed.", r->gi_updates);
+           "Probe updates since the last change that woke probes.", r->gi_updates);
+    metric(&t, "probecast_probes_awake", "gauge", "DDGI probes traced and blended every update.",
+           r->probes_awake);
+    metric(&t, "probecast_probes_sleeping", "gauge",
+           "DDGI probes converged: sampled, neither traced nor blended.", r->probes_sleeping);
+    metric(&t, "probecast_probes_off", "gauge", "DDGI probes inside geometry: not sampled.",
+           r->probes_off);
     metric(&t, "probecast_jpeg_encode_seconds", "gauge", "Mean JPEG encoding time.",
            s->encoder.encode_ms_avg / 1000.0);
     metric(&t, "probecast_jpegs_encoded_total", "counter", "JPEG images encoded.",
@@ -164,8 +177,7 @@ char *srv_stats_prometheus(const srv_stats_snapshot *s)
            (double)s->encoder.frames_published);
     metric(&t, "probecast_viewers", "gauge", "Connected viewers.", s->stream.viewers);
     metric(&t, "probecast_stream_bandwidth_bytes_per_second", "gauge",
-           "Bytes per second sent to viewers over the last second.",
-           s->stream.bandwidth_bps / 8.0);
+           "Bytes per second sent to viewers over the last second.", s->stream.bandwidth_bps / 8.0);
     metric(&t, "probecast_stream_bytes_total", "counter", "Bytes sent to viewers.",
            (double)s->stream.bytes_sent);
     metric(&t, "probecast_stream_frames_sent_total", "counter", "Frames sent to viewers.",

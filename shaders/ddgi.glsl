@@ -9,6 +9,21 @@ layout(buffer_reference, std430, buffer_reference_align = 8) buffer DdgiIrradian
 layout(buffer_reference, std430, buffer_reference_align = 8) buffer DdgiDistanceRef { vec2 v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer DdgiRayRef { vec4 v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer DdgiProbeRef { vec4 v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer DdgiStatsRef { vec4 v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer DdgiListRef { uint v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer DdgiControlRef
+{
+    uvec4 trace_args;
+    uvec4 blend_args;
+    uvec4 border_args;
+    uvec4 before;
+    uvec4 after;
+    ivec4 drift;
+};
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer DdgiWakeRef
+{
+    pc_ddgi_wake v[];
+};
 
 /* ---- octahedral mapping ------------------------------------------------------------- */
 vec2 sign_not_zero(vec2 v) { return vec2(v.x >= 0.0 ? 1.0 : -1.0, v.y >= 0.0 ? 1.0 : -1.0); }
@@ -75,6 +90,14 @@ bool ddgi_probe_active(pc_ddgi_volume vol, uint index)
 {
     return (uint(DdgiProbeRef(vol.probes).v[index].w) & PC_DDGI_PROBE_ACTIVE) != 0u;
 }
+
+uint ddgi_probe_state(pc_ddgi_volume vol, uint index)
+{
+    return uint(DdgiProbeRef(vol.probes).v[index].w);
+}
+
+/* The probe an update pass works on: entry `slot` of this update's list. */
+uint ddgi_listed_probe(pc_ddgi_volume vol, uint slot) { return DdgiListRef(vol.list).v[slot]; }
 
 /* Texel (x, y) of probe's tile (side = interior + 2, border included). */
 uint ddgi_texel(uint probe, uint side, uint x, uint y) { return (probe * side + y) * side + x; }

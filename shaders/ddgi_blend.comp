@@ -1,10 +1,15 @@
 #version 460
-/* DDGI probe blend (paper Sec. 4.2, Eq. 1): one workgroup per probe, one thread per interior
- * texel of its octahedral tile. params.x selects the atlas: 0 = irradiance (8x8, weights
- * max(0, cos), perceptual encoding x^(1/5), convergence heuristics), 1 = distance (16x16,
- * weights cos^50, mean and mean square of min(|t|, max distance)). The irradiance blend also
- * classifies the probe: more than params.z back-face hits means it sits inside geometry and
- * is switched off for sampling. Rays are staged through shared memory in chunks.
+/* DDGI probe blend (paper Sec. 4.2, Eq. 1): one workgroup per probe of the update's list, one
+ * thread per interior texel of its octahedral tile. params.x selects the atlas: 0 = irradiance
+ * (8x8, weights max(0, cos), perceptual encoding x^(1/5)), 1 = distance (16x16, weights cos^50,
+ * mean and mean square of min(|t|, max distance)). The distance blend runs first.
+ *
+ * Hysteresis is per probe (renderer/ddgi.c says why): h = min(h_max, a / (a + AGE_RAMP)) for
+ * the probe's age a. The irradiance blend then measures the probe: its relative change this
+ * update (mean fresh against mean stored encoded luminance), which feeds the drift sums the CPU turns
+ * into next update's hold flag; ages advance unless the field drifts. It also classifies the
+ * probe: more than params.z back-face hits means it sits inside geometry (off); a probe whose
+ * age reached the sleep age falls asleep.
  * push: globals, params.x = atlas. */
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
@@ -13,9 +18,11 @@
 layout(local_size_x = PC_DDGI_DIST_INTERIOR, local_size_y = PC_DDGI_DIST_INTERIOR) in;
 
 #define CHUNK 256u
+#define TEXELS (PC_DDGI_IRR_INTERIOR * PC_DDGI_IRR_INTERIOR)
 shared vec4 s_ray[CHUNK];
 shared vec3 s_dir[CHUNK];
 shared uint s_backfaces;
+shared vec2 s_lum[TEXELS]; /* per irradiance texel: (stored, fresh) encoded luminance */
 
 void main()
 {
@@ -24,12 +31,11 @@ void main()
     bool irradiance = pc.params.x == 0u;
     uint interior = irradiance ? PC_DDGI_IRR_INTERIOR : PC_DDGI_DIST_INTERIOR;
     uint side = interior + 2u;
-    uint probe = gl_WorkGroupID.x;
+    uint probe = ddgi_listed_probe(vol, gl_WorkGroupID.x);
     uvec2 t = gl_LocalInvocationID.xy;
     bool mine = all(lessThan(t, uvec2(interior)));
     vec3 texel_dir = oct_texel_dir(min(t, uvec2(interior - 1u)), interior);
-    /* the classification as the trace saw it (the distance blend runs first, the irradiance
-     * blend updates the classification last) */
+    /* the classification as the trace saw it (the irradiance blend updates it last) */
     bool probe_on = ddgi_probe_active(vol, probe);
     if (!probe_on && !irradiance) return; /* whole workgroup: an off probe keeps its atlas */
     uint n = probe_on ? vol.counts.w : min(vol.counts.w, PC_DDGI_INACTIVE_RAYS);
@@ -37,6 +43,7 @@ void main()
     uint lid = gl_LocalInvocationIndex;
     uint threads = gl_WorkGroupSize.x * gl_WorkGroupSize.y;
     if (lid == 0u) s_backfaces = 0u;
+    if (lid < TEXELS) s_lum[lid] = vec2(0.0);
 
     vec3 sum = vec3(0.0);
     float wsum = 0.0;
@@ -68,9 +75,10 @@ void main()
             }
         }
     }
-    barrier();
-    bool first = vol.info.y == 0u;
-    float h = first ? 0.0 : vol.params.x;
+    DdgiStatsRef stats = DdgiStatsRef(vol.stats);
+    vec4 st = stats.v[probe];
+    float h_max = vol.params.x;
+    float h = vol.info.y == 0u ? 0.0 : min(h_max, st.x / (st.x + PC_DDGI_AGE_RAMP));
     if (mine) {
         uint texel = ddgi_texel(probe, side, t.x + 1u, t.y + 1u);
         if (irradiance) {
@@ -80,19 +88,18 @@ void main()
             uvec2 old_packed = a.v[texel];
             vec3 old = vec3(unpackHalf2x16(old_packed.x), unpackHalf2x16(old_packed.y).x);
             bool written = unpackHalf2x16(old_packed.y).y > 0.5;
-            if (!written || first) h = 0.0;
-            /* convergence heuristics (ddgi-reference.md): large drops converge faster... */
-            if (any(greaterThan(old - fresh, vec3(0.25)))) h = max(0.0, h - 0.75);
-            vec3 delta = fresh - old;
-            vec3 step = (1.0 - h) * delta;
-            /* ...large brightness changes are damped against flicker... */
-            if (written && abs(luminance(delta)) > 0.10) step *= 0.25;
-            /* ...and darkening always progresses by at least 1/1024 */
-            for (int c = 0; c < 3; c++)
-                if (delta[c] < 0.0) step[c] = max(delta[c], min(step[c], -1.0 / 1024.0));
-            vec3 result = (!written || first) ? fresh : old + step;
+            /* No asymmetric heuristics (a faster step for large drops, a minimum darkening
+             * step): both bias the stored mean low, which the drift measure then sees forever;
+             * the per-probe age already makes steps large after a change. */
+            vec3 result = written ? mix(fresh, old, h) : fresh;
             if (any(isnan(result)) || any(isinf(result))) result = vec3(0.0);
             a.v[texel] = uvec2(packHalf2x16(result.rg), packHalf2x16(vec2(result.b, 1.0)));
+            /* measured in the stored (encoded) space: there the blend is an unbiased mean of
+             * the fresh values, so a settled probe shows no drift (decoded, the stored value
+             * sits below the fresh mean by Jensen's inequality) */
+            if (any(isnan(old)) || any(isinf(old))) old = vec3(0.0);
+            s_lum[t.y * PC_DDGI_IRR_INTERIOR + t.x] =
+                vec2(written ? luminance(max(old, vec3(0.0))) : 0.0, luminance(max(fresh, vec3(0.0))));
         } else {
             DdgiDistanceRef a = DdgiDistanceRef(vol.distance);
             vec2 fresh = wsum > 1e-6 ? sum.xy / wsum : a.v[texel];
@@ -101,10 +108,39 @@ void main()
             a.v[texel] = result;
         }
     }
-    if (irradiance && lid == 0u) {
-        bool inside = float(s_backfaces) > vol.params.z * float(n);
-        vec4 pd = DdgiProbeRef(vol.probes).v[probe];
-        pd.w = float(inside ? 0u : PC_DDGI_PROBE_ACTIVE);
-        DdgiProbeRef(vol.probes).v[probe] = pd;
+    if (!irradiance) return;
+    barrier();
+    if (lid != 0u) return;
+    /* thread 0: measure, classify, age */
+    DdgiControlRef ctrl = DdgiControlRef(vol.ctrl);
+    bool inside = float(s_backfaces) > vol.params.z * float(n);
+    uint state;
+    if (inside) {
+        state = PC_DDGI_PROBE_OFF;
+        st.x = 0.0; /* when it comes back on, it starts over */
+    } else if (!probe_on) {
+        state = PC_DDGI_PROBE_AWAKE; /* back on (geometry moved): blended from the next update */
+        st.x = 0.0;
+    } else {
+        vec2 m = vec2(0.0);
+        for (uint i = 0u; i < TEXELS; i++) m += s_lum[i];
+        /* relative change, as a change of the decoded value (x^e changes e times as much) */
+        float rel = clamp(vol.params.w * (m.y - m.x) / max(max(m.x, m.y), 1e-12), -1.0, 1.0);
+        if (isnan(rel) || isinf(rel)) rel = 0.0;
+        st.y = mix(st.y, rel, 0.25);
+        st.z = mix(st.z, abs(rel), 0.25);
+        atomicAdd(ctrl.drift.x, int(round(rel * PC_DDGI_DRIFT_SCALE)));
+        atomicAdd(ctrl.drift.y, int(round(rel * rel * PC_DDGI_DRIFT_SCALE)));
+        atomicAdd(ctrl.drift.z, 1);
+        if (vol.control.x == 0u) st.x += 1.0;
+        state = st.x >= uintBitsToFloat(vol.control.y) ? PC_DDGI_PROBE_SLEEPING
+                                                      : PC_DDGI_PROBE_AWAKE;
     }
+    if (state == PC_DDGI_PROBE_AWAKE) atomicAdd(ctrl.after.x, 1u);
+    else if (state == PC_DDGI_PROBE_SLEEPING) atomicAdd(ctrl.after.y, 1u);
+    else atomicAdd(ctrl.after.z, 1u);
+    stats.v[probe] = st;
+    vec4 pd = DdgiProbeRef(vol.probes).v[probe];
+    pd.w = float(state);
+    DdgiProbeRef(vol.probes).v[probe] = pd;
 }

@@ -1,7 +1,8 @@
 #version 460
 /* DDGI border update: every border texel of every probe tile copies its octahedral wrap
  * source (ddgi-reference.md), so that bilinear filtering across a tile edge continues on
- * the sphere. One thread per border texel; params.x: 0 irradiance atlas, 1 distance atlas.
+ * the sphere. One thread per border texel of each probe of the update's list (x: border texel,
+ * workgroup y: list entry); params.x: 0 irradiance atlas, 1 distance atlas.
  * With T texels per side and I = T - 2 interior: corners <- (x > 0 ? 1 : I, y > 0 ? 1 : I);
  * top/bottom rows <- (T-1-x, 1 / I); left/right columns <- (1 / I, T-1-y). */
 #extension GL_GOOGLE_include_directive : require
@@ -26,9 +27,9 @@ void main()
     bool irradiance = pc.params.x == 0u;
     uint side = irradiance ? vol.info.z : vol.info.w;
     uint per_probe = 4u * (side - 1u);
-    uint id = gl_GlobalInvocationID.x;
-    uint probe = id / per_probe, k = id % per_probe;
-    if (probe >= ddgi_probe_count(vol)) return;
+    uint k = gl_GlobalInvocationID.x;
+    if (k >= per_probe) return;
+    uint probe = ddgi_listed_probe(vol, gl_WorkGroupID.y);
     /* walk the border: top row, right column, bottom row, left column */
     uint last = side - 1u;
     uvec2 p;

@@ -4,6 +4,7 @@
  * the previous update's irradiance at the hit. The last term carries light across updates,
  * one more bounce per update; the 0.9 cap guards energy (production practice). Misses see
  * the sky; back faces of single-sided surfaces carry no radiance.
+ * Works on the update's probe list, like ddgi_trace.comp.
  * push: globals, buf0 = uvec4 hits[], buf1 = pc_counters, params.y = 1 when the probe field
  * already holds an update (else no indirect term). */
 #extension GL_GOOGLE_include_directive : require
@@ -18,10 +19,10 @@ void main()
     count_rays_begin();
     pc_globals g = load_globals();
     pc_ddgi_volume vol = g.ddgi;
-    uint ray = gl_GlobalInvocationID.x, probe = gl_GlobalInvocationID.y;
+    uint ray = gl_GlobalInvocationID.x, probe = ddgi_listed_probe(vol, gl_WorkGroupID.y);
     uint shadow_rays = 0u;
-    /* inactive probes are never sampled: nothing to shade */
-    if (ray < vol.counts.w && probe < ddgi_probe_count(vol) && ddgi_probe_active(vol, probe)) {
+    /* off probes are never sampled: nothing to shade */
+    if (ray < vol.counts.w && ddgi_probe_active(vol, probe)) {
         uint slot = probe * vol.counts.w + ray;
         vec4 r = DdgiRayRef(vol.rays).v[slot];
         uvec4 rec = HitRef(pc.buf0).v[slot];

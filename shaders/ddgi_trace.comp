@@ -4,7 +4,9 @@
  * registers). Writes per ray: hits[] = (tri, instance, u bits, v bits) and rays[].w = hit
  * distance (1e27 for a miss, -0.2 t for a back face of a single-sided surface, which marks a
  * probe that may sit inside geometry). ddgi_shade.comp fills in the radiance.
- * Inactive probes trace only their first PC_DDGI_INACTIVE_RAYS rays (for re-classification).
+ * Works on the update's probe list (ddgi_select.comp; dispatched indirectly: x ray groups, y
+ * listed probes). Off probes trace only their first PC_DDGI_INACTIVE_RAYS rays (for
+ * re-classification).
  * push: globals, buf0 = uvec4 hits[], buf1 = pc_counters. */
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
@@ -18,9 +20,9 @@ void main()
     count_rays_begin();
     pc_globals g = load_globals();
     pc_ddgi_volume vol = g.ddgi;
-    uint ray = gl_GlobalInvocationID.x, probe = gl_GlobalInvocationID.y;
+    uint ray = gl_GlobalInvocationID.x, probe = ddgi_listed_probe(vol, gl_WorkGroupID.y);
     uint rays = 0u;
-    bool wanted = ray < vol.counts.w && probe < ddgi_probe_count(vol) &&
+    bool wanted = ray < vol.counts.w &&
                   (ray < PC_DDGI_INACTIVE_RAYS || ddgi_probe_active(vol, probe));
     if (wanted) {
         uint slot = probe * vol.counts.w + ray;

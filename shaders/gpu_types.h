@@ -72,10 +72,10 @@ static inline float pc_u2f(uint32_t u)
 #define PC_TRI_DOUBLE_SIDED 1u
 #define PC_TRI_ALPHA_MASK 2u
 
-
 /* trace() flags */
-#define PC_TRACE_ANY_HIT 1u         /* stop at the first accepted hit (shadow rays) */
-#define PC_TRACE_CULL_BACKFACES 2u  /* ignore back faces of single-sided materials (primary rays) */
+#define PC_TRACE_ANY_HIT 1u        /* stop at the first accepted hit (shadow rays) */
+#define PC_TRACE_CULL_BACKFACES 2u /* ignore back faces of single-sided materials (primary rays)   \
+                                    */
 
 #define PC_TONEMAP_ACES 0u
 #define PC_TONEMAP_CLAMP 1u
@@ -174,17 +174,17 @@ PC_END(pc_light);
 /* Addresses and counts of the scene on the GPU. */
 PC_STRUCT(pc_scene_refs)
 {
-    pc_u64 tris;        /* pc_tri[]            */
-    pc_u64 tri_attrs;   /* pc_tri_attr[]       */
-    pc_u64 blas_nodes;  /* pc_bvh_node[]       */
-    pc_u64 tlas_nodes;  /* pc_bvh_node[]       */
-    pc_u64 tlas_index;  /* uint[]: TLAS leaf entry -> instance index */
-    pc_u64 instances;   /* pc_instance[]       */
-    pc_u64 materials;   /* pc_material[]       */
-    pc_u64 textures;    /* pc_texture[]        */
-    pc_u64 texels;      /* uint[]              */
-    pc_u64 lights;      /* pc_light[]          */
-    pc_uvec4 counts;    /* x: instances, y: lights, z: materials, w: textures */
+    pc_u64 tris;       /* pc_tri[]            */
+    pc_u64 tri_attrs;  /* pc_tri_attr[]       */
+    pc_u64 blas_nodes; /* pc_bvh_node[]       */
+    pc_u64 tlas_nodes; /* pc_bvh_node[]       */
+    pc_u64 tlas_index; /* uint[]: TLAS leaf entry -> instance index */
+    pc_u64 instances;  /* pc_instance[]       */
+    pc_u64 materials;  /* pc_material[]       */
+    pc_u64 textures;   /* pc_texture[]        */
+    pc_u64 texels;     /* uint[]              */
+    pc_u64 lights;     /* pc_light[]          */
+    pc_uvec4 counts;   /* x: instances, y: lights, z: materials, w: textures */
 }
 PC_END(pc_scene_refs);
 
@@ -220,24 +220,48 @@ PC_END(pc_environment);
 #define PC_DDGI_IRR_INTERIOR 8u   /* irradiance texels per side, without border */
 #define PC_DDGI_DIST_INTERIOR 16u /* distance texels per side, without border */
 #define PC_DDGI_MAX_RAYS 1024u
-#define PC_DDGI_PROBE_ACTIVE 1u   /* probe_data.w bit: probe outside geometry, sampled */
-/* An inactive (off) probe traces only this many of its rays, enough to notice when the
- * geometry around it changes (2021 paper: off probes trace a few fixed rays), and is
- * neither shaded nor blended. */
+/* Probe states (probes[].w, as a float; 2021 follow-up paper, Sec. 5). Bit 0 (ACTIVE) means
+ * shading samples the probe; bit 1 means its value is final and updates skip it. */
+#define PC_DDGI_PROBE_ACTIVE 1u   /* bit: outside geometry, sampled */
+#define PC_DDGI_PROBE_OFF 0u      /* inside geometry: not sampled; re-checked now and then */
+#define PC_DDGI_PROBE_AWAKE 1u    /* sampled, traced and blended every update */
+#define PC_DDGI_PROBE_SLEEPING 3u /* converged: sampled, neither traced nor blended */
+/* An off probe traces only this many of its rays, enough to notice when the geometry around
+ * it changes (2021 paper: off probes trace a few fixed rays), and is neither shaded nor
+ * blended; it is traced once every PC_DDGI_OFF_RECHECK updates, or after a wake in its box. */
 #define PC_DDGI_INACTIVE_RAYS 32u
+#define PC_DDGI_OFF_RECHECK 16u
+/* Adaptive hysteresis: a probe of age a (updates since it was woken, counted only while the
+ * awake field shows no drift) blends with h = min(h_max, a / (a + PC_DDGI_AGE_RAMP)), and
+ * falls asleep PC_DDGI_SETTLE_UPDATES updates after h reached h_max. Rule and measurements:
+ * renderer/ddgi.c. Wake events set the age of the probes they reach to at most: */
+#define PC_DDGI_AGE_RAMP 4.0
+#define PC_DDGI_SETTLE_UPDATES 16u
+#define PC_DDGI_WAKE_AGE_GEOMETRY 0.0 /* a node moved: start over (h = 0) */
+#define PC_DDGI_WAKE_AGE_LIGHT 4.0    /* a light or the sky changed: h = 0.5 at first */
+#define PC_DDGI_WAKE_AGE_NUDGE 23.0   /* one small step of an animated light: h = 0.85 */
+#define PC_DDGI_WAKE_MAX 32u          /* wake boxes per update; more become "wake all" */
+#define PC_DDGI_DRIFT_SCALE 16384.0   /* fixed point of the drift sums */
 
 /* origin: xyz position of probe (0,0,0), w = max ray distance for distance blending;
- * spacing: xyz grid spacing, w = 1 / (1 - hysteresis) unused (0);
+ * spacing: xyz grid spacing, w unused (0);
  * counts: xyz probes per axis, w = rays per probe;
  * rotation: rows of this update's random ray rotation (uniform on SO(3));
- * params: x hysteresis, y bias scale (world units), z back-face ratio that deactivates a
- *   probe, w = irradiance encoding exponent (5);
+ * params: x maximum hysteresis, y bias scale (world units), z back-face ratio that deactivates
+ *   a probe, w = irradiance encoding exponent (5);
  * info: x PC_GI_*, y updates done since reset (0 = next is the first), z atlas irradiance
  *   tile side (interior + 2), w distance tile side (interior + 2);
+ * control: x = 1 while the awake field drifts (ages hold), y = age at which a probe falls
+ *   asleep (as float bits), z = wake boxes this update, w unused;
  * irradiance: uvec2[] per texel (packHalf2x16 of rgb^(1/5) and a written flag);
  * distance: vec2[] per texel (mean, mean of squares);
  * rays: vec4[] per probe ray (radiance, hit distance; < 0: back face);
- * probes: vec4[] per probe (xyz offset, w = PC_DDGI_PROBE_* bits as float). */
+ * probes: vec4[] per probe (xyz offset, w = PC_DDGI_PROBE_* state as float);
+ * stats: vec4[] per probe (x age, y mean of its relative change per update, z mean of its
+ *   absolute relative change per update, w = 1 when an off probe must be re-checked);
+ * list: uint[] probes updated this update (written by ddgi_select.comp);
+ * ctrl: pc_ddgi_control (host-visible: indirect dispatch sizes, census, drift sums);
+ * wake: pc_ddgi_wake[control.z] boxes (host-visible). */
 PC_STRUCT(pc_ddgi_volume)
 {
     pc_vec4 origin;
@@ -250,8 +274,34 @@ PC_STRUCT(pc_ddgi_volume)
     pc_u64 distance;
     pc_u64 rays;
     pc_u64 probes;
+    pc_uvec4 control;
+    pc_u64 stats;
+    pc_u64 list;
+    pc_u64 ctrl;
+    pc_u64 wake;
 }
 PC_END(pc_ddgi_volume);
+
+/* One update's bookkeeping, reset by the CPU before each update and read back after it. */
+PC_STRUCT(pc_ddgi_control)
+{
+    pc_uvec4 trace_args;  /* indirect dispatch: x ray groups, y listed probes, z 1 */
+    pc_uvec4 blend_args;  /* x listed probes, y 1, z 1 */
+    pc_uvec4 border_args; /* x border groups per probe, y listed probes, z 1 */
+    pc_uvec4 before;      /* states when the update began: x awake, y sleeping, z off, w listed */
+    pc_uvec4 after;       /* states the listed probes ended in: x awake, y sleeping, z off */
+    pc_uvec4 drift;       /* over blended probes: x sum of relative change (int, fixed point),
+                             y sum of its square (fixed point), z probes, w unused */
+}
+PC_END(pc_ddgi_control);
+
+/* A wake event: probes within [lo, hi] (GPU frame) get age at most lo.w. */
+PC_STRUCT(pc_ddgi_wake)
+{
+    pc_vec4 lo;
+    pc_vec4 hi;
+}
+PC_END(pc_ddgi_wake);
 
 /* Everything a pass reads, in one GPU buffer reached by address. scene, env and ddgi are the
  * world's (rd_world_fill_globals); view is the rendering view's (zero for probe updates). */
@@ -283,7 +333,7 @@ PC_END(pc_gbuffer_texel);
 PC_STRUCT(pc_counters)
 {
     pc_u32 primary_rays;
-    pc_u32 shadow_rays;       /* from camera-visible surfaces */
+    pc_u32 shadow_rays; /* from camera-visible surfaces */
     pc_u32 probe_rays;
     pc_u32 path_rays;         /* path-traced rays, shadow rays included */
     pc_u32 probe_shadow_rays; /* from probe-ray hits */
@@ -294,8 +344,8 @@ PC_END(pc_counters);
 /* Push constants shared by all passes: address of pc_globals plus pass-specific words. */
 PC_STRUCT(pc_push)
 {
-    pc_u64 globals;  /* pc_globals  */
-    pc_u64 buf0;     /* pass-specific buffers */
+    pc_u64 globals; /* pc_globals  */
+    pc_u64 buf0;    /* pass-specific buffers */
     pc_u64 buf1;
     pc_u64 buf2;
     pc_uvec4 params;
@@ -304,7 +354,7 @@ PC_END(pc_push);
 
 #ifndef PC_GLSL
 #define PC_CHECK(type, size) _Static_assert(sizeof(type) == (size), #type " size")
-#define PC_OFF(type, member, off)                                                               \
+#define PC_OFF(type, member, off)                                                                  \
     _Static_assert(offsetof(type, member) == (off), #type "." #member " offset")
 PC_CHECK(pc_tri, 48);
 PC_OFF(pc_tri, v1, 16);
@@ -334,17 +384,21 @@ PC_CHECK(pc_view, 96);
 PC_OFF(pc_view, size, 64);
 PC_OFF(pc_view, tonemap, 80);
 PC_CHECK(pc_environment, 16);
-PC_CHECK(pc_ddgi_volume, 160);
+PC_CHECK(pc_ddgi_volume, 208);
+PC_OFF(pc_ddgi_volume, control, 160);
+PC_OFF(pc_ddgi_volume, wake, 200);
+PC_CHECK(pc_ddgi_control, 96);
+PC_CHECK(pc_ddgi_wake, 32);
 PC_OFF(pc_ddgi_volume, counts, 32);
 PC_OFF(pc_ddgi_volume, rotation, 48);
 PC_OFF(pc_ddgi_volume, params, 96);
 PC_OFF(pc_ddgi_volume, info, 112);
 PC_OFF(pc_ddgi_volume, irradiance, 128);
 PC_OFF(pc_ddgi_volume, probes, 152);
-PC_CHECK(pc_globals, 368);
+PC_CHECK(pc_globals, 416);
 PC_OFF(pc_globals, view, 96);
 PC_OFF(pc_globals, ddgi, 192);
-PC_OFF(pc_globals, env, 352);
+PC_OFF(pc_globals, env, 400);
 PC_CHECK(pc_gbuffer_texel, 80);
 PC_OFF(pc_gbuffer_texel, albedo, 48);
 PC_CHECK(pc_counters, 32);

@@ -35,13 +35,17 @@ float *test_render(rd_vk *vk, const test_render_desc *d, pc_view *view_out,
         return NULL;
     }
     rd_view_camera cam;
-    CHECK(rd_camera_for_scene(&s, -1, &cam, err, sizeof err));
+    CHECK(rd_camera_for_scene(&s, d->camera > 0 ? d->camera : -1, &cam, err, sizeof err));
     rd_gpu_scene gs;
     rd_renderer r;
     float *rgb = calloc((size_t)d->width * d->height * 3, sizeof(float));
-    rd_frame_settings fs = {.width = d->width, .height = d->height, .view = d->view,
-                            .gi_updates = d->updates, .pathtrace_spp = d->pathtrace_spp,
-                            .max_bounces = d->max_bounces, .seed = d->seed};
+    rd_frame_settings fs = {.width = d->width,
+                            .height = d->height,
+                            .view = d->view,
+                            .gi_updates = d->updates,
+                            .pathtrace_spp = d->pathtrace_spp,
+                            .max_bounces = d->max_bounces,
+                            .seed = d->seed};
     rd_vk_result res = rd_gpu_scene_create(vk, &gs, &s, err, sizeof err);
     CHECKF(res == RD_VK_OK, "%s", err);
     if (res == RD_VK_OK) res = rd_renderer_create(vk, &r, err, sizeof err);
@@ -49,6 +53,15 @@ float *test_render(rd_vk *vk, const test_render_desc *d, pc_view *view_out,
     if (res == RD_VK_OK)
         res = rd_renderer_configure_gi(&r, s.bounds_min, s.bounds_max, &d->gi, err, sizeof err);
     CHECKF(res == RD_VK_OK, "%s", err);
+    if (res == RD_VK_OK && d->converge && r.world.gi) {
+        unsigned done = 0;
+        rd_world_set_scene(&r.world, &gs);
+        res = rd_world_converge(&r.world, 2000, &done, err, sizeof err);
+        CHECKF(res == RD_VK_OK, "%s", err);
+        CHECKF(rd_world_converged(&r.world), "%s: not converged after %u updates", d->scene, done);
+        printf("%s: converged after %u probe updates\n", d->scene, done);
+        if (d->converge_updates) *d->converge_updates = done;
+    }
     if (res == RD_VK_OK) res = rd_renderer_render(&r, &gs, &cam, &fs, err, sizeof err);
     CHECKF(res == RD_VK_OK, "%s", err);
     if (res == RD_VK_OK) res = rd_renderer_read_hdr(&r, rgb, err, sizeof err);
@@ -70,8 +83,10 @@ double test_image_mean(const float *rgb, size_t floats, size_t *non_finite)
     double sum = 0;
     size_t bad = 0;
     for (size_t i = 0; i < floats; i++) {
-        if (!isfinite(rgb[i])) bad++;
-        else sum += rgb[i];
+        if (!isfinite(rgb[i]))
+            bad++;
+        else
+            sum += rgb[i];
     }
     if (non_finite) *non_finite = bad;
     return floats ? sum / floats : 0;

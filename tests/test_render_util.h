@@ -6,12 +6,16 @@
 #include "renderer/render.h"
 
 typedef struct test_render_desc {
-    const char *scene;      /* builtin scene name */
+    const char *scene; /* builtin scene name */
     unsigned width, height;
-    rd_ddgi_settings gi;    /* mode 0 = no GI */
-    unsigned updates;       /* probe updates before the image */
-    unsigned view;          /* PC_VIEW_* */
-    unsigned pathtrace_spp; /* > 0: path-traced reference instead */
+    rd_ddgi_settings gi;        /* mode 0 = no GI */
+    unsigned updates;           /* probe updates before the image */
+    bool converge;              /* first update until the field converges (as `probecast render`
+                                   without --frames), at most 2000 updates */
+    unsigned *converge_updates; /* optional: receives the updates convergence took */
+    int camera;                 /* the scene's camera index (0: the first, or a framing one) */
+    unsigned view;              /* PC_VIEW_* */
+    unsigned pathtrace_spp;     /* > 0: path-traced reference instead */
     unsigned max_bounces;
     unsigned seed;
 } test_render_desc;

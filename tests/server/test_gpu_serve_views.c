@@ -11,10 +11,11 @@
 #include "serve_util.h"
 #include "test_util.h"
 
-/* Tiny and quickly converging: 8 probes of 16 rays, hysteresis 0.5 (7 updates per change). */
+/* Tiny and quickly converging: 8 probes of 128 rays, hysteresis 0.5 (the field sleeps some 20
+ * updates after a change; enough rays that the drift measure rarely holds the ages longer). */
 static const char *const args[] = {
     "--no-animate",    "--width", "64",           "--height", "48",        "--probes", "2,2,2",
-    "--rays",          "16",      "--hysteresis", "0.5",      "--max-fps", "30",       "--scene",
+    "--rays",          "128",     "--hysteresis", "0.5",      "--max-fps", "30",       "--scene",
     "builtin:cornell", NULL};
 
 typedef struct viewer {
@@ -226,16 +227,18 @@ int main(void)
     CHECK(frame_where(&b, 60000, b.view, 48, 64, 0));
 
     /* the probe field advances once per tick whatever the number of views: a light change
-     * costs the same probe updates with 2 and with 5 watched views */
+     * costs about the same probe updates with 2 and with 5 watched views (not the same: the
+     * field converges by measurement, and each change sees other ray rotations) */
     double u2, t2, f2, u5, t5, f5;
-    updates_per_change(&d, 20, &u2, &t2, &f2);
+    updates_per_change(&d, 25, &u2, &t2, &f2); /* from the scene's own light: a larger step */
+    updates_per_change(&d, 20, &u2, &t2, &f2); /* then steps of the same size: 25 <-> 20 */
     viewer more[3];
     memset(more, 0, sizeof more);
     for (int i = 0; i < 3; i++)
         CHECK(pc_stream_open_v2(&d, &more[i].ws, &more[i].view));
     updates_per_change(&d, 25, &u5, &t5, &f5);
-    CHECKF(u2 > 0 && u2 == u5, "probe updates per change: %g with 2 views (+ default), %g with 5",
-           u2, u5);
+    CHECKF(u2 >= 16 && u5 >= 16 && u5 < 1.5 * u2 && u2 < 1.5 * u5,
+           "probe updates per change: %g with 2 views (+ default), %g with 5", u2, u5);
     CHECKF(t2 >= 1 && t2 <= u2 && t5 >= 1 && t5 <= u5, "world ticks per change: %g and %g", t2, t5);
     CHECKF(f5 > f2, "frames per change: %g with 2 views, %g with 5", f2, f5);
     CHECK(stat(&d, "views", "count") == 6);
@@ -254,8 +257,10 @@ int main(void)
     pc_sleep_ms(500);
     CHECK(stat(&d, "views", "count") == 2);
     double u1, t1, f1;
-    updates_per_change(&d, 30, &u1, &t1, &f1); /* B alone */
-    CHECKF(u1 == u5, "probe updates per change: %g with 1 view, %g with 5", u1, u5);
+    updates_per_change(&d, 20, &u1, &t1, &f1); /* B alone */
+    CHECKF(u1 >= 16 && u1 < 1.5 * u5 && u5 < 1.5 * u1,
+           "probe updates per change: %g with 1 view, %g with 5", u1, u5);
+    printf("probe updates per light change: %g (2 views), %g (5 views), %g (1 view)\n", u2, u5, u1);
     CHECKF(f1 < f5, "frames per change: %g with 1 view, %g with 5", f1, f5);
     snprintf(path, sizeof path, "/v1/views/%u/camera", a.view);
     CHECK(pc_api(&d, "GET", path, NULL, false, &r) == 404);

@@ -1,0 +1,41 @@
+#version 460
+/* DDGI update selection (2021 follow-up paper, probe states): one thread per probe. Counts the
+ * probes per state and lists those this update works on — every awake probe, and off probes
+ * whose re-check is due (every PC_DDGI_OFF_RECHECK updates, staggered, or after a wake event
+ * reached them). Sleeping probes are not listed: no ray, shading or blending work at all. The
+ * list's length lands in the indirect dispatch sizes of the passes that follow.
+ * push: globals. */
+#extension GL_GOOGLE_include_directive : require
+#include "common.glsl"
+#include "ddgi.glsl"
+
+layout(local_size_x = PC_WG_1D) in;
+
+void main()
+{
+    pc_globals g = load_globals();
+    pc_ddgi_volume vol = g.ddgi;
+    uint probe = gl_GlobalInvocationID.x;
+    if (probe >= ddgi_probe_count(vol)) return;
+    DdgiControlRef ctrl = DdgiControlRef(vol.ctrl);
+    uint state = ddgi_probe_state(vol, probe);
+    bool listed;
+    if (state == PC_DDGI_PROBE_SLEEPING) {
+        atomicAdd(ctrl.before.y, 1u);
+        listed = false;
+    } else if ((state & PC_DDGI_PROBE_ACTIVE) != 0u) {
+        atomicAdd(ctrl.before.x, 1u);
+        listed = true;
+    } else {
+        atomicAdd(ctrl.before.z, 1u);
+        DdgiStatsRef stats = DdgiStatsRef(vol.stats);
+        listed = stats.v[probe].w != 0.0 || (probe + vol.info.y) % PC_DDGI_OFF_RECHECK == 0u;
+        stats.v[probe].w = 0.0;
+    }
+    if (!listed) return;
+    uint slot = atomicAdd(ctrl.trace_args.y, 1u);
+    atomicAdd(ctrl.blend_args.x, 1u);
+    atomicAdd(ctrl.border_args.y, 1u);
+    atomicAdd(ctrl.before.w, 1u);
+    DdgiListRef(vol.list).v[slot] = probe;
+}
