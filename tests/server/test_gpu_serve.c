@@ -9,7 +9,8 @@
 #include "serve_util.h"
 #include "test_util.h"
 
-/* Tiny and quickly converging: 64x48, 8 probes of 16 rays, hysteresis 0.5 (7 updates). */
+/* Tiny and quickly converging: 64x48, 8 probes of 16 rays, hysteresis 0.5 (the field sleeps
+ * after some 20-40 updates). */
 static const char *const tiny[] = {
     "--no-animate", "--width",      "64",  "--height",  "48", "--probes", "2,2,2",  "--rays",
     "16",           "--hysteresis", "0.5", "--max-fps", "30", "--token",  "s3cret", NULL};
@@ -178,8 +179,16 @@ int main(void)
     CHECK(wait_frame(&ws, 60000, is_still, NULL, &q));
     CHECK(q.h.quality == 85);
 
-    /* idle: nothing changes, so nothing is rendered and nothing is sent */
-    pc_sleep_ms(1500); /* GI converges (7 updates) and the last frames go out */
+    /* idle: once the field has converged by its own measure nothing changes, so no probe is
+     * updated, nothing is rendered and nothing is sent */
+    for (int i = 0; i < 600; i++) { /* the field sleeps (some 20-40 updates), frames go out */
+        cJSON *s = pc_api_get_json(&d, "/v1/stats");
+        bool busy = !cJSON_IsFalse(cJSON_GetObjectItemCaseSensitive(s, "rendering"));
+        cJSON_Delete(s);
+        if (!busy) break;
+        pc_sleep_ms(100);
+    }
+    pc_sleep_ms(300);
     pc_frame idle = {0};
     while (pc_stream_next(&ws, 500, true, &idle)) /* drain what was sent meanwhile */
         pc_frame_free(&idle);
@@ -191,6 +200,21 @@ int main(void)
            pc_json_number(s2, "frames_rendered"));
     CHECK(!got);
     CHECK(cJSON_IsFalse(cJSON_GetObjectItemCaseSensitive(s2, "rendering")));
+    const cJSON *w1 = cJSON_GetObjectItemCaseSensitive(s1, "world");
+    const cJSON *w2 = cJSON_GetObjectItemCaseSensitive(s2, "world");
+    CHECKF(pc_json_number(w1, "probe_updates") > 0 &&
+               pc_json_number(w1, "probe_updates") == pc_json_number(w2, "probe_updates"),
+           "probe updates while idle: %g -> %g", pc_json_number(w1, "probe_updates"),
+           pc_json_number(w2, "probe_updates"));
+    const cJSON *pr = cJSON_GetObjectItemCaseSensitive(s2, "probes");
+    const cJSON *states = cJSON_GetObjectItemCaseSensitive(pr, "states");
+    CHECK(cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(pr, "converged")));
+    CHECKF(pc_json_number(states, "awake") == 0 &&
+               pc_json_number(states, "sleeping") + pc_json_number(states, "off") == 8,
+           "probe states when idle: %g awake, %g sleeping, %g off",
+           pc_json_number(states, "awake"), pc_json_number(states, "sleeping"),
+           pc_json_number(states, "off"));
+    CHECK(pc_json_number(pr, "convergence") == 1);
     const cJSON *st = cJSON_GetObjectItemCaseSensitive(s2, "stream");
     CHECK(pc_json_number(st, "viewers") == 1 && pc_json_number(st, "frames_sent") >= 5);
     CHECK(pc_json_number(cJSON_GetObjectItemCaseSensitive(s2, "encoder"), "jpegs_encoded") >= 5);
