@@ -43,14 +43,14 @@ static rd_vk_result upload_new(rd_vk *vk, rd_buffer *b, const void *data, size_t
 static void fill_material(pc_material *g, const rd_material *m, uint32_t texture_count)
 {
     memset(g, 0, sizeof *g);
-    g->base_color = (pc_vec4){m->base_color[0], m->base_color[1], m->base_color[2],
-                              m->base_color[3]};
+    g->base_color =
+        (pc_vec4){m->base_color[0], m->base_color[1], m->base_color[2], m->base_color[3]};
     g->emission = (pc_vec4){m->emission[0], m->emission[1], m->emission[2], 0};
     bool bc = m->base_color_texture >= 0 && (uint32_t)m->base_color_texture < texture_count;
     bool em = m->emissive_texture >= 0 && (uint32_t)m->emissive_texture < texture_count;
     g->tex.x = bc ? (uint32_t)m->base_color_texture + 1 : 0;
     g->tex.y = em ? (uint32_t)m->emissive_texture + 1 : 0;
-    g->tex.z = m->alpha_mode == RD_ALPHA_MASK ? PC_ALPHA_MASK
+    g->tex.z = m->alpha_mode == RD_ALPHA_MASK    ? PC_ALPHA_MASK
                : m->alpha_mode == RD_ALPHA_BLEND ? PC_ALPHA_BLEND
                                                  : PC_ALPHA_OPAQUE;
     g->tex.w = m->double_sided ? 1u : 0u;
@@ -63,8 +63,8 @@ static rd_vk_result upload_materials(rd_vk *vk, rd_gpu_scene *gs, const rd_scene
     pc_material *mats = xcalloc(s->material_count, sizeof *mats);
     for (uint32_t i = 0; i < s->material_count; i++)
         fill_material(&mats[i], &s->materials[i], s->texture_count);
-    rd_vk_result r = upload_new(vk, &gs->materials, mats, sizeof *mats * s->material_count, err,
-                                errlen);
+    rd_vk_result r =
+        upload_new(vk, &gs->materials, mats, sizeof *mats * s->material_count, err, errlen);
     free(mats);
     if (r != RD_VK_OK) return r;
 
@@ -96,8 +96,7 @@ static rd_vk_result upload_materials(rd_vk *vk, rd_gpu_scene *gs, const rd_scene
     return r;
 }
 
-rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *s, char *err,
-                                  size_t errlen)
+rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *s, char *err, size_t errlen)
 {
     memset(p, 0, sizeof *p);
     double t0 = now_ms();
@@ -124,7 +123,8 @@ rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *s, char 
     p->tri_count = tri_total;
     p->node_count = node_total;
     if (tri_total > UINT32_MAX / 2 || node_total > UINT32_MAX / 2) {
-        for (uint32_t m = 0; m < s->mesh_count; m++) rd_bvh_destroy(&bvhs[m]);
+        for (uint32_t m = 0; m < s->mesh_count; m++)
+            rd_bvh_destroy(&bvhs[m]);
         free(bvhs);
         rd_gpu_scene_prep_destroy(p);
         snprintf(err, errlen, "scene too large: %llu triangles", (unsigned long long)tri_total);
@@ -195,8 +195,8 @@ static rd_vk_result upload_blas(rd_vk *vk, rd_gpu_scene *gs, rd_gpu_scene_prep *
     gs->blas_node_count = p->node_count;
     gs->max_blas_depth = p->max_blas_depth;
     double t1 = now_ms();
-    rd_vk_result r = upload_new(vk, &gs->blas_nodes, p->nodes, sizeof *p->nodes * p->node_count,
-                                err, errlen);
+    rd_vk_result r =
+        upload_new(vk, &gs->blas_nodes, p->nodes, sizeof *p->nodes * p->node_count, err, errlen);
     if (r == RD_VK_OK)
         r = upload_new(vk, &gs->tris, p->tris, sizeof *p->tris * p->tri_count, err, errlen);
     if (r == RD_VK_OK)
@@ -229,7 +229,8 @@ static void world_box(const float m[16], const float *b, float *lo, float *hi)
 
 static void rows3(pc_vec4 out[3], const float m[16])
 {
-    for (int r = 0; r < 3; r++) out[r] = (pc_vec4){m[r], m[4 + r], m[8 + r], m[12 + r]};
+    for (int r = 0; r < 3; r++)
+        out[r] = (pc_vec4){m[r], m[4 + r], m[8 + r], m[12 + r]};
 }
 
 rd_vk_result rd_gpu_scene_update_instances(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
@@ -248,7 +249,8 @@ rd_vk_result rd_gpu_scene_update_instances(rd_vk *vk, rd_gpu_scene *gs, const rd
         /* floating origin: the GPU sees positions relative to origin_shift */
         float world[16];
         memcpy(world, s->nodes[in->node].world, sizeof world);
-        for (int k = 0; k < 3; k++) world[12 + k] -= gs->origin_shift[k];
+        for (int k = 0; k < 3; k++)
+            world[12 + k] -= gs->origin_shift[k];
         float inv[16];
         bool invertible = rd_mat4_inverse(inv, world);
         rows3(inst[i].object_to_world, world);
@@ -298,15 +300,15 @@ rd_vk_result rd_gpu_scene_update_instances(rd_vk *vk, rd_gpu_scene *gs, const rd
     return r;
 }
 
-rd_vk_result rd_gpu_scene_update_lights(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
-                                        char *err, size_t errlen)
+rd_vk_result rd_gpu_scene_update_lights(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, char *err,
+                                        size_t errlen)
 {
     uint32_t n = s->light_count;
     if (n > gs->light_capacity || gs->lights.buffer == VK_NULL_HANDLE) {
         rd_buffer_destroy(vk, &gs->lights);
         uint32_t cap = n < 16 ? 16 : n;
-        rd_vk_result r = rd_buffer_create(vk, &gs->lights, sizeof(pc_light) * cap,
-                                          RD_MEMORY_DEVICE, err, errlen);
+        rd_vk_result r = rd_buffer_create(vk, &gs->lights, sizeof(pc_light) * cap, RD_MEMORY_DEVICE,
+                                          err, errlen);
         if (r != RD_VK_OK) return r;
         gs->light_capacity = cap;
         gs->refs.lights = gs->lights.address;
@@ -327,7 +329,8 @@ rd_vk_result rd_gpu_scene_update_lights(rd_vk *vk, rd_gpu_scene *gs, const rd_sc
         float outer = l->outer_cone, inner = l->inner_cone < outer ? l->inner_cone : outer;
         lights[i].spot = (pc_vec4){cosf(outer), cosf(inner), 0, 0};
         /* equal cones would make smoothstep undefined: keep a tiny soft edge */
-        if (lights[i].spot.y - lights[i].spot.x < 1e-4f) lights[i].spot.y = lights[i].spot.x + 1e-4f;
+        if (lights[i].spot.y - lights[i].spot.x < 1e-4f)
+            lights[i].spot.y = lights[i].spot.x + 1e-4f;
         lights[i].info = (pc_uvec4){l->type == RD_LIGHT_SPOT          ? PC_LIGHT_SPOT
                                     : l->type == RD_LIGHT_DIRECTIONAL ? PC_LIGHT_DIRECTIONAL
                                                                       : PC_LIGHT_POINT,
@@ -388,14 +391,32 @@ rd_vk_result rd_gpu_scene_create(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
 
 void rd_gpu_scene_destroy(rd_vk *vk, rd_gpu_scene *gs)
 {
-    rd_buffer *bufs[] = {&gs->tris,      &gs->tri_attrs, &gs->blas_nodes, &gs->tlas_nodes,
-                         &gs->tlas_index, &gs->instances, &gs->materials, &gs->textures,
-                         &gs->texels,    &gs->lights};
-    for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; i++) rd_buffer_destroy(vk, bufs[i]);
+    rd_buffer *bufs[] = {&gs->tris,       &gs->tri_attrs, &gs->blas_nodes, &gs->tlas_nodes,
+                         &gs->tlas_index, &gs->instances, &gs->materials,  &gs->textures,
+                         &gs->texels,     &gs->lights};
+    for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; i++)
+        rd_buffer_destroy(vk, bufs[i]);
     free(gs->mesh_root);
     free(gs->mesh_bounds);
     gs->mesh_root = NULL;
     gs->mesh_bounds = NULL;
     gs->instance_capacity = gs->light_capacity = 0;
     memset(&gs->refs, 0, sizeof gs->refs);
+}
+
+void rd_gpu_scene_instance_bounds(const rd_gpu_scene *gs, const rd_scene *scene, uint32_t i,
+                                  float lo[3], float hi[3])
+{
+    const float *m = scene->nodes[scene->instances[i].node].world;
+    const float *b = &gs->mesh_bounds[6 * scene->instances[i].mesh];
+    for (int k = 0; k < 3; k++)
+        lo[k] = INFINITY, hi[k] = -INFINITY;
+    for (int c = 0; c < 8; c++) { /* the 8 corners of the mesh's box, transformed */
+        float p[3] = {b[(c & 1) ? 3 : 0], b[(c & 2) ? 4 : 1], b[(c & 4) ? 5 : 2]};
+        for (int k = 0; k < 3; k++) {
+            float w = m[k] * p[0] + m[4 + k] * p[1] + m[8 + k] * p[2] + m[12 + k];
+            lo[k] = fminf(lo[k], w);
+            hi[k] = fmaxf(hi[k], w);
+        }
+    }
 }

@@ -14,14 +14,14 @@
 typedef struct rd_gpu_scene {
     rd_buffer tris, tri_attrs, blas_nodes, tlas_nodes, tlas_index, instances;
     rd_buffer materials, textures, texels, lights;
-    pc_scene_refs refs;      /* addresses and counts, ready for pc_globals */
+    pc_scene_refs refs; /* addresses and counts, ready for pc_globals */
     /* Floating origin: the GPU holds world positions minus this (the scene's centre), so that
      * a scene far from the origin keeps full float precision near its geometry and ray
      * offsets stay small. Cameras and probe grids are shifted the same way when rendering. */
     float origin_shift[3];
     uint32_t mesh_count;
-    uint32_t *mesh_root;     /* absolute BLAS root node per mesh */
-    float *mesh_bounds;      /* 6 floats per mesh: object-space min, max */
+    uint32_t *mesh_root; /* absolute BLAS root node per mesh */
+    float *mesh_bounds;  /* 6 floats per mesh: object-space min, max */
     uint32_t instance_capacity;
     uint32_t light_capacity;
     /* statistics */
@@ -35,8 +35,8 @@ typedef struct rd_gpu_scene {
  * upload's BVHs on the uploading connection's thread, not on the render thread). */
 typedef struct rd_gpu_scene_prep {
     uint32_t mesh_count;
-    uint32_t *mesh_root;  /* absolute BLAS root node per mesh */
-    float *mesh_bounds;   /* 6 floats per mesh */
+    uint32_t *mesh_root; /* absolute BLAS root node per mesh */
+    float *mesh_bounds;  /* 6 floats per mesh */
     pc_bvh_node *nodes;
     pc_tri *tris;
     pc_tri_attr *attrs;
@@ -65,5 +65,9 @@ rd_vk_result rd_gpu_scene_update_instances(rd_vk *vk, rd_gpu_scene *gs, const rd
 rd_vk_result rd_gpu_scene_update_lights(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *scene,
                                         char *err, size_t errlen);
 void rd_gpu_scene_destroy(rd_vk *vk, rd_gpu_scene *gs); /* idempotent */
+/* World bounds of instance i of scene as its node places it now (the mesh's box transformed;
+ * world coordinates, not shifted by the floating origin). */
+void rd_gpu_scene_instance_bounds(const rd_gpu_scene *gs, const rd_scene *scene, uint32_t i,
+                                  float lo[3], float hi[3]);
 
 #endif

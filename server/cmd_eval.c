@@ -17,46 +17,36 @@
 #include "renderer/image_io.h"
 #include "renderer/procedural.h"
 #include "renderer/render.h"
-
-typedef struct eval_args {
-    const char *cases, *out_dir, *cache_dir, *device;
-    unsigned width, height, ref_spp, timing_frames;
-    unsigned rays[8], nrays;
-    unsigned updates[8], nupdates;
-    float density[8];
-    unsigned ndensity;
-    unsigned probes[8][3], nprobes; /* explicit probe counts (replace densities) */
-    float hysteresis[8];
-    unsigned nhysteresis;
-    bool noise_floor, list;
-    const char *replot;
-} eval_args;
+#include "eval_internal.h"
 
 static void eval_usage(FILE *f)
 {
-    fprintf(f,
-            "usage: probecast eval [OPTIONS]\n"
-            "\n"
-            "Renders each scene of the hard-case suite with a path-traced reference and a sweep of\n"
-            "GI settings, and reports GPU time per frame against the error.\n"
-            "\n"
-            "Options:\n"
-            "  --cases A,B,...        scenes of the suite (default: all; --list shows them)\n"
-            "  --width W, --height H  image size (default 320 x 180)\n"
-            "  --ref-spp N            reference samples per pixel (default 1024)\n"
-            "  --rays A,B,...         rays per probe to sweep (default 64,128,256)\n"
-            "  --updates A,B,...      probe updates before the image (default 8,32)\n"
-            "  --density A,B,...      probe density factors over the fitted grid (default 0.5,1,2)\n"
-            "  --hysteresis A,B,...   probe hysteresis values (default 0.85,0.97)\n"
-            "  --probes X,Y,Z[;...]   explicit probe grids instead of densities\n"
-            "  --no-noise-floor       skip the second reference (seed 2) that measures its noise\n"
-            "  --timing-frames N      steady-state frames timed per setting, after two warm-up\n"
-            "                         frames; the median is reported (default 7)\n"
-            "  --out DIR              where eval.csv, eval.json, eval.svg go (default eval-out)\n"
-            "  --cache DIR            reference cache (default DIR-of-out/cache)\n"
-            "  --device INDEX|NAME    Vulkan device\n"
-            "  --list                 list the suite with each case's expectation\n"
-            "  --replot DIR           redraw DIR/eval.svg and the table from DIR/eval.csv\n");
+    fprintf(
+        f, "usage: probecast eval [OPTIONS]\n"
+           "\n"
+           "Renders each scene of the hard-case suite with a path-traced reference and a sweep of\n"
+           "GI settings, and reports GPU time per frame against the error.\n"
+           "\n"
+           "Options:\n"
+           "  --cases A,B,...        scenes of the suite (default: all; --list shows them)\n"
+           "  --width W, --height H  image size (default 320 x 180)\n"
+           "  --ref-spp N            reference samples per pixel (default 1024)\n"
+           "  --rays A,B,...         rays per probe to sweep (default 64,128,256)\n"
+           "  --updates A,B,...      probe updates before the image (default 8,32)\n"
+           "  --density A,B,...      probe density factors over the fitted grid (default 0.5,1,2)\n"
+           "  --hysteresis A,B,...   probe hysteresis values (default 0.85,0.97)\n"
+           "  --probes X,Y,Z[;...]   explicit probe grids instead of densities\n"
+           "  --no-noise-floor       skip the second reference (seed 2) that measures its noise\n"
+           "  --timing-frames N      steady-state frames timed per setting, after two warm-up\n"
+           "                         frames; the median is reported (default 7)\n"
+           "  --out DIR              where eval.csv, eval.json, eval.svg go (default eval-out)\n"
+           "  --cache DIR            reference cache (default DIR-of-out/cache)\n"
+           "  --device INDEX|NAME    Vulkan device\n"
+           "  --list                 list the suite with each case's expectation\n"
+           "  --dynamic              instead of the suite: a light and an object move in a\n"
+           "                         converged field; reports updates, GPU ms and error at\n"
+           "                         fixed update counts after the change (eval-dynamic.csv)\n"
+           "  --replot DIR           redraw DIR/eval.svg and the table from DIR/eval.csv\n");
 }
 
 static bool parse_uint_list(const char *opt, const char *s, unsigned *out, unsigned *n)
@@ -84,7 +74,7 @@ static int parse(int argc, char **argv, eval_args *a)
     for (int i = 1; i < argc; i++) {
         const char *o = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         bool takes = strcmp(o, "--help") && strcmp(o, "-h") && strcmp(o, "--list") &&
-                     strcmp(o, "--no-noise-floor");
+                     strcmp(o, "--no-noise-floor") && strcmp(o, "--dynamic");
         if (takes && !v) {
             fprintf(stderr, "probecast eval: %s needs a value\n", o);
             return 2;
@@ -94,6 +84,8 @@ static int parse(int argc, char **argv, eval_args *a)
             return 0;
         } else if (strcmp(o, "--list") == 0) {
             a->list = true;
+        } else if (strcmp(o, "--dynamic") == 0) {
+            a->dynamic = true;
         } else if (strcmp(o, "--no-noise-floor") == 0) {
             a->noise_floor = false;
         } else if (strcmp(o, "--cases") == 0) {
@@ -179,7 +171,8 @@ static int parse(int argc, char **argv, eval_args *a)
 static uint64_t fnv(uint64_t h, const void *data, size_t n)
 {
     const unsigned char *p = data;
-    for (size_t i = 0; i < n; i++) h = (h ^ p[i]) * 0x100000001b3ull;
+    for (size_t i = 0; i < n; i++)
+        h = (h ^ p[i]) * 0x100000001b3ull;
     return h;
 }
 
@@ -190,7 +183,8 @@ static uint64_t scene_hash(const rd_scene *s, const eval_args *a, unsigned seed)
         h = fnv(h, s->meshes[m].positions, sizeof(float) * 9 * s->meshes[m].tri_count);
         h = fnv(h, s->meshes[m].material, sizeof(uint32_t) * s->meshes[m].tri_count);
     }
-    for (uint32_t i = 0; i < s->node_count; i++) h = fnv(h, s->nodes[i].world, sizeof(float) * 16);
+    for (uint32_t i = 0; i < s->node_count; i++)
+        h = fnv(h, s->nodes[i].world, sizeof(float) * 16);
     for (uint32_t i = 0; i < s->material_count; i++) {
         h = fnv(h, s->materials[i].base_color, sizeof s->materials[i].base_color);
         h = fnv(h, s->materials[i].emission, sizeof s->materials[i].emission);
@@ -218,16 +212,8 @@ static void progress(unsigned done, unsigned total, const char *what)
     fflush(stderr);
 }
 
-typedef struct eval_ctx {
-    rd_vk vk;
-    rd_renderer r;
-    const eval_args *a;
-    char err[512];
-} eval_ctx;
-
-/* Renders (or loads from the cache) the reference of scene with the given seed. */
-static float *reference(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene *gs,
-                        const rd_view_camera *cam, unsigned seed, double *ms)
+float *eval_reference(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene *gs,
+                      const rd_view_camera *cam, unsigned seed, double *ms)
 {
     const eval_args *a = c->a;
     char path[1024];
@@ -240,13 +226,15 @@ static float *reference(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene
         w == a->width && h == a->height)
         return rgb;
     free(rgb);
-    rd_frame_settings fs = {.width = a->width, .height = a->height, .pathtrace_spp = a->ref_spp,
-                            .seed = seed};
+    rd_frame_settings fs = {
+        .width = a->width, .height = a->height, .pathtrace_spp = a->ref_spp, .seed = seed};
     rd_ddgi_settings off = {0};
-    if (rd_renderer_configure_gi(&c->r, s->bounds_min, s->bounds_max, &off, c->err, sizeof c->err) != RD_VK_OK ||
+    if (rd_renderer_configure_gi(&c->r, s->bounds_min, s->bounds_max, &off, c->err,
+                                 sizeof c->err) != RD_VK_OK ||
         rd_renderer_render(&c->r, gs, cam, &fs, c->err, sizeof c->err) != RD_VK_OK)
         return NULL;
-    for (unsigned i = 0; i < c->r.stats.pass_count; i++) *ms += c->r.stats.pass_ms[i];
+    for (unsigned i = 0; i < c->r.stats.pass_count; i++)
+        *ms += c->r.stats.pass_ms[i];
     rgb = malloc(sizeof(float) * 3 * a->width * a->height);
     if (!rgb) abort();
     if (rd_renderer_read_hdr(&c->r, rgb, c->err, sizeof c->err) != RD_VK_OK) {
@@ -268,12 +256,14 @@ static bool run_setting(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene
     bool moving = rd_hard_case_pose(name, s, 0);
     if (moving && rd_gpu_scene_update_instances(&c->vk, gs, s, c->err, sizeof c->err) != RD_VK_OK)
         return false;
-    if (rd_renderer_configure_gi(&c->r, s->bounds_min, s->bounds_max, gi, c->err, sizeof c->err) != RD_VK_OK)
+    if (rd_renderer_configure_gi(&c->r, s->bounds_min, s->bounds_max, gi, c->err, sizeof c->err) !=
+        RD_VK_OK)
         return false;
     rd_frame_settings fs = {.width = a->width, .height = a->height, .seed = gi->seed};
     if (moving) {
         fs.gi_updates = updates / 2 ? updates / 2 : 1;
-        if (rd_renderer_render(&c->r, gs, cam, &fs, c->err, sizeof c->err) != RD_VK_OK) return false;
+        if (rd_renderer_render(&c->r, gs, cam, &fs, c->err, sizeof c->err) != RD_VK_OK)
+            return false;
         rd_hard_case_pose(name, s, 4);
         if (rd_gpu_scene_update_instances(&c->vk, gs, s, c->err, sizeof c->err) != RD_VK_OK)
             return false;
@@ -295,9 +285,11 @@ static bool run_setting(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene
     fs.gi_updates = 1;
     double times[100];
     for (unsigned f = 0; f < a->timing_frames + 2; f++) {
-        if (rd_renderer_render(&c->r, gs, cam, &fs, c->err, sizeof c->err) != RD_VK_OK) return false;
+        if (rd_renderer_render(&c->r, gs, cam, &fs, c->err, sizeof c->err) != RD_VK_OK)
+            return false;
         double total = 0;
-        for (unsigned i = 0; i < c->r.stats.pass_count; i++) total += c->r.stats.pass_ms[i];
+        for (unsigned i = 0; i < c->r.stats.pass_count; i++)
+            total += c->r.stats.pass_ms[i];
         if (f >= 2) times[f - 2] = total;
     }
     for (unsigned i = 1; i < a->timing_frames; i++) /* insertion sort: a handful of values */
@@ -360,7 +352,8 @@ int cli_eval(int argc, char **argv)
         return ok ? 0 : 1;
     }
     if (a.list) {
-        for (unsigned i = 0; i < ncases; i++) printf("%-14s %s\n", cases[i].name, cases[i].expect);
+        for (unsigned i = 0; i < ncases; i++)
+            printf("%-14s %s\n", cases[i].name, cases[i].expect);
         return 0;
     }
     char cache[1024];
@@ -396,11 +389,23 @@ int cli_eval(int argc, char **argv)
         rd_vk_destroy(&c.vk);
         return 1;
     }
+    if (a.dynamic) {
+        int drc = eval_dynamic_run(&c);
+        rd_renderer_destroy(&c.r);
+        unsigned validation = rd_vk_validation_messages(&c.vk);
+        rd_vk_destroy(&c.vk);
+        if (drc == 0 && validation) {
+            fprintf(stderr, "probecast eval: %u Vulkan validation message(s)\n", validation);
+            drc = 1;
+        }
+        return drc;
+    }
     unsigned ngrids = a.nprobes ? a.nprobes : a.ndensity;
     unsigned sweep = ngrids * a.nrays * a.nupdates * a.nhysteresis;
     unsigned per_case = 2 + sweep + (a.noise_floor ? 1 : 0) + 1;
     unsigned selected = 0;
-    for (unsigned i = 0; i < ncases; i++) selected += case_selected(a.cases, cases[i].name);
+    for (unsigned i = 0; i < ncases; i++)
+        selected += case_selected(a.cases, cases[i].name);
     unsigned total = selected * per_case, done = 0, nrows = 0;
     eval_row *rows = calloc((size_t)selected * per_case, sizeof *rows);
     if (!rows) abort();
@@ -427,10 +432,10 @@ int cli_eval(int argc, char **argv)
         if (rd_gpu_scene_update_instances(&c.vk, &gs, &s, c.err, sizeof c.err) != RD_VK_OK) rc = 1;
         progress(done, total, name);
         double ref_ms = 0, noise_ms = 0, noise = 0;
-        float *ref = rc ? NULL : reference(&c, name, &s, &gs, &cam, 1, &ref_ms);
+        float *ref = rc ? NULL : eval_reference(&c, name, &s, &gs, &cam, 1, &ref_ms);
         progress(++done, total, name);
         if (ref && a.noise_floor) {
-            float *ref2 = reference(&c, name, &s, &gs, &cam, 2, &noise_ms);
+            float *ref2 = eval_reference(&c, name, &s, &gs, &cam, 2, &noise_ms);
             if (ref2) {
                 rd_image_error e;
                 rd_image_compare(ref2, ref, (size_t)a.width * a.height, &e);
@@ -446,8 +451,10 @@ int cli_eval(int argc, char **argv)
         /* the fitted grid, for density factors */
         rd_ddgi_settings fit = {.mode = PC_GI_DDGI};
         unsigned fitted[3] = {1, 1, 1};
-        if (rc == 0 && rd_renderer_configure_gi(&c.r, s.bounds_min, s.bounds_max, &fit, c.err, sizeof c.err) == RD_VK_OK) {
-            fitted[0] = c.r.world.ddgi.vol.counts.x, fitted[1] = c.r.world.ddgi.vol.counts.y, fitted[2] = c.r.world.ddgi.vol.counts.z;
+        if (rc == 0 && rd_renderer_configure_gi(&c.r, s.bounds_min, s.bounds_max, &fit, c.err,
+                                                sizeof c.err) == RD_VK_OK) {
+            fitted[0] = c.r.world.ddgi.vol.counts.x, fitted[1] = c.r.world.ddgi.vol.counts.y,
+            fitted[2] = c.r.world.ddgi.vol.counts.z;
         }
         for (unsigned k = 0; rc == 0 && k < 2 + sweep; k++) {
             eval_row *row = &rows[nrows];
@@ -470,7 +477,8 @@ int cli_eval(int argc, char **argv)
                 updates = a.updates[(j / a.nhysteresis) % a.nupdates];
                 gi.hysteresis = a.hysteresis[j % a.nhysteresis];
                 for (int ax = 0; ax < 3; ax++) {
-                    double n = a.nprobes ? a.probes[g][ax] : fmax(1.0, round(fitted[ax] * a.density[g]));
+                    double n =
+                        a.nprobes ? a.probes[g][ax] : fmax(1.0, round(fitted[ax] * a.density[g]));
                     gi.counts[ax] = (unsigned)fmin(n, 256.0);
                 }
                 snprintf(row->mode, sizeof row->mode, "ddgi");
@@ -501,7 +509,8 @@ int cli_eval(int argc, char **argv)
         snprintf(path, sizeof path, "%s/eval.csv", a.out_dir);
         bool ok = eval_write_csv(path, rows, nrows);
         snprintf(path, sizeof path, "%s/eval.json", a.out_dir);
-        ok = ok && eval_write_json(path, rows, nrows, c.vk.device_name, a.width, a.height, a.ref_spp);
+        ok = ok &&
+             eval_write_json(path, rows, nrows, c.vk.device_name, a.width, a.height, a.ref_spp);
         snprintf(path, sizeof path, "%s/eval.svg", a.out_dir);
         ok = ok && eval_write_svg(path, rows, nrows, c.vk.device_name);
         if (!ok) {

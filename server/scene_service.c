@@ -189,15 +189,11 @@ static bool node_bounds(const srv_scene_service *svc, uint32_t node, float lo[3]
         while (n >= 0 && (uint32_t)n != node && depth++ < s->node_count)
             n = s->nodes[n].parent;
         if (n < 0 || (uint32_t)n != node) continue;
-        const float *m = s->nodes[s->instances[i].node].world;
-        const float *b = &svc->gs.mesh_bounds[6 * s->instances[i].mesh];
-        for (int c = 0; c < 8; c++) { /* the 8 corners of the mesh's box, transformed */
-            float p[3] = {b[(c & 1) ? 3 : 0], b[(c & 2) ? 4 : 1], b[(c & 4) ? 5 : 2]};
-            for (int k = 0; k < 3; k++) {
-                float w = m[k] * p[0] + m[4 + k] * p[1] + m[8 + k] * p[2] + m[12 + k];
-                lo[k] = fminf(lo[k], w);
-                hi[k] = fmaxf(hi[k], w);
-            }
+        float a[3], b[3];
+        rd_gpu_scene_instance_bounds(&svc->gs, s, i, a, b);
+        for (int k = 0; k < 3; k++) {
+            lo[k] = fminf(lo[k], a[k]);
+            hi[k] = fmaxf(hi[k], b[k]);
         }
         any = true;
     }

@@ -1,0 +1,43 @@
+/* eval_internal.h: what the parts of `probecast eval` share: its options, the device and
+ * renderer it measures with, and the cached path-traced references. */
+#ifndef SRV_EVAL_INTERNAL_H
+#define SRV_EVAL_INTERNAL_H
+
+#include <stdbool.h>
+
+#include "renderer/render.h"
+
+typedef struct eval_args {
+    const char *cases, *out_dir, *cache_dir, *device;
+    unsigned width, height, ref_spp, timing_frames;
+    unsigned rays[8], nrays;
+    unsigned updates[8], nupdates;
+    float density[8];
+    unsigned ndensity;
+    unsigned probes[8][3], nprobes; /* explicit probe counts (replace densities) */
+    float hysteresis[8];
+    unsigned nhysteresis;
+    bool noise_floor, list;
+    bool dynamic; /* --dynamic: the dynamic cases instead of the static suite */
+    const char *replot;
+} eval_args;
+
+typedef struct eval_ctx {
+    rd_vk vk;
+    rd_renderer r;
+    const eval_args *a;
+    char err[512];
+} eval_ctx;
+
+/* Renders (or loads from the cache in a->cache_dir, keyed by a hash of the scene as it is
+ * now, the image size, the sample count and seed) the path-traced reference of scene; name
+ * prefixes the cache file. NULL with c->err on failure; *ms = GPU time (0 when cached). */
+float *eval_reference(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene *gs,
+                      const rd_view_camera *cam, unsigned seed, double *ms);
+
+/* probecast eval --dynamic: how the probe field follows a moving light and a moving object
+ * (updates, GPU ms and error against the reference of the new state, at fixed update counts
+ * after the change). Prints a table, writes DIR/eval-dynamic.csv. Returns 0 or 1. */
+int eval_dynamic_run(eval_ctx *c);
+
+#endif
