@@ -2,8 +2,8 @@
 /* GI sampling for the camera (paper Sec. 5): adds albedo/pi * E(P, n) from the probe field
  * to each pixel's direct radiance, with v = the direction toward the camera. View modes:
  * PC_VIEW_IRRADIANCE writes E/pi alone (the indirect light as if albedo were 1);
- * PC_VIEW_PROBES draws every probe as a small sphere shaded with its stored irradiance
- * (inactive probes dark red).
+ * PC_VIEW_PROBES draws every probe as a small sphere shaded with its stored irradiance, and
+ * its state: sleeping (converged) plain, awake with a yellow rim, off (inside geometry) dark red.
  * push: globals, buf0 = pc_gbuffer_texel[], buf2 = vec4 radiance[]. */
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
@@ -47,9 +47,12 @@ void main()
             hit = k;
             nrm = normalize(o + th * d - c);
         }
-        if (hit < n)
-            l = ddgi_probe_active(g.ddgi, hit) ? ddgi_sample_irradiance(g.ddgi, hit, nrm)
-                                               : vec3(0.3, 0.0, 0.0);
+        if (hit < n) {
+            uint state = ddgi_probe_state(g.ddgi, hit);
+            l = state == PC_DDGI_PROBE_OFF ? vec3(0.3, 0.0, 0.0)
+                                           : ddgi_sample_irradiance(g.ddgi, hit, nrm);
+            if (state == PC_DDGI_PROBE_AWAKE && dot(nrm, -d) < 0.4) l = vec3(1.0, 0.8, 0.0);
+        }
     }
     RadianceRef(pc.buf2).v[i] = vec4(l, 1.0);
 }

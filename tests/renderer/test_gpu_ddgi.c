@@ -245,15 +245,29 @@ static void test_debug_views(void)
     d.view = PC_VIEW_PROBES;
     probes = test_render(&vk, &d, NULL, NULL);
     if (!final || !probes) return;
-    unsigned spheres = 0, off_marker = 0;
+    unsigned spheres = 0, off_marker = 0, awake_rim = 0;
     for (size_t i = 0; i < (size_t)d.width * d.height; i++) {
         const float *p = &probes[i * 3], *f = &final[i * 3];
         if (p[0] != f[0] || p[1] != f[1] || p[2] != f[2]) spheres++;
         if (p[0] == 0.3f && p[1] == 0.0f && p[2] == 0.0f) off_marker++;
+        if (p[0] == 1.0f && p[1] == 0.8f && p[2] == 0.0f) awake_rim++;
     }
     CHECKF(spheres > 20, "%u pixels show probe spheres", spheres);
     CHECKF(off_marker == 0, "%u sphere pixels in the off-probe colour", off_marker);
+    CHECKF(awake_rim > 0, "after 2 updates every probe is awake: no yellow rim drawn");
     free(final);
+    free(probes);
+
+    /* once the field has converged every probe sleeps: no awake rim is left */
+    d.updates = 0;
+    d.converge = true;
+    d.gi.hysteresis = 0.5f, d.gi.has_hysteresis = true;
+    probes = test_render(&vk, &d, NULL, NULL);
+    if (!probes) return;
+    awake_rim = 0;
+    for (size_t i = 0; i < (size_t)d.width * d.height; i++)
+        awake_rim += probes[i * 3] == 1.0f && probes[i * 3 + 1] == 0.8f && probes[i * 3 + 2] == 0;
+    CHECKF(awake_rim == 0, "%u awake-rim pixels in a converged field", awake_rim);
     free(probes);
 }
 
