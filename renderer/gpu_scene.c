@@ -404,11 +404,10 @@ void rd_gpu_scene_destroy(rd_vk *vk, rd_gpu_scene *gs)
     memset(&gs->refs, 0, sizeof gs->refs);
 }
 
-void rd_gpu_scene_instance_bounds(const rd_gpu_scene *gs, const rd_scene *scene, uint32_t i,
-                                  float lo[3], float hi[3])
+void rd_gpu_scene_mesh_world_bounds(const rd_gpu_scene *gs, uint32_t mesh, const float m[16],
+                                    float lo[3], float hi[3])
 {
-    const float *m = scene->nodes[scene->instances[i].node].world;
-    const float *b = &gs->mesh_bounds[6 * scene->instances[i].mesh];
+    const float *b = &gs->mesh_bounds[6 * mesh];
     for (int k = 0; k < 3; k++)
         lo[k] = INFINITY, hi[k] = -INFINITY;
     for (int c = 0; c < 8; c++) { /* the 8 corners of the mesh's box, transformed */
@@ -419,4 +418,11 @@ void rd_gpu_scene_instance_bounds(const rd_gpu_scene *gs, const rd_scene *scene,
             hi[k] = fmaxf(hi[k], w);
         }
     }
+}
+
+void rd_gpu_scene_instance_bounds(const rd_gpu_scene *gs, const rd_scene *scene, uint32_t i,
+                                  float lo[3], float hi[3])
+{
+    rd_gpu_scene_mesh_world_bounds(gs, scene->instances[i].mesh,
+                                   scene->nodes[scene->instances[i].node].world, lo, hi);
 }

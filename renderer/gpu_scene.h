@@ -65,6 +65,9 @@ rd_vk_result rd_gpu_scene_update_instances(rd_vk *vk, rd_gpu_scene *gs, const rd
 rd_vk_result rd_gpu_scene_update_lights(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *scene,
                                         char *err, size_t errlen);
 void rd_gpu_scene_destroy(rd_vk *vk, rd_gpu_scene *gs); /* idempotent */
+/* World bounds of mesh placed by the column-major world matrix m (its box's corners moved). */
+void rd_gpu_scene_mesh_world_bounds(const rd_gpu_scene *gs, uint32_t mesh, const float m[16],
+                                    float lo[3], float hi[3]);
 /* World bounds of instance i of scene as its node places it now (the mesh's box transformed;
  * world coordinates, not shifted by the floating origin). */
 void rd_gpu_scene_instance_bounds(const rd_gpu_scene *gs, const rd_scene *scene, uint32_t i,

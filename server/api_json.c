@@ -292,6 +292,34 @@ bool srv_json_node_patch(const cJSON *obj, srv_node_patch *p, srv_api_error *e)
     return true;
 }
 
+/* ---- animation playback ----------------------------------------------------------------- */
+
+bool srv_json_playback_patch(const cJSON *obj, srv_playback_patch *p, srv_api_error *e)
+{
+    memset(p, 0, sizeof *p);
+    const cJSON *it;
+    cJSON_ArrayForEach(it, obj)
+    {
+        const char *k = it->string;
+        bool ok;
+        if (strcmp(k, "playing") == 0) {
+            ok = once(&p->has, SRV_PLAY_PLAYING, it, e) &&
+                 (cJSON_IsBool(it) || BAD("Field 'playing' must be true or false."));
+            p->playing = cJSON_IsTrue(it);
+        } else if (strcmp(k, "time") == 0) {
+            ok = once(&p->has, SRV_PLAY_TIME, it, e) &&
+                 ((cJSON_IsNumber(it) && isfinite(it->valuedouble) && it->valuedouble >= 0) ||
+                  BAD("Field 'time' must be a finite number of seconds, 0 or more."));
+            p->time_s = ok ? it->valuedouble : 0;
+        } else {
+            ok = BAD("Unknown animation field '%s' (playing and time can be changed).", k);
+        }
+        if (!ok) return false;
+    }
+    if (!p->has) return BAD("Give at least one of 'playing' and 'time'.");
+    return true;
+}
+
 /* ---- viewer messages ------------------------------------------------------------------------ */
 
 bool srv_json_viewer_msg(const char *text, size_t len, srv_viewer_msg *out, srv_api_error *e)
@@ -464,6 +492,18 @@ cJSON *srv_json_node(uint32_t id, const rd_node *n)
     srv_json_add_floats(j, "scale", n->scale, 3);
     float wt[3] = {n->world[12], n->world[13], n->world[14]};
     srv_json_add_floats(j, "world_translation", wt, 3);
+    return j;
+}
+
+cJSON *srv_json_playback(const srv_playback *p, double now_ms)
+{
+    cJSON *j = cJSON_CreateObject();
+    cJSON_AddNumberToObject(j, "count", p->count);
+    cJSON_AddNumberToObject(j, "duration", srv_json_float((float)p->duration_s));
+    cJSON_AddBoolToObject(j, "playing", p->playing);
+    /* microseconds are enough, and print short */
+    double t = round(srv_playback_time_at(p, now_ms) * 1e6) / 1e6;
+    cJSON_AddNumberToObject(j, "time", t < p->duration_s ? t : 0);
     return j;
 }
 

@@ -14,6 +14,7 @@
 #include <stddef.h>
 
 #include "commands.h"
+#include "playback.h"
 
 /* Error codes (the "error" member of every error body). */
 #define SRV_ERR_MALFORMED_JSON "malformed_json"
@@ -39,12 +40,16 @@ cJSON *srv_json_parse_object(const char *text, size_t len, srv_api_error *e);
 bool srv_json_camera_patch(const cJSON *obj, srv_camera_patch *out, srv_api_error *e);
 bool srv_json_light_patch(const cJSON *obj, srv_light_patch *out, srv_api_error *e);
 bool srv_json_node_patch(const cJSON *obj, srv_node_patch *out, srv_api_error *e);
+/* PATCH /v1/animation: {"playing": bool, "time": seconds >= 0}, at least one. */
+bool srv_json_playback_patch(const cJSON *obj, srv_playback_patch *out, srv_api_error *e);
 /* A text message of the stream: {"type":"camera"|"resize"|"ack", ...}. */
 bool srv_json_viewer_msg(const char *text, size_t len, srv_viewer_msg *out, srv_api_error *e);
 
 cJSON *srv_json_camera(const srv_camera *c);
 cJSON *srv_json_light(uint32_t id, const rd_light *l);
 cJSON *srv_json_node(uint32_t id, const rd_node *n);
+/* GET /v1/animation: {"count", "duration", "playing", "time"}, the time as of now_ms. */
+cJSON *srv_json_playback(const srv_playback *p, double now_ms);
 
 /* {"error": code, "message": message} as malloc'd text. */
 char *srv_json_error_body(const char *code, const char *message);

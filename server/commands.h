@@ -81,6 +81,19 @@ typedef struct srv_node_patch {
     float translation[3], rotation[4], scale[3];
 } srv_node_patch;
 
+/* ---- animation playback ----------------------------------------------------------------- */
+
+enum {
+    SRV_PLAY_PLAYING = 1u << 0,
+    SRV_PLAY_TIME = 1u << 1,
+};
+
+typedef struct srv_playback_patch {
+    unsigned has;
+    bool playing;
+    double time_s; /* finite, >= 0 (wrapped into the loop when applied) */
+} srv_playback_patch;
+
 /* ---- settings ------------------------------------------------------------------------------- */
 
 /* srv_settings, the SRV_SET_* bits and srv_settings_patch come from the settings table. */
@@ -136,12 +149,13 @@ typedef enum srv_cmd_kind {
     SRV_CMD_PATCH_NODE,
     SRV_CMD_GET_SETTINGS,
     SRV_CMD_PATCH_SETTINGS,
-    SRV_CMD_VIEWER_CAMERA, /* from the stream; no reply */
-    SRV_CMD_VIEWER_RESIZE, /* from the stream; no reply */
-    SRV_CMD_VIEW_OPEN,     /* a stream connection's own view (id chosen by the stream) */
-    SRV_CMD_VIEW_CLOSE,    /* its connection left: free the view */
-    SRV_CMD_VIEW_WATCH,    /* delta connections more (or fewer) show view `view` */
-    SRV_CMD_FRAME_REQUEST, /* GET /v1/frame.jpg: reply {"after": frame id} to wait past */
+    SRV_CMD_PATCH_ANIMATION, /* play, pause, seek the scene's animations */
+    SRV_CMD_VIEWER_CAMERA,   /* from the stream; no reply */
+    SRV_CMD_VIEWER_RESIZE,   /* from the stream; no reply */
+    SRV_CMD_VIEW_OPEN,       /* a stream connection's own view (id chosen by the stream) */
+    SRV_CMD_VIEW_CLOSE,      /* its connection left: free the view */
+    SRV_CMD_VIEW_WATCH,      /* delta connections more (or fewer) show view `view` */
+    SRV_CMD_FRAME_REQUEST,   /* GET /v1/frame.jpg: reply {"after": frame id} to wait past */
 } srv_cmd_kind;
 
 /* The render thread's answer: an HTTP status and a JSON body (malloc'd, may be NULL). */
@@ -161,6 +175,7 @@ typedef struct srv_cmd {
     srv_light_patch light;
     srv_node_patch node;
     srv_settings_patch settings;
+    srv_playback_patch playback;
     unsigned width, height; /* VIEWER_RESIZE: device pixels */
     rd_scene *scene;        /* REPLACE_SCENE: validated scene, owned by the command */
     rd_gpu_scene_prep *prepared; /* REPLACE_SCENE: its BVHs, built by the poster (owned) */

@@ -43,6 +43,7 @@ static const unsigned route_methods[R_COUNT] = {
     [R_FRAME] = M_GET | M_HEAD,
     [R_VIEWS] = M_GET | M_HEAD,
     [R_VIEW_CAMERA] = M_GET | M_HEAD | M_PUT | M_PATCH,
+    [R_ANIMATION] = M_GET | M_HEAD | M_PATCH,
     [R_UNKNOWN] = 0,
 };
 
@@ -172,10 +173,11 @@ static route match(const char *url, uint32_t *id, bool *id_ok)
     static const struct {
         const char *path;
         route r;
-    } fixed[] = {
-        {"/v1/health", R_HEALTH},     {"/v1/stats", R_STATS},     {"/v1/openapi.yaml", R_OPENAPI},
-        {"/v1/scene", R_SCENE},       {"/v1/camera", R_CAMERA},   {"/v1/lights", R_LIGHTS},
-        {"/v1/settings", R_SETTINGS}, {"/v1/frame.jpg", R_FRAME}, {"/v1/views", R_VIEWS}};
+    } fixed[] = {{"/v1/health", R_HEALTH},        {"/v1/stats", R_STATS},
+                 {"/v1/openapi.yaml", R_OPENAPI}, {"/v1/scene", R_SCENE},
+                 {"/v1/camera", R_CAMERA},        {"/v1/lights", R_LIGHTS},
+                 {"/v1/settings", R_SETTINGS},    {"/v1/frame.jpg", R_FRAME},
+                 {"/v1/views", R_VIEWS},          {"/v1/animation", R_ANIMATION}};
     for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; i++)
         if (strcmp(url, fixed[i].path) == 0) return fixed[i].r;
     if (strncmp(url, "/v1/lights/", 11) == 0) {

@@ -29,6 +29,7 @@ typedef enum route {
     R_FRAME,
     R_VIEWS,
     R_VIEW_CAMERA,
+    R_ANIMATION,
     R_UNKNOWN, /* under /v1/ but no such resource */
     R_COUNT
 } route;

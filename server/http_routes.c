@@ -200,6 +200,9 @@ static enum MHD_Result handle_get(srv_http *h, struct MHD_Connection *conn, requ
     case R_VIEWS:
         text = srv_snapshot_print(snap, SRV_DOC_VIEWS, NULL);
         break;
+    case R_ANIMATION:
+        text = srv_snapshot_print(snap, SRV_DOC_ANIMATION, NULL);
+        break;
     case R_LIGHT:
         text = srv_snapshot_print_light(snap, rq->id);
         if (!text)
@@ -266,6 +269,10 @@ enum MHD_Result srv_http_handle_json_route(srv_http *h, struct MHD_Connection *c
     case R_SETTINGS:
         c = srv_cmd_new(SRV_CMD_PATCH_SETTINGS);
         ok = srv_json_settings_patch(body, &c->settings, &e);
+        break;
+    case R_ANIMATION:
+        c = srv_cmd_new(SRV_CMD_PATCH_ANIMATION);
+        ok = srv_json_playback_patch(body, &c->playback, &e);
         break;
     default:
         break;

@@ -208,6 +208,7 @@ static void apply(srv_render_loop *l, srv_cmd *c)
     case SRV_CMD_DELETE_LIGHT:
     case SRV_CMD_PATCH_NODE:
     case SRV_CMD_PATCH_SETTINGS:
+    case SRV_CMD_PATCH_ANIMATION:
         world_changed(l, srv_scene_service_apply(&l->svc, c), now);
         break;
     default:
@@ -430,7 +431,9 @@ static void *render_main(void *arg)
         double now = srv_mono_ms();
         const srv_settings *s = &l->svc.st.settings;
         bool lost = l->vk.device_lost;
-        bool animating = srv_scene_service_animating(&l->svc, atomic_load(&l->viewers));
+        unsigned viewers = atomic_load(&l->viewers);
+        srv_scene_service_watch(&l->svc, viewers, now);
+        bool animating = srv_scene_service_animating(&l->svc, viewers);
         unsigned n = l->views.count < 256 ? l->views.count : 256;
         bool any_watched_dirty = false;
         for (unsigned i = 0; i < n; i++) {

@@ -9,6 +9,7 @@
 
 #include "api_json.h"
 #include "log.h"
+#include "renderer/animation_clip.h"
 
 #define NODE_DOC_LIMIT 1000 /* nodes listed in GET /v1/scene */
 
@@ -39,6 +40,15 @@ static cJSON *probes_json(const srv_scene_service *svc)
     return probes;
 }
 
+/* The "nodes" member of the scene document (the first NODE_DOC_LIMIT nodes). */
+static cJSON *nodes_json(const rd_scene *s)
+{
+    cJSON *nodes = cJSON_CreateArray();
+    for (uint32_t i = 0; i < s->node_count && i < NODE_DOC_LIMIT; i++)
+        cJSON_AddItemToArray(nodes, srv_json_node(i, &s->nodes[i]));
+    return nodes;
+}
+
 static cJSON *scene_json(const srv_scene_service *svc)
 {
     const rd_scene *s = &svc->st.scene;
@@ -55,9 +65,7 @@ static cJSON *scene_json(const srv_scene_service *svc)
     cJSON *bounds = cJSON_AddObjectToObject(j, "bounds");
     srv_json_add_floats(bounds, "min", s->bounds_min, 3);
     srv_json_add_floats(bounds, "max", s->bounds_max, 3);
-    cJSON *nodes = cJSON_AddArrayToObject(j, "nodes");
-    for (uint32_t i = 0; i < s->node_count && i < NODE_DOC_LIMIT; i++)
-        cJSON_AddItemToArray(nodes, srv_json_node(i, &s->nodes[i]));
+    cJSON_AddItemToObject(j, "nodes", nodes_json(s));
     cJSON_AddBoolToObject(j, "nodes_truncated", s->node_count > NODE_DOC_LIMIT);
     cJSON *lights = cJSON_AddArrayToObject(j, "lights");
     for (uint32_t i = 0; i < s->light_count; i++)
@@ -135,9 +143,15 @@ bool srv_scene_service_converging(const srv_scene_service *svc)
     return !rd_world_converged(&svc->world);
 }
 
-bool srv_scene_service_animating(const srv_scene_service *svc, unsigned viewers)
+/* The demo light circles (animation.h). */
+static bool demo_runs(const srv_scene_service *svc, unsigned viewers)
 {
     return svc->st.settings.animate && viewers > 0 && svc->st.scene.light_count > 0;
+}
+
+bool srv_scene_service_animating(const srv_scene_service *svc, unsigned viewers)
+{
+    return demo_runs(svc, viewers) || (viewers > 0 && srv_playback_running(&svc->playback));
 }
 
 /* ---- changes -------------------------------------------------------------------------------- */
@@ -175,26 +189,38 @@ static bool node_carries_light(const rd_scene *s, uint32_t node)
     return false;
 }
 
+/* Grows lo..hi by the world box of mesh placed with world matrix m. */
+static void grow_by_mesh(const srv_scene_service *svc, uint32_t mesh, const float m[16],
+                         float lo[3], float hi[3])
+{
+    float a[3], b[3];
+    rd_gpu_scene_mesh_world_bounds(&svc->gs, mesh, m, a, b);
+    for (int k = 0; k < 3; k++) {
+        lo[k] = fminf(lo[k], a[k]);
+        hi[k] = fmaxf(hi[k], b[k]);
+    }
+}
+
+static void empty_box(float lo[3], float hi[3])
+{
+    for (int k = 0; k < 3; k++)
+        lo[k] = INFINITY, hi[k] = -INFINITY;
+}
+
 /* World bounds of the instances that node moves (itself and its descendants); false when it
  * places no mesh. */
 static bool node_bounds(const srv_scene_service *svc, uint32_t node, float lo[3], float hi[3])
 {
     const rd_scene *s = &svc->st.scene;
     bool any = false;
-    for (int k = 0; k < 3; k++)
-        lo[k] = INFINITY, hi[k] = -INFINITY;
+    empty_box(lo, hi);
     for (uint32_t i = 0; i < s->instance_count; i++) {
         int32_t n = (int32_t)s->instances[i].node;
         unsigned depth = 0;
         while (n >= 0 && (uint32_t)n != node && depth++ < s->node_count)
             n = s->nodes[n].parent;
         if (n < 0 || (uint32_t)n != node) continue;
-        float a[3], b[3];
-        rd_gpu_scene_instance_bounds(&svc->gs, s, i, a, b);
-        for (int k = 0; k < 3; k++) {
-            lo[k] = fminf(lo[k], a[k]);
-            hi[k] = fmaxf(hi[k], b[k]);
-        }
+        grow_by_mesh(svc, s->instances[i].mesh, s->nodes[s->instances[i].node].world, lo, hi);
         any = true;
     }
     return any;
@@ -207,6 +233,162 @@ static bool lights_changed(srv_scene_service *svc, srv_cmd *c)
     lighting_changed(svc, PC_DDGI_WAKE_AGE_LIGHT);
     publish_lights(svc, false);
     return true;
+}
+
+/* ---- the scene's animations (glTF) ------------------------------------------------------- */
+
+/* Some light hangs on a node an animation moves. */
+static bool animated_lights(const srv_scene_service *svc)
+{
+    const rd_scene *s = &svc->st.scene;
+    for (uint32_t i = 0; i < s->light_count; i++)
+        if (s->lights[i].node >= 0 && (uint32_t)s->lights[i].node < s->node_count &&
+            svc->animated[s->lights[i].node])
+            return true;
+    return false;
+}
+
+/* Instance i's world matrix differs from before[16 * i] (an animation moved it). */
+static bool instance_moved(const srv_scene_service *svc, const float *before, uint32_t i)
+{
+    const rd_scene *s = &svc->st.scene;
+    const rd_instance *in = &s->instances[i];
+    return svc->animated[in->node] &&
+           memcmp(&before[16 * i], s->nodes[in->node].world, 16 * sizeof *before) != 0;
+}
+
+/* Poses the scene at the clock's time: the animated nodes' TRS (rd_scene_animate), world
+ * matrices, the top-level BVH and, when an animated node carries a light, the lights. With
+ * wake, the probes around the old and the new bounds of every instance that moved wake (and all
+ * of them, gently, when a light moved). *moved: some instance or light moved. */
+static rd_vk_result pose_scene(srv_scene_service *svc, bool wake, bool *moved, char *err,
+                               size_t errlen)
+{
+    rd_scene *s = &svc->st.scene;
+    *moved = false;
+    if (!s->animation_count) return RD_VK_OK;
+    uint32_t n = s->instance_count, nl = s->light_count;
+    float *before = malloc((n ? n : 1) * 16 * sizeof *before);        /* world matrices */
+    float *light_was = malloc((nl ? nl : 1) * 6 * sizeof *light_was); /* position, direction */
+    if (!before || !light_was) abort();
+    for (uint32_t i = 0; i < n; i++)
+        memcpy(&before[16 * i], s->nodes[s->instances[i].node].world, 16 * sizeof *before);
+    for (uint32_t i = 0; i < nl; i++) {
+        memcpy(&light_was[6 * i], s->lights[i].position, 3 * sizeof *light_was);
+        memcpy(&light_was[6 * i + 3], s->lights[i].direction, 3 * sizeof *light_was);
+    }
+    bool lights = animated_lights(svc);
+    rd_scene_animate(s, svc->playback.time_s);
+    rd_vk_result vr = RD_VK_OK;
+    if (!rd_scene_update(s, err, errlen) || s->instance_count != n) {
+        /* animations change no hierarchy: a broken invariant, reported, not fatal */
+        if (s->instance_count != n) snprintf(err, errlen, "the posed scene lost instances");
+        vr = RD_VK_ERR_VULKAN;
+        goto done;
+    }
+    bool any = false, lights_moved = false;
+    for (uint32_t i = 0; i < n && !any; i++)
+        any = instance_moved(svc, before, i);
+    for (uint32_t i = 0; lights && i < nl; i++)
+        lights_moved |= memcmp(&light_was[6 * i], s->lights[i].position, 3 * sizeof(float)) ||
+                        memcmp(&light_was[6 * i + 3], s->lights[i].direction, 3 * sizeof(float));
+    if (any) vr = rd_gpu_scene_update_instances(svc->vk, &svc->gs, s, err, errlen);
+    if (vr == RD_VK_OK && lights_moved)
+        vr = rd_gpu_scene_update_lights(svc->vk, &svc->gs, s, err, errlen);
+    if (vr != RD_VK_OK) goto done;
+    *moved = any || lights_moved;
+    if (lights_moved) publish_lights(svc, true); /* GET answers follow; no event per frame */
+    if (!wake) goto done;
+    /* first: waking all replaces the boxes waiting for the next update */
+    if (lights_moved) lighting_changed(svc, PC_DDGI_WAKE_AGE_NUDGE); /* a small step a frame */
+    for (uint32_t i = 0; any && i < n; i++) {
+        if (!instance_moved(svc, before, i)) continue;
+        const rd_instance *in = &s->instances[i];
+        float lo[3], hi[3];
+        empty_box(lo, hi); /* rd_world_wake_box grows the boxes by a probe spacing */
+        grow_by_mesh(svc, in->mesh, &before[16 * i], lo, hi);
+        rd_world_wake_box(&svc->world, lo, hi, PC_DDGI_WAKE_AGE_GEOMETRY);
+        empty_box(lo, hi);
+        grow_by_mesh(svc, in->mesh, s->nodes[in->node].world, lo, hi);
+        rd_world_wake_box(&svc->world, lo, hi, PC_DDGI_WAKE_AGE_GEOMETRY);
+    }
+    if (any) {
+        svc->gi_updates = 0;
+        if (svc->was_converged) publish_probes(svc);
+    }
+done:
+    free(before);
+    free(light_was);
+    return vr;
+}
+
+/* The posed nodes' documents, without events: GET /v1/nodes/{id} and the scene document's
+ * nodes (both are not updated every frame; this runs on play, pause and seek). */
+static void publish_pose(srv_scene_service *svc)
+{
+    const rd_scene *s = &svc->st.scene;
+    uint32_t *ids = malloc((s->node_count ? s->node_count : 1) * sizeof *ids);
+    cJSON **docs = malloc((s->node_count ? s->node_count : 1) * sizeof *docs);
+    if (!ids || !docs) abort();
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < s->node_count; i++) {
+        if (!svc->animated[i]) continue;
+        ids[n] = i;
+        docs[n++] = srv_json_node(i, &s->nodes[i]);
+    }
+    srv_snapshot_pose_nodes(svc->snap, ids, docs, n);
+    free(ids);
+    free(docs);
+    srv_snapshot_patch_scene(svc->snap, "nodes", nodes_json(s));
+}
+
+/* A new scene: which nodes its animations move, the clock at 0 (playing when there is
+ * something to play) and the scene posed there. Before publish_scene. */
+static void load_playback(srv_scene_service *svc)
+{
+    const rd_scene *s = &svc->st.scene;
+    free(svc->animated);
+    svc->animated = calloc(s->node_count ? s->node_count : 1, sizeof *svc->animated);
+    if (!svc->animated) abort();
+    rd_scene_animated_nodes(s, svc->animated);
+    srv_playback_load(&svc->playback, s->animation_count, rd_scene_animation_duration(s),
+                      srv_mono_ms());
+    char err[256];
+    bool moved;
+    if (pose_scene(svc, false, &moved, err, sizeof err) != RD_VK_OK)
+        srv_warn("render", "the scene's animations cannot be posed: %s", err);
+    srv_snapshot_set_playback(svc->snap, &svc->playback, false);
+    if (s->animation_count)
+        srv_info("render", "%u animation(s) over %.3g s: playing", s->animation_count,
+                 svc->playback.duration_s);
+}
+
+void srv_scene_service_watch(srv_scene_service *svc, unsigned viewers, double now_ms)
+{
+    /* the clock starts or stops: GET answers extrapolate from the new copy (no event) */
+    if (srv_playback_set_watched(&svc->playback, viewers > 0, now_ms))
+        srv_snapshot_set_playback(svc->snap, &svc->playback, true);
+}
+
+/* PATCH /v1/animation: seek and/or play or pause, then pose the scene at the clock's time and
+ * publish the posed nodes (a seek, or where a pause stopped). */
+static unsigned patch_playback(srv_scene_service *svc, srv_cmd *c)
+{
+    double now = srv_mono_ms();
+    srv_playback *p = &svc->playback;
+    srv_playback_advance(p, now);
+    if (c->playback.has & SRV_PLAY_TIME) srv_playback_seek(p, c->playback.time_s, now);
+    if (c->playback.has & SRV_PLAY_PLAYING) srv_playback_set_playing(p, c->playback.playing, now);
+    char err[256];
+    bool moved = false;
+    if (pose_scene(svc, true, &moved, err, sizeof err) != RD_VK_OK) {
+        srv_cmd_fail(c, 500, SRV_ERR_GPU, err);
+        return 0;
+    }
+    if (svc->st.scene.animation_count) publish_pose(svc);
+    srv_snapshot_set_playback(svc->snap, p, false);
+    srv_cmd_complete_json(c, 200, srv_json_playback(p, now));
+    return moved ? SRV_CHANGE_VIEWS : 0;
 }
 
 static unsigned replace_scene(srv_scene_service *svc, srv_cmd *c)
@@ -233,6 +415,7 @@ static unsigned replace_scene(srv_scene_service *svc, srv_cmd *c)
     free(c->scene);
     c->scene = NULL;
     srv_animation_reset(&svc->anim);
+    load_playback(svc);
     if (configure_gi(svc, err, sizeof err) != RD_VK_OK)
         srv_warn("render", "global illumination is off for this scene: %s", err);
     srv_info("render",
@@ -296,6 +479,8 @@ unsigned srv_scene_service_apply(srv_scene_service *svc, srv_cmd *c)
         return replace_scene(svc, c);
     case SRV_CMD_PATCH_SETTINGS:
         return patch_settings(svc, c);
+    case SRV_CMD_PATCH_ANIMATION:
+        return patch_playback(svc, c);
     case SRV_CMD_PATCH_LIGHT: {
         int i = srv_state_light_index(st, c->id);
         if (i < 0) {
@@ -347,14 +532,15 @@ unsigned srv_scene_service_apply(srv_scene_service *svc, srv_cmd *c)
             return 0;
         }
         if (!upload_lights(svc, c)) return 0;
-        /* probes near the node's old and new place wake (rd_world_wake_box grows the boxes by
-         * a probe spacing); lights it carries may reach anywhere */
+        /* lights the node carries may reach anywhere (wake all first: it replaces pending
+         * boxes); probes near its old and new place wake with the geometry age
+         * (rd_world_wake_box grows the boxes by a probe spacing) */
+        if (node_carries_light(&st->scene, c->id))
+            rd_world_wake_all(&svc->world, PC_DDGI_WAKE_AGE_LIGHT);
         if (had_mesh && node_bounds(svc, c->id, lo, hi)) {
             rd_world_wake_box(&svc->world, old_lo, old_hi, PC_DDGI_WAKE_AGE_GEOMETRY);
             rd_world_wake_box(&svc->world, lo, hi, PC_DDGI_WAKE_AGE_GEOMETRY);
         }
-        if (node_carries_light(&st->scene, c->id))
-            rd_world_wake_all(&svc->world, PC_DDGI_WAKE_AGE_LIGHT);
         svc->gi_updates = 0;
         if (svc->was_converged) publish_probes(svc);
         srv_snapshot_set_node(svc->snap, c->id, srv_json_node(c->id, &st->scene.nodes[c->id]));
@@ -371,13 +557,18 @@ unsigned srv_scene_service_apply(srv_scene_service *svc, srv_cmd *c)
 rd_vk_result srv_scene_service_advance(srv_scene_service *svc, bool animating, unsigned updates,
                                        double now_ms, char *err, size_t errlen)
 {
-    if (animating) {
+    if (animating && demo_runs(svc, 1)) { /* animating: someone watches */
         if (srv_animation_step(&svc->anim, &svc->st, now_ms) && upload_lights(svc, NULL)) {
             lighting_changed(svc, PC_DDGI_WAKE_AGE_NUDGE); /* a small step each frame */
             publish_lights(svc, true); /* GET answers follow; no event per frame */
         }
     } else {
         srv_animation_pause(&svc->anim);
+    }
+    if (srv_playback_advance(&svc->playback, now_ms)) { /* it moves only while it runs */
+        bool moved;
+        rd_vk_result vr = pose_scene(svc, true, &moved, err, errlen);
+        if (vr != RD_VK_OK) return vr;
     }
     if (!svc->world.gi) updates = 0;
     if (animating && svc->world.gi && updates == 0) updates = 1;
@@ -437,6 +628,7 @@ rd_vk_result srv_scene_service_init(srv_scene_service *svc, rd_vk *vk, srv_snaps
     }
     rd_world_set_scene(&svc->world, &svc->gs);
     rd_world_set_sky(&svc->world, svc->st.settings.sky);
+    load_playback(svc);
     if (configure_gi(svc, err, errlen) != RD_VK_OK) {
         srv_warn("render", "global illumination is off: %s", err);
         err[0] = '\0';
@@ -450,5 +642,7 @@ void srv_scene_service_dispose(srv_scene_service *svc)
     if (svc->world_ok) rd_world_destroy(&svc->world);
     if (svc->gs_ok) rd_gpu_scene_destroy(svc->vk, &svc->gs);
     svc->world_ok = svc->gs_ok = false;
+    free(svc->animated);
+    svc->animated = NULL;
     srv_state_dispose(&svc->st);
 }

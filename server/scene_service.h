@@ -1,11 +1,13 @@
 /* scene_service.h: the world side of the daemon — the scene state (scene, lights, nodes,
- * settings), its GPU scene and the shared rd_world (environment and probe field), and the API
- * semantics of changing them. Render thread only.
+ * settings), its GPU scene and the shared rd_world (environment and probe field), the clock of
+ * the scene's glTF animations (playback.h), and the API semantics of changing them. Render
+ * thread only.
  *
- * srv_scene_service_apply takes a world command (scene replacement, light, node or settings
- * change), validates it against the current state, applies it to the CPU state and the GPU,
- * completes the command with the API's reply, publishes the changed documents to the snapshot
- * (which turns them into events) and says what the views must do about it.
+ * srv_scene_service_apply takes a world command (scene replacement, light, node, settings or
+ * animation playback change), validates it against the current state, applies it to the CPU
+ * state and the GPU, completes the command with the API's reply, publishes the changed
+ * documents to the snapshot (which turns them into events) and says what the views must do
+ * about it.
  */
 #ifndef SRV_SCENE_SERVICE_H
 #define SRV_SCENE_SERVICE_H
@@ -15,6 +17,7 @@
 #include "animation.h"
 #include "commands.h"
 #include "mailbox.h"
+#include "playback.h"
 #include "renderer/world.h"
 #include "scene_state.h"
 #include "snapshot.h"
@@ -40,7 +43,9 @@ typedef struct srv_scene_service {
     unsigned gi_updates;  /* probe updates since the last change that woke probes */
     unsigned pt_target;   /* path tracing: samples per view to accumulate (0: not path tracing) */
     bool was_converged;   /* as last published in the scene document */
-    srv_animation anim;
+    srv_animation anim;   /* the demo light */
+    srv_playback playback; /* the scene's own (glTF) animations */
+    bool *animated;        /* parallel to st.scene.nodes: an animation moves the node */
 } srv_scene_service;
 
 /* Takes over scene (left zeroed) and builds its GPU scene and the world; applies saved_state
@@ -57,10 +62,14 @@ unsigned srv_scene_service_apply(srv_scene_service *svc, srv_cmd *c);
 
 /* The probe field still wants updates: some probe is awake (rd_world_converged). */
 bool srv_scene_service_converging(const srv_scene_service *svc);
-/* The demo animation runs (enabled, the scene has a light, viewers is not 0). */
+/* Tells the scene's animation clock whether someone watches (viewers is not 0): it runs only
+ * then. Call before srv_scene_service_animating; cheap. */
+void srv_scene_service_watch(srv_scene_service *svc, unsigned viewers, double now_ms);
+/* The world moves by itself: the demo animation runs (enabled, the scene has a light, viewers
+ * is not 0) or the scene's animations play (and someone watches). */
 bool srv_scene_service_animating(const srv_scene_service *svc, unsigned viewers);
-/* One world tick: moves the animation (when animating) and runs up to `updates` probe updates,
- * fewer when the field converges first. */
+/* One world tick: moves the demo light and poses the scene at its animation clock's time (when
+ * animating) and runs up to `updates` probe updates, fewer when the field converges first. */
 rd_vk_result srv_scene_service_advance(srv_scene_service *svc, bool animating, unsigned updates,
                                        double now_ms, char *err, size_t errlen);
 /* The saved-state document (the default view's camera passed in). */

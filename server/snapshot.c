@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "api_json.h"
+#include "clock.h"
 
 typedef struct node_doc {
     cJSON *doc;
@@ -23,13 +24,15 @@ struct srv_snapshot {
     srv_view_info *views;
     unsigned view_count, view_cap;
     srv_view_limits limits;
+    srv_playback playback;
+    bool playback_set;
     srv_snapshot_listener listener;
     void *listener_user;
 };
 
 const char *srv_doc_name(srv_doc kind)
 {
-    static const char *names[SRV_DOC_COUNT] = {"scene", "lights", "settings", "views"};
+    static const char *names[SRV_DOC_COUNT] = {"scene", "lights", "settings", "views", "animation"};
     return kind < SRV_DOC_COUNT ? names[kind] : "?";
 }
 
@@ -81,7 +84,7 @@ static void notify(srv_snapshot *s)
 
 void srv_snapshot_publish(srv_snapshot *s, srv_doc kind, cJSON *doc, bool quiet)
 {
-    if (kind >= SRV_DOC_COUNT || kind == SRV_DOC_VIEWS) {
+    if (kind >= SRV_DOC_COUNT || kind == SRV_DOC_VIEWS || kind == SRV_DOC_ANIMATION) {
         cJSON_Delete(doc);
         return;
     }
@@ -132,6 +135,8 @@ char *srv_snapshot_print(srv_snapshot *s, srv_doc kind, uint64_t *version)
     char *text = NULL;
     if (kind == SRV_DOC_VIEWS)
         text = srv_json_print_delete(views_doc_locked(s));
+    else if (kind == SRV_DOC_ANIMATION && s->playback_set)
+        text = srv_json_print_delete(srv_json_playback(&s->playback, srv_mono_ms()));
     else if (s->docs[kind])
         text = cJSON_PrintUnformatted(s->docs[kind]);
     if (version) *version = s->versions[kind];
@@ -165,6 +170,16 @@ char *srv_snapshot_print_light(srv_snapshot *s, uint32_t id)
     return text;
 }
 
+void srv_snapshot_set_playback(srv_snapshot *s, const srv_playback *p, bool quiet)
+{
+    pthread_mutex_lock(&s->mu);
+    s->playback = *p;
+    s->playback_set = true;
+    if (!quiet) s->versions[SRV_DOC_ANIMATION] = ++s->clock;
+    pthread_mutex_unlock(&s->mu);
+    if (!quiet) notify(s);
+}
+
 void srv_snapshot_set_nodes(srv_snapshot *s, cJSON **docs, uint32_t count)
 {
     node_doc *nodes = calloc(count ? count : 1, sizeof *nodes);
@@ -192,6 +207,20 @@ void srv_snapshot_set_node(srv_snapshot *s, uint32_t id, cJSON *doc)
         notify(s);
     else
         cJSON_Delete(doc);
+}
+
+void srv_snapshot_pose_nodes(srv_snapshot *s, const uint32_t *ids, cJSON **docs, uint32_t n)
+{
+    pthread_mutex_lock(&s->mu);
+    for (uint32_t k = 0; k < n; k++) {
+        if (ids[k] < s->node_count) {
+            cJSON_Delete(s->nodes[ids[k]].doc);
+            s->nodes[ids[k]].doc = docs[k];
+        } else {
+            cJSON_Delete(docs[k]);
+        }
+    }
+    pthread_mutex_unlock(&s->mu);
 }
 
 char *srv_snapshot_print_node(srv_snapshot *s, uint32_t id)

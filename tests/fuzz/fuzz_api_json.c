@@ -16,10 +16,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     srv_light_patch light;
     srv_node_patch node;
     srv_settings_patch settings;
+    srv_playback_patch playback;
     srv_json_camera_patch(obj, &cam, &e);
     srv_json_light_patch(obj, &light, &e);
     srv_json_node_patch(obj, &node, &e);
     srv_json_settings_patch(obj, &settings, &e);
+    srv_json_playback_patch(obj, &playback, &e);
     cJSON_Delete(obj);
     return 0;
 }

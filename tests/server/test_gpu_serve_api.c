@@ -123,6 +123,7 @@ static const char *valid_body(const op *o)
     if (strcmp(o->path, "/v1/lights/{id}") == 0) return "{\"color\":[1,0.8,0.6]}";
     if (strcmp(o->path, "/v1/nodes/{id}") == 0) return "{\"rotation\":[0,0.38268343,0,0.9238795]}";
     if (strcmp(o->path, "/v1/settings") == 0) return "{\"exposure\":0.5}";
+    if (strcmp(o->path, "/v1/animation") == 0) return "{\"playing\":false,\"time\":0}";
     return "{}";
 }
 

@@ -253,7 +253,7 @@ test('the viewer page loads from the daemon', { timeout: 30000 }, async () => {
   const res = await fetch(BASE + '/');
   assert.equal(res.status, 200);
   assert.match(res.headers.get('content-type'), /^text\/html/);
-  for (const f of ['/viewer.css', '/js/main.js', '/js/stream.js', '/js/camera.js', '/js/api.js', '/js/panels.js']) {
+  for (const f of ['/viewer.css', '/js/main.js', '/js/stream.js', '/js/camera.js', '/js/api.js', '/js/panels.js', '/js/animation.js']) {
     const r = await fetch(BASE + f);
     assert.equal(r.status, 200, f);
     assert.match(r.headers.get('content-type'), f.endsWith('.css') ? /^text\/css/ : /^text\/javascript/, f);

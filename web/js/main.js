@@ -1,16 +1,18 @@
 // main.js: wires the viewer together: the stream on the canvas, camera controls (one camera
 // message per animation frame at most), the render size (debounced resize messages), the
-// panels (fed by the stream's world events), following other views, stats polling,
-// drag-and-drop upload and the view restore after a reconnect.
+// panels (fed by the stream's world events; the animation panel plays, pauses and seeks the
+// scene's glTF animations), following other views, stats polling, drag-and-drop upload and the
+// view restore after a reconnect.
 //
 // Views (protocol/stream.md, version 2): every connection owns a view of its own; this page's
-// camera and size change only that view. The world (scene, lights, settings, views) reaches
-// the panels as 'event' messages on the stream, so nothing but /v1/stats (once a second) is
-// polled. Against a version-1 server (one shared view 0, no events) the page still works: it
+// camera and size change only that view. The world (scene, lights, settings, views, animation)
+// reaches the panels as 'event' messages on the stream, so nothing but /v1/stats (once a second)
+// is polled. Against a version-1 server (one shared view 0, no events) the page still works: it
 // reads the panels once per connection and after its own changes.
 
 import { Api } from './api.js';
 import { CameraControls, OrbitCamera } from './camera.js';
+import { AnimationPanel } from './animation.js';
 import { LightsPanel, RenderPanel, ScenePanel, StatsPanel, Toasts, TokenPrompt, ViewsPanel } from './panels.js';
 import { CanvasView, FrameStream, SUBPROTOCOL } from './stream.js';
 
@@ -121,9 +123,11 @@ async function restoreView(gen) {
       // Events that arrived meanwhile: a newer scene than the one restored, our view's size.
       if (stream.world.scene && stream.world.scene !== s) onScene(stream.world.scene);
       if (stream.world.views) onViews(stream.world.views);
+      if (stream.world.animation) animPanel.applyEvent(stream.world.animation);
     } else {
       renderPanel.refresh();
       lightsPanel.refresh();
+      animPanel.refresh();
     }
   } catch (e) {
     console.warn('probecast: restoring the view failed; retrying:', e.message);
@@ -202,6 +206,7 @@ stream.addEventListener('world', (e) => {
   else if (what === 'lights') lightsPanel.applyEvent(data);
   else if (what === 'settings') renderPanel.applyEvent(data);
   else if (what === 'views') onViews(data);
+  else if (what === 'animation') animPanel.applyEvent(data);
   // 'node': no panel shows nodes; lights that hang on a moved node come as a 'lights' event.
 });
 
@@ -295,10 +300,11 @@ const scenePanel = new ScenePanel(api, {
   toasts,
   onSceneChanged: async (s) => {
     await onScene(s); // the event follows with the same document and changes nothing then
-    if (!v2()) { lightsPanel.refresh(); renderPanel.refresh(); }
+    if (!v2()) { lightsPanel.refresh(); renderPanel.refresh(); animPanel.refresh(); }
   },
 });
 const viewsPanel = new ViewsPanel({ onFollow: follow });
+const animPanel = new AnimationPanel(api, { toasts });
 syncFollow();
 
 /* Which gi_mode and view values the API takes, read from /v1/openapi.yaml once: a server that
@@ -335,6 +341,7 @@ async function pollStats() {
         await onScene(await api.get('/v1/scene'));
         lightsPanel.refresh();
         renderPanel.refresh();
+        animPanel.refresh();
       }
     }
   } catch {
@@ -370,6 +377,10 @@ window.addEventListener('keydown', (e) => {
   if (e.ctrlKey || e.metaKey || e.altKey || (t && /^(INPUT|TEXTAREA|SELECT)$/.test(t.tagName))) return;
   if (e.code === 'KeyH') toggleUi();
   else if (e.code === 'KeyP') renderPanel.toggleProbes();
+  else if (e.code === 'Space' && animPanel.visible && !(t && t.tagName === 'BUTTON')) {
+    e.preventDefault();
+    animPanel.toggle();
+  }
   else if (e.code === 'Escape' && viewsPanel.following) follow(null);
 });
 let helpTimer = setTimeout(fadeHelp, 12000);
@@ -392,7 +403,7 @@ document.addEventListener('visibilitychange', () => { if (!document.hidden) stre
 
 // For tests and the console: the live objects and a summary of the stream state.
 window.probecast = {
-  api, stream, camera, controls, view, renderPanel, lightsPanel, scenePanel, viewsPanel, follow,
+  api, stream, camera, controls, view, renderPanel, lightsPanel, scenePanel, viewsPanel, animPanel, follow,
   state: () => ({
     state: stream.state, drawnId: stream.drawnId, frames: stream.counters.drawn, inputSeq: stream.lastHeader ? stream.lastHeader.inputSeq : 0,
     sentSeq: stream.nextSeq - 1, reconnects: stream.counters.reconnects, gen: stream.gen, header: stream.lastHeader,
