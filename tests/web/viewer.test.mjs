@@ -650,6 +650,29 @@ test('world changes through the HTTP API reach both pages as events, without pol
   }
 });
 
+test('a hidden page releases its view at once and takes a new one when shown', { timeout: 40000 }, async () => {
+  const b0 = await state(pageB);
+  const t0 = Date.now();
+  await pageB.evaluate(() => {
+    Object.defineProperty(document, 'hidden', { value: true, configurable: true });
+    document.dispatchEvent(new Event('visibilitychange'));
+  });
+  await until(async () => !(await http('GET', '/v1/views')).json.views.some((v) => v.id === b0.ownView), 'hidden B\'s view to be freed', 3000);
+  assert.ok(Date.now() - t0 < 3000, 'released within 3 s');
+  await pageB.evaluate(() => {
+    Object.defineProperty(document, 'hidden', { value: false, configurable: true });
+    document.dispatchEvent(new Event('visibilitychange'));
+  });
+  await pageB.waitForFunction((old) => { const s = window.probecast.state(); return s.ownView !== null && s.ownView !== old; }, b0.ownView, { timeout: 20000 });
+  const b1 = await state(pageB);
+  await waitViewFrame(pageB, b1.ownView, RENDER_B, 30000);
+  // pagehide (the tab closes or is put in the back/forward cache) releases it the same way
+  await pageB.evaluate(() => window.dispatchEvent(new PageTransitionEvent('pagehide', { persisted: true })));
+  await until(async () => !(await http('GET', '/v1/views')).json.views.some((v) => v.id === b1.ownView), 'B\'s view to be freed on pagehide', 3000);
+  await pageB.evaluate(() => window.dispatchEvent(new PageTransitionEvent('pageshow', { persisted: true })));
+  await pageB.waitForFunction((old) => { const s = window.probecast.state(); return s.ownView !== null && s.ownView !== old; }, b1.ownView, { timeout: 20000 });
+});
+
 test('the second page closes; its view goes away', { timeout: 30000 }, async () => {
   const b = await state(pageB);
   await pageB.close();

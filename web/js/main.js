@@ -399,7 +399,11 @@ for (const d of document.querySelectorAll('details.panel')) {
 }
 
 window.addEventListener('online', () => stream.retryNow());
-document.addEventListener('visibilitychange', () => { if (!document.hidden) stream.retryNow(); });
+// A viewer that leaves or hides releases its view at once (the server stops rendering it); it
+// takes a new one, with its camera, when it shows again.
+document.addEventListener('visibilitychange', () => { if (document.hidden) stream.stop(); else stream.start(); });
+window.addEventListener('pagehide', () => stream.stop());
+window.addEventListener('pageshow', (ev) => { if (ev.persisted && !document.hidden) stream.start(); });
 
 // For tests and the console: the live objects and a summary of the stream state.
 window.probecast = {
