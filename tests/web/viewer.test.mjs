@@ -300,6 +300,13 @@ test('frames arrive, are drawn and acknowledged', { timeout: 40000 }, async () =
   await shot('loaded.png');
 });
 
+test('the stats panel shows the probe field converging, then converged', { timeout: 60000 }, async () => {
+  const probes = page.locator('#st-probes');
+  await page.waitForFunction(() => /\bconverged\b/.test(document.querySelector('#st-probes').textContent), null, { timeout: 50000 });
+  const title = await probes.getAttribute('title');
+  assert.match(title, /^awake 0, sleeping \d+, off \d+$/, `probe states in the tooltip: ${title}`);
+});
+
 test('dragging orbits the camera; frames reflect the input', { timeout: 40000 }, async () => {
   const own = (await state()).ownView;
   const camBefore = await viewCamera(own);

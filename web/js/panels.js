@@ -197,9 +197,14 @@ export class StatsPanel {
     f.rays.textContent = si(server.rays_per_second);
     const p = server.probes || {};
     const active = p.mode && p.mode !== 'off' ? p.total || 0 : 0;
+    // convergence progress: the share of the lit probes that have settled (asleep)
+    const st = p.states || null;
+    const progress = st && Number.isFinite(p.convergence) && !p.converged
+      ? ` ${Math.floor(p.convergence * 100)}% · ${st.awake} awake` : '';
     f.probes.innerHTML = active
-      ? `${active} <small>${p.mode} · ${p.converged ? 'converged' : 'converging'}</small>`
+      ? `${active} <small>${p.mode} · ${p.converged ? 'converged' : 'converging' + progress}</small>`
       : `0 <small>${p.mode || 'off'}</small>`;
+    f.probes.title = st ? `awake ${st.awake}, sleeping ${st.sleeping}, off ${st.off}` : '';
     f.gpu.innerHTML = server.rendering === false ? `idle <small>(converged)</small>`
       : `${fixed(server.gpu_ms_total, 1)} ms`;
     f.device.textContent = server.device ? `${server.device}${server.stream ? ` · ${server.stream.viewers} viewer${server.stream.viewers === 1 ? '' : 's'}` : ''}` : '';
