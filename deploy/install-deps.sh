@@ -11,6 +11,7 @@ packages=(
   vulkan-validationlayers  # tests run with VK_LAYER_KHRONOS_validation
   libtinygltf-dev libstb-dev nlohmann-json3-dev  # glTF / GLB loading, image decoding
   libpng-dev libturbojpeg0-dev                   # PNG and JPEG output
+  libjpeg62-turbo-dev      # libjpeg API of libjpeg-turbo: restart intervals for striped JPEG
   libmicrohttpd-dev libwebsockets-dev libcjson-dev  # probecast serve: HTTP API, frame stream, JSON
 )
 

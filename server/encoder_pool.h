@@ -6,6 +6,13 @@
  * and only if it is newer than its view's published one: latest frame wins, per view. Jobs of a
  * view's older frames that have not started are dropped when a newer frame of that view
  * arrives, so a slow encoder never builds a queue. Encoders see only CPU memory: never a GPU object.
+ *
+ * Large images (at least the stripe threshold's pixels, with more than one thread) are encoded in
+ * horizontal stripes (jpeg_striped.h): each variant becomes one job per stripe, spread over the
+ * threads like any job, and the thread that finishes a variant's last stripe joins them into its
+ * one JPEG. Small images are one tjCompress2 job per variant. Both give the same decoded pixels.
+ * A striped frame counts as started once its first stripe has: a newer frame of its view no longer
+ * drops its other stripes (at most one frame a view in flight, one pending).
  */
 #ifndef SRV_ENCODER_POOL_H
 #define SRV_ENCODER_POOL_H
@@ -58,8 +65,9 @@ typedef struct srv_frame {
     srv_jpeg variants[SRV_MAX_VARIANTS]; /* ascending quality */
     /* encoder-private */
     srv_image *image;
-    unsigned remaining;
+    unsigned remaining; /* jobs not finished or dropped */
     bool abandoned;
+    struct srv_stripe_set *stripe_sets; /* one per variant when encoded in stripes, else NULL */
 } srv_frame;
 
 srv_frame *srv_frame_ref(srv_frame *f);
@@ -71,8 +79,9 @@ const srv_jpeg *srv_frame_best(const srv_frame *f);
 
 typedef struct srv_encoder_stats {
     uint64_t frames_published, frames_dropped, jpegs_encoded, bytes_encoded;
-    double encode_ms_avg; /* exponential moving average per JPEG */
+    double encode_ms_avg; /* exponential moving average per JPEG (wall: first stripe to join) */
     double encode_ms_last;
+    uint64_t jpegs_striped; /* of jpegs_encoded, those encoded in stripes */
 } srv_encoder_stats;
 
 /* Called (from an encoder thread) after a frame is published. Must be quick and thread-safe. */
@@ -82,6 +91,7 @@ typedef struct srv_encoder_pool srv_encoder_pool;
 
 /* Starts threads encoders (0 = 2). Returns NULL when a thread cannot be started. */
 srv_encoder_pool *srv_encoder_pool_create(unsigned threads);
+
 /* Stops and joins the threads, drops pending jobs, frees everything (NULL is fine). */
 void srv_encoder_pool_destroy(srv_encoder_pool *p);
 void srv_encoder_pool_set_listener(srv_encoder_pool *p, srv_frame_listener fn, void *user);
@@ -89,6 +99,13 @@ void srv_encoder_pool_set_listener(srv_encoder_pool *p, srv_frame_listener fn, v
  * min(base_quality, cap) for each cap in the current cap mask. */
 void srv_encoder_submit(srv_encoder_pool *p, srv_image *img, const srv_frame_info *info,
                         unsigned base_quality);
+/* Images of at least this many pixels are encoded in stripes, one per thread (fewer for images
+ * under SRV_STRIPE_MIN_MCU_ROWS MCU rows a stripe); see encoder_pool.c for the measurements. */
+#define SRV_STRIPE_MIN_PIXELS 500000u
+#define SRV_STRIPE_MIN_MCU_ROWS 2u
+/* Sets the stripe threshold in pixels for frames submitted from now on (0: the default,
+ * SRV_STRIPE_MIN_PIXELS; UINT_MAX: never). A pool of one thread never stripes. */
+void srv_encoder_set_stripe_min_pixels(srv_encoder_pool *p, unsigned pixels);
 /* Sets the lag-driven caps the viewers currently need (see SRV_CAP_*). */
 void srv_encoder_set_caps(srv_encoder_pool *p, uint32_t mask);
 /* The newest published frame of view view_id (a new reference) or NULL. */

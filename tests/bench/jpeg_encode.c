@@ -1,0 +1,486 @@
+/* probecast_jpegbench: one frame's JPEG encoded whole (tjCompress2 on one thread) and in stripes
+ * over the daemon's encoder pool (server/encoder_pool.c with server/jpeg_striped.c), at several
+ * sizes and thread counts. Prints a table and writes it as CSV. A benchmark, not a test: nothing
+ * is asserted.
+ *
+ * Columns, medians over the runs, the three timings taken in turn in every run (so a machine
+ * that gets busier or slower mid-way slows them alike): single_ms: tjCompress2 of the whole
+ * frame on this thread; pool_ms: wall time from srv_encoder_submit to the published frame
+ * (srv_encoder_wait_frame) with a pool of that many threads, every frame striped (one stripe a
+ * thread; a pool of one thread encodes whole, as the daemon does); speedup: single_ms / pool_ms;
+ * pool_p10_ms: the pool's 10th percentile (what it reaches when no other work is in the way);
+ * stripes_cpu_ms: all stripes one after the other on this thread plus the join (the CPU cost of
+ * striping, for every thread count); dispatch_ms: the pool's round trip for a 16-pixel-wide
+ * frame in as many stripes (thread wake-ups and bookkeeping, almost no encoding: what pool_ms
+ * costs beyond the encode itself); bytes of the single and the striped JPEG. Thread counts above
+ * the machine's cores get no pool measurement (those columns are left blank).
+ *
+ *   probecast_jpegbench [--image frame.png|frame.ppm] [--sizes 1280x720,1920x1080]
+ *                       [--threads 1,2,4,8,16] [--runs 31] [--quality 80] [--machine NAME]
+ *                       [--csv tests/bench/results/jpeg_encode.csv]
+ */
+#include <math.h>
+#include <png.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <turbojpeg.h>
+#include <unistd.h>
+
+#include "server/clock.h"
+#include "server/encoder_pool.h"
+#include "server/jpeg_striped.h"
+
+#define MAX_LIST 16
+
+/* ---- the frame ------------------------------------------------------------------------------- */
+
+static double clamp01(double v)
+{
+    return v < 0 ? 0 : v > 1 ? 1 : v;
+}
+
+/* A frame like the renderer's: a sky gradient, a checkered floor in perspective, three shaded
+ * spheres with soft shadows, and path-tracing grain (a few levels of noise on every pixel). */
+static uint8_t *make_frame(unsigned w, unsigned h)
+{
+    uint8_t *p = malloc((size_t)w * h * 4);
+    if (!p) abort();
+    static const double sph[3][4] = {
+        {-1.3, 0.6, 5.0, 0.6}, {0.4, 0.9, 6.5, 0.9}, {1.6, 0.45, 4.2, 0.45}};
+    static const double col[3][3] = {{0.85, 0.3, 0.25}, {0.3, 0.6, 0.9}, {0.9, 0.85, 0.4}};
+    const double L[3] = {-0.48, 0.8, -0.36}; /* towards the light */
+    uint32_t seed = 12345;
+    double aspect = (double)w / h;
+    for (unsigned y = 0; y < h; y++) {
+        for (unsigned x = 0; x < w; x++) {
+            double d[3] = {((x + 0.5) / w * 2 - 1) * aspect * 0.6, (1 - (y + 0.5) / h * 2) * 0.6,
+                           1};
+            double n = sqrt(d[0] * d[0] + d[1] * d[1] + 1);
+            d[0] /= n, d[1] /= n, d[2] /= n;
+            const double o[3] = {0, 1.2, 0};
+            double c[3], best = 1e30;
+            int hit = -1;
+            for (int s = 0; s < 3; s++) {
+                double oc[3] = {o[0] - sph[s][0], o[1] - sph[s][1], o[2] - sph[s][2]};
+                double b = oc[0] * d[0] + oc[1] * d[1] + oc[2] * d[2];
+                double cc = oc[0] * oc[0] + oc[1] * oc[1] + oc[2] * oc[2] - sph[s][3] * sph[s][3];
+                double disc = b * b - cc;
+                if (disc > 0 && -b - sqrt(disc) < best && -b - sqrt(disc) > 0) {
+                    best = -b - sqrt(disc);
+                    hit = s;
+                }
+            }
+            double tf = d[1] < 0 ? -o[1] / d[1] : 1e30;
+            if (hit >= 0 && best < tf) {
+                double q[3], nn[3];
+                for (int k = 0; k < 3; k++) {
+                    q[k] = o[k] + best * d[k];
+                    nn[k] = (q[k] - sph[hit][k]) / sph[hit][3];
+                }
+                double lam = clamp01(nn[0] * L[0] + nn[1] * L[1] + nn[2] * L[2]);
+                double spec = pow(clamp01(nn[1] * 0.7 + nn[2] * -0.7), 40);
+                for (int k = 0; k < 3; k++)
+                    c[k] = col[hit][k] * (0.12 + 0.85 * lam) + 0.5 * spec;
+            } else if (tf < 1e29) {
+                double fx = o[0] + tf * d[0], fz = o[2] + tf * d[2];
+                int check = ((int)floor(fx) + (int)floor(fz)) & 1;
+                double base = check ? 0.75 : 0.35, shadow = 1;
+                for (int s = 0; s < 3; s++) { /* soft shadow: distance to the sphere's foot */
+                    double dx = fx - (sph[s][0] - 0.6 * sph[s][1]);
+                    double dz = fz - (sph[s][2] + 0.45 * sph[s][1]);
+                    double r = sqrt(dx * dx + dz * dz) / sph[s][3];
+                    shadow *= 0.35 + 0.65 * clamp01((r - 0.6) / 0.8);
+                }
+                double fog = exp(-tf * 0.04);
+                for (int k = 0; k < 3; k++)
+                    c[k] = (base * shadow * (k == 2 ? 0.9 : 1.0)) * fog + (1 - fog) * 0.7;
+            } else {
+                double t = clamp01(d[1] * 2);
+                c[0] = 0.75 - 0.45 * t, c[1] = 0.82 - 0.35 * t, c[2] = 0.95 - 0.1 * t;
+            }
+            uint8_t *px = p + ((size_t)y * w + x) * 4;
+            for (int k = 0; k < 3; k++) {
+                seed = seed * 1664525u + 1013904223u;
+                double grain = ((seed >> 24) % 9) - 4.0;
+                double v = 255 * pow(clamp01(c[k]), 1 / 2.2) + grain;
+                px[k] = (uint8_t)(v < 0 ? 0 : v > 255 ? 255 : v);
+            }
+            px[3] = 255;
+        }
+    }
+    return p;
+}
+
+/* Reads a PNG or a binary PPM (P6) as RGBA; NULL on failure. */
+static uint8_t *read_image(const char *path, unsigned *w, unsigned *h)
+{
+    size_t n = strlen(path);
+    if (n > 4 && strcmp(path + n - 4, ".png") == 0) {
+        png_image img;
+        memset(&img, 0, sizeof img);
+        img.version = PNG_IMAGE_VERSION;
+        if (!png_image_begin_read_from_file(&img, path)) return NULL;
+        img.format = PNG_FORMAT_RGBA;
+        uint8_t *p = malloc(PNG_IMAGE_SIZE(img));
+        if (!p || !png_image_finish_read(&img, NULL, p, 0, NULL)) {
+            free(p);
+            png_image_free(&img);
+            return NULL;
+        }
+        *w = img.width, *h = img.height;
+        return p;
+    }
+    FILE *f = fopen(path, "rb");
+    if (!f) return NULL;
+    unsigned maxv = 0;
+    uint8_t *p = NULL;
+    if (fscanf(f, "P6 %u %u %u", w, h, &maxv) == 3 && maxv == 255 && fgetc(f) != EOF && *w && *h) {
+        size_t px = (size_t)*w * *h;
+        uint8_t *rgb = malloc(px * 3);
+        p = malloc(px * 4);
+        if (rgb && p && fread(rgb, 3, px, f) == px) {
+            for (size_t i = 0; i < px; i++) {
+                memcpy(p + 4 * i, rgb + 3 * i, 3);
+                p[4 * i + 3] = 255;
+            }
+        } else {
+            free(p);
+            p = NULL;
+        }
+        free(rgb);
+    }
+    fclose(f);
+    return p;
+}
+
+/* Bilinear resampling of an RGBA image to w x h. */
+static uint8_t *resample(const uint8_t *src, unsigned sw, unsigned sh, unsigned w, unsigned h)
+{
+    uint8_t *p = malloc((size_t)w * h * 4);
+    if (!p) abort();
+    for (unsigned y = 0; y < h; y++) {
+        double fy = (y + 0.5) * sh / h - 0.5;
+        int y0 = fy < 0 ? 0 : (int)fy, y1 = y0 + 1 < (int)sh ? y0 + 1 : y0;
+        double ty = fy < 0 ? 0 : fy - y0;
+        for (unsigned x = 0; x < w; x++) {
+            double fx = (x + 0.5) * sw / w - 0.5;
+            int x0 = fx < 0 ? 0 : (int)fx, x1 = x0 + 1 < (int)sw ? x0 + 1 : x0;
+            double tx = fx < 0 ? 0 : fx - x0;
+            for (int c = 0; c < 4; c++) {
+                double a = src[((size_t)y0 * sw + x0) * 4 + c] * (1 - tx) +
+                           src[((size_t)y0 * sw + x1) * 4 + c] * tx;
+                double b = src[((size_t)y1 * sw + x0) * 4 + c] * (1 - tx) +
+                           src[((size_t)y1 * sw + x1) * 4 + c] * tx;
+                p[((size_t)y * w + x) * 4 + c] = (uint8_t)(a * (1 - ty) + b * ty + 0.5);
+            }
+        }
+    }
+    return p;
+}
+
+/* ---- measuring ------------------------------------------------------------------------------- */
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* The q-quantile (0..1) of v (sorted in place), by the nearest rank. */
+static double quantile(double *v, unsigned n, double q)
+{
+    qsort(v, n, sizeof *v, cmp_double);
+    unsigned i = (unsigned)(q * (n - 1) + 0.5);
+    return v[i < n ? i : n - 1];
+}
+
+static double median(double *v, unsigned n)
+{
+    qsort(v, n, sizeof *v, cmp_double);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/* One table row. The three timings are taken in turn within every run, so that a busy or
+ * throttled machine slows them alike. */
+typedef struct row {
+    unsigned stripes;
+    double single_ms, pool_ms, cpu_ms; /* medians; pool_ms < 0: not measured */
+
+    double dispatch_ms; /* the pool's round trip for a tiny frame */
+    double pool_p10_ms; /* the fastest tenth of the pool's runs end here */
+    size_t single_bytes, striped_bytes;
+} row;
+
+static double elapsed(double t0)
+{
+    return srv_mono_ms() - t0;
+}
+
+/* Submits img as frame `id` of view `view` and waits for it: milliseconds, and its size. */
+static double round_trip(srv_encoder_pool *p, srv_image *img, uint32_t view, uint64_t id,
+                         unsigned q, size_t *size)
+{
+    srv_frame_info info = {.frame_id = id, .view_id = view, .still = true};
+    double t0 = srv_mono_ms();
+    srv_encoder_submit(p, img, &info, q);
+    srv_frame *f = srv_encoder_wait_frame(p, view, id - 1, 10000);
+    double ms = elapsed(t0);
+    if (!f) {
+        fprintf(stderr, "no frame from the pool\n");
+        exit(1);
+    }
+    *size = srv_frame_best(f)->size;
+    srv_frame_unref(f);
+    return ms;
+}
+
+static void measure(const uint8_t *rgba, unsigned w, unsigned h, unsigned q, unsigned threads,
+                    unsigned runs, bool with_pool, row *out)
+{
+    enum { WARMUP = 3 };
+    tjhandle tj = tjInitCompress();
+    srv_jpeg_plan plan;
+    srv_jpeg_plan_make(&plan, w, h, threads, SRV_STRIPE_MIN_MCU_ROWS);
+    srv_jpeg_encoder *e = srv_jpeg_encoder_create();
+    srv_jpeg_buf *bufs = calloc(plan.stripe_count, sizeof *bufs);
+    srv_encoder_pool *p = with_pool ? srv_encoder_pool_create(threads) : NULL;
+
+    srv_image *img = NULL, *tiny = NULL;
+    if (p) {
+        srv_encoder_set_stripe_min_pixels(p, 1); /* every size striped, as 1 Mpixel would be */
+
+        img = srv_image_new(w, h);
+        memcpy(img->rgba, rgba, (size_t)w * h * 4);
+        /* one MCU column, two MCU rows a thread: as many stripes as the frame, almost no work */
+        tiny = srv_image_new(16, 32 * threads);
+        memset(tiny->rgba, 128, (size_t)tiny->width * tiny->height * 4);
+    }
+    double *ts = calloc(runs, sizeof *ts), *tc = calloc(runs, sizeof *tc);
+    double *tp = calloc(runs, sizeof *tp), *td = calloc(runs, sizeof *td);
+
+    memset(out, 0, sizeof *out);
+    out->stripes = plan.stripe_count;
+    for (unsigned r = 0; r < runs + WARMUP; r++) {
+        unsigned k = r < WARMUP ? 0 : r - WARMUP;
+        unsigned char *jpeg = NULL;
+        unsigned long size = 0;
+        double t0 = srv_mono_ms();
+        if (tjCompress2(tj, rgba, (int)w, 0, (int)h, TJPF_RGBA, &jpeg, &size, TJSAMP_420, (int)q,
+                        TJFLAG_FASTDCT) != 0) {
+            fprintf(stderr, "tjCompress2: %s\n", tjGetErrorStr2(tj));
+            exit(1);
+        }
+        ts[k] = elapsed(t0);
+        out->single_bytes = size;
+        tjFree(jpeg);
+
+        t0 = srv_mono_ms();
+        for (unsigned i = 0; i < plan.stripe_count; i++)
+            srv_jpeg_encode_stripe(e, &plan, rgba, q, i, &bufs[i]);
+        size_t cap = srv_jpeg_join_bound(&plan, bufs), joined = 0;
+        uint8_t *all = malloc(cap);
+        if (srv_jpeg_join(&plan, bufs, all, cap, &joined) != SRV_JPEG_OK) exit(1);
+        free(all);
+        tc[k] = elapsed(t0);
+        out->striped_bytes = joined;
+
+        if (p) {
+            size_t size = 0, tiny_size = 0;
+            tp[k] = round_trip(p, img, 1, r + 1, q, &size);
+
+            td[k] = round_trip(p, tiny, 2, r + 1, q, &tiny_size);
+            if (threads > 1 && size != joined) {
+                fprintf(stderr, "the pool's JPEG is not the joined stripes\n");
+                exit(1);
+            }
+        }
+    }
+    out->single_ms = median(ts, runs);
+    out->cpu_ms = median(tc, runs);
+    out->pool_ms = p ? median(tp, runs) : -1;
+    out->pool_p10_ms = p ? quantile(tp, runs, 0.1) : -1;
+    out->dispatch_ms = p ? median(td, runs) : -1;
+
+    if (p) {
+        srv_encoder_stats st;
+        srv_encoder_get_stats(p, &st);
+        if (st.jpegs_striped == 0) out->stripes = 1; /* a pool of one thread encodes whole */
+    }
+    free(ts);
+    free(tc);
+    free(tp);
+    free(td);
+
+    srv_image_unref(img);
+    srv_image_unref(tiny);
+    srv_encoder_pool_destroy(p);
+
+    for (unsigned i = 0; i < plan.stripe_count; i++)
+        srv_jpeg_buf_free(&bufs[i]);
+    free(bufs);
+    srv_jpeg_encoder_destroy(e);
+    tjDestroy(tj);
+}
+
+static unsigned parse_list(const char *s, unsigned *out)
+{
+    unsigned n = 0;
+    while (*s && n < MAX_LIST) {
+        char *end;
+        out[n++] = (unsigned)strtoul(s, &end, 10);
+        s = *end == ',' ? end + 1 : end;
+        if (*end && *end != ',') break;
+    }
+    return n;
+}
+
+/* How many cores the machine gives at the moment: n threads each encoding the frame `reps`
+ * times with tjCompress2, against one thread doing it alone (n for a machine with n idle cores;
+ * less on one shared with other work or with SMT siblings as cores). */
+typedef struct gauge_arg {
+    const uint8_t *rgba;
+    unsigned w, h, q, reps;
+} gauge_arg;
+
+static void *gauge_thread(void *arg)
+{
+    const gauge_arg *a = arg;
+    tjhandle tj = tjInitCompress();
+    for (unsigned i = 0; i < a->reps; i++) {
+        unsigned char *out = NULL;
+        unsigned long size = 0;
+        tjCompress2(tj, a->rgba, (int)a->w, 0, (int)a->h, TJPF_RGBA, &out, &size, TJSAMP_420,
+                    (int)a->q, TJFLAG_FASTDCT);
+        tjFree(out);
+    }
+    tjDestroy(tj);
+    return NULL;
+}
+
+static double parallelism(const uint8_t *rgba, unsigned w, unsigned h, unsigned q, unsigned n)
+{
+    gauge_arg a = {rgba, w, h, q, 20};
+    double t0 = srv_mono_ms();
+    gauge_thread(&a);
+    double one = elapsed(t0);
+    pthread_t th[MAX_LIST * 4];
+    if (n > sizeof th / sizeof th[0]) n = sizeof th / sizeof th[0];
+    t0 = srv_mono_ms();
+    for (unsigned i = 0; i < n; i++)
+        pthread_create(&th[i], NULL, gauge_thread, &a);
+    for (unsigned i = 0; i < n; i++)
+        pthread_join(th[i], NULL);
+    return n * one / elapsed(t0);
+}
+
+int main(int argc, char **argv)
+{
+    const char *image = NULL, *csv = NULL, *machine = "unnamed machine";
+    unsigned sizes[MAX_LIST][2] = {{1280, 720}, {1920, 1080}}, size_count = 2;
+    unsigned threads[MAX_LIST] = {1, 2, 4, 8, 16}, thread_count = 5;
+    unsigned runs = 31, quality = 80;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!v) {
+            fprintf(stderr, "%s needs a value (see the comment at the top of jpeg_encode.c)\n", a);
+            return 2;
+        }
+        i++;
+        if (!strcmp(a, "--image")) {
+            image = v;
+        } else if (!strcmp(a, "--csv")) {
+            csv = v;
+        } else if (!strcmp(a, "--machine")) {
+            machine = v;
+        } else if (!strcmp(a, "--runs")) {
+            runs = (unsigned)atoi(v);
+        } else if (!strcmp(a, "--quality")) {
+            quality = (unsigned)atoi(v);
+        } else if (!strcmp(a, "--threads")) {
+            thread_count = parse_list(v, threads);
+        } else if (!strcmp(a, "--sizes")) {
+            size_count = 0;
+            for (const char *s = v; *s && size_count < MAX_LIST;) {
+                unsigned w, h;
+                int used = 0;
+                if (sscanf(s, "%ux%u%n", &w, &h, &used) != 2) break;
+                sizes[size_count][0] = w, sizes[size_count++][1] = h;
+                s += used;
+                if (*s == ',') s++;
+            }
+        } else {
+            fprintf(stderr, "unknown option %s\n", a);
+            return 2;
+        }
+    }
+    if (runs < 1 || quality < 1 || quality > 100 || !size_count || !thread_count) return 2;
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    uint8_t *src = NULL;
+    unsigned sw = 0, sh = 0;
+    if (image && !(src = read_image(image, &sw, &sh))) {
+        fprintf(stderr, "cannot read %s (PNG or binary PPM)\n", image);
+        return 1;
+    }
+
+    FILE *out = csv ? fopen(csv, "w") : NULL;
+    if (csv && !out) {
+        fprintf(stderr, "cannot write %s\n", csv);
+        return 1;
+    }
+    printf("# JPEG encode, 4:2:0 q%u fast DCT, %s (%ld cores), image %s, median of %u runs\n",
+           quality, machine, cores, image ? image : "generated", runs);
+    {
+        uint8_t *g = make_frame(640, 360);
+        printf("# cores available now (tjCompress2 on n threads at once against one, before the "
+               "table): %.2f of %ld\n",
+               parallelism(g, 640, 360, quality, (unsigned)cores), cores);
+        free(g);
+    }
+    printf("%-10s %7s %7s %10s %9s %8s %11s %14s %11s %12s %13s %7s\n", "size", "threads",
+           "stripes", "single_ms", "pool_ms", "speedup", "pool_p10_ms", "stripes_cpu_ms",
+           "dispatch_ms", "single_bytes", "striped_bytes", "ratio");
+    if (out)
+        fprintf(out, "machine,width,height,quality,threads,stripes,single_ms,pool_ms,speedup,"
+                     "pool_p10_ms,stripes_cpu_ms,dispatch_ms,single_bytes,striped_bytes,ratio\n");
+    for (unsigned s = 0; s < size_count; s++) {
+        unsigned w = sizes[s][0], h = sizes[s][1];
+        uint8_t *rgba = src ? resample(src, sw, sh, w, h) : make_frame(w, h);
+        for (unsigned t = 0; t < thread_count; t++) {
+            unsigned n = threads[t];
+            if (n < 1) continue;
+            row rw;
+            measure(rgba, w, h, quality, n, runs, (long)n <= cores, &rw);
+            char sz[32], wall_s[32] = "", speed_s[32] = "", disp_s[32] = "", p10_s[32] = "";
+            snprintf(sz, sizeof sz, "%ux%u", w, h);
+            if (rw.pool_ms >= 0) {
+                snprintf(wall_s, sizeof wall_s, "%.3f", rw.pool_ms);
+                snprintf(speed_s, sizeof speed_s, "%.2f", rw.single_ms / rw.pool_ms);
+                snprintf(disp_s, sizeof disp_s, "%.3f", rw.dispatch_ms);
+                snprintf(p10_s, sizeof p10_s, "%.3f", rw.pool_p10_ms);
+            }
+            size_t striped = rw.stripes > 1 ? rw.striped_bytes : rw.single_bytes;
+            double ratio = (double)striped / (double)rw.single_bytes;
+            printf("%-10s %7u %7u %10.3f %9s %8s %11s %14.3f %11s %12zu %13zu %7.4f\n", sz, n,
+                   rw.stripes, rw.single_ms, wall_s[0] ? wall_s : "-", speed_s[0] ? speed_s : "-",
+                   p10_s[0] ? p10_s : "-", rw.cpu_ms, disp_s[0] ? disp_s : "-", rw.single_bytes,
+                   striped, ratio);
+            fflush(stdout);
+            if (out)
+                fprintf(out, "\"%s\",%u,%u,%u,%u,%u,%.3f,%s,%s,%s,%.3f,%s,%zu,%zu,%.4f\n", machine,
+                        w, h, quality, n, rw.stripes, rw.single_ms, wall_s, speed_s, p10_s,
+                        rw.cpu_ms, disp_s, rw.single_bytes, striped, ratio);
+        }
+        free(rgba);
+    }
+    {
+        uint8_t *g = make_frame(640, 360);
+        printf("# cores available now (after the table): %.2f of %ld\n",
+               parallelism(g, 640, 360, quality, (unsigned)cores), cores);
+        free(g);
+    }
+    if (out) fclose(out);
+    free(src);
+    return 0;
+}
