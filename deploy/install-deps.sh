@@ -13,6 +13,7 @@ packages=(
   libpng-dev libturbojpeg0-dev                   # PNG and JPEG output
   libjpeg62-turbo-dev      # libjpeg API of libjpeg-turbo: restart intervals for striped JPEG
   libmicrohttpd-dev libwebsockets-dev libcjson-dev  # probecast serve: HTTP API, frame stream, JSON
+  libssl-dev               # checks --tls-cert/--tls-key (OpenSSL, which libwebsockets links)
 )
 
 missing=()

@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "cli.h"
@@ -21,6 +22,7 @@
 #include "renderer/procedural.h"
 #include "scene_state.h"
 #include "snapshot.h"
+#include "tls_cert.h"
 #include "ws_stream.h"
 
 #define DEMO_SCENE "builtin:cornell"
@@ -32,7 +34,8 @@ static void serve_usage(FILE *f)
         "usage: probecast serve [OPTIONS]\n"
         "\n"
         "Runs the daemon: renders a scene with global illumination and streams it to browsers.\n"
-        "Open the printed http:// address in a browser. Stop with Ctrl-C (SIGINT) or SIGTERM.\n"
+        "Open the printed http:// (or https://) address in a browser. Stop with Ctrl-C (SIGINT)\n"
+        "or SIGTERM.\n"
         "\n"
         "Options:\n"
         "  --scene FILE|builtin:NAME  scene at start-up (default: the demo, builtin:cornell,\n"
@@ -41,6 +44,10 @@ static void serve_usage(FILE *f)
         "  --ws ADDR:PORT         WebSocket frame stream (default 127.0.0.1:8081)\n"
         "  --token T              require 'Authorization: Bearer T' for changes, frames and the\n"
         "                         stream (default: $PROBECAST_TOKEN; needed off loopback)\n"
+        "  --tls-cert FILE        serve the API over https:// and the stream over wss:// only,\n"
+        "                         with this PEM certificate (chain), for use without a TLS\n"
+        "                         proxy; needs --tls-key\n"
+        "  --tls-key FILE         the certificate's PEM private key, without a passphrase\n"
         "  --public-name NAME     a host name (or NAME:PORT's NAME) browsers use to reach this\n"
         "                         server, besides loopback names and IP addresses; repeatable.\n"
         "                         Requests naming any other Host are refused (DNS rebinding)\n"
@@ -69,6 +76,7 @@ static void serve_usage(FILE *f)
 
 typedef struct serve_args {
     const char *scene, *http, *ws, *token, *data_dir, *web_dir, *device;
+    const char *tls_cert, *tls_key; /* both or neither */
     char public_names[1024]; /* --public-name values, comma-separated */
     size_t max_upload;
     unsigned max_viewers, max_per_ip, http_connections, encoders, max_views, max_total_pixels;
@@ -178,6 +186,10 @@ static int parse(int argc, char **argv, serve_args *a)
             NEED_VALUE a->ws = v;
         } else if (IS("--token")) {
             NEED_VALUE a->token = v;
+        } else if (IS("--tls-cert")) {
+            NEED_VALUE a->tls_cert = v;
+        } else if (IS("--tls-key")) {
+            NEED_VALUE a->tls_key = v;
         } else if (IS("--public-name")) {
             NEED_VALUE if (!*v || strlen(v) > 200 || strchr(v, ',') ||
                            strlen(a->public_names) + strlen(v) + 2 > sizeof a->public_names)
@@ -222,6 +234,11 @@ static int parse(int argc, char **argv, serve_args *a)
         }
 #undef NEED_VALUE
 #undef IS
+    }
+    if (!a->tls_cert != !a->tls_key) {
+        fprintf(stderr, "probecast serve: %s needs %s too (TLS takes a certificate and its key)\n",
+                a->tls_cert ? "--tls-cert" : "--tls-key", a->tls_cert ? "--tls-key" : "--tls-cert");
+        return 2;
     }
     if ((uint64_t)s->width * s->height > s->max_pixels) s->max_pixels = s->width * s->height;
     return -1;
@@ -305,6 +322,36 @@ int cli_serve(int argc, char **argv)
         srv_warn("serve",
                  "listening beyond loopback without --token: anyone who reaches this host can "
                  "change the scene and watch the stream");
+    /* TLS: the files are read and checked now, before the GPU starts; they stay in memory until
+     * the end (the HTTP API keeps using the PEM text) */
+    srv_tls_cert tls;
+    memset(&tls, 0, sizeof tls);
+    const bool use_tls = a.tls_cert != NULL;
+    if (use_tls) {
+        char tls_err[768];
+        if (!srv_http_tls_available()) {
+            fprintf(stderr, "probecast serve: --tls-cert needs a libmicrohttpd built with TLS "
+                            "(GnuTLS), and this one has none\n");
+            return 2;
+        }
+        if (srv_tls_cert_load(&tls, a.tls_cert, a.tls_key, tls_err, sizeof tls_err) != SRV_TLS_OK) {
+            fprintf(stderr, "probecast serve: %s\n", tls_err);
+            return 2;
+        }
+        time_t now = time(NULL);
+        char until[32] = "?";
+        struct tm tm;
+        if (tls.not_after && gmtime_r(&tls.not_after, &tm))
+            strftime(until, sizeof until, "%Y-%m-%d %H:%M UTC", &tm);
+        srv_info("serve", "TLS certificate %s (%s), valid until %s", a.tls_cert, tls.subject,
+                 until);
+        if (tls.not_after && now > tls.not_after)
+            srv_warn("serve", "the --tls-cert certificate expired on %s: browsers will refuse it",
+                     until);
+        else if (tls.not_before && now < tls.not_before)
+            srv_warn("serve",
+                     "the --tls-cert certificate is not valid yet: browsers will refuse it");
+    }
 
     /* Every thread created from here on inherits this mask; the main thread takes the signals
      * with sigwait. */
@@ -323,6 +370,7 @@ int cli_serve(int argc, char **argv)
         persist = srv_persist_open(a.data_dir, err, sizeof err);
         if (!persist) {
             fprintf(stderr, "probecast serve: %s\n", err);
+            srv_tls_cert_dispose(&tls);
             return 1;
         }
         srv_persist_load(persist, &saved);
@@ -333,6 +381,7 @@ int cli_serve(int argc, char **argv)
     if (!load_start_scene(&a, &saved, &scene, source, sizeof source, &generation)) {
         srv_persist_close(persist);
         srv_saved_free(&saved);
+        srv_tls_cert_dispose(&tls);
         return 1;
     }
     const cJSON *state = NULL;
@@ -382,6 +431,8 @@ int cli_serve(int argc, char **argv)
         .http_host = http_host,
         .max_viewers = a.max_viewers,
         .max_per_ip = a.max_per_ip,
+        .tls_cert_path = use_tls ? a.tls_cert : NULL,
+        .tls_key_path = use_tls ? a.tls_key : NULL,
         .loop = loop,
         .encoders = enc,
         .snapshot = snap,
@@ -401,6 +452,8 @@ int cli_serve(int argc, char **argv)
         .max_connections = a.http_connections,
         .web_dir = a.web_dir ? a.web_dir : find_resource("web", web_buf, sizeof web_buf),
         .openapi_path = find_resource("protocol/openapi.yaml", api_buf, sizeof api_buf),
+        .tls_cert_pem = tls.cert_pem,
+        .tls_key_pem = tls.key_pem,
         .loop = loop,
         .encoders = enc,
         .ws = ws,
@@ -421,14 +474,16 @@ int cli_serve(int argc, char **argv)
     }
     const char *hb = strchr(http_host, ':') ? "[" : "", *he = strchr(http_host, ':') ? "]" : "";
     const char *wb = strchr(ws_host, ':') ? "[" : "", *we = strchr(ws_host, ':') ? "]" : "";
-    printf("probecast serving http=%s%s%s:%u ws=%s%s%s:%u\n", hb, http_host, he,
-           srv_http_port(http), wb, ws_host, we, srv_ws_port(ws));
-    printf("open http://%s%s%s:%u/%s in a browser (stream: ws://%s%s%s:%u/v1/stream)\n", hb,
+    /* https=/wss= instead of http=/ws= with --tls-cert: nothing answers plain requests then */
+    const char *hs = use_tls ? "https" : "http", *ss = use_tls ? "wss" : "ws";
+    printf("probecast serving %s=%s%s%s:%u %s=%s%s%s:%u\n", hs, hb, http_host, he,
+           srv_http_port(http), ss, wb, ws_host, we, srv_ws_port(ws));
+    printf("open %s://%s%s%s:%u/%s in a browser (stream: %s://%s%s%s:%u/v1/stream)\n", hs, hb,
            strcmp(http_host, "0.0.0.0") == 0 ? "127.0.0.1" : http_host, he, srv_http_port(http),
-           a.token ? "?token=..." : "", wb, ws_host, we, srv_ws_port(ws));
+           a.token ? "?token=..." : "", ss, wb, ws_host, we, srv_ws_port(ws));
     fflush(stdout);
-    srv_info("serve", "serving %s on http %s:%u, stream %s:%u", source, http_host,
-             srv_http_port(http), ws_host, srv_ws_port(ws));
+    srv_info("serve", "serving %s on %s %s:%u, stream %s%s:%u", source, hs, http_host,
+             srv_http_port(http), use_tls ? "wss " : "", ws_host, srv_ws_port(ws));
 
     int sig = 0;
     sigwait(&sigs, &sig);
@@ -454,6 +509,7 @@ out:
         rc = 1;
     }
     srv_saved_free(&saved);
+    srv_tls_cert_dispose(&tls); /* after srv_http_stop: the daemon held the PEM text */
     if (rc == 0) srv_info("serve", "stopped cleanly");
     return rc;
 }

@@ -434,6 +434,11 @@ static void on_completed(void *cls, struct MHD_Connection *conn, void **con_cls,
     *con_cls = NULL;
 }
 
+/* While srv_http_start runs MHD_start_daemon on this thread: where MHD's first message goes, so
+ * that a failure can say what MHD said. */
+static _Thread_local char *start_message;
+static _Thread_local size_t start_message_len;
+
 static void mhd_log(void *cls, const char *fmt, va_list ap)
 {
     (void)cls;
@@ -442,6 +447,7 @@ static void mhd_log(void *cls, const char *fmt, va_list ap)
     size_t n = strlen(buf);
     while (n > 0 && (buf[n - 1] == '\n' || buf[n - 1] == '\r'))
         buf[--n] = 0;
+    if (start_message && !start_message[0]) snprintf(start_message, start_message_len, "%s", buf);
     srv_warn("mhd", "%s", buf);
 }
 
@@ -464,6 +470,11 @@ static void load_openapi(srv_http *h, const char *path)
         h->openapi_len = fread(h->openapi, 1, (size_t)n, f);
     }
     fclose(f);
+}
+
+bool srv_http_tls_available(void)
+{
+    return MHD_is_feature_supported(MHD_FEATURE_TLS) == MHD_YES;
 }
 
 srv_http *srv_http_start(const srv_http_config *cfg, char *err, size_t errlen)
@@ -499,6 +510,29 @@ srv_http *srv_http_start(const srv_http_config *cfg, char *err, size_t errlen)
         srv_http_stop(h);
         return NULL;
     }
+    /* HTTPS: TLS 1.2 and 1.3 only; the PEM text is GnuTLS's to parse (the chain included) */
+    bool tls = cfg->tls_cert_pem && cfg->tls_key_pem;
+    struct MHD_OptionItem tls_options[] = {
+        {MHD_OPTION_HTTPS_MEM_CERT, 0, (void *)cfg->tls_cert_pem},
+        {MHD_OPTION_HTTPS_MEM_KEY, 0, (void *)cfg->tls_key_pem},
+        {MHD_OPTION_HTTPS_PRIORITIES, 0, (void *)"NORMAL:-VERS-ALL:+VERS-TLS1.3:+VERS-TLS1.2"},
+        {MHD_OPTION_END, 0, NULL},
+    };
+    const struct MHD_OptionItem *tls_end =
+        &tls_options[sizeof tls_options / sizeof *tls_options - 1];
+    if (tls) {
+        if (!srv_http_tls_available()) {
+            snprintf(err, errlen,
+                     "this libmicrohttpd was built without TLS, so it cannot serve HTTPS "
+                     "(Debian's libmicrohttpd12 has it, through GnuTLS)");
+            srv_http_stop(h);
+            return NULL;
+        }
+        flags |= MHD_USE_TLS;
+    }
+    char mhd_said[256] = "";
+    start_message = mhd_said;
+    start_message_len = sizeof mhd_said;
     h->daemon =
         MHD_start_daemon(flags, (uint16_t)cfg->port, NULL, NULL, on_request, h,
                          MHD_OPTION_EXTERNAL_LOGGER, mhd_log, NULL, /* first, as MHD asks */
@@ -506,10 +540,19 @@ srv_http *srv_http_start(const srv_http_config *cfg, char *err, size_t errlen)
                          (unsigned int)h->cfg.max_connections, MHD_OPTION_PER_IP_CONNECTION_LIMIT,
                          (unsigned int)h->cfg.max_per_ip, MHD_OPTION_CONNECTION_TIMEOUT,
                          (unsigned int)h->cfg.timeout_s, MHD_OPTION_NOTIFY_COMPLETED, on_completed,
-                         h, MHD_OPTION_END);
+                         h, MHD_OPTION_ARRAY, tls ? tls_options : tls_end, MHD_OPTION_END);
+    start_message = NULL;
     if (!h->daemon) {
-        snprintf(err, errlen, "cannot listen for HTTP on %s:%u (in use, or not a local address?)",
-                 cfg->address, cfg->port);
+        size_t n = strlen(mhd_said);
+        while (n > 0 && (mhd_said[n - 1] == '.' || mhd_said[n - 1] == ' '))
+            mhd_said[--n] = 0;
+        if (tls && mhd_said[0])
+            snprintf(err, errlen, "cannot serve HTTPS on %s:%u: %s", cfg->address, cfg->port,
+                     mhd_said);
+        else
+            snprintf(err, errlen,
+                     "cannot listen for HTTP on %s:%u (in use, or not a local address?)",
+                     cfg->address, cfg->port);
         srv_http_stop(h);
         return NULL;
     }

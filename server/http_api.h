@@ -30,6 +30,9 @@ typedef struct srv_http_config {
     unsigned timeout_s;       /* idle connection timeout (0 = 30) */
     const char *web_dir;      /* viewer files, may be NULL */
     const char *openapi_path; /* protocol/openapi.yaml, may be NULL */
+    /* both or neither: HTTPS only, with this certificate (chain) and key as PEM text, which must
+     * stay valid until srv_http_stop (tls_cert.h checked them) */
+    const char *tls_cert_pem, *tls_key_pem;
     srv_render_loop *loop;
     srv_encoder_pool *encoders;
     srv_ws_stream *ws;
@@ -39,6 +42,8 @@ typedef struct srv_http_config {
 
 typedef struct srv_http srv_http;
 
+/* Whether this libmicrohttpd can serve HTTPS (it was built with GnuTLS). */
+bool srv_http_tls_available(void);
 /* Starts listening and serving. NULL with a message on failure. */
 srv_http *srv_http_start(const srv_http_config *cfg, char *err, size_t errlen);
 unsigned srv_http_port(const srv_http *h);

@@ -65,6 +65,10 @@ enum MHD_Result srv_http_handle_health(srv_http *h, struct MHD_Connection *conn,
     cJSON_AddNumberToObject(st, "port", h->cfg.ws ? srv_ws_port(h->cfg.ws) : 0);
     cJSON_AddStringToObject(st, "path", "/v1/stream");
     cJSON_AddStringToObject(st, "subprotocol", "probecast.v2");
+    /* --tls-cert: the stream is wss:// only (and this API https:// only) */
+    bool tls = h->cfg.tls_cert_pem != NULL;
+    cJSON_AddStringToObject(st, "scheme", tls ? "wss" : "ws");
+    cJSON_AddBoolToObject(st, "tls", tls);
     /* a page served on another port than this one came through a proxy: it should reach the
      * stream at /v1/stream of its own origin (the proxy routes it) */
     cJSON_AddNumberToObject(st, "http_port", h->port);

@@ -430,6 +430,11 @@ static void *service_main(void *arg)
     return NULL;
 }
 
+/* While srv_ws_create sets up the vhost on this thread: where lws's first error goes, so that a
+ * failure can say what lws said. */
+static _Thread_local char *start_error;
+static _Thread_local size_t start_error_len;
+
 static void lws_log(int level, const char *line)
 {
     char buf[512];
@@ -437,6 +442,8 @@ static void lws_log(int level, const char *line)
     size_t n = strlen(buf);
     while (n > 0 && (buf[n - 1] == '\n' || buf[n - 1] == '\r'))
         buf[--n] = 0;
+    if (level == LLL_ERR && start_error && !start_error[0])
+        snprintf(start_error, start_error_len, "%s", buf);
     srv_log(level == LLL_ERR ? SRV_LOG_ERROR : SRV_LOG_WARN, "lws", "%s", buf);
 }
 
@@ -465,7 +472,9 @@ srv_ws_stream *srv_ws_create(const srv_ws_config *cfg, char *err, size_t errlen)
 
     struct lws_context_creation_info info;
     memset(&info, 0, sizeof info);
+    bool tls = cfg->tls_cert_path && cfg->tls_key_path;
     info.options = LWS_SERVER_OPTION_EXPLICIT_VHOSTS | LWS_SERVER_OPTION_VALIDATE_UTF8;
+    if (tls) info.options |= LWS_SERVER_OPTION_DO_SSL_GLOBAL_INIT;
     info.user = ws;
     info.count_threads = 1;
     info.fd_limit_per_thread = ws->cfg.max_viewers + 32;
@@ -481,11 +490,32 @@ srv_ws_stream *srv_ws_create(const srv_ws_config *cfg, char *err, size_t errlen)
     info.protocols = ws->protocols;
     info.vhost_name = "probecast";
     info.retry_and_idle_policy = &ws->retry;
-    ws->vhost = lws_create_vhost(ws->ctx, &info);
-    if (!ws->vhost) {
+    if (tls) {
+#if defined(LWS_WITH_TLS)
+        /* wss:// only (no plain connections on this port); the chain is read from the file */
+        info.ssl_cert_filepath = cfg->tls_cert_path;
+        info.ssl_private_key_filepath = cfg->tls_key_path;
+        info.ssl_options_set = SSL_OP_NO_TLSv1 | SSL_OP_NO_TLSv1_1;
+#else
         snprintf(err, errlen,
-                 "cannot listen for the stream on %s:%u (in use, or not a local address?)",
-                 cfg->address, cfg->port);
+                 "this libwebsockets was built without TLS, so it cannot serve wss://");
+        srv_ws_destroy(ws);
+        return NULL;
+#endif
+    }
+    char lws_said[256] = "";
+    start_error = lws_said;
+    start_error_len = sizeof lws_said;
+    ws->vhost = lws_create_vhost(ws->ctx, &info);
+    start_error = NULL;
+    if (!ws->vhost) {
+        if (tls && lws_said[0])
+            snprintf(err, errlen, "cannot serve the stream over TLS on %s:%u: %s", cfg->address,
+                     cfg->port, lws_said);
+        else
+            snprintf(err, errlen,
+                     "cannot listen for the stream on %s:%u (in use, or not a local address?)",
+                     cfg->address, cfg->port);
         srv_ws_destroy(ws);
         return NULL;
     }

@@ -30,6 +30,9 @@ typedef struct srv_ws_config {
     unsigned http_port;
     unsigned max_viewers; /* 0 = 100 */
     unsigned max_per_ip;  /* 0 = 64 */
+    /* both or neither: wss:// only, with the PEM certificate (chain) and key in these files
+     * (tls_cert.h checked them) */
+    const char *tls_cert_path, *tls_key_path;
     srv_render_loop *loop;
     srv_encoder_pool *encoders;
     srv_snapshot *snapshot;

@@ -40,9 +40,10 @@ let serverStats = null;
 
 /* ---- the stream ------------------------------------------------------------------------------ */
 
-/* Where the stream is: the --ws port from /v1/health, on the host that served this page; or, when
- * this page came through a proxy (its port is not the daemon's HTTP port), /v1/stream of the
- * page's own origin, which the proxy routes to the stream (deploy/nginx). The
+/* Where the stream is: the --ws port from /v1/health, on the host that served this page, with
+ * the scheme health names (wss when the daemon serves TLS itself, --tls-cert; else the page's);
+ * or, when this page came through a proxy (its port is not the daemon's HTTP port), /v1/stream
+ * of the page's own origin and scheme, which the proxy routes to the stream (deploy/nginx). The
  * token goes as a 'bearer.TOKEN' subprotocol next to 'probecast.v2' (protocol/stream.md); a
  * server that names another subprotocol (probecast.v1: before views) is offered that one. */
 async function resolveStream() {
@@ -50,11 +51,13 @@ async function resolveStream() {
   if (health.auth === 'bearer' && !(await api.checkToken())) throw new Error('a token is needed');
   const st = health.stream || {};
   if (!st.port) throw new Error('the server has no stream');
-  const scheme = location.protocol === 'https:' ? 'wss:' : 'ws:';
+  const pageScheme = location.protocol === 'https:' ? 'wss:' : 'ws:';
   const protocols = [st.subprotocol || SUBPROTOCOL];
   if (api.token) protocols.push('bearer.' + api.token);
   const pagePort = Number(location.port || (location.protocol === 'https:' ? 443 : 80));
   const proxied = st.http_port && pagePort !== st.http_port;
+  const direct = st.scheme === 'wss' ? 'wss:' : st.scheme === 'ws' ? 'ws:' : pageScheme;
+  const scheme = proxied ? pageScheme : direct;
   const url = proxied ? `${scheme}//${location.host}${st.path || '/v1/stream'}`
                       : `${scheme}//${location.hostname}:${st.port}${st.path || '/v1/stream'}`;
   return { url, protocols };
