@@ -63,7 +63,7 @@ static void serve_usage(FILE *f)
         "                         protocol 2 (default 64, at most 256)\n"
         "  --max-total-pixels N   pixels over all views (default 16777216)\n"
         "  --web-dir DIR          viewer files served at / (default: web/ of the source tree)\n"
-        "  --encoders N           JPEG encoder threads (default 2)\n"
+        "  --encoders N           JPEG encoder threads (default: the CPU cores, 2 to 16)\n"
         "  --device INDEX|NAME    Vulkan device (default: $PROBECAST_DEVICE, else the best)\n"
         "  --log-level L          error, warn, info (default) or debug ($PROBECAST_LOG)\n"
         "  --help                 this text\n"
@@ -400,7 +400,10 @@ int cli_serve(int argc, char **argv)
     srv_render_loop *loop = NULL;
     srv_ws_stream *ws = NULL;
     srv_http *http = NULL;
-    enc = srv_encoder_pool_create(a.encoders ? a.encoders : 2);
+    /* default: one encoder per core (large frames are striped over all of them), 2 to 16 */
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    unsigned default_encoders = cores < 2 ? 2u : cores > 16 ? 16u : (unsigned)cores;
+    enc = srv_encoder_pool_create(a.encoders ? a.encoders : default_encoders);
     if (!enc) {
         fprintf(stderr, "probecast serve: cannot start the JPEG encoders\n");
         rd_scene_destroy(&scene);
