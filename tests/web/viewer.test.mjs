@@ -340,6 +340,38 @@ test('dragging orbits the camera; frames reflect the input', { timeout: 40000 },
   await shot('orbited.png');
 });
 
+test('the URL carries the camera: a shared link opens the same view; the screenshot button downloads a still', { timeout: 60000 }, async () => {
+  const a = await state();
+  await page.waitForFunction(() => /#cam=/.test(location.hash), null, { timeout: 10000 });
+  const link = page.url();
+  const v = decodeURIComponent(/cam=([^&]*)/.exec(new URL(link).hash)[1]).split(',').map(Number);
+  assert.equal(v.length, 7);
+  // the page's own view really has that camera
+  const own = (await http('GET', `/v1/views/${a.ownView}/camera`)).json;
+  for (let k = 0; k < 3; k++) {
+    assert.ok(Math.abs(own.position[k] - v[k]) < 1e-3, `position ${own.position} vs link ${v}`);
+    assert.ok(Math.abs(own.target[k] - v[3 + k]) < 1e-3, `target ${own.target} vs link ${v}`);
+  }
+  // a link with another camera opens a page whose own view takes it
+  const want = [v[0] + 0.5, v[1] + 0.25, v[2], v[3], v[4], v[5], 50];
+  const pc = await newViewerPage(context);
+  await pc.goto(`${BASE}/#cam=${want.join(',')}`);
+  await pc.waitForFunction(() => window.probecast.state().ownView !== null, null, { timeout: 30000 });
+  const c = await state(pc);
+  await until(async () => {
+    const cam = (await http('GET', `/v1/views/${c.ownView}/camera`)).json;
+    return [0, 1, 2].every((k) => Math.abs(cam.position[k] - want[k]) < 1e-3 && Math.abs(cam.target[k] - want[3 + k]) < 1e-3) &&
+      Math.abs(cam.fov - 50) < 0.01;
+  }, 'the linked camera on the new page\'s view', 10000);
+  // the screenshot: a JPEG of the page's own view at its size
+  await waitViewFrame(pc, c.ownView, null, 30000).catch(() => {});
+  const [dl] = await Promise.all([pc.waitForEvent('download', { timeout: 30000 }), pc.click('#screenshot')]);
+  const bytes = fs.readFileSync(await dl.path());
+  assert.ok(bytes.length > 500 && bytes[0] === 0xff && bytes[1] === 0xd8, 'the download is a JPEG');
+  assert.match(dl.suggestedFilename(), /^probecast-.*\.jpg$/);
+  await pc.close();
+});
+
 test('wheel zooms, right-drag pans, W flies, a two-finger pinch zooms', { timeout: 30000 }, async () => {
   const cam = () => page.evaluate(() => {
     const c = window.probecast.camera;

@@ -102,6 +102,27 @@ export class Api {
     }
   }
 
+  /* GET of a binary body (an image): resolves to a Blob; errors like request(). */
+  async blob(path, { timeoutMs = DEFAULT_TIMEOUT_MS } = {}) {
+    for (let attempt = 0; ; attempt++) {
+      const ctl = new AbortController();
+      const timer = setTimeout(() => ctl.abort(), timeoutMs);
+      let res;
+      try {
+        res = await fetch(path, { headers: this.headers({}), signal: ctl.signal, cache: 'no-store' });
+        if (res.ok) return await res.blob();
+      } catch (e) {
+        throw new ApiError(0, 'network', ctl.signal.aborted ? 'The server did not answer in time.'
+                                                           : 'The server cannot be reached.');
+      } finally {
+        clearTimeout(timer);
+      }
+      const err = errorFrom(res.status, await res.text().catch(() => ''));
+      if (res.status === 401 && attempt === 0 && (await this.reauthorize(err))) continue;
+      throw err;
+    }
+  }
+
   get(path, opts) { return this.request('GET', path, undefined, opts); }
   patch(path, body, opts) { return this.request('PATCH', path, body, opts); }
   post(path, body, opts) { return this.request('POST', path, body, opts); }

@@ -99,6 +99,25 @@ const ownCameraPath = () => (v2() && stream.ownView !== null ? `/v1/views/${stre
  * lasts if the API fails meanwhile. A viewer that followed another view before the outage
  * watches its own new view again (the old ids are gone with the connection). */
 let restored = false;
+
+/* ---- share links: the camera in the URL (#cam=px,py,pz,tx,ty,tz,fov) ------------------------ */
+function parseLinkCamera(hash) {
+  const m = /(?:^#|&)cam=([^&]*)/.exec(hash || '');
+  if (!m) return null;
+  const v = decodeURIComponent(m[1]).split(',').map(Number);
+  if (v.length !== 7 || !v.every(Number.isFinite) || v[6] <= 0 || v[6] >= 180) return null;
+  return { position: v.slice(0, 3), target: v.slice(3, 6), fov: v[6] };
+}
+let linkCamera = parseLinkCamera(location.hash); // taken by the first restore, then dropped
+let linkWritten = -1, linkTimer = 0;
+function writeLink() {
+  if (!camera.known || camera.version === linkWritten) return;
+  linkWritten = camera.version;
+  const c = camera.toMessage();
+  const hash = '#cam=' + [...c.position, ...c.target, c.fov].map((x) => +x.toFixed(4)).join(',');
+  if (location.hash !== hash) history.replaceState(null, '', hash);
+}
+function scheduleLink() { clearTimeout(linkTimer); linkTimer = setTimeout(writeLink, 250); }
 stream.addEventListener('state', (e) => {
   if (e.detail.state === 'open') return;
   restored = false;
@@ -112,7 +131,10 @@ async function restoreView(gen) {
     if (stale(gen)) return;
     const same = scene && s.source === scene.source && s.generation === scene.generation;
     setScene(s);
-    if (camera.known && same) {
+    if (linkCamera && camera.setFromServer(linkCamera)) {
+      sentVersion = -1; // a share link's camera goes to our view with the next animation frame
+      linkWritten = camera.version;
+    } else if (camera.known && same) {
       sentVersion = -1; // the next animation frame sends our camera to our (new) view
     } else {
       const c = await api.get(ownCameraPath());
@@ -121,6 +143,7 @@ async function restoreView(gen) {
       sentVersion = camera.version;
     }
     restored = true;
+    linkCamera = null;
     requestTick();
     if (v2()) {
       // Events that arrived meanwhile: a newer scene than the one restored, our view's size.
@@ -265,6 +288,7 @@ function tick(t) {
   if (camera.version !== sentVersion && restored && stream.open && controls.enabled) {
     if (stream.sendCamera(camera.toMessage())) sentVersion = camera.version;
   }
+  if (camera.version !== linkWritten) scheduleLink();
   if (controls.keysHeld()) requestTick();
   else lastTick = 0;
 }
@@ -400,6 +424,31 @@ for (const d of document.querySelectorAll('details.panel')) {
   else if (innerWidth < 720) d.open = false;
   d.addEventListener('toggle', () => localStorage.setItem(key, d.open ? '1' : '0'));
 }
+
+$('share').addEventListener('click', async () => {
+  writeLink();
+  try {
+    await navigator.clipboard.writeText(location.href);
+    toasts.show('Link to this view copied.', 'ok');
+  } catch {
+    toasts.show(`Link to this view: ${location.href}`, 'ok', 15000);
+  }
+});
+$('screenshot').addEventListener('click', async () => {
+  try {
+    const view = v2() && stream.ownView !== null ? `?view=${stream.ownView}` : '';
+    const blob = await api.blob('/v1/frame.jpg' + view, { timeoutMs: 30000 });
+    const a = document.createElement('a');
+    a.href = URL.createObjectURL(blob);
+    a.download = `probecast-${new Date().toISOString().replace(/[:.]/g, '-')}.jpg`;
+    document.body.append(a);
+    a.click();
+    a.remove();
+    setTimeout(() => URL.revokeObjectURL(a.href), 10000);
+  } catch (e) {
+    toasts.error(e);
+  }
+});
 
 window.addEventListener('online', () => stream.retryNow());
 // A viewer that leaves or hides releases its view at once (the server stops rendering it); it
