@@ -3,30 +3,31 @@
 #ifndef PC_TEST_UTIL_H
 #define PC_TEST_UTIL_H
 
+#include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
 
 extern int test_failures;
 extern int test_checks;
 
-#define CHECK(cond)                                                                             \
-    do {                                                                                        \
-        test_checks++;                                                                          \
-        if (!(cond)) {                                                                          \
-            test_failures++;                                                                    \
-            fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond);            \
-        }                                                                                       \
+#define CHECK(cond)                                                                                \
+    do {                                                                                           \
+        test_checks++;                                                                             \
+        if (!(cond)) {                                                                             \
+            test_failures++;                                                                       \
+            fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond);               \
+        }                                                                                          \
     } while (0)
 
-#define CHECKF(cond, ...)                                                                       \
-    do {                                                                                        \
-        test_checks++;                                                                          \
-        if (!(cond)) {                                                                          \
-            test_failures++;                                                                    \
-            fprintf(stderr, "%s:%d: CHECK failed: %s: ", __FILE__, __LINE__, #cond);            \
-            fprintf(stderr, __VA_ARGS__);                                                       \
-            fputc('\n', stderr);                                                                \
-        }                                                                                       \
+#define CHECKF(cond, ...)                                                                          \
+    do {                                                                                           \
+        test_checks++;                                                                             \
+        if (!(cond)) {                                                                             \
+            test_failures++;                                                                       \
+            fprintf(stderr, "%s:%d: CHECK failed: %s: ", __FILE__, __LINE__, #cond);               \
+            fprintf(stderr, __VA_ARGS__);                                                          \
+            fputc('\n', stderr);                                                                   \
+        }                                                                                          \
     } while (0)
 
 /* Relative closeness: |a - b| <= tol * max(|b|, tiny). */
@@ -40,5 +41,12 @@ int test_finish(void);
 uint32_t test_make_cube(float *pos, int g);
 /* Writes a scratch path under the build tree's test output folder. */
 const char *test_tmp_path(const char *name);
+
+/* Writing test files. All results are malloc'd (the caller frees); out-of-memory aborts. */
+char *test_xprintf(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+/* Standard base64 of n bytes, '='-padded. */
+char *test_base64(const uint8_t *p, size_t n);
+/* Test JSON is written with single quotes; this turns them into double quotes. */
+char *test_jq(const char *s);
 
 #endif

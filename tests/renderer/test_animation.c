@@ -16,50 +16,6 @@
 
 /* ---- building the file ------------------------------------------------------------------ */
 
-static char *xprintf(const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    int n = vsnprintf(NULL, 0, fmt, ap);
-    va_end(ap);
-    char *s = malloc((size_t)n + 1);
-    va_start(ap, fmt);
-    vsnprintf(s, (size_t)n + 1, fmt, ap);
-    va_end(ap);
-    return s;
-}
-
-static char *base64(const uint8_t *p, size_t n)
-{
-    static const char tab[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    char *out = malloc(n / 3 * 4 + 8), *o = out;
-    size_t i = 0;
-    for (; i + 2 < n; i += 3) {
-        uint32_t v = (uint32_t)p[i] << 16 | (uint32_t)p[i + 1] << 8 | p[i + 2];
-        *o++ = tab[v >> 18], *o++ = tab[(v >> 12) & 63], *o++ = tab[(v >> 6) & 63],
-        *o++ = tab[v & 63];
-    }
-    if (i < n) {
-        uint32_t v = (uint32_t)p[i] << 16 | (i + 1 < n ? (uint32_t)p[i + 1] << 8 : 0);
-        *o++ = tab[v >> 18], *o++ = tab[(v >> 12) & 63];
-        *o++ = i + 1 < n ? tab[(v >> 6) & 63] : '=';
-        *o++ = '=';
-    }
-    *o = '\0';
-    return out;
-}
-
-/* Test JSON is written with single quotes; this turns them into double quotes. */
-static char *jq(const char *s)
-{
-    char *d = malloc(strlen(s) + 1);
-    for (size_t i = 0;; i++) {
-        d[i] = s[i] == '\'' ? '"' : s[i];
-        if (!s[i]) break;
-    }
-    return d;
-}
-
 /* The buffer: every region below is one buffer view and one accessor of the same index. */
 static const float kTimes3[3] = {0, 1, 3};                  /* 0: SCALAR */
 static const float kTrans[9] = {0, 0, 0, 2, 0, 0, 2, 4, 0}; /* 1: VEC3 LINEAR */
@@ -150,12 +106,12 @@ static char *anim_json(const char *animations)
         snprintf(accessors + al, sizeof accessors - al, "%s{'bufferView':%zu,%s}", i ? "," : "", i,
                  kRegions[i].accessor);
     }
-    char *b64 = base64(buf, n);
-    char *s = xprintf("{'asset':{'version':'2.0'},'buffers':[{'byteLength':%zu,'uri':"
+    char *b64 = test_base64(buf, n);
+    char *s = test_xprintf("{'asset':{'version':'2.0'},'buffers':[{'byteLength':%zu,'uri':"
                       "'data:application/octet-stream;base64,%s'}],'bufferViews':[%s],"
                       "'accessors':[%s]," NODES ",'animations':%s}",
                       n, b64, views, accessors, animations);
-    char *j = jq(s);
+    char *j = test_jq(s);
     free(s);
     free(b64);
     return j;

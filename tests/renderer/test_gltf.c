@@ -45,50 +45,6 @@ static size_t bin_put(bin *b, const void *data, size_t n)
     return at;
 }
 
-static char *xprintf(const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    int n = vsnprintf(NULL, 0, fmt, ap);
-    va_end(ap);
-    char *s = malloc((size_t)n + 1);
-    va_start(ap, fmt);
-    vsnprintf(s, (size_t)n + 1, fmt, ap);
-    va_end(ap);
-    return s;
-}
-
-static char *base64(const uint8_t *p, size_t n)
-{
-    static const char tab[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    char *out = malloc(n / 3 * 4 + 8), *o = out;
-    size_t i = 0;
-    for (; i + 2 < n; i += 3) {
-        uint32_t v = (uint32_t)p[i] << 16 | (uint32_t)p[i + 1] << 8 | p[i + 2];
-        *o++ = tab[v >> 18], *o++ = tab[(v >> 12) & 63], *o++ = tab[(v >> 6) & 63],
-        *o++ = tab[v & 63];
-    }
-    if (i < n) {
-        uint32_t v = (uint32_t)p[i] << 16 | (i + 1 < n ? (uint32_t)p[i + 1] << 8 : 0);
-        *o++ = tab[v >> 18], *o++ = tab[(v >> 12) & 63];
-        *o++ = i + 1 < n ? tab[(v >> 6) & 63] : '=';
-        *o++ = '=';
-    }
-    *o = '\0';
-    return out;
-}
-
-/* Test JSON is written with single quotes; this turns them into double quotes. */
-static char *jq(const char *s)
-{
-    char *d = malloc(strlen(s) + 1);
-    for (size_t i = 0;; i++) {
-        d[i] = s[i] == '\'' ? '"' : s[i];
-        if (!s[i]) break;
-    }
-    return d;
-}
-
 /* ---- the standard buffer ----------------------------------------------------------------
  * A unit quad in the XY plane: 4 positions (0) 4 normals (48) 4 uvs (96), indices 0 1 2 0 2 3
  * as u16 (128) u8 (140) u32 (148), then a sparse index (172) and a sparse value (176). */
@@ -138,16 +94,16 @@ static char *gltf_json(const bin *b, int glb, const char *views, const char *acc
 {
     char *uri = NULL;
     if (!glb) {
-        char *b64 = base64(b->p, b->n);
-        uri = xprintf(",'uri':'data:application/octet-stream;base64,%s'", b64);
+        char *b64 = test_base64(b->p, b->n);
+        uri = test_xprintf(",'uri':'data:application/octet-stream;base64,%s'", b64);
         free(b64);
     }
     char *s =
-        xprintf("{'asset':{'version':'2.0'},'buffers':[{'byteLength':%zu%s}],"
+        test_xprintf("{'asset':{'version':'2.0'},'buffers':[{'byteLength':%zu%s}],"
                 "'bufferViews':[%s],'accessors':[%s]%s%s}",
                 b->n, uri ? uri : "", views ? views : STD_VIEWS,
                 accessors ? accessors : STD_ACCESSORS, rest && *rest ? "," : "", rest ? rest : "");
-    char *j = jq(s);
+    char *j = test_jq(s);
     free(s);
     free(uri);
     return j;
@@ -208,8 +164,8 @@ static void make_png(bin *out, int w, int h, int color_type, int depth, const ui
 
 static char *png_data_uri(const bin *png)
 {
-    char *b64 = base64(png->p, png->n);
-    char *uri = xprintf("data:image/png;base64,%s", b64);
+    char *b64 = test_base64(png->p, png->n);
+    char *uri = test_xprintf("data:image/png;base64,%s", b64);
     free(b64);
     return uri;
 }
@@ -484,7 +440,7 @@ static void test_textures(void)
         uri[i] = png_data_uri(&png[i]);
     bin b;
     std_bin(&b, NULL);
-    char *rest = xprintf("'images':[{'uri':'%s'},{'uri':'%s'},{'uri':'%s'}]," TEXTURE_MATERIALS,
+    char *rest = test_xprintf("'images':[{'uri':'%s'},{'uri':'%s'},{'uri':'%s'}]," TEXTURE_MATERIALS,
                          uri[0], uri[1], uri[2]);
     char *j = gltf_json(&b, 0, NULL, NULL, rest);
     rd_scene s;
@@ -500,11 +456,11 @@ static void test_textures(void)
     size_t off[3];
     for (int i = 0; i < 3; i++)
         off[i] = bin_put(&g, png[i].p, png[i].n);
-    char *views = xprintf(STD_VIEWS ",{'buffer':0,'byteOffset':%zu,'byteLength':%zu},"
+    char *views = test_xprintf(STD_VIEWS ",{'buffer':0,'byteOffset':%zu,'byteLength':%zu},"
                                     "{'buffer':0,'byteOffset':%zu,'byteLength':%zu},"
                                     "{'buffer':0,'byteOffset':%zu,'byteLength':%zu}",
                           off[0], png[0].n, off[1], png[1].n, off[2], png[2].n);
-    rest = xprintf(
+    rest = test_xprintf(
         "'images':[{'bufferView':8,'mimeType':'image/png'},{'bufferView':9,"
         "'mimeType':'image/png'},{'bufferView':10,'mimeType':'image/png'}]," TEXTURE_MATERIALS);
     j = gltf_json(&g, 1, views, NULL, rest);
@@ -517,13 +473,13 @@ static void test_textures(void)
 
     /* an image that is not a PNG fails when a material uses it, not before */
     free(rest);
-    rest = xprintf("'images':[{'uri':'data:image/png;base64,AAAAAAAA'}],"
+    rest = test_xprintf("'images':[{'uri':'data:image/png;base64,AAAAAAAA'}],"
                    "'textures':[{'source':0}],'materials':[{'emissiveTexture':{'index':0}}]");
     free(j);
     j = gltf_json(&b, 0, NULL, NULL, rest);
     EXPECT_ERROR(j, RD_GLTF_ERR_INVALID, "image 0 could not be decoded");
     free(rest);
-    rest = xprintf("'images':[{'uri':'data:image/png;base64,AAAAAAAA'}],'textures':[{'source':0}]");
+    rest = test_xprintf("'images':[{'uri':'data:image/png;base64,AAAAAAAA'}],'textures':[{'source':0}]");
     free(j);
     j = gltf_json(&b, 0, NULL, NULL, rest);
     CHECKF(load_text(j, &s) == RD_GLTF_OK, "%s", err);
@@ -676,13 +632,13 @@ static void test_glb_and_files(void)
     f = fopen(test_tmp_path("quad.png"), "wb");
     CHECK(f && fwrite(png.p, 1, png.n, f) == png.n);
     if (f) fclose(f);
-    char *tmpl = xprintf("{'asset':{'version':'2.0'},'buffers':[{'byteLength':%zu,'uri':'%%s'}],"
+    char *tmpl = test_xprintf("{'asset':{'version':'2.0'},'buffers':[{'byteLength':%zu,'uri':'%%s'}],"
                          "'bufferViews':[" STD_VIEWS "],'accessors':[" STD_ACCESSORS "],"
                          "'images':[{'uri':'%%s'}],'textures':[{'source':0}],"
                          "'materials':[{'pbrMetallicRoughness':{'baseColorTexture':{'index':0}}}],"
                          "'meshes':[" QUAD_MESH "],'nodes':[{'mesh':0}]}",
                          b.n);
-    char *tq = jq(tmpl);
+    char *tq = test_jq(tmpl);
     struct {
         const char *buffer, *image;
         rd_gltf_result want;
@@ -700,7 +656,7 @@ static void test_glb_and_files(void)
         {"quad.png", "quad.png", RD_GLTF_ERR_INVALID, "byteLength"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
-        char *text = xprintf(tq, cases[i].buffer, cases[i].image);
+        char *text = test_xprintf(tq, cases[i].buffer, cases[i].image);
         const char *gpath = test_tmp_path("quad.gltf");
         f = fopen(gpath, "wb");
         CHECK(f && fwrite(text, 1, strlen(text), f) == strlen(text));
@@ -765,12 +721,12 @@ static void test_errors(void)
     rd_scene s;
 
     EXPECT_ERROR("", RD_GLTF_ERR_PARSE, "empty");
-    j = jq("{'asset':{'version':'2.0'},'nodes':[{'name':'x'}");
+    j = test_jq("{'asset':{'version':'2.0'},'nodes':[{'name':'x'}");
     EXPECT_ERROR(j, RD_GLTF_ERR_PARSE, "JSON");
     free(j);
     EXPECT_ERROR("\x89PNG garbage", RD_GLTF_ERR_PARSE, "JSON");
     EXPECT_ERROR("{\"nodes\":[]}", RD_GLTF_ERR_INVALID, "asset");
-    j = jq("{'asset':{'version':'1.0'}}");
+    j = test_jq("{'asset':{'version':'1.0'}}");
     EXPECT_ERROR(j, RD_GLTF_ERR_UNSUPPORTED, "version");
     free(j);
     char deep[512];
@@ -886,16 +842,16 @@ static void test_errors(void)
     free(j);
 
     /* buffers */
-    j = jq("{'asset':{'version':'2.0'},'buffers':[{'byteLength':8,'uri':'x.bin'}]}");
+    j = test_jq("{'asset':{'version':'2.0'},'buffers':[{'byteLength':8,'uri':'x.bin'}]}");
     EXPECT_ERROR(j, RD_GLTF_ERR_IO,
                  "buffer 0 'x.bin' could not be loaded: external files are "
                  "not allowed");
     free(j);
-    j = jq("{'asset':{'version':'2.0'},'buffers':[{'byteLength':8,"
+    j = test_jq("{'asset':{'version':'2.0'},'buffers':[{'byteLength':8,"
            "'uri':'data:application/octet-stream;base64,AAAA'}]}");
     EXPECT_ERROR(j, RD_GLTF_ERR_INVALID, "byteLength");
     free(j);
-    j = jq("{'asset':{'version':'2.0'},'buffers':[{'byteLength':8,'uri':'data:text/x,abc'}]}");
+    j = test_jq("{'asset':{'version':'2.0'},'buffers':[{'byteLength':8,'uri':'data:text/x,abc'}]}");
     EXPECT_ERROR(j, RD_GLTF_ERR_UNSUPPORTED, "data URI");
     free(j);
     j = gltf_json(&b, 0, NULL, NULL,
@@ -903,7 +859,7 @@ static void test_errors(void)
                   "'materials':[{'emissiveTexture':{'index':0}}]");
     EXPECT_ERROR(j, RD_GLTF_ERR_UNSUPPORTED, "image 0 has a data URI");
     free(j);
-    j = jq("{'asset':{'version':'2.0'},'buffers':[{'byteLength':8}]}");
+    j = test_jq("{'asset':{'version':'2.0'},'buffers':[{'byteLength':8}]}");
     EXPECT_ERROR(j, RD_GLTF_ERR_INVALID, "uri");
     free(j);
 
@@ -937,7 +893,7 @@ static void test_mutations(void)
     bin b;
     std_bin(&b, NULL);
     size_t off = bin_put(&b, png.p, png.n);
-    char *views = xprintf(STD_VIEWS ",{'buffer':0,'byteOffset':%zu,'byteLength':%zu}", off, png.n);
+    char *views = test_xprintf(STD_VIEWS ",{'buffer':0,'byteOffset':%zu,'byteLength':%zu}", off, png.n);
     const char *rest =
         "'images':[{'bufferView':8,'mimeType':'image/png'}],'textures':[{'source':0}],"
         "'materials':[{'pbrMetallicRoughness':{'baseColorTexture':{'index':0}}}],"

@@ -18,22 +18,6 @@
 
 static pc_daemon d = {.token = "s3cret"};
 
-static char *base64(const uint8_t *p, size_t n)
-{
-    static const char tab[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    char *out = malloc(n / 3 * 4 + 8), *o = out;
-    if (!out) abort();
-    for (size_t i = 0; i < n; i += 3) {
-        uint32_t v = (uint32_t)p[i] << 16 | (i + 1 < n ? (uint32_t)p[i + 1] << 8 : 0) |
-                     (i + 2 < n ? p[i + 2] : 0);
-        *o++ = tab[v >> 18], *o++ = tab[(v >> 12) & 63];
-        *o++ = i + 1 < n ? tab[(v >> 6) & 63] : '=';
-        *o++ = i + 2 < n ? tab[v & 63] : '=';
-    }
-    *o = '\0';
-    return out;
-}
-
 /* A 4 x 4 m floor, a unit box (node "box") with the animation carrying a point light 2 m above
  * it (node "lamp", its child), and a camera; one buffer as a data: URI. */
 static void write_scene(const char *path)
@@ -57,7 +41,7 @@ static void write_scene(const char *path)
     memcpy(bin + 156, box_idx, 72);
     memcpy(bin + 228, times, 8);
     memcpy(bin + 236, moves, 24);
-    char *b64 = base64(bin, 260);
+    char *b64 = test_base64(bin, 260);
     FILE *f = fopen(path, "wb");
     CHECK(f != NULL);
     if (!f) abort();
