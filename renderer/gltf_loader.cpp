@@ -155,7 +155,9 @@ struct FileRules {
 /* Why a decoded relative URI may not be opened, or "" when it may. */
 std::string uri_refusal(const FileRules &rules, const std::string &rel)
 {
-    if (!rules.allowed) return "external files are not allowed when loading from memory";
+    if (!rules.allowed)
+        return "a file uploaded alone cannot refer to other files: upload a .glb, or a .gltf "
+               "whose buffers and images are embedded as data: URIs";
     if (rel.empty()) return "the URI is empty";
     if (rel.find('\0') != std::string::npos) return "the URI contains a NUL character";
     if (rel.compare(0, 5, "data:") == 0)

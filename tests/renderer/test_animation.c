@@ -108,9 +108,9 @@ static char *anim_json(const char *animations)
     }
     char *b64 = test_base64(buf, n);
     char *s = test_xprintf("{'asset':{'version':'2.0'},'buffers':[{'byteLength':%zu,'uri':"
-                      "'data:application/octet-stream;base64,%s'}],'bufferViews':[%s],"
-                      "'accessors':[%s]," NODES ",'animations':%s}",
-                      n, b64, views, accessors, animations);
+                           "'data:application/octet-stream;base64,%s'}],'bufferViews':[%s],"
+                           "'accessors':[%s]," NODES ",'animations':%s}",
+                           n, b64, views, accessors, animations);
     char *j = test_jq(s);
     free(s);
     free(b64);

@@ -98,11 +98,11 @@ static char *gltf_json(const bin *b, int glb, const char *views, const char *acc
         uri = test_xprintf(",'uri':'data:application/octet-stream;base64,%s'", b64);
         free(b64);
     }
-    char *s =
-        test_xprintf("{'asset':{'version':'2.0'},'buffers':[{'byteLength':%zu%s}],"
-                "'bufferViews':[%s],'accessors':[%s]%s%s}",
-                b->n, uri ? uri : "", views ? views : STD_VIEWS,
-                accessors ? accessors : STD_ACCESSORS, rest && *rest ? "," : "", rest ? rest : "");
+    char *s = test_xprintf("{'asset':{'version':'2.0'},'buffers':[{'byteLength':%zu%s}],"
+                           "'bufferViews':[%s],'accessors':[%s]%s%s}",
+                           b->n, uri ? uri : "", views ? views : STD_VIEWS,
+                           accessors ? accessors : STD_ACCESSORS, rest && *rest ? "," : "",
+                           rest ? rest : "");
     char *j = test_jq(s);
     free(s);
     free(uri);
@@ -440,8 +440,9 @@ static void test_textures(void)
         uri[i] = png_data_uri(&png[i]);
     bin b;
     std_bin(&b, NULL);
-    char *rest = test_xprintf("'images':[{'uri':'%s'},{'uri':'%s'},{'uri':'%s'}]," TEXTURE_MATERIALS,
-                         uri[0], uri[1], uri[2]);
+    char *rest =
+        test_xprintf("'images':[{'uri':'%s'},{'uri':'%s'},{'uri':'%s'}]," TEXTURE_MATERIALS, uri[0],
+                     uri[1], uri[2]);
     char *j = gltf_json(&b, 0, NULL, NULL, rest);
     rd_scene s;
     CHECKF(load_text(j, &s) == RD_GLTF_OK, "%s", err);
@@ -457,9 +458,9 @@ static void test_textures(void)
     for (int i = 0; i < 3; i++)
         off[i] = bin_put(&g, png[i].p, png[i].n);
     char *views = test_xprintf(STD_VIEWS ",{'buffer':0,'byteOffset':%zu,'byteLength':%zu},"
-                                    "{'buffer':0,'byteOffset':%zu,'byteLength':%zu},"
-                                    "{'buffer':0,'byteOffset':%zu,'byteLength':%zu}",
-                          off[0], png[0].n, off[1], png[1].n, off[2], png[2].n);
+                                         "{'buffer':0,'byteOffset':%zu,'byteLength':%zu},"
+                                         "{'buffer':0,'byteOffset':%zu,'byteLength':%zu}",
+                               off[0], png[0].n, off[1], png[1].n, off[2], png[2].n);
     rest = test_xprintf(
         "'images':[{'bufferView':8,'mimeType':'image/png'},{'bufferView':9,"
         "'mimeType':'image/png'},{'bufferView':10,'mimeType':'image/png'}]," TEXTURE_MATERIALS);
@@ -474,12 +475,13 @@ static void test_textures(void)
     /* an image that is not a PNG fails when a material uses it, not before */
     free(rest);
     rest = test_xprintf("'images':[{'uri':'data:image/png;base64,AAAAAAAA'}],"
-                   "'textures':[{'source':0}],'materials':[{'emissiveTexture':{'index':0}}]");
+                        "'textures':[{'source':0}],'materials':[{'emissiveTexture':{'index':0}}]");
     free(j);
     j = gltf_json(&b, 0, NULL, NULL, rest);
     EXPECT_ERROR(j, RD_GLTF_ERR_INVALID, "image 0 could not be decoded");
     free(rest);
-    rest = test_xprintf("'images':[{'uri':'data:image/png;base64,AAAAAAAA'}],'textures':[{'source':0}]");
+    rest = test_xprintf(
+        "'images':[{'uri':'data:image/png;base64,AAAAAAAA'}],'textures':[{'source':0}]");
     free(j);
     j = gltf_json(&b, 0, NULL, NULL, rest);
     CHECKF(load_text(j, &s) == RD_GLTF_OK, "%s", err);
@@ -632,12 +634,13 @@ static void test_glb_and_files(void)
     f = fopen(test_tmp_path("quad.png"), "wb");
     CHECK(f && fwrite(png.p, 1, png.n, f) == png.n);
     if (f) fclose(f);
-    char *tmpl = test_xprintf("{'asset':{'version':'2.0'},'buffers':[{'byteLength':%zu,'uri':'%%s'}],"
-                         "'bufferViews':[" STD_VIEWS "],'accessors':[" STD_ACCESSORS "],"
-                         "'images':[{'uri':'%%s'}],'textures':[{'source':0}],"
-                         "'materials':[{'pbrMetallicRoughness':{'baseColorTexture':{'index':0}}}],"
-                         "'meshes':[" QUAD_MESH "],'nodes':[{'mesh':0}]}",
-                         b.n);
+    char *tmpl =
+        test_xprintf("{'asset':{'version':'2.0'},'buffers':[{'byteLength':%zu,'uri':'%%s'}],"
+                     "'bufferViews':[" STD_VIEWS "],'accessors':[" STD_ACCESSORS "],"
+                     "'images':[{'uri':'%%s'}],'textures':[{'source':0}],"
+                     "'materials':[{'pbrMetallicRoughness':{'baseColorTexture':{'index':0}}}],"
+                     "'meshes':[" QUAD_MESH "],'nodes':[{'mesh':0}]}",
+                     b.n);
     char *tq = test_jq(tmpl);
     struct {
         const char *buffer, *image;
@@ -678,7 +681,8 @@ static void test_glb_and_files(void)
         rd_scene_destroy(&s);
         if (i == 0) {
             r = rd_gltf_load_memory(text, strlen(text), NULL, NULL, &s, err, sizeof err);
-            CHECKF(r == RD_GLTF_ERR_IO && strstr(err, "not allowed"), "%s", err);
+            /* the message tells an uploader what to do instead */
+            CHECKF(r == RD_GLTF_ERR_IO && strstr(err, "upload a .glb"), "%s", err);
         }
         free(text);
     }
@@ -844,11 +848,11 @@ static void test_errors(void)
     /* buffers */
     j = test_jq("{'asset':{'version':'2.0'},'buffers':[{'byteLength':8,'uri':'x.bin'}]}");
     EXPECT_ERROR(j, RD_GLTF_ERR_IO,
-                 "buffer 0 'x.bin' could not be loaded: external files are "
-                 "not allowed");
+                 "buffer 0 'x.bin' could not be loaded: a file uploaded alone cannot refer to "
+                 "other files: upload a .glb");
     free(j);
     j = test_jq("{'asset':{'version':'2.0'},'buffers':[{'byteLength':8,"
-           "'uri':'data:application/octet-stream;base64,AAAA'}]}");
+                "'uri':'data:application/octet-stream;base64,AAAA'}]}");
     EXPECT_ERROR(j, RD_GLTF_ERR_INVALID, "byteLength");
     free(j);
     j = test_jq("{'asset':{'version':'2.0'},'buffers':[{'byteLength':8,'uri':'data:text/x,abc'}]}");
@@ -893,7 +897,8 @@ static void test_mutations(void)
     bin b;
     std_bin(&b, NULL);
     size_t off = bin_put(&b, png.p, png.n);
-    char *views = test_xprintf(STD_VIEWS ",{'buffer':0,'byteOffset':%zu,'byteLength':%zu}", off, png.n);
+    char *views =
+        test_xprintf(STD_VIEWS ",{'buffer':0,'byteOffset':%zu,'byteLength':%zu}", off, png.n);
     const char *rest =
         "'images':[{'bufferView':8,'mimeType':'image/png'}],'textures':[{'source':0}],"
         "'materials':[{'pbrMetallicRoughness':{'baseColorTexture':{'index':0}}}],"

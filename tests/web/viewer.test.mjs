@@ -732,11 +732,15 @@ test('a rejected upload shows the server\'s message', { timeout: 30000 }, async 
   const cases = [
     { name: 'truncated.glb', mimeType: 'model/gltf-binary', buffer: glb, type: 'model/gltf-binary' },
     { name: 'notes.txt', mimeType: 'text/plain', buffer: Buffer.from('not a scene\n'), type: 'application/octet-stream' },
+    // a .gltf that refers to a file beside it: one uploaded file cannot; the message says what to do
+    { name: 'parts.gltf', mimeType: 'model/gltf+json', type: 'model/gltf+json', hint: /upload a \.glb/,
+      buffer: Buffer.from('{"asset":{"version":"2.0"},"buffers":[{"byteLength":8,"uri":"parts.bin"}]}') },
   ];
   for (const c of cases) {
     const expected = await http('PUT', '/v1/scene', new Uint8Array(c.buffer), { 'Content-Type': c.type });
     assert.equal(expected.status, 422, expected.text);
     assert.ok(expected.json.message.length > 0);
+    if (c.hint) assert.match(expected.json.message, c.hint);
     await page.locator('#upload-file').setInputFiles({ name: c.name, mimeType: c.mimeType, buffer: c.buffer });
     await page.waitForFunction((msg) => {
       const el = document.querySelector('#upload-error .msg');
