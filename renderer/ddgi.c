@@ -305,13 +305,17 @@ bool rd_ddgi_converged(const rd_ddgi *d)
     return d->configured && d->updates > 0 && d->census.awake == 0 && d->wake_count == 0;
 }
 
+/* Pending boxes only ever combine by taking the lowest age per probe (the wake pass), so the
+ * order of wake calls does not matter. When the list is full it collapses into one box over
+ * everything with the lowest age of all. */
 void rd_ddgi_wake_box(rd_ddgi *d, const float lo[3], const float hi[3], float age)
 {
     if (!d->configured) return;
-    if (d->wake_count == PC_DDGI_WAKE_MAX) { /* too many boxes: wake everything instead */
+    if (d->wake_count == PC_DDGI_WAKE_MAX) {
         float a = age;
         for (unsigned i = 0; i < d->wake_count; i++)
             a = fminf(a, d->wakes[i].lo.w);
+        d->wake_count = 0;
         rd_ddgi_wake_all(d, a);
         return;
     }
@@ -321,9 +325,7 @@ void rd_ddgi_wake_box(rd_ddgi *d, const float lo[3], const float hi[3], float ag
 
 void rd_ddgi_wake_all(rd_ddgi *d, float age)
 {
-    if (!d->configured) return;
     const float lo[3] = {-3e38f, -3e38f, -3e38f}, hi[3] = {3e38f, 3e38f, 3e38f};
-    d->wake_count = 0;
     rd_ddgi_wake_box(d, lo, hi, age);
 }
 

@@ -35,3 +35,11 @@ void rd_frame_stats_add_timer(rd_frame_stats *dst, const rd_timer *t)
     for (uint32_t i = 1; i < t->count && i < RD_TIMER_MAX; i++)
         add_pass(dst, t->names[i] ? t->names[i] : "?", t->ms[i]);
 }
+
+double rd_frame_stats_total_ms(const rd_frame_stats *s)
+{
+    double ms = 0;
+    for (unsigned i = 0; i < s->pass_count; i++)
+        ms += s->pass_ms[i];
+    return ms;
+}

@@ -233,8 +233,7 @@ float *eval_reference(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene *
                                  sizeof c->err) != RD_VK_OK ||
         rd_renderer_render(&c->r, gs, cam, &fs, c->err, sizeof c->err) != RD_VK_OK)
         return NULL;
-    for (unsigned i = 0; i < c->r.stats.pass_count; i++)
-        *ms += c->r.stats.pass_ms[i];
+    *ms = rd_frame_stats_total_ms(&c->r.stats);
     rgb = malloc(sizeof(float) * 3 * a->width * a->height);
     if (!rgb) abort();
     if (rd_renderer_read_hdr(&c->r, rgb, c->err, sizeof c->err) != RD_VK_OK) {
@@ -287,10 +286,7 @@ static bool run_setting(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene
     for (unsigned f = 0; f < a->timing_frames + 2; f++) {
         if (rd_renderer_render(&c->r, gs, cam, &fs, c->err, sizeof c->err) != RD_VK_OK)
             return false;
-        double total = 0;
-        for (unsigned i = 0; i < c->r.stats.pass_count; i++)
-            total += c->r.stats.pass_ms[i];
-        if (f >= 2) times[f - 2] = total;
+        if (f >= 2) times[f - 2] = rd_frame_stats_total_ms(&c->r.stats);
     }
     for (unsigned i = 1; i < a->timing_frames; i++) /* insertion sort: a handful of values */
         for (unsigned j = i; j > 0 && times[j] < times[j - 1]; j--) {

@@ -73,14 +73,6 @@ static bool measure(eval_ctx *c, const rd_view_camera *cam, const float *ref, dy
     return ok;
 }
 
-static double update_ms(const rd_world *w)
-{
-    double ms = 0;
-    for (unsigned i = 0; i < w->stats.pass_count; i++)
-        ms += w->stats.pass_ms[i];
-    return ms;
-}
-
 /* Applies the case's change to s and gs and wakes the probes it reaches. */
 static bool change(eval_ctx *c, const dyn_case *dc, rd_scene *s, rd_gpu_scene *gs)
 {
@@ -154,11 +146,8 @@ static bool run_case(eval_ctx *c, const dyn_case *dc, dyn_row *rows, unsigned *n
     double ms = 0;
     ok = rd_world_configure_gi(w, s.bounds_min, s.bounds_max, &gi, c->err, sizeof c->err) ==
          RD_VK_OK;
-    while (ok && done < DYN_CAP && !rd_world_converged(w)) {
-        ok = rd_world_update(w, 1, c->err, sizeof c->err) == RD_VK_OK;
-        ms += update_ms(w);
-        done++;
-    }
+    ok = ok && rd_world_converge(w, DYN_CAP, &done, c->err, sizeof c->err) == RD_VK_OK;
+    ms = rd_frame_stats_total_ms(&w->stats);
     if (ok)
         printf("%s: %s\n  from cold: converged after %u updates, %.1f ms of GPU time\n", dc->name,
                dc->change, done, ms);
@@ -176,7 +165,7 @@ static bool run_case(eval_ctx *c, const dyn_case *dc, dyn_row *rows, unsigned *n
             if (!ok || r->converged || u == DYN_CAP) break;
         }
         ok = rd_world_update(w, 1, c->err, sizeof c->err) == RD_VK_OK;
-        ms += update_ms(w);
+        ms += rd_frame_stats_total_ms(&w->stats);
         u++;
     }
     free(ref);

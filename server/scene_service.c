@@ -532,9 +532,8 @@ unsigned srv_scene_service_apply(srv_scene_service *svc, srv_cmd *c)
             return 0;
         }
         if (!upload_lights(svc, c)) return 0;
-        /* lights the node carries may reach anywhere (wake all first: it replaces pending
-         * boxes); probes near its old and new place wake with the geometry age
-         * (rd_world_wake_box grows the boxes by a probe spacing) */
+        /* lights the node carries may reach anywhere; probes near its old and new place
+         * wake with the geometry age (rd_world_wake_box grows the boxes by a probe spacing) */
         if (node_carries_light(&st->scene, c->id))
             rd_world_wake_all(&svc->world, PC_DDGI_WAKE_AGE_LIGHT);
         if (had_mesh && node_bounds(svc, c->id, lo, hi)) {
@@ -572,17 +571,9 @@ rd_vk_result srv_scene_service_advance(srv_scene_service *svc, bool animating, u
     }
     if (!svc->world.gi) updates = 0;
     if (animating && svc->world.gi && updates == 0) updates = 1;
-    rd_vk_result vr = RD_VK_OK;
-    rd_frame_stats sum;
-    memset(&sum, 0, sizeof sum);
-    unsigned done = 0;
     /* updates stop as soon as the field has converged: then every probe sleeps */
-    while (vr == RD_VK_OK && done < updates && !rd_world_converged(&svc->world)) {
-        vr = rd_world_update(&svc->world, 1, err, errlen);
-        if (vr == RD_VK_OK) rd_frame_stats_add(&sum, &svc->world.stats);
-        done++;
-    }
-    svc->world.stats = sum;
+    unsigned done = 0;
+    rd_vk_result vr = rd_world_converge(&svc->world, updates, &done, err, errlen);
     if (vr == RD_VK_OK && svc->gi_updates < UINT32_MAX - done) svc->gi_updates += done;
     if (svc->was_converged != !srv_scene_service_converging(svc)) publish_probes(svc);
     return vr;

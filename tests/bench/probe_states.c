@@ -30,33 +30,40 @@ static char err[512];
 
 static bool parse(int argc, char **argv, bench_args *a)
 {
-    *a = (bench_args){.scene = "spheres:1000000", .probes = {32, 8, 32}, .frames = 60,
-                      .width = 320, .height = 180, .ref_spp = 1024, .out = "probe_states.csv"};
+    *a = (bench_args){.scene = "spheres:1000000",
+                      .probes = {32, 8, 32},
+                      .frames = 60,
+                      .width = 320,
+                      .height = 180,
+                      .ref_spp = 1024,
+                      .out = "probe_states.csv"};
     for (int i = 1; i < argc; i++) {
         const char *o = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!v) return false;
-        if (strcmp(o, "--scene") == 0) a->scene = strncmp(v, "builtin:", 8) == 0 ? v + 8 : v;
+        if (strcmp(o, "--scene") == 0)
+            a->scene = strncmp(v, "builtin:", 8) == 0 ? v + 8 : v;
         else if (strcmp(o, "--probes") == 0) {
             if (sscanf(v, "%u,%u,%u", &a->probes[0], &a->probes[1], &a->probes[2]) != 3)
                 return false;
-        } else if (strcmp(o, "--rays") == 0) a->rays = (unsigned)atoi(v);
-        else if (strcmp(o, "--frames") == 0) a->frames = (unsigned)atoi(v);
-        else if (strcmp(o, "--width") == 0) a->width = (unsigned)atoi(v);
-        else if (strcmp(o, "--height") == 0) a->height = (unsigned)atoi(v);
-        else if (strcmp(o, "--ref-spp") == 0) a->ref_spp = (unsigned)atoi(v);
-        else if (strcmp(o, "--out") == 0) a->out = v;
-        else if (strcmp(o, "--device") == 0) a->device = v;
-        else return false;
+        } else if (strcmp(o, "--rays") == 0)
+            a->rays = (unsigned)atoi(v);
+        else if (strcmp(o, "--frames") == 0)
+            a->frames = (unsigned)atoi(v);
+        else if (strcmp(o, "--width") == 0)
+            a->width = (unsigned)atoi(v);
+        else if (strcmp(o, "--height") == 0)
+            a->height = (unsigned)atoi(v);
+        else if (strcmp(o, "--ref-spp") == 0)
+            a->ref_spp = (unsigned)atoi(v);
+        else if (strcmp(o, "--out") == 0)
+            a->out = v;
+        else if (strcmp(o, "--device") == 0)
+            a->device = v;
+        else
+            return false;
         i++;
     }
     return a->frames > 0 && a->width > 0 && a->height > 0;
-}
-
-static double gi_ms(const rd_world *w)
-{
-    double ms = 0;
-    for (unsigned i = 0; i < w->stats.pass_count; i++) ms += w->stats.pass_ms[i];
-    return ms;
 }
 
 static double mean_lum(const float *rgb, size_t px)
@@ -125,7 +132,8 @@ int main(int argc, char **argv)
     rd_tris_sphere(&t, c0, 0.5f, 16, 32, white);
     uint32_t node = rd_tris_commit(&t, &s, "mover");
     rd_view_camera cam;
-    if (!rd_scene_update(&s, err, sizeof err) || !rd_camera_for_scene(&s, -1, &cam, err, sizeof err)) {
+    if (!rd_scene_update(&s, err, sizeof err) ||
+        !rd_camera_for_scene(&s, -1, &cam, err, sizeof err)) {
         fprintf(stderr, "probe_bench: %s\n", err);
         return 1;
     }
@@ -153,8 +161,8 @@ int main(int argc, char **argv)
                  "gi_ms_total,bias\n");
 
     /* path-traced reference (GI off while it renders) */
-    rd_frame_settings pt = {.width = a.width, .height = a.height, .pathtrace_spp = a.ref_spp,
-                            .seed = 7};
+    rd_frame_settings pt = {
+        .width = a.width, .height = a.height, .pathtrace_spp = a.ref_spp, .seed = 7};
     size_t px = (size_t)a.width * a.height;
     float *ref = malloc(px * 12);
     if (!ref) abort();
@@ -166,27 +174,28 @@ int main(int argc, char **argv)
     double ref_lum = ok ? mean_lum(ref, px) : NAN;
     free(ref);
 
-    rd_ddgi_settings gi = {.mode = PC_GI_DDGI, .rays = a.rays, .seed = 1,
+    rd_ddgi_settings gi = {.mode = PC_GI_DDGI,
+                           .rays = a.rays,
+                           .seed = 1,
                            .counts = {a.probes[0], a.probes[1], a.probes[2]}};
     rd_world *w = &r.world;
-    printf("\n%-34s %8s %9s %10s %12s %8s\n", "cold convergence", "updates", "GPU ms",
-           "ms/update", "bias vs PT", "probes");
+    printf("\n%-34s %8s %9s %10s %12s %8s\n", "cold convergence", "updates", "GPU ms", "ms/update",
+           "bias vs PT", "probes");
     for (int rule = 0; ok && rule < 2; rule++) {
         rd_ddgi_settings g = gi;
         if (rule == 1) g.hysteresis = 0.97f, g.has_hysteresis = true;
         ok = rd_renderer_configure_gi(&r, s.bounds_min, s.bounds_max, &g, err, sizeof err) ==
              RD_VK_OK;
         rd_world_set_scene(w, &gs);
-        unsigned n = 0;
-        double ms = 0;
-        while (ok && (rule == 0 ? !rd_world_converged(w) && n < 3000 : n < 152)) {
-            ok = rd_world_update(w, 1, err, sizeof err) == RD_VK_OK;
-            ms += gi_ms(w);
-            n++;
-        }
+        unsigned n = 152;
+        if (ok && rule == 0)
+            ok = rd_world_converge(w, 3000, &n, err, sizeof err) == RD_VK_OK;
+        else if (ok)
+            ok = rd_world_update(w, n, err, sizeof err) == RD_VK_OK;
+        double ms = rd_frame_stats_total_ms(&w->stats); /* both sum their updates */
         double bias = ok ? image_lum(&r, &cam, &a) / ref_lum - 1 : NAN;
-        const char *cfg = rule == 0 ? "defaults, until every probe sleeps"
-                                    : "old rule: 152 updates at h 0.97";
+        const char *cfg =
+            rule == 0 ? "defaults, until every probe sleeps" : "old rule: 152 updates at h 0.97";
         printf("%-34s %8u %9.1f %10.3f %+11.2f%% %8u\n", cfg, n, ms, ms / n, 100 * bias,
                rd_ddgi_probe_count(&w->ddgi));
         fprintf(csv, "\"%s\",cold,\"%s\",%u,%u,%u,,,%.3f,%.5f\n", vk.device_name, cfg,
@@ -207,7 +216,7 @@ int main(int argc, char **argv)
             ok = move(&vk, &r, &s, &gs, node, inst, f, all == 1) &&
                  rd_world_update(w, 1, err, sizeof err) == RD_VK_OK;
             awake += (double)w->ddgi.census.updated / total;
-            ms += gi_ms(w);
+            ms += rd_frame_stats_total_ms(&w->stats);
         }
         const char *cfg = all ? "every probe woken each frame" : "probe states (wake boxes)";
         printf("%-34s %8u %8.1f%% %10.3f\n", cfg, a.frames, 100 * awake / a.frames, ms / a.frames);
@@ -215,8 +224,10 @@ int main(int argc, char **argv)
                 total, w->ddgi.vol.counts.w, a.frames, awake / a.frames, ms / a.frames, ms);
     }
     fclose(csv);
-    if (!ok) fprintf(stderr, "probe_bench: %s\n", err);
-    else printf("\nwrote %s\n", a.out);
+    if (!ok)
+        fprintf(stderr, "probe_bench: %s\n", err);
+    else
+        printf("\nwrote %s\n", a.out);
     rd_renderer_destroy(&r);
     rd_gpu_scene_destroy(&vk, &gs);
     rd_vk_destroy(&vk);
