@@ -1,0 +1,187 @@
+/* gltf_builder.c: glTF test files built in memory (see gltf_builder.h). */
+#include "gltf_builder.h"
+
+#include <math.h>
+#include <png.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "test_util.h"
+
+/* ---- byte and string builders ---------------------------------------------------------- */
+
+void bin_raw(bin *b, const void *data, size_t n)
+{
+    if (b->n + n > b->cap) {
+        b->cap = (b->n + n) * 2 + 64;
+        b->p = realloc(b->p, b->cap);
+    }
+    if (n) memcpy(b->p + b->n, data, n);
+    b->n += n;
+}
+
+void bin_align(bin *b, uint8_t fill)
+{
+    while (b->n % 4)
+        bin_raw(b, &fill, 1);
+}
+
+/* Appends at a 4-byte aligned offset and returns it. */
+size_t bin_put(bin *b, const void *data, size_t n)
+{
+    bin_align(b, 0);
+    size_t at = b->n;
+    bin_raw(b, data, n);
+    return at;
+}
+
+/* ---- the standard buffer ----------------------------------------------------------------
+ * A unit quad in the XY plane: 4 positions (0) 4 normals (48) 4 uvs (96), indices 0 1 2 0 2 3
+ * as u16 (128) u8 (140) u32 (148), then a sparse index (172) and a sparse value (176). */
+const uint8_t kRgba[16] = {255, 0, 0, 255, 0, 255, 0, 128, 0, 0, 255, 255, 255, 255, 255, 0};
+const float kQuad[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+
+void std_bin(bin *b, const float *positions)
+{
+    static const float normals[12] = {0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1};
+    static const float uvs[8] = {0, 0, 1, 0, 1, 1, 0, 1};
+    static const uint16_t i16[6] = {0, 1, 2, 0, 2, 3};
+    static const uint8_t i8[6] = {0, 1, 2, 0, 2, 3};
+    static const uint32_t i32[6] = {0, 1, 2, 0, 2, 3};
+    static const uint8_t sparse_index[1] = {2};
+    static const float sparse_value[3] = {5, 5, 5};
+    memset(b, 0, sizeof *b);
+    bin_put(b, positions ? positions : kQuad, 48);
+    bin_put(b, normals, 48);
+    bin_put(b, uvs, 32);
+    bin_put(b, i16, 12);
+    bin_put(b, i8, 6);
+    bin_put(b, i32, 24);
+    bin_put(b, sparse_index, 1);
+    bin_put(b, sparse_value, 12);
+    CHECK(b->n == 188);
+}
+
+/* A complete glTF JSON text (double quotes). b: buffer 0; glb: no URI (GLB BIN chunk);
+ * views/accessors: array items or NULL for the standard ones; rest: more top-level members. */
+char *gltf_json(const bin *b, int glb, const char *views, const char *accessors, const char *rest)
+{
+    char *uri = NULL;
+    if (!glb) {
+        char *b64 = test_base64(b->p, b->n);
+        uri = test_xprintf(",'uri':'data:application/octet-stream;base64,%s'", b64);
+        free(b64);
+    }
+    char *s = test_xprintf("{'asset':{'version':'2.0'},'buffers':[{'byteLength':%zu%s}],"
+                           "'bufferViews':[%s],'accessors':[%s]%s%s}",
+                           b->n, uri ? uri : "", views ? views : STD_VIEWS,
+                           accessors ? accessors : STD_ACCESSORS, rest && *rest ? "," : "",
+                           rest ? rest : "");
+    char *j = test_jq(s);
+    free(s);
+    free(uri);
+    return j;
+}
+
+/* GLB container: header, JSON chunk padded with spaces, BIN chunk padded with zeros. */
+uint8_t *make_glb(const char *json, const bin *b, size_t *size)
+{
+    size_t jn = strlen(json), jpad = (jn + 3) & ~(size_t)3;
+    size_t bpad = b ? (b->n + 3) & ~(size_t)3 : 0;
+    size_t total = 12 + 8 + jpad + (b ? 8 + bpad : 0);
+    uint8_t *g = calloc(1, total);
+    uint32_t hdr[5] = {0x46546C67u, 2, (uint32_t)total, (uint32_t)jpad, 0x4E4F534Au};
+    memcpy(g, hdr, sizeof hdr);
+    memset(g + 20, ' ', jpad);
+    memcpy(g + 20, json, jn);
+    if (b) {
+        uint32_t ch[2] = {(uint32_t)bpad, 0x004E4942u};
+        memcpy(g + 20 + jpad, ch, 8);
+        memcpy(g + 28 + jpad, b->p, b->n);
+    }
+    *size = total;
+    return g;
+}
+
+/* ---- PNG ------------------------------------------------------------------------------- */
+
+static void png_write_cb(png_structp png, png_bytep data, size_t n)
+{
+    bin_raw((bin *)png_get_io_ptr(png), data, n);
+}
+
+/* color_type: PNG_COLOR_TYPE_*; rows packed, 16-bit samples big-endian. */
+void make_png(bin *out, int w, int h, int color_type, int depth, const uint8_t *px)
+{
+    memset(out, 0, sizeof *out);
+    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+    png_infop info = png_create_info_struct(png);
+    if (setjmp(png_jmpbuf(png))) {
+        CHECK(!"libpng failed");
+        png_destroy_write_struct(&png, &info);
+        return;
+    }
+    png_set_write_fn(png, out, png_write_cb, NULL);
+    png_set_IHDR(png, info, (png_uint_32)w, (png_uint_32)h, depth, color_type, PNG_INTERLACE_NONE,
+                 PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+    png_write_info(png, info);
+    int channels = color_type == PNG_COLOR_TYPE_GRAY         ? 1
+                   : color_type == PNG_COLOR_TYPE_GRAY_ALPHA ? 2
+                   : color_type == PNG_COLOR_TYPE_RGB        ? 3
+                                                             : 4;
+    size_t row = (size_t)w * (size_t)channels * (size_t)depth / 8;
+    for (int y = 0; y < h; y++)
+        png_write_row(png, (png_const_bytep)(px + (size_t)y * row));
+    png_write_end(png, NULL);
+    png_destroy_write_struct(&png, &info);
+}
+
+char *png_data_uri(const bin *png)
+{
+    char *b64 = test_base64(png->p, png->n);
+    char *uri = test_xprintf("data:image/png;base64,%s", b64);
+    free(b64);
+    return uri;
+}
+
+/* ---- loading and checking -------------------------------------------------------------------- */
+
+char gltf_err[512];
+
+rd_gltf_result load_text(const char *json, rd_scene *s)
+{
+    gltf_err[0] = '\0';
+    return rd_gltf_load_memory(json, strlen(json), NULL, NULL, s, gltf_err, sizeof gltf_err);
+}
+
+int near3(const float *a, float x, float y, float z)
+{
+    return fabsf(a[0] - x) < 1e-5f && fabsf(a[1] - y) < 1e-5f && fabsf(a[2] - z) < 1e-5f;
+}
+
+int scene_is_empty(const rd_scene *s)
+{
+    return s->meshes == NULL && s->mesh_count == 0 && s->materials == NULL &&
+           s->material_count == 0 && s->nodes == NULL && s->warnings == NULL &&
+           s->warning_count == 0 && s->textures == NULL;
+}
+
+int has_warning(const rd_scene *s, const char *needle)
+{
+    for (uint32_t i = 0; i < s->warning_count; i++)
+        if (strstr(s->warnings[i], needle)) return 1;
+    return 0;
+}
+
+/* Expects failure with `code` and a message containing `needle`; the scene must be empty. */
+void expect_error(const char *json, rd_gltf_result code, const char *needle, int line)
+{
+    rd_scene s;
+    rd_gltf_result r = load_text(json, &s);
+    CHECKF(r == code, "line %d: got %s (%s), wanted %s", line, rd_gltf_strerror(r), gltf_err,
+           rd_gltf_strerror(code));
+    CHECKF(strstr(gltf_err, needle) != NULL, "line %d: message '%s' lacks '%s'", line, gltf_err,
+           needle);
+    CHECKF(scene_is_empty(&s), "line %d: scene not empty after an error", line);
+    rd_scene_destroy(&s);
+}
