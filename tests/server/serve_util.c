@@ -263,7 +263,7 @@ double pc_frame_diff(const pc_frame *a, const pc_frame *b)
 
 /* ---- test scenes ---------------------------------------------------------------------------- */
 
-static size_t scene_bin(uint8_t *bin)
+size_t pc_scene_bin(uint8_t *bin)
 {
     const float floor_pos[12] = {-2, 0, -2, -2, 0, 2, 2, 0, 2, 2, 0, -2};
     const uint16_t floor_idx[6] = {0, 1, 2, 0, 2, 3};
@@ -330,7 +330,7 @@ uint8_t *pc_make_glb(float box_x, size_t *size)
     char *json = scene_json(box_x, NULL);
     size_t jl = strlen(json), jpad = (jl + 3) & ~(size_t)3;
     uint8_t bin[256];
-    size_t bl = scene_bin(bin), bpad = (bl + 3) & ~(size_t)3;
+    size_t bl = pc_scene_bin(bin), bpad = (bl + 3) & ~(size_t)3;
     size_t total = 12 + 8 + jpad + 8 + bpad;
     uint8_t *g = calloc(1, total);
     if (!g) abort();
@@ -353,7 +353,7 @@ char *pc_make_gltf(float box_x)
 {
     static const char b64[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     uint8_t bin[256];
-    size_t bl = scene_bin(bin);
+    size_t bl = pc_scene_bin(bin);
     char uri[512] = "data:application/octet-stream;base64,";
     size_t o = strlen(uri);
     for (size_t i = 0; i < bl; i += 3) {

@@ -58,6 +58,9 @@ void pc_frame_free(pc_frame *f);
 /* Mean absolute difference of two same-sized frames, 0..255. */
 double pc_frame_diff(const pc_frame *a, const pc_frame *b);
 
+/* The test scene's buffer: floor positions (0, 48 bytes) and u16 indices (48, 12), box
+ * positions (60, 96) and u16 indices (156, 72); returns its 228 bytes (bin needs that room). */
+size_t pc_scene_bin(uint8_t *bin);
 /* A small .glb: a 4 x 4 m grey floor, a red unit box (node 1) at box_x, 0.5, 0, a point light
  * (node 2) of 20 cd at (0, 2.5, 1) and a camera at (0, 1.5, 5). Caller frees. */
 uint8_t *pc_make_glb(float box_x, size_t *size);

@@ -23,22 +23,9 @@ static pc_daemon d = {.token = "s3cret"};
 static void write_scene(const char *path)
 {
     uint8_t bin[512];
-    const float floor_pos[12] = {-2, 0, -2, -2, 0, 2, 2, 0, 2, 2, 0, -2};
-    const uint16_t floor_idx[6] = {0, 1, 2, 0, 2, 3};
-    float box_pos[24];
-    for (int i = 0; i < 8; i++) {
-        box_pos[i * 3 + 0] = (i & 1) ? 0.5f : -0.5f;
-        box_pos[i * 3 + 1] = (i & 2) ? 0.5f : -0.5f;
-        box_pos[i * 3 + 2] = (i & 4) ? 0.5f : -0.5f;
-    }
-    const uint16_t box_idx[36] = {0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5, 0, 1, 5, 0, 5, 4,
-                                  2, 6, 7, 2, 7, 3, 0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6};
     const float times[2] = {0, (float)DURATION};
     const float moves[6] = {(float)X0, 0.5f, 0, (float)(X0 + DURATION), 0.5f, 0};
-    memcpy(bin, floor_pos, 48);
-    memcpy(bin + 48, floor_idx, 12);
-    memcpy(bin + 60, box_pos, 96);
-    memcpy(bin + 156, box_idx, 72);
+    CHECK(pc_scene_bin(bin) == 228); /* the floor and the box of the other serve tests */
     memcpy(bin + 228, times, 8);
     memcpy(bin + 236, moves, 24);
     char *b64 = test_base64(bin, 260);
