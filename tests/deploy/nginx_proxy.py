@@ -8,7 +8,6 @@ usage: nginx_proxy.py PATH/TO/probecast SOURCE_DIR"""
 import http.client
 import json
 import os
-import re
 import shutil
 import socket
 import ssl
@@ -17,15 +16,9 @@ import sys
 import tempfile
 import time
 
-failures = 0
-
-
-def check(cond, what):
-    global failures
-    if not cond:
-        failures += 1
-        print("CHECK failed:", what, file=sys.stderr)
-    return cond
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import deploy_util  # noqa: E402
+from deploy_util import WsClient, check, upgrade_request  # noqa: E402
 
 
 def free_port():
@@ -40,10 +33,7 @@ exe, src = sys.argv[1], sys.argv[2]
 nginx = shutil.which("nginx") or "/usr/sbin/nginx"
 tmp = tempfile.mkdtemp(prefix="probecast-nginx-")
 name = "render.test"
-cert, key = os.path.join(tmp, "cert.pem"), os.path.join(tmp, "key.pem")
-subprocess.run(["openssl", "req", "-x509", "-newkey", "rsa:2048", "-nodes", "-days", "2",
-                "-subj", "/CN=" + name, "-addext", "subjectAltName=DNS:" + name,
-                "-keyout", key, "-out", cert], check=True, capture_output=True)
+cert, key = deploy_util.make_cert(tmp, "server", name, "DNS:" + name)
 
 api_port, ws_port, tls_port = free_port(), free_port(), free_port()
 daemon = subprocess.Popen(
@@ -119,31 +109,15 @@ http {{
     # the stream on the same origin, through the proxy's WebSocket upgrade
     s = ctx.wrap_socket(socket.create_connection(("127.0.0.1", tls_port), timeout=60),
                         server_hostname=name)
-    s.sendall((f"GET /v1/stream HTTP/1.1\r\nHost: {name}\r\nOrigin: https://{name}\r\n"
-               "Upgrade: websocket\r\nConnection: Upgrade\r\n"
-               "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n"
-               "Sec-WebSocket-Protocol: probecast.v2\r\n\r\n").encode())
-    buf = b""
-    while b"\r\n\r\n" not in buf:
-        chunk = s.recv(4096)
-        if not chunk:
-            break
-        buf += chunk
-    head, _, rest = buf.partition(b"\r\n\r\n")
-    check(head.startswith(b"HTTP/1.1 101"), "WebSocket upgrade through the proxy: " +
-          head.split(b"\r\n")[0].decode(errors="replace"))
-    # the first message is the welcome (a text frame with a small payload)
-    while len(rest) < 2:
-        rest += s.recv(4096)
-    opcode, length = rest[0] & 0x0F, rest[1] & 0x7F
-    hdr = 2
-    if length == 126:
-        while len(rest) < 4:
-            rest += s.recv(4096)
-        length, hdr = int.from_bytes(rest[2:4], "big"), 4
-    while len(rest) < hdr + length:
-        rest += s.recv(4096)
-    msg = json.loads(rest[hdr:hdr + length]) if opcode == 1 else {}
+    ws = WsClient(s)
+    status_line, _ = ws.handshake(upgrade_request(name, f"https://{name}"))
+    check(status_line.startswith("HTTP/1.1 101"), "WebSocket upgrade through the proxy: " + status_line)
+    # the first message is the welcome (a text frame)
+    try:
+        opcode, payload = ws.next_message()
+        msg = json.loads(payload) if opcode == 1 else {}
+    except (EOFError, OSError, ValueError) as e:
+        opcode, msg = None, {"error": str(e)}
     check(msg.get("type") == "welcome" and msg.get("protocol") == 2,
           f"welcome over wss: opcode {opcode}, {msg}")
     s.close()
@@ -155,5 +129,5 @@ finally:
     rc = daemon.wait(timeout=30)
     check(rc == 0, f"daemon clean exit, status {rc}")
     shutil.rmtree(tmp, ignore_errors=True)
-print(f"nginx_proxy: {failures} failed")
-sys.exit(1 if failures else 0)
+print(f"nginx_proxy: {deploy_util.failures} failed")
+sys.exit(1 if deploy_util.failures else 0)

@@ -7,8 +7,6 @@ another certificate each stop the daemon at start with status 2 and a sentence n
 SIGTERM stops it cleanly (status 0).
 
 usage: tls_direct.py PATH/TO/probecast SOURCE_DIR"""
-import base64
-import hashlib
 import http.client
 import json
 import os
@@ -21,23 +19,13 @@ import subprocess
 import sys
 import tempfile
 
-failures = 0
-
-
-def check(cond, what):
-    global failures
-    if not cond:
-        failures += 1
-        print("CHECK failed:", what, file=sys.stderr)
-    return cond
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import deploy_util  # noqa: E402
+from deploy_util import WsClient, check, upgrade_request  # noqa: E402
 
 
 def make_cert(tmp, name):
-    cert, key = os.path.join(tmp, name + "-cert.pem"), os.path.join(tmp, name + "-key.pem")
-    subprocess.run(["openssl", "req", "-x509", "-newkey", "rsa:2048", "-nodes", "-days", "2",
-                    "-subj", "/CN=localhost", "-addext", "subjectAltName=DNS:localhost,IP:127.0.0.1",
-                    "-keyout", key, "-out", cert], check=True, capture_output=True)
-    return cert, key
+    return deploy_util.make_cert(tmp, name, "localhost", "DNS:localhost,IP:127.0.0.1")
 
 
 exe, src = sys.argv[1], sys.argv[2]
@@ -123,10 +111,7 @@ try:
     check(status == 200, f"a change from the page's https:// origin: {status} {body[:200]}")
 
     # plain ws:// to the stream port gets no upgrade
-    upgrade = (f"GET /v1/stream HTTP/1.1\r\nHost: 127.0.0.1:{ws_port}\r\n"
-               f"Origin: https://127.0.0.1:{api_port}\r\nUpgrade: websocket\r\n"
-               "Connection: Upgrade\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n"
-               "Sec-WebSocket-Version: 13\r\nSec-WebSocket-Protocol: probecast.v2\r\n\r\n").encode()
+    upgrade = upgrade_request(f"127.0.0.1:{ws_port}", f"https://127.0.0.1:{api_port}")
     answer = b""
     try:
         s = socket.create_connection(("127.0.0.1", ws_port), timeout=20)
@@ -140,66 +125,22 @@ try:
     # wss:// with subprotocol probecast.v2: 101, a welcome text message, then a binary frame
     s = ctx.wrap_socket(socket.create_connection(("127.0.0.1", ws_port), timeout=120),
                         server_hostname="127.0.0.1")
-    s.sendall(upgrade)
-    buf = b""
-    while b"\r\n\r\n" not in buf:
-        chunk = s.recv(4096)
-        if not chunk:
-            break
-        buf += chunk
-    head, _, buf = buf.partition(b"\r\n\r\n")
-    lines = head.decode(errors="replace").split("\r\n")
-    hdrs = {k.strip().lower(): v.strip() for k, _, v in (x.partition(":") for x in lines[1:])}
-    check(lines[0].startswith("HTTP/1.1 101"), f"WebSocket upgrade over TLS: {lines[0]}")
+    ws = WsClient(s)
+    status_line, hdrs = ws.handshake(upgrade)
+    check(status_line.startswith("HTTP/1.1 101"), f"WebSocket upgrade over TLS: {status_line}")
     check(hdrs.get("sec-websocket-protocol") == "probecast.v2",
           f"subprotocol probecast.v2 chosen: {hdrs.get('sec-websocket-protocol')}")
-    accept = base64.b64encode(hashlib.sha1(
-        b"dGhlIHNhbXBsZSBub25jZQ==258EAFA5-E914-47DA-95CA-C5AB0DC85B11").digest()).decode()
-    check(hdrs.get("sec-websocket-accept") == accept, "Sec-WebSocket-Accept")
-
-    def need(n):
-        global buf
-        while len(buf) < n:
-            chunk = s.recv(65536)
-            if not chunk:
-                raise EOFError("the stream closed")
-            buf += chunk
-
-    def next_message():
-        """(opcode, payload) of the next whole message (fragments joined; control frames
-        skipped)."""
-        global buf
-        opcode, payload = None, b""
-        while True:
-            need(2)
-            op, fin, length, hdr = buf[0] & 0x0F, buf[0] & 0x80, buf[1] & 0x7F, 2
-            if length == 126:
-                need(4)
-                length, hdr = struct.unpack(">H", buf[2:4])[0], 4
-            elif length == 127:
-                need(10)
-                length, hdr = struct.unpack(">Q", buf[2:10])[0], 10
-            need(hdr + length)
-            data, buf = buf[hdr:hdr + length], buf[hdr + length:]
-            if op >= 8:
-                if op == 8:
-                    raise EOFError(f"closed by the server: {data[2:]!r}")
-                continue
-            if op != 0:
-                opcode = op
-            payload += data
-            if fin:
-                return opcode, payload
+    check(hdrs.get("sec-websocket-accept") == WsClient.expected_accept(), "Sec-WebSocket-Accept")
 
     welcome = {}
     try:
-        op, data = next_message()
+        op, data = ws.next_message()
         welcome = json.loads(data) if op == 1 else {}
         check(welcome.get("type") == "welcome" and welcome.get("protocol") == 2,
               f"welcome over wss: opcode {op}, {data[:200]!r}")
         frame = None
         for _ in range(100):  # events may come first
-            op, data = next_message()
+            op, data = ws.next_message()
             if op == 2:
                 frame = data
                 break
@@ -229,8 +170,8 @@ finally:
     log.close()
     check(rc == 0, f"daemon clean exit after SIGTERM, status {rc}")
     check("stopped cleanly" in err, "the log says it stopped cleanly")
-    if failures:
+    if deploy_util.failures:
         sys.stderr.write(err[-4000:])
     shutil.rmtree(tmp, ignore_errors=True)
-print(f"tls_direct: {failures} failed")
-sys.exit(1 if failures else 0)
+print(f"tls_direct: {deploy_util.failures} failed")
+sys.exit(1 if deploy_util.failures else 0)
