@@ -41,7 +41,8 @@ static void serve_usage(FILE *f)
         "  --scene FILE|builtin:NAME  scene at start-up (default: the demo, builtin:cornell,\n"
         "                         whose light circles slowly while someone watches)\n"
         "  --http ADDR:PORT       HTTP API and viewer (default 127.0.0.1:8080; port 0 = any)\n"
-        "  --ws ADDR:PORT         WebSocket frame stream (default 127.0.0.1:8081)\n"
+        "  --ws ADDR:PORT         also serve the WebSocket frame stream on a port of its own\n"
+        "                         (default: none; it is always at /v1/stream of --http)\n"
         "  --token T              require 'Authorization: Bearer T' for changes, frames and the\n"
         "                         stream (default: $PROBECAST_TOKEN; needed off loopback)\n"
         "  --tls-cert FILE        serve the API over https:// and the stream over wss:// only,\n"
@@ -77,7 +78,7 @@ static void serve_usage(FILE *f)
 typedef struct serve_args {
     const char *scene, *http, *ws, *token, *data_dir, *web_dir, *device;
     const char *tls_cert, *tls_key; /* both or neither */
-    char public_names[1024]; /* --public-name values, comma-separated */
+    char public_names[1024];        /* --public-name values, comma-separated */
     size_t max_upload;
     unsigned max_viewers, max_per_ip, http_connections, encoders, max_views, max_total_pixels;
     srv_settings settings;
@@ -154,7 +155,7 @@ static int parse(int argc, char **argv, serve_args *a)
 {
     memset(a, 0, sizeof *a);
     a->http = "127.0.0.1:8080";
-    a->ws = "127.0.0.1:8081";
+    a->ws = NULL; /* the stream is at /v1/stream of --http's address; --ws adds a port */
     a->animate = -1;
     srv_settings_defaults(&a->settings);
     srv_settings *s = &a->settings;
@@ -313,12 +314,12 @@ int cli_serve(int argc, char **argv)
             }
         }
     }
-    char http_host[64], ws_host[64];
-    unsigned http_port, ws_port;
+    char http_host[64], ws_host[64] = "";
+    unsigned http_port, ws_port = 0;
     if (!parse_addr("--http", a.http, http_host, sizeof http_host, &http_port) ||
-        !parse_addr("--ws", a.ws, ws_host, sizeof ws_host, &ws_port))
+        (a.ws && !parse_addr("--ws", a.ws, ws_host, sizeof ws_host, &ws_port)))
         return 2;
-    if ((!is_loopback(http_host) || !is_loopback(ws_host)) && !a.token)
+    if ((!is_loopback(http_host) || (a.ws && !is_loopback(ws_host))) && !a.token)
         srv_warn("serve",
                  "listening beyond loopback without --token: anyone who reaches this host can "
                  "change the scene and watch the stream");
@@ -427,7 +428,7 @@ int cli_serve(int argc, char **argv)
         goto out;
     }
     srv_ws_config ws_cfg = {
-        .address = ws_host,
+        .address = a.ws ? ws_host : NULL,
         .port = ws_port,
         .token = a.token,
         .public_names = a.public_names,
@@ -453,6 +454,8 @@ int cli_serve(int argc, char **argv)
         .public_names = a.public_names,
         .max_upload = a.max_upload,
         .max_connections = a.http_connections,
+        .stream_viewers = a.max_viewers ? a.max_viewers : 100,
+        .stream_per_ip = a.max_per_ip ? a.max_per_ip : 64,
         .web_dir = a.web_dir ? a.web_dir : find_resource("web", web_buf, sizeof web_buf),
         .openapi_path = find_resource("protocol/openapi.yaml", api_buf, sizeof api_buf),
         .tls_cert_pem = tls.cert_pem,
@@ -476,17 +479,21 @@ int cli_serve(int argc, char **argv)
         goto out;
     }
     const char *hb = strchr(http_host, ':') ? "[" : "", *he = strchr(http_host, ':') ? "]" : "";
-    const char *wb = strchr(ws_host, ':') ? "[" : "", *we = strchr(ws_host, ':') ? "]" : "";
+    /* the stream's address: --ws's port when given, else the API's own (/v1/stream there) */
+    const char *stream_host = a.ws ? ws_host : http_host;
+    unsigned stream_port = a.ws ? srv_ws_port(ws) : srv_http_port(http);
+    const char *wb = strchr(stream_host, ':') ? "[" : "", *we = strchr(stream_host, ':') ? "]" : "";
     /* https=/wss= instead of http=/ws= with --tls-cert: nothing answers plain requests then */
     const char *hs = use_tls ? "https" : "http", *ss = use_tls ? "wss" : "ws";
     printf("probecast serving %s=%s%s%s:%u %s=%s%s%s:%u\n", hs, hb, http_host, he,
-           srv_http_port(http), ss, wb, ws_host, we, srv_ws_port(ws));
+           srv_http_port(http), ss, wb, stream_host, we, stream_port);
     printf("open %s://%s%s%s:%u/%s in a browser (stream: %s://%s%s%s:%u/v1/stream)\n", hs, hb,
            strcmp(http_host, "0.0.0.0") == 0 ? "127.0.0.1" : http_host, he, srv_http_port(http),
-           a.token ? "?token=..." : "", ss, wb, ws_host, we, srv_ws_port(ws));
+           a.token ? "?token=..." : "", ss, wb, stream_host, we, stream_port);
     fflush(stdout);
-    srv_info("serve", "serving %s on %s %s:%u, stream %s%s:%u", source, hs, http_host,
-             srv_http_port(http), use_tls ? "wss " : "", ws_host, srv_ws_port(ws));
+    srv_info("serve", "serving %s on %s %s:%u, stream %s%s:%u/v1/stream%s", source, hs, http_host,
+             srv_http_port(http), use_tls ? "wss " : "", stream_host, stream_port,
+             a.ws ? " and on the API's address" : "");
 
     int sig = 0;
     sigwait(&sigs, &sig);

@@ -44,6 +44,7 @@ static const unsigned route_methods[R_COUNT] = {
     [R_VIEWS] = M_GET | M_HEAD,
     [R_VIEW_CAMERA] = M_GET | M_HEAD | M_PUT | M_PATCH,
     [R_ANIMATION] = M_GET | M_HEAD | M_PATCH,
+    [R_STREAM] = M_GET,
     [R_UNKNOWN] = 0,
 };
 
@@ -173,11 +174,11 @@ static route match(const char *url, uint32_t *id, bool *id_ok)
     static const struct {
         const char *path;
         route r;
-    } fixed[] = {{"/v1/health", R_HEALTH},        {"/v1/stats", R_STATS},
-                 {"/v1/openapi.yaml", R_OPENAPI}, {"/v1/scene", R_SCENE},
-                 {"/v1/camera", R_CAMERA},        {"/v1/lights", R_LIGHTS},
-                 {"/v1/settings", R_SETTINGS},    {"/v1/frame.jpg", R_FRAME},
-                 {"/v1/views", R_VIEWS},          {"/v1/animation", R_ANIMATION}};
+    } fixed[] = {
+        {"/v1/health", R_HEALTH},       {"/v1/stats", R_STATS},     {"/v1/openapi.yaml", R_OPENAPI},
+        {"/v1/scene", R_SCENE},         {"/v1/camera", R_CAMERA},   {"/v1/lights", R_LIGHTS},
+        {"/v1/settings", R_SETTINGS},   {"/v1/frame.jpg", R_FRAME}, {"/v1/views", R_VIEWS},
+        {"/v1/animation", R_ANIMATION}, {"/v1/stream", R_STREAM}};
     for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; i++)
         if (strcmp(url, fixed[i].path) == 0) return fixed[i].r;
     if (strncmp(url, "/v1/lights/", 11) == 0) {
@@ -344,6 +345,8 @@ static enum MHD_Result dispatch(srv_http *h, struct MHD_Connection *conn, reques
     }
     case R_FRAME:
         return srv_http_handle_frame(h, conn, rq);
+    case R_STREAM:
+        return srv_http_handle_stream(h, conn, rq);
     case R_SCENE:
         if (rq->method == M_PUT) return srv_http_handle_upload(h, conn, rq);
         return srv_http_handle_json_route(h, conn, rq);
@@ -375,6 +378,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
         rq = calloc(1, sizeof *rq);
         if (!rq) abort();
         *con_cls = rq;
+        rq->stream_fd = -1;
         rq->start_ms = srv_mono_ms();
         rq->method = method_bit(method);
         rq->route = match(url, &rq->id, &rq->id_ok);
@@ -429,6 +433,7 @@ static void on_completed(void *cls, struct MHD_Connection *conn, void **con_cls,
     request *rq = *con_cls;
     if (!rq) return;
     if (rq->is_upload) atomic_fetch_sub(&h->uploads_in_progress, 1);
+    if (rq->stream_fd >= 0) close(rq->stream_fd); /* the upgrade never happened */
     free(rq->data);
     free(rq);
     *con_cls = NULL;
@@ -489,13 +494,19 @@ srv_http *srv_http_start(const srv_http_config *cfg, char *err, size_t errlen)
     snprintf(h->token, sizeof h->token, "%s", cfg->token ? cfg->token : "");
     h->start_ms = srv_mono_ms();
     pthread_mutex_init(&h->counters_mu, NULL);
+    h->relay_wake = -1;
+    if (!srv_http_stream_init(h)) {
+        snprintf(err, errlen, "cannot create an eventfd");
+        srv_http_stop(h);
+        return NULL;
+    }
     if (cfg->web_dir && realpath(cfg->web_dir, h->web_dir)) h->have_web_dir = true;
     load_openapi(h, cfg->openapi_path);
 
     struct sockaddr_storage ss;
     memset(&ss, 0, sizeof ss);
     unsigned flags = MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_THREAD_PER_CONNECTION |
-                     MHD_USE_POLL | MHD_USE_ERROR_LOG | MHD_USE_ITC;
+                     MHD_USE_POLL | MHD_USE_ERROR_LOG | MHD_USE_ITC | MHD_ALLOW_UPGRADE;
     struct sockaddr_in *a4 = (struct sockaddr_in *)&ss;
     struct sockaddr_in6 *a6 = (struct sockaddr_in6 *)&ss;
     if (inet_pton(AF_INET, cfg->address, &a4->sin_addr) == 1) {
@@ -533,14 +544,15 @@ srv_http *srv_http_start(const srv_http_config *cfg, char *err, size_t errlen)
     char mhd_said[256] = "";
     start_message = mhd_said;
     start_message_len = sizeof mhd_said;
-    h->daemon =
-        MHD_start_daemon(flags, (uint16_t)cfg->port, NULL, NULL, on_request, h,
-                         MHD_OPTION_EXTERNAL_LOGGER, mhd_log, NULL, /* first, as MHD asks */
-                         MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&ss, MHD_OPTION_CONNECTION_LIMIT,
-                         (unsigned int)h->cfg.max_connections, MHD_OPTION_PER_IP_CONNECTION_LIMIT,
-                         (unsigned int)h->cfg.max_per_ip, MHD_OPTION_CONNECTION_TIMEOUT,
-                         (unsigned int)h->cfg.timeout_s, MHD_OPTION_NOTIFY_COMPLETED, on_completed,
-                         h, MHD_OPTION_ARRAY, tls ? tls_options : tls_end, MHD_OPTION_END);
+    h->daemon = MHD_start_daemon(
+        flags, (uint16_t)cfg->port, NULL, NULL, on_request, h, MHD_OPTION_EXTERNAL_LOGGER, mhd_log,
+        NULL, /* first, as MHD asks */
+        MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&ss, MHD_OPTION_CONNECTION_LIMIT,
+        (unsigned int)(h->cfg.max_connections + h->cfg.stream_viewers),
+        MHD_OPTION_PER_IP_CONNECTION_LIMIT,
+        (unsigned int)(h->cfg.max_per_ip + h->cfg.stream_per_ip), MHD_OPTION_CONNECTION_TIMEOUT,
+        (unsigned int)h->cfg.timeout_s, MHD_OPTION_NOTIFY_COMPLETED, on_completed, h,
+        MHD_OPTION_ARRAY, tls ? tls_options : tls_end, MHD_OPTION_END);
     start_message = NULL;
     if (!h->daemon) {
         size_t n = strlen(mhd_said);
@@ -576,8 +588,10 @@ void srv_http_quiesce(srv_http *h)
 void srv_http_stop(srv_http *h)
 {
     if (!h) return;
+    srv_http_stream_stop(h); /* MHD waits for upgraded connections */
     if (h->daemon) MHD_stop_daemon(h->daemon);
     h->daemon = NULL;
+    srv_http_stream_destroy(h);
     free(h->openapi);
     pthread_mutex_destroy(&h->counters_mu);
     free(h);

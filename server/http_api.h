@@ -4,9 +4,10 @@
  * GET routes answer from the published snapshot (snapshot.h) without waiting for the render
  * thread. For a change, a connection's thread parses and validates the request (JSON bodies;
  * glTF uploads, whose BVHs it builds too), posts a command to the render thread and waits for its
- * reply, so nothing here touches the scene or the GPU. Limits are applied before a body is read: the token (401), the media type (415) and
- * Content-Length against the upload cap (413); bodies without a length are counted as they
- * arrive. Every error answers {"error": code, "message": sentence}.
+ * reply, so nothing here touches the scene or the GPU. Limits are applied before a body is read:
+ * the token (401), the media type (415) and Content-Length against the upload cap (413); bodies
+ * without a length are counted as they arrive. Every error answers {"error": code, "message":
+ * sentence}.
  */
 #ifndef SRV_HTTP_API_H
 #define SRV_HTTP_API_H
@@ -28,6 +29,9 @@ typedef struct srv_http_config {
     unsigned max_connections; /* 0 = 64 */
     unsigned max_per_ip;      /* 0 = 16 */
     unsigned timeout_s;       /* idle connection timeout (0 = 30) */
+    /* viewers of /v1/stream on this address, on top of the connection limits above (the
+     * stream applies its own viewer limits as well) */
+    unsigned stream_viewers, stream_per_ip;
     const char *web_dir;      /* viewer files, may be NULL */
     const char *openapi_path; /* protocol/openapi.yaml, may be NULL */
     /* both or neither: HTTPS only, with this certificate (chain) and key as PEM text, which must
@@ -37,7 +41,7 @@ typedef struct srv_http_config {
     srv_encoder_pool *encoders;
     srv_ws_stream *ws;
     srv_snapshot *snapshot; /* GET routes answer from it */
-    srv_persist *persist; /* may be NULL */
+    srv_persist *persist;   /* may be NULL */
 } srv_http_config;
 
 typedef struct srv_http srv_http;

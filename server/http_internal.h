@@ -30,6 +30,7 @@ typedef enum route {
     R_VIEWS,
     R_VIEW_CAMERA,
     R_ANIMATION,
+    R_STREAM,  /* GET /v1/stream: the WebSocket, handed to the stream (http_stream.c) */
     R_UNKNOWN, /* under /v1/ but no such resource */
     R_COUNT
 } route;
@@ -49,6 +50,12 @@ struct srv_http {
     atomic_uint uploads_in_progress;
     pthread_mutex_t counters_mu;
     srv_http_counters counters;
+    /* relays of /v1/stream connections (http_stream.c) */
+    pthread_mutex_t relay_mu;
+    pthread_cond_t relay_done;
+    int relay_wake; /* eventfd: readable when the relays must stop; -1 before init */
+    unsigned relays;
+    bool relays_stopping;
 };
 
 typedef struct request {
@@ -64,6 +71,7 @@ typedef struct request {
     bool responded; /* a response was queued before the body was read */
     bool is_upload; /* counted in uploads_in_progress */
     int status;     /* of the response queued */
+    int stream_fd;  /* R_STREAM: our end of the pair until the relay takes it; else -1 */
     double start_ms;
 } request;
 
@@ -89,6 +97,11 @@ enum MHD_Result srv_http_handle_health(srv_http *h, struct MHD_Connection *conn,
 enum MHD_Result srv_http_handle_frame(srv_http *h, struct MHD_Connection *conn, request *rq);
 enum MHD_Result srv_http_handle_upload(srv_http *h, struct MHD_Connection *conn, request *rq);
 enum MHD_Result srv_http_handle_json_route(srv_http *h, struct MHD_Connection *conn, request *rq);
+/* ---- GET /v1/stream (http_stream.c) ---- */
+enum MHD_Result srv_http_handle_stream(srv_http *h, struct MHD_Connection *conn, request *rq);
+bool srv_http_stream_init(srv_http *h);    /* false: no eventfd */
+void srv_http_stream_stop(srv_http *h);    /* ends the relays and waits for them */
+void srv_http_stream_destroy(srv_http *h); /* after MHD stopped */
 enum MHD_Result srv_http_handle_static(srv_http *h, struct MHD_Connection *conn, request *rq,
                                        const char *url);
 

@@ -62,15 +62,17 @@ enum MHD_Result srv_http_handle_health(srv_http *h, struct MHD_Connection *conn,
     cJSON_AddNumberToObject(j, "uptime_s", floor(srv_mono_ms() - h->start_ms) / 1000.0);
     cJSON_AddStringToObject(j, "auth", h->token[0] ? "bearer" : "none");
     cJSON *st = cJSON_AddObjectToObject(j, "stream");
-    cJSON_AddNumberToObject(st, "port", h->cfg.ws ? srv_ws_port(h->cfg.ws) : 0);
+    /* /v1/stream answers on this API's own address; "port" names --ws's port when there is one
+     * (the same stream, without the relay through the API) */
+    unsigned ws_port = h->cfg.ws ? srv_ws_port(h->cfg.ws) : 0;
+    cJSON_AddNumberToObject(st, "port", ws_port ? ws_port : h->port);
+    cJSON_AddBoolToObject(st, "same_origin", true);
     cJSON_AddStringToObject(st, "path", "/v1/stream");
     cJSON_AddStringToObject(st, "subprotocol", "probecast.v2");
     /* --tls-cert: the stream is wss:// only (and this API https:// only) */
     bool tls = h->cfg.tls_cert_pem != NULL;
     cJSON_AddStringToObject(st, "scheme", tls ? "wss" : "ws");
     cJSON_AddBoolToObject(st, "tls", tls);
-    /* a page served on another port than this one came through a proxy: it should reach the
-     * stream at /v1/stream of its own origin (the proxy routes it) */
     cJSON_AddNumberToObject(st, "http_port", h->port);
     if (rs.device_lost) cJSON_AddStringToObject(j, "error", rs.last_error);
     return srv_http_respond_json(h, conn, rq, rs.device_lost ? 503 : 200, j);

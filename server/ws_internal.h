@@ -68,11 +68,21 @@ typedef struct viewer {
     char close_reason[64];
 } viewer;
 
+/* A connection the HTTP API handed over (srv_ws_adopt), until the service thread takes it. */
+typedef struct srv_ws_adoption {
+    char ip[64]; /* first: the adopted wsi's opaque user data points here */
+    int fd;
+    struct srv_ws_adoption *next;
+} srv_ws_adoption;
+
 struct srv_ws_stream {
     srv_ws_config cfg;
     char token[256], http_host[256];
     struct lws_context *ctx;
-    struct lws_vhost *vhost;
+    struct lws_vhost *vhost;  /* --ws's listening socket; NULL without one */
+    struct lws_vhost *bridge; /* no socket of its own: connections from the HTTP API */
+    pthread_mutex_t adopt_mu;
+    srv_ws_adoption *adopt_head;
     struct lws_protocols protocols[3];
     lws_retry_bo_t retry;
     lws_sorted_usec_list_t tick;

@@ -8,10 +8,51 @@
 #include <string.h>
 #include <strings.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "access.h"
 #include "clock.h"
 #include "log.h"
+
+/* The client's address: for a connection handed over by the HTTP API (srv_ws_adopt), the one
+ * it was accepted from there (this socket's peer is the API's end of a socket pair). */
+static void peer_ip(struct lws *wsi, char *ip, size_t n)
+{
+    const char *adopted = lws_get_opaque_user_data(wsi);
+    if (adopted)
+        snprintf(ip, n, "%s", adopted);
+    else
+        lws_get_peer_simple(wsi, ip, n);
+}
+
+/* Takes the connections srv_ws_adopt queued onto the bridge vhost (service thread). */
+static void adopt_pending(srv_ws_stream *ws)
+{
+    pthread_mutex_lock(&ws->adopt_mu);
+    srv_ws_adoption *a = ws->adopt_head;
+    ws->adopt_head = NULL;
+    pthread_mutex_unlock(&ws->adopt_mu);
+    while (a) {
+        srv_ws_adoption *next = a->next;
+        if (atomic_load(&ws->stopping)) {
+            close(a->fd);
+            free(a);
+        } else {
+            /* plain HTTP on the pair whatever the listening vhost's TLS: the API did the TLS */
+            lws_adopt_desc_t d = {.vh = ws->bridge,
+                                  .type = LWS_ADOPT_SOCKET | LWS_ADOPT_HTTP,
+                                  .fd = {.sockfd = a->fd},
+                                  .opaque = a->ip};
+            /* the wsi owns a (its ip string) from here; freed at LWS_CALLBACK_WSI_DESTROY.
+             * On failure lws has closed the socket. */
+            if (!lws_adopt_descriptor_vhost_via_info(&d)) {
+                srv_warn("stream", "could not take over a connection from %s", a->ip);
+                free(a);
+            }
+        }
+        a = next;
+    }
+}
 
 /* Token from "Authorization: Bearer T", "?token=T" or a "bearer.T" subprotocol entry. */
 static bool token_ok(srv_ws_stream *ws, struct lws *wsi)
@@ -89,7 +130,7 @@ static const char *handshake_refusal(srv_ws_stream *ws, struct lws *wsi)
                    "share the default view";
     }
     char ip[64] = "";
-    lws_get_peer_simple(wsi, ip, sizeof ip);
+    peer_ip(wsi, ip, sizeof ip);
     unsigned same = 0;
     for (viewer *v = ws->viewers; v; v = v->next)
         same += strcmp(v->ip, ip) == 0;
@@ -261,7 +302,7 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
         const char *why = handshake_refusal(ws, wsi);
         if (!why) return 0;
         char ip[64] = "";
-        lws_get_peer_simple(wsi, ip, sizeof ip);
+        peer_ip(wsi, ip, sizeof ip);
         srv_info("stream", "refused a viewer from %s: %s", ip, why);
         pthread_mutex_lock(&ws->stats_mu);
         ws->stats.connections_rejected++;
@@ -277,7 +318,7 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
         v->wsi = wsi;
         v->id = ++ws->next_viewer_id;
         v->cap = 100;
-        lws_get_peer_simple(wsi, v->ip, sizeof v->ip);
+        peer_ip(wsi, v->ip, sizeof v->ip);
         v->version = offers_v2(wsi) ? 2 : 1;
         if (v->version == 2) {
             /* its own view, opened by the render thread; it watches it from the start */
@@ -382,7 +423,16 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
         }
         return send_some(ws, v);
 
+    case LWS_CALLBACK_WSI_DESTROY: {
+        /* an adopted connection's record (ip is its first member) */
+        srv_ws_adoption *a = lws_get_opaque_user_data(wsi);
+        lws_set_opaque_user_data(wsi, NULL);
+        free(a);
+        return 0;
+    }
+
     case LWS_CALLBACK_EVENT_WAIT_CANCELLED:
+        adopt_pending(ws);
         if (atomic_load(&ws->stopping)) {
             for (viewer *x = ws->viewers; x; x = x->next)
                 srv_ws_close_viewer(x, LWS_CLOSE_STATUS_GOINGAWAY, "server stopping");
@@ -458,6 +508,7 @@ srv_ws_stream *srv_ws_create(const srv_ws_config *cfg, char *err, size_t errlen)
     snprintf(ws->http_host, sizeof ws->http_host, "%s",
              cfg->http_host ? cfg->http_host : "127.0.0.1");
     pthread_mutex_init(&ws->stats_mu, NULL);
+    pthread_mutex_init(&ws->adopt_mu, NULL);
     /* the first is what clients offering no subprotocol get; offers_v2 decides the version */
     ws->protocols[0] = (struct lws_protocols){
         .name = "probecast.v1",
@@ -485,11 +536,22 @@ srv_ws_stream *srv_ws_create(const srv_ws_config *cfg, char *err, size_t errlen)
         srv_ws_destroy(ws);
         return NULL;
     }
+    info.protocols = ws->protocols;
+    info.retry_and_idle_policy = &ws->retry;
+    /* connections the HTTP API hands over (GET /v1/stream on its own address, srv_ws_adopt):
+     * plain HTTP over a socket pair, whatever TLS the API speaks to its client */
+    info.port = CONTEXT_PORT_NO_LISTEN_SERVER;
+    info.vhost_name = "api";
+    ws->bridge = lws_create_vhost(ws->ctx, &info);
+    if (!ws->bridge) {
+        snprintf(err, errlen, "cannot set up the stream's connections from the HTTP API");
+        srv_ws_destroy(ws);
+        return NULL;
+    }
+    if (!cfg->address) return ws; /* no --ws: the stream is reached through the API only */
     info.port = (int)cfg->port;
     info.iface = cfg->address;
-    info.protocols = ws->protocols;
     info.vhost_name = "probecast";
-    info.retry_and_idle_policy = &ws->retry;
     if (tls) {
 #if defined(LWS_WITH_TLS)
         /* wss:// only (no plain connections on this port); the chain is read from the file */
@@ -524,7 +586,22 @@ srv_ws_stream *srv_ws_create(const srv_ws_config *cfg, char *err, size_t errlen)
 
 unsigned srv_ws_port(const srv_ws_stream *ws)
 {
-    return (unsigned)lws_get_vhost_listen_port(ws->vhost);
+    return ws->vhost ? (unsigned)lws_get_vhost_listen_port(ws->vhost) : 0;
+}
+
+bool srv_ws_adopt(srv_ws_stream *ws, int fd, const char *peer_ip)
+{
+    if (atomic_load(&ws->stopping)) return false;
+    srv_ws_adoption *a = calloc(1, sizeof *a);
+    if (!a) abort();
+    a->fd = fd;
+    snprintf(a->ip, sizeof a->ip, "%s", peer_ip ? peer_ip : "");
+    pthread_mutex_lock(&ws->adopt_mu);
+    a->next = ws->adopt_head;
+    ws->adopt_head = a;
+    pthread_mutex_unlock(&ws->adopt_mu);
+    lws_cancel_service(ws->ctx);
+    return true;
 }
 
 void srv_ws_set_http_port(srv_ws_stream *ws, unsigned port)
@@ -553,6 +630,12 @@ void srv_ws_destroy(srv_ws_stream *ws)
     }
     if (ws->ctx) lws_context_destroy(ws->ctx); /* closes what is left (CLOSED frees viewers) */
     ws->ctx = NULL;
+    for (srv_ws_adoption *a = ws->adopt_head, *next; a; a = next) {
+        next = a->next;
+        close(a->fd);
+        free(a);
+    }
+    pthread_mutex_destroy(&ws->adopt_mu);
     pthread_mutex_destroy(&ws->stats_mu);
     free(ws);
 }

@@ -22,9 +22,9 @@
 #include "render_loop.h"
 
 typedef struct srv_ws_config {
-    const char *address;      /* numeric IP to listen on */
-    unsigned port;            /* 0 = any free port */
-    const char *token;        /* NULL or "" = no token required */
+    const char *address; /* numeric IP to listen on; NULL: no port of its own (srv_ws_adopt only) */
+    unsigned port;       /* 0 = any free port */
+    const char *token;   /* NULL or "" = no token required */
     const char *public_names; /* Host names besides loopback and IP literals (comma-separated) */
     const char *http_host;    /* the HTTP API's address, for the Origin check */
     unsigned http_port;
@@ -48,9 +48,14 @@ typedef struct srv_ws_stats {
 
 typedef struct srv_ws_stream srv_ws_stream;
 
-/* Binds the listening socket. NULL with a message on failure. */
+/* Binds the listening socket (when cfg->address is set). NULL with a message on failure. */
 srv_ws_stream *srv_ws_create(const srv_ws_config *cfg, char *err, size_t errlen);
+/* The listening port; 0 without one. */
 unsigned srv_ws_port(const srv_ws_stream *ws);
+/* Hands over a connected socket whose first bytes will be an HTTP upgrade request for
+ * /v1/stream (any thread; the service thread adopts it). peer_ip is the client's address, for the
+ * per-address limit. Takes fd (closed on failure); false when stopping. */
+bool srv_ws_adopt(srv_ws_stream *ws, int fd, const char *peer_ip);
 /* The HTTP API's port for the Origin check, once it is known (before srv_ws_start). */
 void srv_ws_set_http_port(srv_ws_stream *ws, unsigned port);
 bool srv_ws_start(srv_ws_stream *ws);

@@ -13,7 +13,7 @@
  * nothing is asserted. For many large views start the daemon with enough --max-views and
  * --max-total-pixels (50 views of 1920x1080 need 104 M pixels).
  *
- *   probecast_loadtest [--http 127.0.0.1:8080] [--ws 127.0.0.1:8081] [--token T]
+ *   probecast_loadtest [--http 127.0.0.1:8080] [--ws H:P (default: the --http address)] [--token T]
  *                      [--mode own|shared] [--sizes 1280x720,1920x1080] [--viewers 1,10,50]
  *                      [--seconds 10] [--warmup 2] [--csv tests/bench/results/stream_load.csv]
  */
@@ -34,7 +34,8 @@
 #define MAX_SAMPLES 100000
 
 static char http_host[64] = "127.0.0.1", ws_host[64] = "127.0.0.1";
-static unsigned http_port = 8080, ws_port = 8081;
+static unsigned http_port = 8080, ws_port = 0; /* 0: the stream at the --http address */
+static bool ws_given = false;
 static const char *token = NULL;
 static bool own_views = true;
 
@@ -258,7 +259,8 @@ static bool run(unsigned w, unsigned h, unsigned nviewers, double seconds, doubl
     }
     /* every driver's samples together */
     unsigned total = 0;
-    for (unsigned i = 0; i < nviewers; i++) total += v[i].latency_count;
+    for (unsigned i = 0; i < nviewers; i++)
+        total += v[i].latency_count;
     double *all = calloc(total ? total : 1, sizeof *all);
     for (unsigned i = 0; i < nviewers; i++) {
         if (v[i].latency_count)
@@ -299,6 +301,7 @@ int main(int argc, char **argv)
             if (!split_addr(v, http_host, sizeof http_host, &http_port)) return 2;
         } else if (strcmp(o, "--ws") == 0 && ++i) {
             if (!split_addr(v, ws_host, sizeof ws_host, &ws_port)) return 2;
+            ws_given = true;
         } else if (strcmp(o, "--token") == 0 && ++i) {
             token = v;
         } else if (strcmp(o, "--mode") == 0 && ++i) {
@@ -322,13 +325,17 @@ int main(int argc, char **argv)
         } else if (strcmp(o, "--csv") == 0 && ++i) {
             csv = v;
         } else {
-            fprintf(
-                stderr,
-                "usage: probecast_loadtest [--http H:P] [--ws H:P] [--token T] [--mode own|shared]\n"
-                "                          [--sizes WxH,...] [--viewers N,...] [--seconds S]\n"
-                "                          [--warmup S] [--csv FILE]\n");
+            fprintf(stderr,
+                    "usage: probecast_loadtest [--http H:P] [--ws H:P] [--token T] [--mode "
+                    "own|shared]\n"
+                    "                          [--sizes WxH,...] [--viewers N,...] [--seconds S]\n"
+                    "                          [--warmup S] [--csv FILE]\n");
             return strcmp(o, "--help") == 0 ? 0 : 2;
         }
+    }
+    if (!ws_given) {
+        snprintf(ws_host, sizeof ws_host, "%s", http_host);
+        ws_port = http_port;
     }
     if (!token) token = getenv("PROBECAST_TOKEN");
     for (int i = 0; i < nviewers; i++)
@@ -346,15 +353,14 @@ int main(int argc, char **argv)
 
     FILE *f = fopen(csv, "w");
     if (f)
-        fprintf(f,
-                "mode,width,height,viewers,connected,viewer_fps_mean,viewer_fps_min,server_fps,"
-                "latency_p50_ms,latency_p99_ms,latency_max_ms,latency_samples,stream_mbit_s,"
-                "view_gpu_ms,world_gpu_ms,world_ticks_per_s,encode_ms\n");
+        fprintf(f, "mode,width,height,viewers,connected,viewer_fps_mean,viewer_fps_min,server_fps,"
+                   "latency_p50_ms,latency_p99_ms,latency_max_ms,latency_samples,stream_mbit_s,"
+                   "view_gpu_ms,world_gpu_ms,world_ticks_per_s,encode_ms\n");
     printf("mode: %s\n", own_views ? "own (every viewer its own view and camera)"
-                                    : "shared (one view, viewer 0 drives)");
-    printf("\n%-10s %7s %10s %10s %10s %9s %9s %9s %8s %9s %8s %8s %8s %9s\n", "size",
-           "viewers", "fps/viewer", "fps(min)", "server fps", "lat p50", "lat p99", "lat max",
-           "samples", "Mbit/s", "view ms", "world ms", "ticks/s", "encode ms");
+                                   : "shared (one view, viewer 0 drives)");
+    printf("\n%-10s %7s %10s %10s %10s %9s %9s %9s %8s %9s %8s %8s %8s %9s\n", "size", "viewers",
+           "fps/viewer", "fps(min)", "server fps", "lat p50", "lat p99", "lat max", "samples",
+           "Mbit/s", "view ms", "world ms", "ticks/s", "encode ms");
     for (int s = 0; s < nsizes; s++) {
         for (int k = 0; k < nviewers; k++) {
             row rw;
@@ -368,11 +374,11 @@ int main(int argc, char **argv)
                    rw.ticks_per_s, rw.encode_ms);
             fflush(stdout);
             if (f)
-                fprintf(f,
-                        "%s,%u,%u,%u,%u,%.3f,%.3f,%.3f,%.2f,%.2f,%.2f,%u,%.3f,%.3f,%.3f,%.3f,%.3f\n",
-                        own_views ? "own" : "shared", rw.w, rw.h, rw.viewers, rw.connected,
-                        rw.fps_mean, rw.fps_min, rw.server_fps, rw.lat_p50, rw.lat_p99, rw.lat_max,
-                        rw.samples, rw.mbps, rw.gpu_ms, rw.world_ms, rw.ticks_per_s, rw.encode_ms);
+                fprintf(
+                    f, "%s,%u,%u,%u,%u,%.3f,%.3f,%.3f,%.2f,%.2f,%.2f,%u,%.3f,%.3f,%.3f,%.3f,%.3f\n",
+                    own_views ? "own" : "shared", rw.w, rw.h, rw.viewers, rw.connected, rw.fps_mean,
+                    rw.fps_min, rw.server_fps, rw.lat_p50, rw.lat_p99, rw.lat_max, rw.samples,
+                    rw.mbps, rw.gpu_ms, rw.world_ms, rw.ticks_per_s, rw.encode_ms);
         }
     }
     if (f) {

@@ -35,10 +35,9 @@ tmp = tempfile.mkdtemp(prefix="probecast-nginx-")
 name = "render.test"
 cert, key = deploy_util.make_cert(tmp, "server", name, "DNS:" + name)
 
-api_port, ws_port, tls_port = free_port(), free_port(), free_port()
+api_port, tls_port = free_port(), free_port()
 daemon = subprocess.Popen(
-    [exe, "serve", "--http", f"127.0.0.1:{api_port}", "--ws", f"127.0.0.1:{ws_port}",
-     "--public-name", name, "--width", "32", "--height", "24", "--probes", "2,2,2", "--rays", "16",
+    [exe, "serve", "--http", f"127.0.0.1:{api_port}", "--public-name", name, "--width", "32", "--height", "24", "--probes", "2,2,2", "--rays", "16",
      "--no-animate", "--scene", "builtin:cornell", "--web-dir", os.path.join(src, "web")],
     stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
 proc = None
@@ -47,7 +46,6 @@ try:
     # the shipped configuration, pointed at this daemon, certificate and port
     conf = open(os.path.join(src, "deploy/nginx/probecast.conf")).read()
     conf = conf.replace("127.0.0.1:8080", f"127.0.0.1:{api_port}")
-    conf = conf.replace("127.0.0.1:8081", f"127.0.0.1:{ws_port}")
     conf = conf.replace("listen 443 ssl;", f"listen 127.0.0.1:{tls_port} ssl;")
     conf = conf.replace("/etc/probecast/tls/cert.pem", cert).replace("/etc/probecast/tls/key.pem", key)
     conf = conf.replace("render.example.org", name)

@@ -122,42 +122,49 @@ try:
         pass
     check(not answer.startswith(b"HTTP/1.1 101"), f"plain ws:// is not upgraded: {answer[:60]!r}")
 
-    # wss:// with subprotocol probecast.v2: 101, a welcome text message, then a binary frame
-    s = ctx.wrap_socket(socket.create_connection(("127.0.0.1", ws_port), timeout=120),
-                        server_hostname="127.0.0.1")
-    ws = WsClient(s)
-    status_line, hdrs = ws.handshake(upgrade)
-    check(status_line.startswith("HTTP/1.1 101"), f"WebSocket upgrade over TLS: {status_line}")
-    check(hdrs.get("sec-websocket-protocol") == "probecast.v2",
-          f"subprotocol probecast.v2 chosen: {hdrs.get('sec-websocket-protocol')}")
-    check(hdrs.get("sec-websocket-accept") == WsClient.expected_accept(), "Sec-WebSocket-Accept")
+    def wss_session(port, where, upgrade):
+        """wss:// with subprotocol probecast.v2: 101, a welcome text message, then a binary frame"""
+        s = ctx.wrap_socket(socket.create_connection(("127.0.0.1", port), timeout=120),
+                            server_hostname="127.0.0.1")
+        ws = WsClient(s)
+        status_line, hdrs = ws.handshake(upgrade)
+        check(status_line.startswith("HTTP/1.1 101"),
+              f"WebSocket upgrade over TLS {where}: {status_line}")
+        check(hdrs.get("sec-websocket-protocol") == "probecast.v2",
+              f"subprotocol probecast.v2 chosen: {hdrs.get('sec-websocket-protocol')}")
+        check(hdrs.get("sec-websocket-accept") == WsClient.expected_accept(), "Sec-WebSocket-Accept")
 
-    welcome = {}
-    try:
-        op, data = ws.next_message()
-        welcome = json.loads(data) if op == 1 else {}
-        check(welcome.get("type") == "welcome" and welcome.get("protocol") == 2,
-              f"welcome over wss: opcode {op}, {data[:200]!r}")
-        frame = None
-        for _ in range(100):  # events may come first
+        welcome = {}
+        try:
             op, data = ws.next_message()
-            if op == 2:
-                frame = data
-                break
-        check(frame is not None, "a binary frame over wss")
-        if frame:
-            magic, version, header_size = struct.unpack_from("<IHH", frame, 0)
-            view_id, width, height = struct.unpack_from("<III", frame, 40)
-            jpeg_size = struct.unpack_from("<I", frame, 56)[0]
-            check(magic == 0x52464350 and version == 2, f"frame header: {magic:#x} v{version}")
-            check(view_id == welcome.get("view") and (width, height) == (32, 24),
-                  f"the frame is of the own view at 32x24: view {view_id}, {width}x{height}")
-            jpeg = frame[header_size:header_size + jpeg_size]
-            check(len(jpeg) == jpeg_size and jpeg[:2] == b"\xff\xd8", "the frame holds a JPEG")
-    except (EOFError, OSError, ValueError) as e:
-        check(False, f"stream over wss: {e}")
-    s.sendall(bytes([0x88, 0x82]) + b"\0\0\0\0" + struct.pack(">H", 1000))  # close, masked
-    s.close()
+            welcome = json.loads(data) if op == 1 else {}
+            check(welcome.get("type") == "welcome" and welcome.get("protocol") == 2,
+                  f"welcome over wss {where}: opcode {op}, {data[:200]!r}")
+            frame = None
+            for _ in range(100):  # events may come first
+                op, data = ws.next_message()
+                if op == 2:
+                    frame = data
+                    break
+            check(frame is not None, f"a binary frame over wss {where}")
+            if frame:
+                magic, version, header_size = struct.unpack_from("<IHH", frame, 0)
+                view_id, width, height = struct.unpack_from("<III", frame, 40)
+                jpeg_size = struct.unpack_from("<I", frame, 56)[0]
+                check(magic == 0x52464350 and version == 2, f"frame header: {magic:#x} v{version}")
+                check(view_id == welcome.get("view") and (width, height) == (32, 24),
+                      f"the frame is of the own view at 32x24: view {view_id}, {width}x{height}")
+                jpeg = frame[header_size:header_size + jpeg_size]
+                check(len(jpeg) == jpeg_size and jpeg[:2] == b"\xff\xd8", "the frame holds a JPEG")
+        except (EOFError, OSError, ValueError) as e:
+            check(False, f"stream over wss {where}: {e}")
+        s.sendall(bytes([0x88, 0x82]) + b"\0\0\0\0" + struct.pack(">H", 1000))  # close, masked
+        s.close()
+
+    wss_session(ws_port, "on the --ws port", upgrade)
+    # one origin: the same stream at /v1/stream of the API's own https address
+    wss_session(api_port, "at /v1/stream of the API's address",
+                upgrade_request(f"127.0.0.1:{api_port}", f"https://127.0.0.1:{api_port}"))
 finally:
     daemon.terminate()
     try:

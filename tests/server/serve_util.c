@@ -33,8 +33,8 @@ bool pc_daemon_start(pc_daemon *d, const char *const *args)
     argv[n++] = "serve";
     argv[n++] = "--http";
     argv[n++] = "127.0.0.1:0";
-    argv[n++] = "--ws";
-    argv[n++] = "127.0.0.1:0";
+    /* no --ws: the stream is reached at /v1/stream of the API's address (ws_port = http_port)
+     * unless a test asks for a port of its own */
     for (int i = 0; args && args[i] && n < 62; i++)
         argv[n++] = args[i];
     argv[n] = NULL;
@@ -172,8 +172,8 @@ bool pc_stream_open_v2(pc_daemon *d, pc_ws *ws, uint32_t *view)
         snprintf(path, sizeof path, "/v1/stream?token=%s", d->token);
     else
         snprintf(path, sizeof path, "/v1/stream");
-    if (pc_ws_connect(ws, "127.0.0.1", d->ws_port, path,
-                      "Sec-WebSocket-Protocol: probecast.v2\r\n", 10000) != 0)
+    if (pc_ws_connect(ws, "127.0.0.1", d->ws_port, path, "Sec-WebSocket-Protocol: probecast.v2\r\n",
+                      10000) != 0)
         return false;
     cJSON *w = pc_stream_next_text(ws, 10000, "welcome");
     double id = pc_json_number(w, "view");

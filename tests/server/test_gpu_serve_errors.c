@@ -163,7 +163,8 @@ static void test_stream_refusals(void)
     CHECKF(ws.http_status == 403, "foreign origin: %d", ws.http_status);
     pc_ws_close(&ws);
     char origin[128];
-    snprintf(origin, sizeof origin, "Origin: http://127.0.0.1:%u\r\n", d.ws_port); /* wrong port */
+    /* a page of another port on this host is another origin */
+    snprintf(origin, sizeof origin, "Origin: http://127.0.0.1:%u\r\n", d.http_port + 1);
     CHECK(pc_ws_connect(&ws, "127.0.0.1", d.ws_port, "/v1/stream?token=s3cret", origin, 10000) !=
           0);
     pc_ws_close(&ws);

@@ -40,27 +40,19 @@ let serverStats = null;
 
 /* ---- the stream ------------------------------------------------------------------------------ */
 
-/* Where the stream is: the --ws port from /v1/health, on the host that served this page, with
- * the scheme health names (wss when the daemon serves TLS itself, --tls-cert; else the page's);
- * or, when this page came through a proxy (its port is not the daemon's HTTP port), /v1/stream
- * of the page's own origin and scheme, which the proxy routes to the stream (deploy/nginx). The
+/* Where the stream is: /v1/stream of this page's own origin, ws: or wss: as the page came (the
+ * daemon answers it on its API address; a proxy in front routes it like any other path). The
  * token goes as a 'bearer.TOKEN' subprotocol next to 'probecast.v2' (protocol/stream.md); a
  * server that names another subprotocol (probecast.v1: before views) is offered that one. */
 async function resolveStream() {
   const health = await api.get('/v1/health', { timeoutMs: 4000 });
   if (health.auth === 'bearer' && !(await api.checkToken())) throw new Error('a token is needed');
   const st = health.stream || {};
-  if (!st.port) throw new Error('the server has no stream');
-  const pageScheme = location.protocol === 'https:' ? 'wss:' : 'ws:';
+  if (!st.path) throw new Error('the server has no stream');
+  const scheme = location.protocol === 'https:' ? 'wss:' : 'ws:';
   const protocols = [st.subprotocol || SUBPROTOCOL];
   if (api.token) protocols.push('bearer.' + api.token);
-  const pagePort = Number(location.port || (location.protocol === 'https:' ? 443 : 80));
-  const proxied = st.http_port && pagePort !== st.http_port;
-  const direct = st.scheme === 'wss' ? 'wss:' : st.scheme === 'ws' ? 'ws:' : pageScheme;
-  const scheme = proxied ? pageScheme : direct;
-  const url = proxied ? `${scheme}//${location.host}${st.path || '/v1/stream'}`
-                      : `${scheme}//${location.hostname}:${st.port}${st.path || '/v1/stream'}`;
-  return { url, protocols };
+  return { url: `${scheme}//${location.host}${st.path}`, protocols };
 }
 
 const stream = new FrameStream({ resolve: resolveStream, view });
