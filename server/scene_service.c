@@ -79,6 +79,15 @@ static cJSON *scene_json(const srv_scene_service *svc)
     cJSON_AddNumberToObject(bvh, "tlas_build_ms", svc->gs.tlas_build_ms);
     cJSON_AddNumberToObject(bvh, "upload_ms", svc->gs.upload_ms);
     cJSON_AddItemToObject(j, "probes", probes_json(svc));
+    if (svc->st.default_lighting) {
+        cJSON *dl = cJSON_AddObjectToObject(j, "default_lighting");
+        cJSON_AddNumberToObject(dl, "light", svc->st.default_light_id);
+        float sky[3];
+        srv_state_sky(&svc->st, sky);
+        srv_json_add_floats(dl, "sky", sky, 3);
+    } else {
+        cJSON_AddFalseToObject(j, "default_lighting");
+    }
     cJSON *w = cJSON_AddArrayToObject(j, "warnings");
     for (uint32_t i = 0; i < s->warning_count; i++)
         cJSON_AddItemToArray(w, cJSON_CreateString(s->warnings[i]));
@@ -224,6 +233,23 @@ static bool node_bounds(const srv_scene_service *svc, uint32_t node, float lo[3]
         any = true;
     }
     return any;
+}
+
+/* The world's sky: the setting, or the default environment (scene_state.h). */
+static void apply_sky(srv_scene_service *svc)
+{
+    float sky[3];
+    srv_state_sky(&svc->st, sky);
+    rd_world_set_sky(&svc->world, sky);
+}
+
+/* Default lighting ended (the user added a light, or took the key light over): the default
+ * environment goes too; GET /v1/scene says so. */
+static void default_lighting_ended(srv_scene_service *svc)
+{
+    apply_sky(svc);
+    lighting_changed(svc, PC_DDGI_WAKE_AGE_LIGHT);
+    publish_scene(svc);
 }
 
 /* After a light was added, changed or removed: upload, reconverge, tell everyone. */
@@ -414,6 +440,12 @@ static unsigned replace_scene(srv_scene_service *svc, srv_cmd *c)
     srv_state_set_scene(&svc->st, c->scene, c->source, ++svc->generation_counter);
     free(c->scene);
     c->scene = NULL;
+    /* a scene without light got the default key light (scene_state.h), which the GPU scene,
+     * built from the upload, does not have yet */
+    if (svc->st.default_lighting &&
+        rd_gpu_scene_update_lights(svc->vk, &svc->gs, &svc->st.scene, err, sizeof err) != RD_VK_OK)
+        srv_warn("render", "the default lighting could not be uploaded: %s", err);
+    apply_sky(svc);
     srv_animation_reset(&svc->anim);
     load_playback(svc);
     if (configure_gi(svc, err, sizeof err) != RD_VK_OK)
@@ -454,7 +486,7 @@ static unsigned patch_settings(srv_scene_service *svc, srv_cmd *c)
         publish_probes(svc);
     }
     if (c->settings.has & SRV_SET_SKY) {
-        rd_world_set_sky(&svc->world, svc->st.settings.sky);
+        apply_sky(svc);
         lighting_changed(svc, PC_DDGI_WAKE_AGE_LIGHT);
     }
     if (!svc->st.settings.animate) srv_animation_pause(&svc->anim);
@@ -493,7 +525,10 @@ unsigned srv_scene_service_apply(srv_scene_service *svc, srv_cmd *c)
             return 0;
         }
         if (svc->anim.valid && svc->anim.light == c->id) srv_animation_reset(&svc->anim);
+        bool took_over = st->default_lighting && c->id == st->default_light_id;
+        if (took_over) st->default_lighting = false; /* the key light is the user's now */
         if (!lights_changed(svc, c)) return 0;
+        if (took_over) default_lighting_ended(svc);
         srv_cmd_complete_json(c, 200, srv_json_light(c->id, &st->scene.lights[i]));
         return SRV_CHANGE_VIEWS | SRV_CHANGE_PERSIST;
     }
@@ -503,20 +538,27 @@ unsigned srv_scene_service_apply(srv_scene_service *svc, srv_cmd *c)
             srv_cmd_complete_error(c, &e);
             return 0;
         }
+        /* the user's first light replaces the default lighting */
+        bool replaced = srv_state_drop_default_lighting(st);
         if (!lights_changed(svc, c)) return 0;
+        if (replaced) default_lighting_ended(svc);
         srv_cmd_complete_json(c, 201,
-                              srv_json_light(id, &st->scene.lights[st->scene.light_count - 1]));
+                              srv_json_light(id, &st->scene.lights[srv_state_light_index(st, id)]));
         return SRV_CHANGE_VIEWS | SRV_CHANGE_PERSIST;
     }
-    case SRV_CMD_DELETE_LIGHT:
+    case SRV_CMD_DELETE_LIGHT: {
         if (!srv_state_light_delete(st, c->id, &e)) {
             srv_cmd_complete_error(c, &e);
             return 0;
         }
         if (svc->anim.valid && svc->anim.light == c->id) srv_animation_reset(&svc->anim);
+        bool removed_default = st->default_lighting && c->id == st->default_light_id;
+        if (removed_default) st->default_lighting = false;
         if (!lights_changed(svc, c)) return 0;
+        if (removed_default) default_lighting_ended(svc);
         srv_cmd_complete(c, 204, NULL);
         return SRV_CHANGE_VIEWS | SRV_CHANGE_PERSIST;
+    }
     case SRV_CMD_PATCH_NODE: {
         float old_lo[3], old_hi[3], lo[3], hi[3];
         bool had_mesh = c->id < st->scene.node_count && node_bounds(svc, c->id, old_lo, old_hi);
@@ -618,7 +660,7 @@ rd_vk_result srv_scene_service_init(srv_scene_service *svc, rd_vk *vk, srv_snaps
         return vr;
     }
     rd_world_set_scene(&svc->world, &svc->gs);
-    rd_world_set_sky(&svc->world, svc->st.settings.sky);
+    apply_sky(svc);
     load_playback(svc);
     if (configure_gi(svc, err, errlen) != RD_VK_OK) {
         srv_warn("render", "global illumination is off: %s", err);

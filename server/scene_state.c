@@ -36,6 +36,77 @@ static void *xcalloc(size_t n, size_t size)
     return p;
 }
 
+/* ---- default lighting ------------------------------------------------------------------- */
+
+bool srv_scene_brings_light(const rd_scene *s)
+{
+    if (s->light_count > 0) return true;
+    for (uint32_t i = 0; i < s->material_count; i++) {
+        const float *e = s->materials[i].emission;
+        if (e[0] > 0 || e[1] > 0 || e[2] > 0) return true;
+    }
+    return false;
+}
+
+void srv_state_sky(const srv_scene_state *st, float sky[3])
+{
+    const float *set = st->settings.sky;
+    bool black = set[0] == 0 && set[1] == 0 && set[2] == 0;
+    if (st->default_lighting && black) {
+        sky[0] = SRV_DEFAULT_SKY_R, sky[1] = SRV_DEFAULT_SKY_G, sky[2] = SRV_DEFAULT_SKY_B;
+    } else {
+        memcpy(sky, set, 3 * sizeof *sky);
+    }
+}
+
+/* A directional key light from above, behind and left of the default camera (a photographer's
+ * 45-degree key), so that the side of the model the camera sees is lit. */
+static void add_default_key_light(srv_scene_state *st)
+{
+    rd_view_camera v;
+    srv_camera_to_view(&st->camera, &v);
+    const float up[3] = {0, 1, 0}, fallback[3] = {1, 0, 0};
+    float right[3], d[3];
+    rd_vec3_cross(right, v.forward, up);
+    rd_vec3_normalize(right, right, fallback);
+    for (int i = 0; i < 3; i++)
+        d[i] = v.forward[i] - 0.9f * up[i] + 0.5f * right[i];
+    const float down[3] = {0, -1, 0};
+    srv_light_patch p = {.has = SRV_LIGHT_TYPE | SRV_LIGHT_INTENSITY | SRV_LIGHT_DIRECTION |
+                                SRV_LIGHT_NAME,
+                         .type = RD_LIGHT_DIRECTIONAL,
+                         .intensity = SRV_DEFAULT_KEY_INTENSITY};
+    rd_vec3_normalize(p.direction, d, down);
+    snprintf(p.name, sizeof p.name, "default key light");
+    srv_api_error e;
+    uint32_t id;
+    if (srv_state_light_add(st, &p, &id, &e)) {
+        st->default_lighting = true;
+        st->default_light_id = id;
+    }
+}
+
+/* After a scene or a saved state arrived: default lighting on when the scene brings no light
+ * and no sky is set; off when its key light is gone (a saved state replaced the lights). */
+static void settle_default_lighting(srv_scene_state *st)
+{
+    if (st->default_lighting && srv_state_light_index(st, st->default_light_id) < 0)
+        st->default_lighting = false;
+    const float *sky = st->settings.sky;
+    if (!st->default_lighting && !srv_scene_brings_light(&st->scene) && sky[0] == 0 &&
+        sky[1] == 0 && sky[2] == 0)
+        add_default_key_light(st);
+}
+
+bool srv_state_drop_default_lighting(srv_scene_state *st)
+{
+    if (!st->default_lighting) return false;
+    srv_api_error e;
+    srv_state_light_delete(st, st->default_light_id, &e);
+    st->default_lighting = false;
+    return true;
+}
+
 void srv_state_set_scene(srv_scene_state *st, rd_scene *scene, const char *source,
                          uint64_t generation)
 {
@@ -62,6 +133,8 @@ void srv_state_set_scene(srv_scene_state *st, rd_scene *scene, const char *sourc
     rd_vec3_sub(d, c, v.eye);
     float dist = rd_vec3_dot(d, v.forward);
     srv_camera_from_view(&v, dist > 1e-3f ? dist : 1.0f, &st->camera);
+    st->default_lighting = false;
+    settle_default_lighting(st);
 }
 
 int srv_state_light_index(const srv_scene_state *st, uint32_t id)
@@ -286,6 +359,10 @@ cJSON *srv_state_to_json(const srv_scene_state *st)
     cJSON *lights = cJSON_AddArrayToObject(j, "lights");
     for (uint32_t i = 0; i < st->scene.light_count; i++)
         cJSON_AddItemToArray(lights, srv_json_light(st->light_ids[i], &st->scene.lights[i]));
+    if (st->default_lighting)
+        cJSON_AddNumberToObject(j, "default_lighting", st->default_light_id);
+    else
+        cJSON_AddFalseToObject(j, "default_lighting");
     cJSON *nodes = cJSON_AddArrayToObject(j, "nodes");
     for (uint32_t i = 0; i < st->scene.node_count; i++) {
         if (!st->node_moved[i]) continue;
@@ -406,5 +483,12 @@ bool srv_state_restore(srv_scene_state *st, const cJSON *doc, srv_api_error *e)
     }
     char err[256];
     rd_scene_update(&st->scene, err, sizeof err); /* places node-attached lights */
+    /* the saved lights replaced the scene's: which of them is the default key light, if any */
+    const cJSON *dl = cJSON_GetObjectItemCaseSensitive(doc, "default_lighting");
+    if (cJSON_IsArray(lights)) {
+        st->default_lighting = cJSON_IsNumber(dl) && dl->valuedouble >= 0;
+        if (st->default_lighting) st->default_light_id = (uint32_t)dl->valuedouble;
+    }
+    settle_default_lighting(st);
     return true;
 }

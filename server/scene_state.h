@@ -25,7 +25,19 @@ typedef struct srv_scene_state {
     bool *node_moved; /* parallel to scene.nodes: changed through the API */
     srv_camera camera;
     srv_settings settings;
+    /* Default lighting: a scene that brings no light, no emission (and has no sky set) gets a
+     * key light framed to its default camera plus an environment, until the user adds a light
+     * (srv_state_drop_default_lighting) or takes the key light over (patch, delete). */
+    bool default_lighting;
+    uint32_t default_light_id;
 } srv_scene_state;
+
+/* The default environment's radiance and the key light's illuminance (lux-like units of the
+ * renderer: a white diffuse surface facing the light reflects intensity / pi). */
+#define SRV_DEFAULT_SKY_R 0.20f
+#define SRV_DEFAULT_SKY_G 0.22f
+#define SRV_DEFAULT_SKY_B 0.26f
+#define SRV_DEFAULT_KEY_INTENSITY 2.5f
 
 /* Empty state with default settings. */
 void srv_state_init(srv_scene_state *st);
@@ -35,6 +47,14 @@ void srv_state_dispose(srv_scene_state *st); /* idempotent */
  * points the camera at it (the scene's first camera, else one framing its bounds). */
 void srv_state_set_scene(srv_scene_state *st, rd_scene *scene, const char *source,
                          uint64_t generation);
+
+/* Whether the scene lights itself: a light, or a material that emits. */
+bool srv_scene_brings_light(const rd_scene *s);
+/* The sky radiance the world renders with: the setting, or the default environment while
+ * default lighting is on and the setting is black. */
+void srv_state_sky(const srv_scene_state *st, float sky[3]);
+/* Ends default lighting: removes the key light. False when it was off. */
+bool srv_state_drop_default_lighting(srv_scene_state *st);
 
 /* Index into scene.lights of light id, or -1. */
 int srv_state_light_index(const srv_scene_state *st, uint32_t id);
@@ -54,7 +74,8 @@ bool srv_state_node_apply(srv_scene_state *st, uint32_t id, const srv_node_patch
 void srv_camera_from_view(const rd_view_camera *v, float target_distance, srv_camera *c);
 void srv_camera_to_view(const srv_camera *c, rd_view_camera *v);
 
-/* The persisted document: {"camera", "settings", "lights", "nodes"} (moved nodes only). */
+/* The persisted document: {"camera", "settings", "lights", "nodes" (moved nodes only),
+ * "default_lighting" (the id of the default key light, or false)}. */
 cJSON *srv_state_to_json(const srv_scene_state *st);
 /* Applies a document written by srv_state_to_json to the current scene. Members that do not
  * fit the scene (a node id it lacks) are skipped with a warning in e->message; returns false

@@ -199,8 +199,69 @@ static void test_state(void)
     srv_state_dispose(&st);
 }
 
+/* Default lighting: a scene without lights or emission gets a key light (lit from the camera's
+ * side) and the default sky; an emitting scene does not; the saved state keeps which light it is.
+ */
+static void test_default_lighting(void)
+{
+    srv_scene_state st;
+    srv_state_init(&st);
+    rd_scene s;
+    rd_scene_init(&s);
+    rd_material m = {.base_color = {1, 1, 1, 1}, .base_color_texture = -1, .emissive_texture = -1};
+    rd_scene_add_material(&s, &m);
+    srv_state_set_scene(&st, &s, "test", 1);
+    CHECK(st.default_lighting && st.scene.light_count == 1);
+    const rd_light *key = &st.scene.lights[0];
+    CHECK(key->type == RD_LIGHT_DIRECTIONAL && key->intensity > 0);
+    /* it shines the way the camera looks, and down */
+    float along = key->direction[0] * st.camera.forward[0] +
+                  key->direction[1] * st.camera.forward[1] +
+                  key->direction[2] * st.camera.forward[2];
+    CHECK(along > 0.3f && key->direction[1] < -0.3f);
+    float sky[3];
+    srv_state_sky(&st, sky);
+    CHECK(sky[0] == SRV_DEFAULT_SKY_R && sky[2] == SRV_DEFAULT_SKY_B);
+    /* a sky set by the user wins */
+    st.settings.sky[1] = 0.5f;
+    srv_state_sky(&st, sky);
+    CHECK(sky[0] == 0 && sky[1] == 0.5f);
+    st.settings.sky[1] = 0;
+
+    /* saved and restored: still default, same light */
+    cJSON *doc = srv_state_to_json(&st);
+    srv_scene_state st2;
+    srv_state_init(&st2);
+    rd_scene s2;
+    rd_scene_init(&s2);
+    rd_scene_add_material(&s2, &m);
+    srv_state_set_scene(&st2, &s2, "test", 1);
+    srv_api_error e;
+    CHECK(srv_state_restore(&st2, doc, &e));
+    CHECK(st2.default_lighting && st2.scene.light_count == 1 &&
+          st2.default_light_id == st.default_light_id);
+    cJSON_Delete(doc);
+    /* dropped: the key light goes, the sky is the setting again */
+    CHECK(srv_state_drop_default_lighting(&st2) && st2.scene.light_count == 0);
+    srv_state_sky(&st2, sky);
+    CHECK(sky[0] == 0 && sky[1] == 0 && sky[2] == 0);
+    CHECK(!srv_state_drop_default_lighting(&st2));
+    srv_state_dispose(&st2);
+
+    /* an emitting material lights the scene itself */
+    rd_scene s3;
+    rd_scene_init(&s3);
+    rd_material glow = m;
+    glow.emission[0] = 2;
+    rd_scene_add_material(&s3, &glow);
+    srv_state_set_scene(&st, &s3, "test", 2);
+    CHECK(!st.default_lighting && st.scene.light_count == 0);
+    srv_state_dispose(&st);
+}
+
 int main(void)
 {
+    test_default_lighting();
     test_bodies();
     test_viewer_messages();
     test_state();

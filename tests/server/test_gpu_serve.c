@@ -57,6 +57,59 @@ static int light_id(pc_daemon *d)
     return id;
 }
 
+/* A scene that brings no light (the lamp node is left out of the scene) renders lit by the
+ * default key light and environment, reported in GET /v1/scene, until the user adds a light. */
+static void test_default_lighting(pc_daemon *d)
+{
+    char *gltf = pc_make_gltf(0.5f);
+    char *nodes = strstr(gltf, "\"nodes\":[0,1,2,3]");
+    CHECK(nodes != NULL);
+    if (!nodes) {
+        free(gltf);
+        return;
+    }
+    memcpy(nodes, "\"nodes\":[0,1,3]  ", 17); /* without node 2, the lamp */
+    pc_http_response r;
+    CHECK(pc_http("127.0.0.1", d->http_port, "PUT", "/v1/scene",
+                  "Authorization: Bearer s3cret\r\nContent-Type: model/gltf+json\r\n", gltf,
+                  strlen(gltf), &r, 120000) == 200);
+    pc_http_response_free(&r);
+    free(gltf);
+    cJSON *scene = pc_api_get_json(d, "/v1/scene");
+    const cJSON *dl = cJSON_GetObjectItemCaseSensitive(scene, "default_lighting");
+    const cJSON *lights = cJSON_GetObjectItemCaseSensitive(scene, "lights");
+    CHECKF(cJSON_IsObject(dl), "default lighting reported");
+    CHECK(pc_json_number(scene, "light_count") == 1);
+    const cJSON *key = cJSON_GetArrayItem(lights, 0);
+    CHECK(pc_json_number(key, "id") == pc_json_number(dl, "light"));
+    const cJSON *type = cJSON_GetObjectItemCaseSensitive(key, "type");
+    CHECK(cJSON_IsString(type) && strcmp(type->valuestring, "directional") == 0);
+    const cJSON *sky = cJSON_GetObjectItemCaseSensitive(dl, "sky");
+    CHECK(cJSON_GetArraySize(sky) == 3 && cJSON_GetArrayItem(sky, 0)->valuedouble > 0);
+    cJSON_Delete(scene);
+
+    pc_ws ws;
+    CHECK(pc_stream_open(d, &ws));
+    pc_frame lit = {0};
+    CHECK(pc_stream_next(&ws, 60000, true, &lit));
+    CHECKF(lit.mean > 20, "a light-less upload renders lit: mean %.1f", lit.mean);
+    pc_frame_free(&lit);
+    pc_ws_close(&ws);
+
+    /* the user's first light replaces the default lighting (key light and environment) */
+    CHECK(pc_api(d, "POST", "/v1/lights",
+                 "{\"type\":\"point\",\"position\":[0,2.5,1],\"intensity\":20}", true, &r) == 201);
+    pc_http_response_free(&r);
+    scene = pc_api_get_json(d, "/v1/scene");
+    dl = cJSON_GetObjectItemCaseSensitive(scene, "default_lighting");
+    lights = cJSON_GetObjectItemCaseSensitive(scene, "lights");
+    CHECK(cJSON_IsFalse(dl));
+    CHECK(pc_json_number(scene, "light_count") == 1);
+    type = cJSON_GetObjectItemCaseSensitive(cJSON_GetArrayItem(lights, 0), "type");
+    CHECK(cJSON_IsString(type) && strcmp(type->valuestring, "point") == 0);
+    cJSON_Delete(scene);
+}
+
 int main(void)
 {
     const char *data_dir = test_tmp_path("serve-data");
@@ -211,9 +264,8 @@ int main(void)
     CHECK(cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(pr, "converged")));
     CHECKF(pc_json_number(states, "awake") == 0 &&
                pc_json_number(states, "sleeping") + pc_json_number(states, "off") == 8,
-           "probe states when idle: %g awake, %g sleeping, %g off",
-           pc_json_number(states, "awake"), pc_json_number(states, "sleeping"),
-           pc_json_number(states, "off"));
+           "probe states when idle: %g awake, %g sleeping, %g off", pc_json_number(states, "awake"),
+           pc_json_number(states, "sleeping"), pc_json_number(states, "off"));
     CHECK(pc_json_number(pr, "convergence") == 1);
     const cJSON *st = cJSON_GetObjectItemCaseSensitive(s2, "stream");
     CHECK(pc_json_number(st, "viewers") == 1 && pc_json_number(st, "frames_sent") >= 5);
@@ -274,6 +326,7 @@ int main(void)
     CHECK(again.h.width == 64 && again.mean > 5);
     pc_frame_free(&again);
     pc_ws_close(&ws);
+    test_default_lighting(&d2);
     CHECKF(pc_daemon_stop(&d2) == 0, "clean exit after SIGTERM");
     return test_finish();
 }

@@ -465,7 +465,20 @@ test('lights are added and deleted through the panel', { timeout: 30000 }, async
   assert.equal(added.type, 'spot');
   const card = page.locator(`#lights details.light[data-id="${added.id}"]`);
   assert.equal(await card.locator('input[aria-label="direction y"]').isVisible(), true, 'a spot light shows its direction');
-  assert.equal(Number(await card.locator('input[aria-label="direction y"]').inputValue()), -1);
+  // placed outside the model, on the camera's side, above it, and aimed at its centre
+  const b = (await http('GET', '/v1/scene')).json.bounds;
+  const cam = (await http('GET', '/v1/camera')).json;
+  const c = [0, 1, 2].map((i) => 0.5 * (b.min[i] + b.max[i]));
+  const p = added.position;
+  const inside = [0, 1, 2].every((i) => p[i] >= b.min[i] && p[i] <= b.max[i]);
+  assert.equal(inside, false, `the new light at ${p} is outside the bounds ${b.min} .. ${b.max}`);
+  const toCam = [0, 1, 2].map((i) => cam.position[i] - c[i]);
+  const toLight = [0, 1, 2].map((i) => p[i] - c[i]);
+  assert.ok(toCam[0] * toLight[0] + toCam[1] * toLight[1] + toCam[2] * toLight[2] > 0, 'on the camera side');
+  assert.ok(p[1] > c[1], 'above the centre');
+  const d = added.direction;
+  assert.ok(d[0] * toLight[0] + d[1] * toLight[1] + d[2] * toLight[2] < 0, 'the spot aims at the model');
+  assert.ok(Number(await card.locator('input[aria-label="direction y"]').inputValue()) < 0);
   await card.locator('button[aria-label="delete light"]').click();
   await page.waitForFunction((n) => document.querySelectorAll('#lights details.light').length === n, n0, { timeout: 10000 });
   assert.equal(await count(), n0);

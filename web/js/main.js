@@ -313,6 +313,8 @@ const renderPanel = new RenderPanel(api, { toasts });
 const lightsPanel = new LightsPanel(api, {
   toasts,
   cameraTarget: () => (camera.known ? camera.target.slice() : null),
+  cameraPosition: () => (camera.known ? camera.position() : null),
+  sceneBounds: () => (scene && scene.bounds && scene.bounds.min ? scene.bounds : null),
   sceneSize: () => camera.sceneSize,
 });
 const scenePanel = new ScenePanel(api, {

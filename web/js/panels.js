@@ -344,10 +344,12 @@ export class RenderPanel {
  * once and the events that follow confirm them. cameraTarget() and sceneSize() place new
  * lights where the user is looking, at a strength that suits the scene's size. */
 export class LightsPanel {
-  constructor(api, { toasts, cameraTarget, sceneSize }) {
+  constructor(api, { toasts, cameraTarget, cameraPosition, sceneBounds, sceneSize }) {
     this.api = api;
     this.toasts = toasts;
     this.cameraTarget = cameraTarget;
+    this.cameraPosition = cameraPosition;
+    this.sceneBounds = sceneBounds;
     this.sceneSize = sceneSize;
     this.root = $('lights');
     this.count = $('light-count');
@@ -504,18 +506,38 @@ export class LightsPanel {
     }
   }
 
+  /* Where a new light goes: outside the model, on the camera's side and above it (a key light's
+   * place), so that it lights what the user sees instead of sitting inside the mesh. Point and
+   * spot lights get an intensity that gives about the default key light's 2.5 at the model's
+   * centre; a spot aims at it; a directional light shines from there toward it. */
+  static placement(type, bounds, eye, target) {
+    const lo = bounds ? bounds.min : [target[0] - 1, target[1] - 1, target[2] - 1];
+    const hi = bounds ? bounds.max : [target[0] + 1, target[1] + 1, target[2] + 1];
+    const c = [0, 1, 2].map((i) => 0.5 * (lo[i] + hi[i]));
+    const radius = Math.max(0.05, 0.5 * Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]));
+    let toward = eye ? [eye[0] - c[0], eye[1] - c[1], eye[2] - c[2]] : [0, 0, 1];
+    let n = Math.hypot(...toward) || 1;
+    toward = toward.map((v) => v / n);
+    // from the camera's side, raised by 45 degrees over the model and a little to its left
+    const up = [0, 1, 0];
+    const left = [toward[2], 0, -toward[0]].map((v) => v / (Math.hypot(toward[2], toward[0]) || 1));
+    let dir = [0, 1, 2].map((i) => toward[i] + up[i] + 0.4 * left[i]);
+    n = Math.hypot(...dir);
+    dir = dir.map((v) => v / n);
+    const dist = radius * 1.6;
+    const round = (v) => Math.round(v * 1000) / 1000;
+    const position = [0, 1, 2].map((i) => round(c[i] + dir[i] * dist));
+    const aim = dir.map((v) => round(-v));
+    if (type === 'directional') return { intensity: 2.5, direction: aim };
+    const body = { intensity: Number((2.5 * dist * dist).toPrecision(3)), position };
+    if (type === 'spot') Object.assign(body, { direction: aim, inner_cone_angle: 0.35, outer_cone_angle: 0.6 });
+    return body;
+  }
+
   async add(type) {
-    const t = this.cameraTarget() || [0, 1, 0];
-    const size = Math.max(0.1, this.sceneSize() || 3.5);
-    const body = { type, color: [1, 1, 1] };
-    if (type === 'directional') {
-      Object.assign(body, { intensity: 2, direction: [-0.3, -1, -0.2] });
-    } else {
-      // Candela: about as bright at a quarter of the scene's size as the demo's light is.
-      Object.assign(body, { intensity: Number((3 * (size / 3.5) ** 2).toPrecision(3)),
-        position: [t[0], t[1] + size * 0.15, t[2]].map((v) => Math.round(v * 1000) / 1000) });
-      if (type === 'spot') Object.assign(body, { direction: [0, -1, 0], inner_cone_angle: 0.35, outer_cone_angle: 0.6 });
-    }
+    const target = this.cameraTarget() || [0, 1, 0];
+    const body = { type, color: [1, 1, 1],
+      ...LightsPanel.placement(type, this.sceneBounds(), this.cameraPosition(), target) };
     try {
       const l = await this.api.post('/v1/lights', body);
       this.upsert(l);
