@@ -1,7 +1,9 @@
 /* world.c: the scene-wide state shared by views, and probe updates. */
 #include "world.h"
 
+#include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 rd_vk_result rd_world_create(rd_vk *vk, rd_world *w, char *err, size_t errlen)
@@ -15,6 +17,8 @@ rd_vk_result rd_world_create(rd_vk *vk, rd_world *w, char *err, size_t errlen)
                                errlen);
     if (res == RD_VK_OK) res = rd_timer_create(vk, &w->timer, err, errlen);
     if (res != RD_VK_OK) rd_world_destroy(w);
+    const float black[3] = {0, 0, 0};
+    if (res == RD_VK_OK) rd_world_set_sky(w, black);
     return res;
 }
 
@@ -26,6 +30,8 @@ void rd_world_destroy(rd_world *w)
     rd_timer_destroy(w->vk, &w->timer);
     rd_buffer_destroy(w->vk, &w->counters);
     rd_buffer_destroy(w->vk, &w->globals);
+    rd_buffer_destroy(w->vk, &w->env_texels);
+    rd_env_image_free(&w->image);
     w->scene = NULL;
     w->vk = NULL;
 }
@@ -37,7 +43,61 @@ void rd_world_set_scene(rd_world *w, const rd_gpu_scene *scene)
 
 void rd_world_set_sky(rd_world *w, const float sky[3])
 {
-    memcpy(w->sky, sky, sizeof w->sky);
+    rd_environment e = {.mode = RD_ENV_UNIFORM, .intensity = 1};
+    memcpy(e.sky, sky, sizeof e.sky);
+    rd_world_set_environment(w, &e);
+}
+
+void rd_world_set_environment(rd_world *w, const rd_environment *e)
+{
+    w->env = *e;
+    w->env.image = w->image.rgb ? &w->image : NULL;
+    rd_env_irradiance_sh(&w->env, w->env_sh);
+}
+
+/* IEEE half of a finite non-negative float (radiance), rounded to nearest, saturating at the
+ * largest half (65504) and flushing below the smallest normal to zero. */
+static uint16_t half_of(float f)
+{
+    if (!(f > 6.1035156e-5f)) return 0; /* also NaN */
+    if (f >= 65504.0f) return 0x7bff;
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    uint32_t exp = ((u >> 23) & 0xff) - 127 + 15, mant = u & 0x7fffff;
+    uint32_t h = exp << 10 | mant >> 13;
+    if ((mant & 0x1fff) > 0x1000 || ((mant & 0x1fff) == 0x1000 && (h & 1))) h++;
+    return (uint16_t)(h > 0x7bff ? 0x7bff : h);
+}
+
+rd_vk_result rd_world_set_environment_image(rd_world *w, rd_env_image *img, char *err,
+                                            size_t errlen)
+{
+    rd_buffer_destroy(w->vk, &w->env_texels);
+    rd_env_image_free(&w->image);
+    rd_vk_result res = RD_VK_OK;
+    if (img && img->width && img->rgb) {
+        w->image = *img;
+        memset(img, 0, sizeof *img);
+        rd_env_image_limit(&w->image, RD_ENV_IMAGE_MAX_WIDTH);
+        size_t n = (size_t)w->image.width * w->image.height;
+        uint16_t *texels = malloc(n * 4 * sizeof *texels);
+        if (!texels) abort();
+        for (size_t i = 0; i < n; i++) {
+            for (int c = 0; c < 3; c++)
+                texels[i * 4 + (size_t)c] = half_of(w->image.rgb[i * 3 + (size_t)c]);
+            texels[i * 4 + 3] = 0x3c00; /* 1.0 */
+        }
+        res = rd_buffer_create(w->vk, &w->env_texels, n * 8, RD_MEMORY_DEVICE, err, errlen);
+        if (res == RD_VK_OK)
+            res = rd_buffer_upload(w->vk, &w->env_texels, 0, texels, n * 8, err, errlen);
+        free(texels);
+        if (res != RD_VK_OK) {
+            rd_buffer_destroy(w->vk, &w->env_texels);
+            rd_env_image_free(&w->image);
+        }
+    }
+    rd_world_set_environment(w, &w->env); /* the image (or its absence) and its irradiance */
+    return res;
 }
 
 rd_vk_result rd_world_configure_gi(rd_world *w, const float bmin[3], const float bmax[3],
@@ -75,7 +135,8 @@ void rd_world_fill_globals(const rd_world *w, pc_globals *g)
             g->ddgi.origin.z -= w->scene->origin_shift[2];
         }
     }
-    g->env.sky = (pc_vec4){w->sky[0], w->sky[1], w->sky[2], 0};
+    rd_env_fill_gpu(&w->env, w->env_sh, &g->env);
+    if (g->env.mode == PC_ENV_IMAGE) g->env.image = w->env_texels.address;
 }
 
 rd_vk_result rd_world_update(rd_world *w, unsigned n, char *err, size_t errlen)

@@ -10,6 +10,7 @@
 #define RD_WORLD_H
 
 #include "ddgi.h"
+#include "environment.h"
 #include "frame_stats.h"
 #include "gpu_scene.h"
 #include "vk_buffer.h"
@@ -19,9 +20,14 @@ typedef struct rd_world {
     rd_vk *vk;
     const rd_gpu_scene *scene; /* the scene being rendered; NOT owned (the caller owns and
                                   destroys it) */
-    float sky[3]; /* environment radiance seen by primary misses, probe rays and path tracing */
-    rd_ddgi ddgi; /* the probe field; valid when gi */
-    bool gi;      /* a GI mode other than off is configured */
+    /* the environment seen by primary misses, probe rays and path tracing (environment.h);
+     * env.image points at image, the world's own copy of an HDR image (none: width 0) */
+    rd_environment env;
+    rd_env_image image;
+    rd_buffer env_texels;        /* the image as RGBA16F, on the GPU; only while there is one */
+    float env_sh[9][3];          /* irradiance SH9 of env */
+    rd_ddgi ddgi;                /* the probe field; valid when gi */
+    bool gi;                     /* a GI mode other than off is configured */
     rd_buffer globals, counters; /* for probe updates */
     rd_timer timer;
     uint64_t updates_total; /* probe updates run since creation (never reset; for stats) */
@@ -35,7 +41,16 @@ void rd_world_destroy(rd_world *w);
 /* The scene that updates and views trace; NULL until set. Changing it does not reset the probe
  * field (call rd_world_configure_gi for a different scene). */
 void rd_world_set_scene(rd_world *w, const rd_gpu_scene *scene);
+/* A uniform sky of this radiance (rd_world_set_environment with RD_ENV_UNIFORM). */
 void rd_world_set_sky(rd_world *w, const float sky[3]);
+/* The environment's mode and parameters (e->image is ignored: the world's own image, set by
+ * rd_world_set_environment_image, is used in RD_ENV_IMAGE mode; without one that mode shows
+ * e->sky uniformly). Recomputes the irradiance SH. */
+void rd_world_set_environment(rd_world *w, const rd_environment *e);
+/* Takes *img (left zeroed; width 0 drops the image), reduces it to RD_ENV_IMAGE_MAX_WIDTH and
+ * uploads it. */
+rd_vk_result rd_world_set_environment_image(rd_world *w, rd_env_image *img, char *err,
+                                            size_t errlen);
 /* Configures global illumination for scene bounds (PC_GI_OFF frees the probe field) and resets
  * the field. RD_VK_ERR_UNSUPPORTED with a message for settings out of range; gi is then off. */
 rd_vk_result rd_world_configure_gi(rd_world *w, const float bmin[3], const float bmax[3],

@@ -100,6 +100,7 @@ bool trace_alpha_pass(pc_scene_refs s, uint tri, float u, float v)
     return alpha >= m.params.x;
 }
 
+#include "environment.glsl"
 #include "trace.glsl"
 
 /* ---- surfaces ---------------------------------------------------------------------------- */

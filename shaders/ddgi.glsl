@@ -155,13 +155,12 @@ vec2 ddgi_sample_distance(pc_ddgi_volume vol, uint probe, vec3 dir)
  * the viewer or the tracing probe). mode PC_GI_CLASSIC uses trilinear weights only;
  * PC_GI_DDGI adds the back-face wrap, Chebyshev visibility and small-weight crush, with the
  * sample point biased along n and v by a fraction of the probe spacing (2021 paper form).
- * Beyond half a spacing outside the probe hull the result fades, over one spacing, to the
- * sky's irradiance.
+ * Beyond half a spacing outside the probe hull the result fades, over one spacing, to sky_e,
+ * the environment's irradiance at n (env_irradiance).
  * Callers make sure the field holds at least one update. */
-vec3 ddgi_irradiance(pc_ddgi_volume vol, vec3 sky, vec3 p, vec3 n, vec3 v)
+vec3 ddgi_irradiance(pc_ddgi_volume vol, vec3 sky_e, vec3 p, vec3 n, vec3 v)
 {
     uint mode = vol.info.x;
-    vec3 sky_e = PC_PI * sky;
     if (mode == PC_GI_OFF) return vec3(0.0);
     vec3 biased = p + (0.2 * n + 0.8 * v) * vol.params.y;
     vec3 grid = (biased - vol.origin.xyz) / vol.spacing.xyz;

@@ -25,7 +25,7 @@ void main()
     if (t.position.w >= 0.0) {
         vec3 p = t.position.xyz;
         vec3 v = normalize(g.view.eye.xyz - p);
-        vec3 e = ddgi_irradiance(g.ddgi, g.env.sky.rgb, p, t.normal.xyz, v);
+        vec3 e = ddgi_irradiance(g.ddgi, env_irradiance(g.env, t.normal.xyz), p, t.normal.xyz, v);
         l = view == PC_VIEW_IRRADIANCE ? e / PC_PI : l + t.albedo.rgb / PC_PI * e;
     } else if (view == PC_VIEW_IRRADIANCE) {
         l = vec3(0.0);

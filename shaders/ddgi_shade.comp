@@ -28,7 +28,7 @@ void main()
         uvec4 rec = HitRef(pc.buf0).v[slot];
         vec3 radiance = vec3(0.0);
         if (rec.x == PC_INVALID) {
-            radiance = g.env.sky.rgb;
+            radiance = env_radiance(g.env, ddgi_ray_dir(vol, ray));
         } else if (r.w >= 0.0) {
             pc_hit hit;
             hit.t = r.w;
@@ -42,7 +42,8 @@ void main()
             vec3 e = direct_irradiance(g.scene, sf.position, sf.normal, sf.geom_normal, shadow_rays);
             vec3 indirect = vec3(0.0);
             if (pc.params.y != 0u)
-                indirect = ddgi_irradiance(vol, g.env.sky.rgb, sf.position, sf.normal, -dir);
+                indirect = ddgi_irradiance(vol, env_irradiance(g.env, sf.normal), sf.position,
+                                           sf.normal, -dir);
             radiance = sf.emission + sf.albedo / PC_PI * e + min(sf.albedo, vec3(0.9)) / PC_PI * indirect;
         }
         if (any(isnan(radiance)) || any(isinf(radiance))) radiance = vec3(0.0);

@@ -204,11 +204,28 @@ PC_STRUCT(pc_view)
 }
 PC_END(pc_view);
 
-/* What the world around the scene looks like; shared by every view of a world.
- * sky: rgb radiance of rays that escape (primary misses, probe rays, paths), w unused. */
+/* What the world around the scene looks like; shared by every view of a world
+ * (renderer/environment.h, shaders/environment.glsl).
+ * sky: rgb uniform radiance, or the gradient's zenith radiance; w: image intensity;
+ * ground: rgb the gradient's nadir radiance; w: image rotation about +y (radians);
+ * irradiance: SH9 coefficients (rgb) of the cosine-convolved radiance, for probe fallbacks;
+ * image: equirectangular texels, RGBA16F as two uints each, row 0 at the zenith (0: none);
+ * mode: PC_ENV_*; width, height: of the image. */
+#define PC_ENV_UNIFORM 0u
+#define PC_ENV_GRADIENT 1u
+#define PC_ENV_IMAGE 2u
 PC_STRUCT(pc_environment)
 {
     pc_vec4 sky;
+    pc_vec4 ground;
+    pc_vec4 irradiance[9];
+    pc_u64 image;
+    pc_u32 mode;
+    pc_u32 width;
+    pc_u32 height;
+    pc_u32 pad0;
+    pc_u32 pad1;
+    pc_u32 pad2;
 }
 PC_END(pc_environment);
 
@@ -383,7 +400,9 @@ PC_OFF(pc_scene_refs, counts, 80);
 PC_CHECK(pc_view, 96);
 PC_OFF(pc_view, size, 64);
 PC_OFF(pc_view, tonemap, 80);
-PC_CHECK(pc_environment, 16);
+PC_CHECK(pc_environment, 208);
+PC_OFF(pc_environment, image, 176);
+PC_OFF(pc_environment, mode, 184);
 PC_CHECK(pc_ddgi_volume, 208);
 PC_OFF(pc_ddgi_volume, control, 160);
 PC_OFF(pc_ddgi_volume, wake, 200);
@@ -395,7 +414,7 @@ PC_OFF(pc_ddgi_volume, params, 96);
 PC_OFF(pc_ddgi_volume, info, 112);
 PC_OFF(pc_ddgi_volume, irradiance, 128);
 PC_OFF(pc_ddgi_volume, probes, 152);
-PC_CHECK(pc_globals, 416);
+PC_CHECK(pc_globals, 608);
 PC_OFF(pc_globals, view, 96);
 PC_OFF(pc_globals, ddgi, 192);
 PC_OFF(pc_globals, env, 400);

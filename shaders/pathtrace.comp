@@ -58,7 +58,7 @@ void main()
             pc_hit hit;
             rays++;
             if (!trace_ray(g.scene, org, dir, 0.0, 1e30, flags, hit)) {
-                radiance += throughput * g.env.sky.rgb;
+                radiance += throughput * env_radiance(g.env, dir);
                 break;
             }
             flags = 0u;

@@ -32,7 +32,7 @@ void main()
             o.normal = vec4(0.0);
             o.geom_normal = vec4(0.0);
             o.albedo = vec4(0.0);
-            o.emission = vec4(g.env.sky.rgb, 0.0);
+            o.emission = vec4(env_radiance(g.env, dir), 0.0);
         }
         GBufferRef(pc.buf0).v[px.y * g.view.size.x + px.x] = o;
     }

@@ -220,8 +220,8 @@ static void check_sky(fixture *f, rd_view *v, const float sky[3])
 
 static void test_sky(fixture *f)
 {
-    check_sky(f, &f->a, f->world.sky);
-    check_sky(f, &f->b, f->world.sky);
+    check_sky(f, &f->a, f->world.env.sky);
+    check_sky(f, &f->b, f->world.env.sky);
     const float sky2[3] = {2.0f, 0.125f, 0.0f};
     rd_world_set_sky(&f->world, sky2);
     check_sky(f, &f->a, sky2);

@@ -5,8 +5,11 @@
 # stops the daemon. The test itself kills and restarts the daemon (same ports and data dir), so
 # the daemon's pid lives in a file both read.
 #
-# Exit status: the tests' (0 = pass); 77 (ctest SKIP_RETURN_CODE) when Chromium, node or
-# tests/web/node_modules is missing: deploy/install-web-test-deps.sh installs them.
+# Exit status: the tests' (0 = pass). A missing piece (Chromium, Node.js 18 or newer,
+# tests/web/node_modules as the lock file pins it) is a failure, not a skip: the install step,
+# deploy/install-web-test-deps.sh, installs all of them, so a run without them is a broken set-up
+# that must not pass quietly. The only skip is asked for: PROBECAST_SKIP_WEB_TESTS=1 exits 77
+# (ctest SKIP_RETURN_CODE), for a machine that cannot run a browser.
 # Screenshots and the daemon's log go to $PROBECAST_WEB_OUT (default: ./test-output/web of the
 # working directory, i.e. the build folder under ctest).
 set -euo pipefail
@@ -20,14 +23,23 @@ here="$(cd "$(dirname "$0")" && pwd -P)"
 root="$(cd "$here/../.." && pwd)"
 chromium="${PROBECAST_CHROMIUM:-/usr/bin/chromium}"
 
-if [ ! -x "$chromium" ]; then
-  echo "SKIP: $chromium is missing (run deploy/install-web-test-deps.sh)"
+if [ "${PROBECAST_SKIP_WEB_TESTS:-0}" = 1 ]; then
+  echo "SKIP: PROBECAST_SKIP_WEB_TESTS=1"
   exit 77
 fi
-if ! command -v node >/dev/null 2>&1 || [ ! -d "$here/node_modules/playwright-core" ]; then
-  echo "SKIP: node or tests/web/node_modules is missing (run deploy/install-web-test-deps.sh)"
-  exit 77
-fi
+missing() {
+  echo "error: $1: run deploy/install-web-test-deps.sh (or set PROBECAST_SKIP_WEB_TESTS=1 to skip the browser tests)" >&2
+  exit 1
+}
+[ -x "$chromium" ] || missing "$chromium is missing"
+command -v node >/dev/null 2>&1 || missing "node is missing"
+node_major="$(node -p 'process.versions.node.split(".")[0]')"
+[ "$node_major" -ge 18 ] || missing "the tests need Node.js 18 or newer, found $(node --version)"
+# The installed driver is the one the lock file pins (npm ci runs again when the lock changes).
+want="$(node -p 'require(process.argv[1]).packages["node_modules/playwright-core"].version' "$here/package-lock.json")"
+have="$(node -p 'require(process.argv[1]).version' "$here/node_modules/playwright-core/package.json" 2>/dev/null || true)"
+[ -n "$have" ] || missing "tests/web/node_modules/playwright-core is missing"
+[ "$have" = "$want" ] || missing "tests/web/node_modules has playwright-core $have, the lock file pins $want"
 if [ ! -x "$exe" ]; then
   echo "error: $exe is not an executable" >&2
   exit 2

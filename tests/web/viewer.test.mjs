@@ -809,13 +809,20 @@ test('the render size follows the window (debounced resize messages)', { timeout
   // Resize only while the server idles (GI converged, nothing in flight): see RENDER above.
   await until(async () => (await http('GET', '/v1/stats')).json.rendering === false, 'the server to idle', 45000, 250);
   const n = await page.evaluate(() => window.__sent.length);
+  // The viewer waits 150 ms after a change; on a loaded machine a change can itself take longer
+  // than that, and then a message between changes is right. The longest gap decides.
+  const changed = [];
   for (const w of [900, 840, 800]) {
     await page.setViewportSize({ width: w, height: 500 });
+    changed.push(performance.now());
     await sleep(30);
   }
   await sleep(600);
   const resizes = await page.evaluate((k) => window.__sent.slice(k).filter((x) => x.m.type === 'resize').map((x) => x.m), n);
-  assert.deepEqual(resizes, [{ type: 'resize', width: 800, height: 500, dpr: 1 }], 'one message after the last change');
+  const gap = Math.max(changed[1] - changed[0], changed[2] - changed[1]);
+  assert.deepEqual(resizes[resizes.length - 1], { type: 'resize', width: 800, height: 500, dpr: 1 }, 'the last message has the final size');
+  if (gap < 120) assert.equal(resizes.length, 1, `one message after the last change (changes ${gap.toFixed(0)} ms apart)`);
+  else assert.ok(resizes.length <= 3, `at most one message per change (changes ${gap.toFixed(0)} ms apart)`);
   const want = serverSize(800, 500, MAX_PIXELS);
   await page.waitForFunction((w) => {
     const h = window.probecast.state().header;

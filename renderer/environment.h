@@ -1,0 +1,67 @@
+/* environment.h: the light that reaches the scene from outside it (issue "environment light"):
+ * a uniform radiance, a two-colour gradient from nadir to zenith, or an equirectangular HDR
+ * image (a Radiance .hdr file). Primary misses, probe rays and the path tracer see it through
+ * env_radiance() (shaders/environment.glsl); probe fallbacks use its irradiance, kept as the nine
+ * spherical-harmonic coefficients of the cosine-convolved radiance (Ramamoorthi and Hanrahan
+ * 2001), exact for the uniform and gradient skies (their radiance is linear in the direction).
+ *
+ * Plain CPU code: parsing, the SH projection and the GPU record (world.c uploads the image).
+ */
+#ifndef RD_ENVIRONMENT_H
+#define RD_ENVIRONMENT_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "shaders/gpu_types.h"
+
+/* Images are reduced (box filter, by halves) until at most this wide; the height is half. */
+#define RD_ENV_IMAGE_MAX_WIDTH 4096u
+/* The largest .hdr file header line and dimensions accepted. */
+#define RD_ENV_HDR_MAX_DIM 32768u
+
+typedef enum rd_env_mode {
+    RD_ENV_UNIFORM = PC_ENV_UNIFORM,
+    RD_ENV_GRADIENT = PC_ENV_GRADIENT,
+    RD_ENV_IMAGE = PC_ENV_IMAGE,
+} rd_env_mode;
+
+/* Linear RGB radiance per texel, equirectangular: row 0 looks at the zenith (+y), column 0 at
+ * -z, u grows toward +x (u = atan2(x, -z) / 2pi + 1/2, v = acos(y) / pi). */
+typedef struct rd_env_image {
+    uint32_t width, height;
+    float *rgb; /* width * height * 3 */
+} rd_env_image;
+
+typedef struct rd_environment {
+    rd_env_mode mode;
+    float sky[3];              /* uniform radiance, or the gradient's zenith radiance */
+    float ground[3];           /* the gradient's nadir radiance */
+    float intensity;           /* scales the image (1 = as stored) */
+    float rotation;            /* of the image about +y, radians (the image turns toward +x) */
+    const rd_env_image *image; /* RD_ENV_IMAGE only; not owned */
+} rd_environment;
+
+/* Parses a Radiance RGBE file (.hdr/.pic: "#?RADIANCE" or "#?RGBE", FORMAT=32-bit_rle_rgbe,
+ * "-Y H +X W" orientation, flat or run-length encoded scanlines). Takes no ownership of data;
+ * out->rgb is malloc'd. False with a sentence in err for anything else (truncated, other
+ * orientation or format, oversized, bad run lengths). */
+bool rd_env_image_parse_hdr(const uint8_t *data, size_t len, rd_env_image *out, char *err,
+                            size_t errlen);
+/* Halves the image (2x2 box) until width <= max_width. */
+void rd_env_image_limit(rd_env_image *img, uint32_t max_width);
+void rd_env_image_free(rd_env_image *img);
+
+/* Radiance of the environment toward unit direction d (the CPU twin of env_radiance, for
+ * tests and references). */
+void rd_env_radiance(const rd_environment *e, const float d[3], float out[3]);
+/* The SH9 coefficients (RGB) of the irradiance E(n) = integral of L(w) max(0, n.w) dw. */
+void rd_env_irradiance_sh(const rd_environment *e, float sh[9][3]);
+/* E(n) from those coefficients. */
+void rd_env_irradiance_eval(const float sh[9][3], const float n[3], float out[3]);
+
+/* The GPU record (image address filled by the caller). */
+void rd_env_fill_gpu(const rd_environment *e, const float sh[9][3], pc_environment *g);
+
+#endif
