@@ -1,13 +1,14 @@
 /* The contract: every operation protocol/openapi.yaml lists exists on the running server and
  * answers only with statuses it documents (a valid request, a malformed body, a missing
- * token, an unknown id), errors in the documented shape. Also: /v1/openapi.yaml serves the
- * file itself. */
+ * token, an unknown id), errors in the documented shape; GET /v1/stream upgrades to the
+ * WebSocket on the API's own address. Also: /v1/openapi.yaml serves the file itself. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "serve_util.h"
 #include "test_util.h"
+#include "ws_client.h"
 
 typedef struct op {
     char path[64];
@@ -113,6 +114,35 @@ static void probe(const op *o, const char *path, const char *type, const void *b
     pc_http_response_free(&r);
 }
 
+/* GET /v1/stream is a WebSocket handshake on the API's own address: a plain GET, an upgrade
+ * with and without the token and one from a foreign page, each answered with a documented
+ * status (101 for the upgrade). */
+static void probe_stream(const op *o)
+{
+    probe(o, o->path, NULL, NULL, 0, true, 400, "not an upgrade");
+    static const struct {
+        const char *path, *headers, *what;
+        int want;
+    } cases[] = {
+        {"/v1/stream", "Authorization: Bearer s3cret\r\nSec-WebSocket-Protocol: probecast.v2\r\n",
+         "upgrade", 101},
+        {"/v1/stream?token=s3cret", "Sec-WebSocket-Protocol: probecast.v1\r\n", "query token", 101},
+        {"/v1/stream", "Sec-WebSocket-Protocol: probecast.v2\r\n", "no token", 401},
+        {"/v1/stream?token=s3cret", "Origin: http://evil.example\r\n", "foreign origin", 403},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        pc_ws ws;
+        int rc = pc_ws_connect(&ws, "127.0.0.1", d.http_port, cases[i].path, cases[i].headers,
+                               10000);
+        CHECKF(documented(o, ws.http_status), "GET /v1/stream (%s): status %d is not documented",
+               cases[i].what, ws.http_status);
+        CHECKF(ws.http_status == cases[i].want && (rc == 0) == (cases[i].want == 101),
+               "GET /v1/stream (%s): status %d, expected %d", cases[i].what, ws.http_status,
+               cases[i].want);
+        pc_ws_close(&ws);
+    }
+}
+
 /* A valid body for each mutating operation. */
 static const char *valid_body(const op *o)
 {
@@ -143,7 +173,7 @@ int main(void)
     CHECK(spec != NULL);
     if (!spec) return test_finish();
     parse_spec(spec);
-    CHECKF(nops >= 22, "%d operations found in the spec", nops);
+    CHECKF(nops >= 23, "%d operations found in the spec", nops);
     /* every operation is named (uniquely) and documents its client errors */
     for (int i = 0; i < nops; i++) {
         int client_errors = 0;
@@ -194,6 +224,10 @@ int main(void)
             snprintf(path, sizeof path, "%.63s", o->path);
         fprintf(stderr, "checking %s %s (%d documented responses)\n", o->method, path, o->ncodes);
         bool mutating = strcmp(o->method, "GET") != 0;
+        if (strcmp(o->path, "/v1/stream") == 0) {
+            probe_stream(o);
+            continue;
+        }
         if (!mutating) {
             probe(o, path, NULL, NULL, 0, true, 200, "valid");
             if (brace) {
