@@ -414,8 +414,8 @@ bool srv_json_viewer_msg(const char *text, size_t len, srv_viewer_msg *out, srv_
         }
         if (ok && !have) ok = BAD("An ack message needs 'frame'.");
     } else {
-        ok = BAD("Unknown message type '%.40s' (camera, resize, follow or ack).",
-                 type->valuestring);
+        ok =
+            BAD("Unknown message type '%.40s' (camera, resize, follow or ack).", type->valuestring);
     }
     cJSON_Delete(j);
     return ok;

@@ -26,6 +26,7 @@
 #define SRV_ERR_TOO_LARGE "payload_too_large"
 #define SRV_ERR_MEDIA_TYPE "unsupported_media_type"
 #define SRV_ERR_INVALID_GLTF "invalid_gltf"
+#define SRV_ERR_INVALID_IMAGE "invalid_image"
 #define SRV_ERR_UNAVAILABLE "unavailable"
 #define SRV_ERR_GPU "gpu_error"
 #define SRV_ERR_INTERNAL "internal_error"

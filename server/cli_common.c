@@ -35,8 +35,8 @@ bool cli_parse_floats(const char *opt, const char *s, float *out, int n)
         errno = 0;
         float v = strtof(p, &end);
         if (end == p || errno || !isfinite(v) || (i < n - 1 ? *end != ',' : *end != '\0')) {
-            fprintf(stderr, "probecast: %s expects %d comma-separated number%s, got '%s'\n", opt,
-                    n, n > 1 ? "s" : "", s ? s : "");
+            fprintf(stderr, "probecast: %s expects %d comma-separated number%s, got '%s'\n", opt, n,
+                    n > 1 ? "s" : "", s ? s : "");
             return false;
         }
         out[i] = v;

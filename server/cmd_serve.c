@@ -474,6 +474,24 @@ int cli_serve(int argc, char **argv)
     srv_ws_set_http_port(ws, srv_http_port(http));
     srv_encoder_pool_set_listener(enc, srv_ws_frame_ready, ws);
     srv_snapshot_set_listener(snap, srv_ws_event_ready, ws);
+    /* the saved environment image comes back before the first frame (the render loop takes
+     * commands in order) */
+    if (saved.environment) {
+        rd_env_image *img = calloc(1, sizeof *img);
+        if (!img) abort();
+        char env_err[256];
+        if (rd_env_image_parse_hdr(saved.environment, saved.environment_size, img, env_err,
+                                   sizeof env_err)) {
+            rd_env_image_limit(img, RD_ENV_IMAGE_MAX_WIDTH);
+            srv_cmd *c = srv_cmd_new(SRV_CMD_SET_ENVIRONMENT);
+            c->env_image = img;
+            srv_render_post(loop, c); /* takes c */
+        } else {
+            srv_warn("serve", "the saved environment image no longer loads (%s); not used",
+                     env_err);
+            free(img);
+        }
+    }
     if (!srv_render_loop_start(loop) || !srv_ws_start(ws)) {
         fprintf(stderr, "probecast serve: cannot start threads\n");
         goto out;

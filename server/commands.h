@@ -13,6 +13,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "renderer/environment.h"
 #include "renderer/gpu_scene.h"
 #include "renderer/scene.h"
 
@@ -156,6 +157,7 @@ typedef enum srv_cmd_kind {
     SRV_CMD_VIEW_CLOSE,      /* its connection left: free the view */
     SRV_CMD_VIEW_WATCH,      /* delta connections more (or fewer) show view `view` */
     SRV_CMD_FRAME_REQUEST,   /* GET /v1/frame.jpg: reply {"after": frame id} to wait past */
+    SRV_CMD_SET_ENVIRONMENT, /* PUT/DELETE /v1/environment: env_image, or NULL to drop it */
 } srv_cmd_kind;
 
 /* The render thread's answer: an HTTP status and a JSON body (malloc'd, may be NULL). */
@@ -167,19 +169,20 @@ typedef struct srv_reply {
 
 typedef struct srv_cmd {
     srv_cmd_kind kind;
-    uint32_t id;  /* light or node id */
+    uint32_t id;   /* light or node id */
     uint32_t view; /* the view a camera, resize, watch or frame request is for (0: default) */
     int delta;     /* VIEW_WATCH */
-    bool replace; /* SET_CAMERA: PUT (position and a direction are required) */
+    bool replace;  /* SET_CAMERA: PUT (position and a direction are required) */
     srv_camera_patch camera;
     srv_light_patch light;
     srv_node_patch node;
     srv_settings_patch settings;
     srv_playback_patch playback;
-    unsigned width, height; /* VIEWER_RESIZE: device pixels */
-    rd_scene *scene;        /* REPLACE_SCENE: validated scene, owned by the command */
+    unsigned width, height;      /* VIEWER_RESIZE: device pixels */
+    rd_scene *scene;             /* REPLACE_SCENE: validated scene, owned by the command */
     rd_gpu_scene_prep *prepared; /* REPLACE_SCENE: its BVHs, built by the poster (owned) */
-    char source[128];       /* REPLACE_SCENE: where it came from ("upload", "builtin:...") */
+    char source[128];            /* REPLACE_SCENE: where it came from ("upload", "builtin:...") */
+    rd_env_image *env_image;     /* SET_ENVIRONMENT: the parsed HDR image (owned), NULL = none */
 
     /* Owned by render_loop.c. */
     uint64_t ticket; /* input order (see srv_render_post) */

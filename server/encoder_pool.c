@@ -28,8 +28,6 @@ static void *xcalloc(size_t n, size_t size)
     return p;
 }
 
-
-
 /* ---- images and frames ----------------------------------------------------------------------- */
 
 /* Freed pixel buffers kept for reuse: a frame of the same size follows soon, and a fresh
@@ -85,7 +83,8 @@ static void pixels_give(uint8_t *p, size_t cap)
 void srv_image_pool_drain(void)
 {
     pthread_mutex_lock(&pool_mu);
-    while (pool_count) free(pool[--pool_count].data);
+    while (pool_count)
+        free(pool[--pool_count].data);
     pthread_mutex_unlock(&pool_mu);
 }
 
@@ -188,7 +187,7 @@ struct srv_encoder_pool {
     struct {
         uint32_t view_id;
         srv_frame *frame;
-    } *latest;
+    } * latest;
     unsigned latest_count, latest_cap;
     pthread_cond_t published; /* broadcast on every publication (srv_encoder_wait_frame) */
     srv_frame_listener listener;

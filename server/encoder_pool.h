@@ -5,7 +5,8 @@
  * quality, spread over the threads), and publishes the frame once all its variants are done
  * and only if it is newer than its view's published one: latest frame wins, per view. Jobs of a
  * view's older frames that have not started are dropped when a newer frame of that view
- * arrives, so a slow encoder never builds a queue. Encoders see only CPU memory: never a GPU object.
+ * arrives, so a slow encoder never builds a queue. Encoders see only CPU memory: never a GPU
+ * object.
  *
  * Large images (at least the stripe threshold's pixels, with more than one thread) are encoded in
  * horizontal stripes (jpeg_striped.h): each variant becomes one job per stripe, spread over the

@@ -15,11 +15,11 @@ typedef struct eval_row {
     char mode[16];   /* direct, classic, ddgi */
     unsigned probes[3], rays, updates;
     float hysteresis;
-    double gpu_ms;   /* GPU time of one steady-state frame (one probe update + shading) */
-    double ref_ms;   /* GPU time of the reference render */
+    double gpu_ms;        /* GPU time of one steady-state frame (one probe update + shading) */
+    double ref_ms;        /* GPU time of the reference render */
     double noise_rel_mse; /* relMSE between two references of different seeds */
     rd_image_error err;
-    bool pareto;     /* on the speed/error Pareto front of its scene (by rel_mse) */
+    bool pareto; /* on the speed/error Pareto front of its scene (by rel_mse) */
 } eval_row;
 
 /* Marks each row's pareto flag (per scene: no other row is both faster and more accurate). */

@@ -45,6 +45,7 @@ static const unsigned route_methods[R_COUNT] = {
     [R_VIEW_CAMERA] = M_GET | M_HEAD | M_PUT | M_PATCH,
     [R_ANIMATION] = M_GET | M_HEAD | M_PATCH,
     [R_STREAM] = M_GET,
+    [R_ENVIRONMENT] = M_PUT | M_DELETE,
     [R_UNKNOWN] = 0,
 };
 
@@ -174,11 +175,12 @@ static route match(const char *url, uint32_t *id, bool *id_ok)
     static const struct {
         const char *path;
         route r;
-    } fixed[] = {
-        {"/v1/health", R_HEALTH},       {"/v1/stats", R_STATS},     {"/v1/openapi.yaml", R_OPENAPI},
-        {"/v1/scene", R_SCENE},         {"/v1/camera", R_CAMERA},   {"/v1/lights", R_LIGHTS},
-        {"/v1/settings", R_SETTINGS},   {"/v1/frame.jpg", R_FRAME}, {"/v1/views", R_VIEWS},
-        {"/v1/animation", R_ANIMATION}, {"/v1/stream", R_STREAM}};
+    } fixed[] = {{"/v1/health", R_HEALTH},        {"/v1/stats", R_STATS},
+                 {"/v1/openapi.yaml", R_OPENAPI}, {"/v1/scene", R_SCENE},
+                 {"/v1/camera", R_CAMERA},        {"/v1/lights", R_LIGHTS},
+                 {"/v1/settings", R_SETTINGS},    {"/v1/frame.jpg", R_FRAME},
+                 {"/v1/views", R_VIEWS},          {"/v1/animation", R_ANIMATION},
+                 {"/v1/stream", R_STREAM},        {"/v1/environment", R_ENVIRONMENT}};
     for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; i++)
         if (strcmp(url, fixed[i].path) == 0) return fixed[i].r;
     if (strncmp(url, "/v1/lights/", 11) == 0) {
@@ -275,6 +277,15 @@ static bool refuse_early(srv_http *h, struct MHD_Connection *conn, request *rq,
                 mt ? mt : "no Content-Type");
         rq->body = BODY_SCENE;
         rq->limit = h->cfg.max_upload;
+    } else if (rq->route == R_ENVIRONMENT && rq->method == M_PUT) {
+        if (mt && strcmp(mt, "image/vnd.radiance") != 0 &&
+            strcmp(mt, "application/octet-stream") != 0)
+            return REFUSE(415, SRV_ERR_MEDIA_TYPE,
+                          "An environment is uploaded as image/vnd.radiance (.hdr) or "
+                          "application/octet-stream (got %s).",
+                          mt);
+        rq->body = BODY_SCENE; /* raw bytes, counted against the upload cap */
+        rq->limit = h->cfg.max_upload;
     } else if (mutating && rq->method != M_DELETE) {
         if (mt && strcmp(mt, "application/json") != 0)
             return REFUSE(415, SRV_ERR_MEDIA_TYPE, "The body must be application/json (got %s).",
@@ -347,6 +358,8 @@ static enum MHD_Result dispatch(srv_http *h, struct MHD_Connection *conn, reques
         return srv_http_handle_frame(h, conn, rq);
     case R_STREAM:
         return srv_http_handle_stream(h, conn, rq);
+    case R_ENVIRONMENT:
+        return srv_http_handle_environment(h, conn, rq);
     case R_SCENE:
         if (rq->method == M_PUT) return srv_http_handle_upload(h, conn, rq);
         return srv_http_handle_json_route(h, conn, rq);

@@ -30,8 +30,9 @@ typedef enum route {
     R_VIEWS,
     R_VIEW_CAMERA,
     R_ANIMATION,
-    R_STREAM,  /* GET /v1/stream: the WebSocket, handed to the stream (http_stream.c) */
-    R_UNKNOWN, /* under /v1/ but no such resource */
+    R_STREAM,      /* GET /v1/stream: the WebSocket, handed to the stream (http_stream.c) */
+    R_ENVIRONMENT, /* PUT, DELETE /v1/environment: the HDR image (http_routes.c) */
+    R_UNKNOWN,     /* under /v1/ but no such resource */
     R_COUNT
 } route;
 
@@ -96,6 +97,7 @@ void srv_http_stats_snapshot(srv_http *h, srv_stats_snapshot *s);
 enum MHD_Result srv_http_handle_health(srv_http *h, struct MHD_Connection *conn, request *rq);
 enum MHD_Result srv_http_handle_frame(srv_http *h, struct MHD_Connection *conn, request *rq);
 enum MHD_Result srv_http_handle_upload(srv_http *h, struct MHD_Connection *conn, request *rq);
+enum MHD_Result srv_http_handle_environment(srv_http *h, struct MHD_Connection *conn, request *rq);
 enum MHD_Result srv_http_handle_json_route(srv_http *h, struct MHD_Connection *conn, request *rq);
 /* ---- GET /v1/stream (http_stream.c) ---- */
 enum MHD_Result srv_http_handle_stream(srv_http *h, struct MHD_Connection *conn, request *rq);

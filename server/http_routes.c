@@ -187,6 +187,39 @@ enum MHD_Result srv_http_handle_upload(srv_http *h, struct MHD_Connection *conn,
     return r;
 }
 
+/* PUT /v1/environment: a Radiance .hdr, parsed and reduced here (never on the render thread),
+ * becomes the environment (sky_mode image); DELETE drops it. */
+enum MHD_Result srv_http_handle_environment(srv_http *h, struct MHD_Connection *conn, request *rq)
+{
+    srv_cmd *c = srv_cmd_new(SRV_CMD_SET_ENVIRONMENT);
+    if (rq->method == M_PUT) {
+        char err[256] = "";
+        rd_env_image *img = calloc(1, sizeof *img);
+        if (!img) abort();
+        if (!rd_env_image_parse_hdr(rq->data, rq->len, img, err, sizeof err)) {
+            free(img);
+            srv_cmd_unref(c);
+            srv_info("http", "environment upload of %zu bytes rejected: %s", rq->len, err);
+            return srv_http_respond_error(h, conn, rq, 422, SRV_ERR_INVALID_IMAGE, "%s", err);
+        }
+        rd_env_image_limit(img, RD_ENV_IMAGE_MAX_WIDTH);
+        c->env_image = img;
+    }
+    srv_render_call(h->cfg.loop, c, SCENE_TIMEOUT_MS);
+    bool ok = c->reply.status == 200 || c->reply.status == 204;
+    if (ok && h->cfg.persist) {
+        srv_persist_post_environment(h->cfg.persist, rq->method == M_PUT ? rq->data : NULL,
+                                     rq->method == M_PUT ? rq->len : 0);
+        if (rq->method == M_PUT) {
+            rq->data = NULL;
+            rq->len = rq->cap = 0;
+        }
+    }
+    enum MHD_Result r = srv_http_respond_reply(h, conn, rq, c);
+    srv_cmd_unref(c);
+    return r;
+}
+
 /* Answers a GET from the published snapshot (never waits for the render thread). */
 static enum MHD_Result handle_get(srv_http *h, struct MHD_Connection *conn, request *rq)
 {

@@ -160,6 +160,10 @@ void srv_cmd_unref(srv_cmd *c)
         rd_gpu_scene_prep_destroy(c->prepared);
         free(c->prepared);
     }
+    if (c->env_image) {
+        rd_env_image_free(c->env_image);
+        free(c->env_image);
+    }
     free(c->reply.body);
     pthread_cond_destroy(&c->cv);
     pthread_mutex_destroy(&c->mu);

@@ -6,17 +6,16 @@
 
 static void usage(FILE *f)
 {
-    fprintf(f,
-            "usage: probecast COMMAND [OPTIONS]\n"
-            "\n"
-            "Commands:\n"
-            "  render SCENE   render a glTF scene (or builtin:NAME) to an image\n"
-            "  serve          run the daemon: HTTP API, WebSocket frame stream, browser viewer\n"
-            "  eval           speed against error of GI settings on the hard-case suite\n"
-            "\n"
-            "Options:\n"
-            "  --help         this text (also: probecast COMMAND --help)\n"
-            "  --version      print the version\n");
+    fprintf(f, "usage: probecast COMMAND [OPTIONS]\n"
+               "\n"
+               "Commands:\n"
+               "  render SCENE   render a glTF scene (or builtin:NAME) to an image\n"
+               "  serve          run the daemon: HTTP API, WebSocket frame stream, browser viewer\n"
+               "  eval           speed against error of GI settings on the hard-case suite\n"
+               "\n"
+               "Options:\n"
+               "  --help         this text (also: probecast COMMAND --help)\n"
+               "  --version      print the version\n");
 }
 
 int main(int argc, char **argv)

@@ -30,6 +30,9 @@ struct srv_persist {
     cJSON *state;
     uint64_t state_generation;
     char state_source[128];
+    bool env_pending; /* env bytes to write, or (env NULL) the file to remove */
+    uint8_t *env;
+    size_t env_size;
 };
 
 static int write_all(int fd, const void *data, size_t size)
@@ -94,6 +97,23 @@ static void write_scene(srv_persist *p, uint64_t gen, const uint8_t *bytes, size
                  size);
 }
 
+static void write_environment(srv_persist *p, const uint8_t *bytes, size_t size)
+{
+    char path[1100];
+    path_of(p, "environment.hdr", path, sizeof path);
+    int rc = 0;
+    if (bytes)
+        rc = srv_write_file_atomic(path, bytes, size);
+    else if (unlink(path) != 0 && errno != ENOENT)
+        rc = errno;
+    if (rc != 0)
+        srv_error("persist", "cannot save the environment in %s: %s", p->dir, strerror(rc));
+    else if (bytes)
+        srv_info("persist", "saved the environment image (%zu bytes)", size);
+    else
+        srv_info("persist", "removed the environment image");
+}
+
 static void write_state(srv_persist *p, uint64_t gen, const char *source, cJSON *state)
 {
     cJSON *doc = cJSON_CreateObject();
@@ -119,8 +139,13 @@ static void *persist_main(void *arg)
     srv_persist *p = arg;
     pthread_mutex_lock(&p->mu);
     for (;;) {
-        while (!p->stop && !p->scene && !p->state)
+        while (!p->stop && !p->scene && !p->state && !p->env_pending)
             pthread_cond_wait(&p->cv, &p->mu);
+        bool env_pending = p->env_pending;
+        uint8_t *env = p->env;
+        size_t env_size = p->env_size;
+        p->env_pending = false;
+        p->env = NULL;
         uint8_t *scene = p->scene;
         size_t scene_size = p->scene_size;
         uint64_t scene_gen = p->scene_generation;
@@ -136,10 +161,12 @@ static void *persist_main(void *arg)
             write_scene(p, scene_gen, scene, scene_size);
             free(scene);
         }
+        if (env_pending) write_environment(p, env, env_size);
+        free(env);
         if (state) write_state(p, state_gen, source, state);
         if (stop) {
             pthread_mutex_lock(&p->mu);
-            if (!p->scene && !p->state) break;
+            if (!p->scene && !p->state && !p->env_pending) break;
             continue;
         }
         /* coalesce state documents: the newest of the next interval wins */
@@ -190,6 +217,7 @@ void srv_persist_close(srv_persist *p)
     pthread_mutex_unlock(&p->mu);
     pthread_join(p->thread, NULL);
     free(p->scene);
+    free(p->env);
     cJSON_Delete(p->state);
     pthread_cond_destroy(&p->cv);
     pthread_mutex_destroy(&p->mu);
@@ -211,6 +239,21 @@ void srv_persist_post_scene(srv_persist *p, uint64_t generation, uint8_t *bytes,
         p->scene_size = size;
         p->scene_generation = generation;
     }
+    pthread_cond_signal(&p->cv);
+    pthread_mutex_unlock(&p->mu);
+}
+
+void srv_persist_post_environment(srv_persist *p, uint8_t *bytes, size_t size)
+{
+    if (!p) {
+        free(bytes);
+        return;
+    }
+    pthread_mutex_lock(&p->mu);
+    free(p->env); /* the newest wins */
+    p->env = bytes;
+    p->env_size = size;
+    p->env_pending = true;
     pthread_cond_signal(&p->cv);
     pthread_mutex_unlock(&p->mu);
 }
@@ -288,6 +331,8 @@ void srv_persist_load(srv_persist *p, srv_saved *out)
         cJSON_Delete(m);
         free(meta);
     }
+    path_of(p, "environment.hdr", path, sizeof path);
+    out->environment = read_file(path, (size_t)1 << 31, &out->environment_size);
     path_of(p, "state.json", path, sizeof path);
     uint8_t *text = read_file(path, 64u << 20, &size);
     if (text) {
@@ -313,6 +358,7 @@ void srv_persist_load(srv_persist *p, srv_saved *out)
 void srv_saved_free(srv_saved *s)
 {
     free(s->scene);
+    free(s->environment);
     cJSON_Delete(s->state);
     memset(s, 0, sizeof *s);
 }

@@ -2,6 +2,7 @@
  *
  * DIR/scene.bin        the bytes of the last accepted uploaded scene (.glb or .gltf)
  * DIR/scene.json       {"generation": G, "size": N} written after scene.bin
+ * DIR/environment.hdr the environment image of PUT /v1/environment (gone after DELETE)
  * DIR/state.json       {"version": 1, "generation": G, "source": S, "state": {camera,
  *                      settings, lights, nodes}} (scene_state.h's document)
  * Every file is written as a temporary file, fsync'ed, renamed over the old one, and the
@@ -27,6 +28,8 @@ srv_persist *srv_persist_open(const char *dir, char *err, size_t errlen);
 void srv_persist_close(srv_persist *p);
 
 typedef struct srv_saved {
+    uint8_t *environment; /* malloc'd bytes of the saved environment image, or NULL */
+    size_t environment_size;
     uint8_t *scene; /* malloc'd bytes of the saved upload, or NULL */
     size_t scene_size;
     uint64_t scene_generation;
@@ -42,6 +45,8 @@ void srv_saved_free(srv_saved *s);
 
 /* Queues the bytes of an accepted upload (ownership of bytes passes to p; free()d). */
 void srv_persist_post_scene(srv_persist *p, uint64_t generation, uint8_t *bytes, size_t size);
+/* Queues the bytes of an accepted environment image (taken, free()d), or its removal (NULL). */
+void srv_persist_post_environment(srv_persist *p, uint8_t *bytes, size_t size);
 /* Queues a state document (ownership of doc passes to p). */
 void srv_persist_post_state(srv_persist *p, uint64_t generation, const char *source, cJSON *doc);
 

@@ -209,6 +209,7 @@ static void apply(srv_render_loop *l, srv_cmd *c)
     case SRV_CMD_PATCH_NODE:
     case SRV_CMD_PATCH_SETTINGS:
     case SRV_CMD_PATCH_ANIMATION:
+    case SRV_CMD_SET_ENVIRONMENT:
         world_changed(l, srv_scene_service_apply(&l->svc, c), now);
         break;
     default:

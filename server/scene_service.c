@@ -79,12 +79,19 @@ static cJSON *scene_json(const srv_scene_service *svc)
     cJSON_AddNumberToObject(bvh, "tlas_build_ms", svc->gs.tlas_build_ms);
     cJSON_AddNumberToObject(bvh, "upload_ms", svc->gs.upload_ms);
     cJSON_AddItemToObject(j, "probes", probes_json(svc));
+    if (svc->world.image.width) {
+        cJSON *im = cJSON_AddObjectToObject(j, "environment_image");
+        cJSON_AddNumberToObject(im, "width", svc->world.image.width);
+        cJSON_AddNumberToObject(im, "height", svc->world.image.height);
+    } else {
+        cJSON_AddNullToObject(j, "environment_image");
+    }
     if (svc->st.default_lighting) {
         cJSON *dl = cJSON_AddObjectToObject(j, "default_lighting");
         cJSON_AddNumberToObject(dl, "light", svc->st.default_light_id);
-        float sky[3];
-        srv_state_sky(&svc->st, sky);
-        srv_json_add_floats(dl, "sky", sky, 3);
+        rd_environment env;
+        srv_state_environment(&svc->st, &env);
+        srv_json_add_floats(dl, "sky", env.sky, 3);
     } else {
         cJSON_AddFalseToObject(j, "default_lighting");
     }
@@ -235,12 +242,12 @@ static bool node_bounds(const srv_scene_service *svc, uint32_t node, float lo[3]
     return any;
 }
 
-/* The world's sky: the setting, or the default environment (scene_state.h). */
+/* The world's environment: the settings', or the default one (scene_state.h). */
 static void apply_sky(srv_scene_service *svc)
 {
-    float sky[3];
-    srv_state_sky(&svc->st, sky);
-    rd_world_set_sky(&svc->world, sky);
+    rd_environment e;
+    srv_state_environment(&svc->st, &e);
+    rd_world_set_environment(&svc->world, &e);
 }
 
 /* Default lighting ended (the user added a light, or took the key light over): the default
@@ -462,6 +469,37 @@ static unsigned replace_scene(srv_scene_service *svc, srv_cmd *c)
     return SRV_CHANGE_VIEWS | SRV_CHANGE_SCENE | SRV_CHANGE_PERSIST;
 }
 
+/* PUT /v1/environment (an image: the mode becomes image) or DELETE (none: image mode shows the
+ * sky uniformly, so the mode goes back to uniform). */
+static unsigned set_environment_image(srv_scene_service *svc, srv_cmd *c)
+{
+    char err[256];
+    bool upload = c->env_image != NULL;
+    rd_env_image none = {0};
+    rd_vk_result vr =
+        rd_world_set_environment_image(&svc->world, upload ? c->env_image : &none, err, sizeof err);
+    if (vr != RD_VK_OK) {
+        srv_cmd_fail(c, 500, SRV_ERR_GPU, err);
+        apply_sky(svc);
+        return 0;
+    }
+    svc->st.settings.sky_mode = upload ? PC_ENV_IMAGE : PC_ENV_UNIFORM;
+    apply_sky(svc);
+    lighting_changed(svc, PC_DDGI_WAKE_AGE_LIGHT);
+    srv_snapshot_publish(svc->snap, SRV_DOC_SETTINGS, srv_json_settings(&svc->st.settings), false);
+    publish_scene(svc);
+    if (upload) {
+        cJSON *j = cJSON_CreateObject();
+        cJSON_AddNumberToObject(j, "width", svc->world.image.width);
+        cJSON_AddNumberToObject(j, "height", svc->world.image.height);
+        cJSON_AddStringToObject(j, "sky_mode", "image");
+        srv_cmd_complete_json(c, 200, j);
+    } else {
+        srv_cmd_complete(c, 204, NULL);
+    }
+    return SRV_CHANGE_VIEWS | SRV_CHANGE_PERSIST;
+}
+
 static unsigned patch_settings(srv_scene_service *svc, srv_cmd *c)
 {
     srv_api_error e;
@@ -485,7 +523,7 @@ static unsigned patch_settings(srv_scene_service *svc, srv_cmd *c)
         }
         publish_probes(svc);
     }
-    if (c->settings.has & SRV_SET_SKY) {
+    if (c->settings.has & SRV_SET_ENV_FIELDS) {
         apply_sky(svc);
         lighting_changed(svc, PC_DDGI_WAKE_AGE_LIGHT);
     }
@@ -513,6 +551,8 @@ unsigned srv_scene_service_apply(srv_scene_service *svc, srv_cmd *c)
         return patch_settings(svc, c);
     case SRV_CMD_PATCH_ANIMATION:
         return patch_playback(svc, c);
+    case SRV_CMD_SET_ENVIRONMENT:
+        return set_environment_image(svc, c);
     case SRV_CMD_PATCH_LIGHT: {
         int i = srv_state_light_index(st, c->id);
         if (i < 0) {

@@ -40,10 +40,10 @@ typedef struct srv_scene_service {
     rd_world world;
     bool world_ok;
     uint64_t generation_counter;
-    unsigned gi_updates;  /* probe updates since the last change that woke probes */
-    unsigned pt_target;   /* path tracing: samples per view to accumulate (0: not path tracing) */
-    bool was_converged;   /* as last published in the scene document */
-    srv_animation anim;   /* the demo light */
+    unsigned gi_updates;   /* probe updates since the last change that woke probes */
+    unsigned pt_target;    /* path tracing: samples per view to accumulate (0: not path tracing) */
+    bool was_converged;    /* as last published in the scene document */
+    srv_animation anim;    /* the demo light */
     srv_playback playback; /* the scene's own (glTF) animations */
     bool *animated;        /* parallel to st.scene.nodes: an animation moves the node */
 } srv_scene_service;

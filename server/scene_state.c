@@ -48,14 +48,25 @@ bool srv_scene_brings_light(const rd_scene *s)
     return false;
 }
 
-void srv_state_sky(const srv_scene_state *st, float sky[3])
+bool srv_settings_light_the_scene(const srv_settings *s)
 {
-    const float *set = st->settings.sky;
-    bool black = set[0] == 0 && set[1] == 0 && set[2] == 0;
-    if (st->default_lighting && black) {
-        sky[0] = SRV_DEFAULT_SKY_R, sky[1] = SRV_DEFAULT_SKY_G, sky[2] = SRV_DEFAULT_SKY_B;
-    } else {
-        memcpy(sky, set, 3 * sizeof *sky);
+    bool sky = s->sky[0] > 0 || s->sky[1] > 0 || s->sky[2] > 0;
+    bool ground = s->sky_ground[0] > 0 || s->sky_ground[1] > 0 || s->sky_ground[2] > 0;
+    return sky || (s->sky_mode == PC_ENV_GRADIENT && ground) || s->sky_mode == PC_ENV_IMAGE;
+}
+
+void srv_state_environment(const srv_scene_state *st, rd_environment *e)
+{
+    const srv_settings *s = &st->settings;
+    memset(e, 0, sizeof *e);
+    e->mode = (rd_env_mode)s->sky_mode;
+    memcpy(e->sky, s->sky, sizeof e->sky);
+    memcpy(e->ground, s->sky_ground, sizeof e->ground);
+    e->intensity = s->sky_intensity;
+    e->rotation = s->sky_rotation * 3.14159265358979323846f / 180.0f;
+    if (st->default_lighting && !srv_settings_light_the_scene(s)) {
+        e->mode = RD_ENV_UNIFORM;
+        e->sky[0] = SRV_DEFAULT_SKY_R, e->sky[1] = SRV_DEFAULT_SKY_G, e->sky[2] = SRV_DEFAULT_SKY_B;
     }
 }
 
@@ -92,9 +103,8 @@ static void settle_default_lighting(srv_scene_state *st)
 {
     if (st->default_lighting && srv_state_light_index(st, st->default_light_id) < 0)
         st->default_lighting = false;
-    const float *sky = st->settings.sky;
-    if (!st->default_lighting && !srv_scene_brings_light(&st->scene) && sky[0] == 0 &&
-        sky[1] == 0 && sky[2] == 0)
+    if (!st->default_lighting && !srv_scene_brings_light(&st->scene) &&
+        !srv_settings_light_the_scene(&st->settings))
         add_default_key_light(st);
 }
 

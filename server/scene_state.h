@@ -14,6 +14,7 @@
 #include "commands.h"
 #include "renderer/camera.h"
 #include "renderer/ddgi.h"
+#include "renderer/environment.h"
 
 typedef struct srv_scene_state {
     rd_scene scene;
@@ -50,9 +51,12 @@ void srv_state_set_scene(srv_scene_state *st, rd_scene *scene, const char *sourc
 
 /* Whether the scene lights itself: a light, or a material that emits. */
 bool srv_scene_brings_light(const rd_scene *s);
-/* The sky radiance the world renders with: the setting, or the default environment while
- * default lighting is on and the setting is black. */
-void srv_state_sky(const srv_scene_state *st, float sky[3]);
+/* Whether the settings give the scene an environment that lights it (a sky that is not black,
+ * a gradient that is not, or the HDR image mode). */
+bool srv_settings_light_the_scene(const srv_settings *s);
+/* The environment the world renders with (e->image left NULL: the world owns the image): the
+ * settings', or the default environment while default lighting is on. */
+void srv_state_environment(const srv_scene_state *st, rd_environment *e);
 /* Ends default lighting: removes the key light. False when it was off. */
 bool srv_state_drop_default_lighting(srv_scene_state *st);
 

@@ -15,6 +15,8 @@ _Static_assert(PC_VIEW_FINAL == 0 && PC_VIEW_IRRADIANCE == 1 && PC_VIEW_PROBES =
                "SRV_VIEW_NAMES order");
 _Static_assert(PC_GI_OFF == 0 && PC_GI_CLASSIC == 1 && PC_GI_DDGI == 2 && SRV_GI_PATHTRACE == 3,
                "SRV_GI_NAMES order");
+_Static_assert(PC_ENV_UNIFORM == 0 && PC_ENV_GRADIENT == 1 && PC_ENV_IMAGE == 2,
+               "SRV_SKY_MODE_NAMES order");
 _Static_assert(SRV_SETTING_COUNT <= 31, "SRV_SET_* bits fit an int enum");
 
 #define BAD(...) (srv_api_fail(e, 400, SRV_ERR_INVALID_FIELD, __VA_ARGS__), false)

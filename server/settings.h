@@ -44,10 +44,11 @@ typedef enum srv_setting_type {
 } srv_setting_type;
 
 /* Names of the enumerations, index = value (PC_TONEMAP_*, PC_VIEW_*, PC_GI_* and
- * SRV_GI_PATHTRACE; settings.c checks them). */
+ * SRV_GI_PATHTRACE, PC_ENV_*; settings.c checks them). */
 #define SRV_TONEMAP_NAMES "aces", "clamp"
 #define SRV_VIEW_NAMES "final", "irradiance", "probes"
 #define SRV_GI_NAMES "off", "classic", "ddgi", "pathtrace"
+#define SRV_SKY_MODE_NAMES "uniform", "gradient", "image"
 
 /* The table. X(ID, field, TYPE, "json", "--flag" or NULL, "ARG", min, max, default, SCOPE,
  *              (enum names) or (NULL), "description")
@@ -92,7 +93,17 @@ typedef enum srv_setting_type {
       RD_DDGI_DEFAULT_HYSTERESIS, WORLD, (NULL),                                                   \
       "probe blend weight of the old value; 0 keeps no history")                                   \
     X(ANIMATE, animate, BOOL, "animate", NULL, "", 0, 0, false, WORLD, (NULL),                     \
-      "circle the first light slowly while viewers watch (the demo)")
+      "circle the first light slowly while viewers watch (the demo)")                              \
+    X(SKY_MODE, sky_mode, ENUM, "sky_mode", "--sky-mode", "", 0, 0, PC_ENV_UNIFORM, WORLD,         \
+      (SRV_SKY_MODE_NAMES),                                                                        \
+      "environment: sky everywhere, a gradient from sky_ground (nadir) to sky (zenith), or the "  \
+      "HDR image of PUT /v1/environment (sky where there is none)")                               \
+    X(SKY_GROUND, sky_ground, FLOAT3, "sky_ground", "--sky-ground", "R,G,B", 0, 1000000, 0, WORLD, \
+      (NULL), "radiance toward the nadir (gradient)")                                             \
+    X(SKY_INTENSITY, sky_intensity, FLOAT, "sky_intensity", "--sky-intensity", "X", 0, 1000000, 1, \
+      WORLD, (NULL), "scale of the HDR image's radiance")                                         \
+    X(SKY_ROTATION, sky_rotation, FLOAT, "sky_rotation", "--sky-rotation", "DEG", -360, 360, 0,    \
+      WORLD, (NULL), "turn of the HDR image about the vertical axis, degrees")
 /* clang-format on */
 
 /* Values a CPU device (lavapipe) starts with for the settings the command line did not give:
@@ -130,6 +141,10 @@ enum { SRV_SETTINGS(SRV_SETTING_BIT_) };
 #define SRV_SET_GI_FIELDS                                                                          \
     (SRV_SET_GI_MODE | SRV_SET_PROBE_COUNTS | SRV_SET_PROBE_SPACING | SRV_SET_RAYS |               \
      SRV_SET_HYSTERESIS)
+/* The settings of the environment (a change relights everything). */
+#define SRV_SET_ENV_FIELDS                                                                         \
+    (SRV_SET_SKY | SRV_SET_SKY_MODE | SRV_SET_SKY_GROUND | SRV_SET_SKY_INTENSITY |                 \
+     SRV_SET_SKY_ROTATION)
 
 typedef struct srv_settings_patch {
     unsigned has;   /* SRV_SET_* */

@@ -228,6 +228,70 @@ static void test_sky(fixture *f)
     check_sky(f, &f->b, sky2);
 }
 
+/* A gradient and an HDR image environment: every miss pixel shows env_radiance toward its
+ * direction as the CPU twin (rd_env_radiance) computes it (the image through half floats). */
+static void check_env(fixture *f, rd_view *v, const char *what, float tol)
+{
+    if (!render(f, v)) return;
+    size_t px = (size_t)v->width * v->height;
+    pc_gbuffer_texel *gb = malloc(px * sizeof *gb);
+    CHECK(rd_buffer_download(&vk, &v->gbuffer, 0, gb, px * sizeof *gb, err, sizeof err) ==
+          RD_VK_OK);
+    float *rgb = read_hdr(v);
+    size_t misses = 0, wrong = 0;
+    double worst = 0;
+    for (size_t i = 0; i < px; i++) {
+        if (gb[i].position.w >= 0) continue;
+        misses++;
+        const float d[3] = {gb[i].position.x, gb[i].position.y, gb[i].position.z};
+        float want[3];
+        rd_env_radiance(&f->world.env, d, want);
+        for (int c = 0; c < 3; c++) {
+            double e = fabs(rgb[i * 3 + c] - want[c]) / fmax(fabs(want[c]), 0.05);
+            worst = fmax(worst, e);
+            wrong += e > tol;
+        }
+    }
+    CHECKF(misses > 0 && wrong == 0, "%s, view %ux%u: %zu of %zu miss channels off (worst %.4f)",
+           what, v->width, v->height, wrong, misses * 3, worst);
+    free(gb), free(rgb);
+}
+
+static void test_environments(fixture *f)
+{
+    rd_environment g = {.mode = RD_ENV_GRADIENT,
+                        .sky = {0.2f, 0.4f, 1.5f},
+                        .ground = {0.3f, 0.1f, 0.0f},
+                        .intensity = 1};
+    rd_world_set_environment(&f->world, &g);
+    check_env(f, &f->a, "gradient", 1e-4f);
+    check_env(f, &f->b, "gradient", 1e-4f);
+    /* an image with detail in both directions, turned by 40 degrees */
+    rd_env_image img = {.width = 64, .height = 32};
+    img.rgb = malloc(64 * 32 * 3 * sizeof(float));
+    for (unsigned y = 0; y < 32; y++)
+        for (unsigned x = 0; x < 64; x++) {
+            float *t = img.rgb + (y * 64 + x) * 3;
+            t[0] = 0.5f + 0.4f * sinf((float)x * 0.2f);
+            t[1] = 0.2f + 0.02f * (float)y;
+            t[2] = (x / 8 + y / 8) % 2 ? 2.0f : 0.25f;
+        }
+    CHECK(rd_world_set_environment_image(&f->world, &img, err, sizeof err) == RD_VK_OK);
+    CHECK(img.rgb == NULL && f->world.image.width == 64);
+    rd_environment im = {
+        .mode = RD_ENV_IMAGE, .sky = {9, 9, 9}, .intensity = 1.5f, .rotation = 0.7f};
+    rd_world_set_environment(&f->world, &im);
+    check_env(f, &f->a, "image", 2e-3f);
+    check_env(f, &f->b, "image", 2e-3f);
+    /* without the image, image mode shows the sky */
+    rd_env_image none = {0};
+    CHECK(rd_world_set_environment_image(&f->world, &none, err, sizeof err) == RD_VK_OK);
+    const float sky[3] = {9, 9, 9};
+    check_sky(f, &f->a, sky);
+    const float black[3] = {0, 0, 0};
+    rd_world_set_sky(&f->world, black);
+}
+
 /* ---- readback ring ---------------------------------------------------------------------- */
 
 typedef struct record {
@@ -307,6 +371,7 @@ int main(void)
         test_views_read_the_world(&f);
         test_update_count(&f);
         test_sky(&f);
+        test_environments(&f);
         test_readback_ring(&f);
     }
     fixture_destroy(&f);

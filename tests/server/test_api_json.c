@@ -219,14 +219,21 @@ static void test_default_lighting(void)
                   key->direction[1] * st.camera.forward[1] +
                   key->direction[2] * st.camera.forward[2];
     CHECK(along > 0.3f && key->direction[1] < -0.3f);
-    float sky[3];
-    srv_state_sky(&st, sky);
-    CHECK(sky[0] == SRV_DEFAULT_SKY_R && sky[2] == SRV_DEFAULT_SKY_B);
-    /* a sky set by the user wins */
+    rd_environment env;
+    srv_state_environment(&st, &env);
+    CHECK(env.mode == RD_ENV_UNIFORM && env.sky[0] == SRV_DEFAULT_SKY_R &&
+          env.sky[2] == SRV_DEFAULT_SKY_B);
+    /* an environment set by the user wins */
     st.settings.sky[1] = 0.5f;
-    srv_state_sky(&st, sky);
-    CHECK(sky[0] == 0 && sky[1] == 0.5f);
+    srv_state_environment(&st, &env);
+    CHECK(env.sky[0] == 0 && env.sky[1] == 0.5f);
     st.settings.sky[1] = 0;
+    st.settings.sky_mode = PC_ENV_GRADIENT;
+    st.settings.sky_ground[0] = 0.25f;
+    srv_state_environment(&st, &env);
+    CHECK(env.mode == RD_ENV_GRADIENT && env.ground[0] == 0.25f && env.sky[0] == 0);
+    st.settings.sky_mode = PC_ENV_UNIFORM;
+    st.settings.sky_ground[0] = 0;
 
     /* saved and restored: still default, same light */
     cJSON *doc = srv_state_to_json(&st);
@@ -243,8 +250,8 @@ static void test_default_lighting(void)
     cJSON_Delete(doc);
     /* dropped: the key light goes, the sky is the setting again */
     CHECK(srv_state_drop_default_lighting(&st2) && st2.scene.light_count == 0);
-    srv_state_sky(&st2, sky);
-    CHECK(sky[0] == 0 && sky[1] == 0 && sky[2] == 0);
+    srv_state_environment(&st2, &env);
+    CHECK(env.sky[0] == 0 && env.sky[1] == 0 && env.sky[2] == 0);
     CHECK(!srv_state_drop_default_lighting(&st2));
     srv_state_dispose(&st2);
 

@@ -132,8 +132,8 @@ static void probe_stream(const op *o)
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         pc_ws ws;
-        int rc = pc_ws_connect(&ws, "127.0.0.1", d.http_port, cases[i].path, cases[i].headers,
-                               10000);
+        int rc =
+            pc_ws_connect(&ws, "127.0.0.1", d.http_port, cases[i].path, cases[i].headers, 10000);
         CHECKF(documented(o, ws.http_status), "GET /v1/stream (%s): status %d is not documented",
                cases[i].what, ws.http_status);
         CHECKF(ws.http_status == cases[i].want && (rc == 0) == (cases[i].want == 101),
@@ -215,7 +215,7 @@ int main(void)
         char path[96];
         const char *brace = strchr(o->path, '{');
         const char *after = brace ? strchr(brace, '}') + 1 : ""; /* "/camera" of views */
-        int id = strstr(o->path, "/lights/") ? first_light_id()
+        int id = strstr(o->path, "/lights/")  ? first_light_id()
                  : strstr(o->path, "/views/") ? 0 /* the default view */
                                               : 1;
         if (brace)
@@ -239,6 +239,20 @@ int main(void)
             continue;
         }
         probe(o, path, NULL, NULL, 0, false, 401, "no token");
+        if (strcmp(o->path, "/v1/environment") == 0) {
+            if (strcmp(o->method, "DELETE") == 0) {
+                probe(o, path, NULL, NULL, 0, true, 204, "valid");
+                probe(o, path, NULL, NULL, 0, true, 204, "deleted twice (nothing to remove)");
+                continue;
+            }
+            /* a 2 x 1 Radiance file, flat scanline: (1, 0.5, 0.25) and (0, 0, 0) */
+            static const char hdr[] = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 1 +X 2\n"
+                                      "\x80\x40\x20\x81\x00\x00\x00\x00";
+            probe(o, path, "image/vnd.radiance", "#?RADIANCE\n", 11, true, 422, "malformed");
+            probe(o, path, "image/png", "x", 1, true, 415, "media type");
+            probe(o, path, "image/vnd.radiance", hdr, sizeof hdr - 1, true, 200, "valid");
+            continue;
+        }
         if (strcmp(o->method, "DELETE") == 0) {
             char unknown[96];
             snprintf(unknown, sizeof unknown, "%.*s77777", (int)(brace - o->path), o->path);

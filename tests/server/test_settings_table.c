@@ -231,7 +231,7 @@ static void test_table(void)
     unsigned view = srv_settings_scope_mask(SRV_SCOPE_VIEW);
     CHECK((world | view) == ALL_BITS && (world & view) == 0);
     CHECK((world & SRV_SET_GI_FIELDS) == SRV_SET_GI_FIELDS);
-    CHECK(world == (SRV_SET_SKY | SRV_SET_GI_FIELDS | SRV_SET_ANIMATE));
+    CHECK(world == (SRV_SET_ENV_FIELDS | SRV_SET_GI_FIELDS | SRV_SET_ANIMATE));
     CHECK(view & SRV_SET_WIDTH && view & SRV_SET_EXPOSURE && view & SRV_SET_VIEW);
     CHECK(srv_settings_scope_mask(0) == 0);
 
