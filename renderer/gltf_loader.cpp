@@ -832,8 +832,8 @@ uint32_t read_index(const Accessor &a, size_t i)
 
 struct Primitive {
     int mode = TINYGLTF_MODE_TRIANGLES;
-    Accessor pos, nrm, uv, idx;
-    bool has_nrm = false, has_uv = false, has_idx = false;
+    Accessor pos, nrm, uv, tan, idx;
+    bool has_nrm = false, has_uv = false, has_tan = false, has_idx = false;
     uint64_t tris = 0;
     uint32_t material = 0;
 };
@@ -850,6 +850,7 @@ class Converter
   private:
     void hierarchy();
     void materials();
+    void metallic_roughness(const tinygltf::Material &g, size_t i, rd_material *mt);
     int32_t texture(int index, int tex_coord, size_t material, const char *slot);
     void meshes();
     std::vector<Primitive> plan_mesh(size_t mesh);
@@ -898,10 +899,15 @@ void Converter::run()
 
 void Converter::warnings()
 {
-    for (const std::string &e : m_.extensionsUsed)
-        if (!e.empty() && !is_supported_extension(e))
+    for (const std::string &e : m_.extensionsUsed) {
+        if (e.empty() || is_supported_extension(e)) continue;
+        bool on_material = false; /* then materials() warns, saying how many use it */
+        for (const tinygltf::Material &g : m_.materials)
+            on_material = on_material || g.extensions.count(e) != 0;
+        if (!on_material)
             rd_scene_warn(s_, "extension %s is not supported and was ignored",
                           clean(e, 80).c_str());
+    }
     if (!m_.skins.empty())
         rd_scene_warn(s_,
                       "the file has %zu skin(s); skinning is not supported, skinned meshes "
@@ -1116,6 +1122,8 @@ int32_t Converter::texture(int index, int tex_coord, size_t material, const char
 
 void Converter::materials()
 {
+    size_t blend = 0;
+    std::map<std::string, size_t> unsupported; /* material extension -> materials using it */
     for (size_t i = 0; i < m_.materials.size(); i++) {
         const tinygltf::Material &g = m_.materials[i];
         rd_material mt;
@@ -1163,8 +1171,45 @@ void Converter::materials()
                     g.pbrMetallicRoughness.baseColorTexture.texCoord, i, "base colour");
         mt.emissive_texture =
             texture(g.emissiveTexture.index, g.emissiveTexture.texCoord, i, "emissive");
+        metallic_roughness(g, i, &mt);
+        if (mt.alpha_mode == RD_ALPHA_BLEND) blend++;
+        for (const auto &e : g.extensions)
+            if (!is_supported_extension(e.first)) unsupported[clean(e.first, 80)]++;
         rd_scene_add_material(s_, &mt); /* index 1 + i: materials[0] is the default */
     }
+    if (blend)
+        rd_scene_warn(s_,
+                      "%zu material(s) use alphaMode BLEND; transparency is not supported, they "
+                      "are drawn opaque",
+                      blend);
+    for (const auto &u : unsupported)
+        rd_scene_warn(s_,
+                      "material extension %s (on %zu material(s)) is not supported; those "
+                      "materials are drawn with the core metallic-roughness model",
+                      u.first.c_str(), u.second);
+}
+
+/* The core metallic-roughness parameters beyond base colour and emission: factors (glTF
+ * defaults metallic 1, roughness 1), metallicRoughnessTexture, normalTexture with its scale
+ * and occlusionTexture with its strength. specular = 1: the full Appendix B BRDF. */
+void Converter::metallic_roughness(const tinygltf::Material &g, size_t i, rd_material *mt)
+{
+    const tinygltf::PbrMetallicRoughness &pbr = g.pbrMetallicRoughness;
+    bool ok = to_float(pbr.metallicFactor, &mt->metallic) &&
+              to_float(pbr.roughnessFactor, &mt->roughness) &&
+              to_float(g.normalTexture.scale, &mt->normal_scale) &&
+              to_float(g.occlusionTexture.strength, &mt->occlusion_strength);
+    if (!ok) fail(RD_GLTF_ERR_INVALID, "material %zu has a factor that is not a finite number", i);
+    mt->metallic = std::min(std::max(mt->metallic, 0.0f), 1.0f);
+    mt->roughness = std::min(std::max(mt->roughness, 0.0f), 1.0f);
+    mt->occlusion_strength = std::min(std::max(mt->occlusion_strength, 0.0f), 1.0f);
+    mt->specular = 1.0f;
+    mt->metallic_roughness_texture =
+        texture(pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord, i,
+                "metallic-roughness");
+    mt->normal_texture = texture(g.normalTexture.index, g.normalTexture.texCoord, i, "normal");
+    mt->occlusion_texture =
+        texture(g.occlusionTexture.index, g.occlusionTexture.texCoord, i, "occlusion");
 }
 
 /* Validates a mesh's primitives and counts its triangles without reading vertex data. */
@@ -1207,8 +1252,15 @@ std::vector<Primitive> Converter::plan_mesh(size_t mesh)
                                TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT});
             pr.has_uv = true;
         }
+        auto tan = gp.attributes.find("TANGENT");
+        if (tan != gp.attributes.end()) {
+            pr.tan = make_accessor(m_, tan->second, "TANGENT of " + where, TINYGLTF_TYPE_VEC4,
+                                   {TINYGLTF_COMPONENT_TYPE_FLOAT});
+            pr.has_tan = true;
+        }
         if ((pr.has_nrm && pr.nrm.count != pr.pos.count) ||
-            (pr.has_uv && pr.uv.count != pr.pos.count))
+            (pr.has_uv && pr.uv.count != pr.pos.count) ||
+            (pr.has_tan && pr.tan.count != pr.pos.count))
             fail(RD_GLTF_ERR_INVALID, "the attributes of %s have different vertex counts",
                  where.c_str());
         size_t n = pr.pos.count;
@@ -1245,6 +1297,17 @@ std::vector<Primitive> Converter::plan_mesh(size_t mesh)
 void Converter::fill_mesh(size_t mesh, const std::vector<Primitive> &prims, rd_mesh *out)
 {
     size_t t_out = 0;
+    bool any_tan = false;
+    for (const Primitive &pr : prims)
+        any_tan = any_tan || pr.has_tan;
+    if (any_tan) { /* zeros where a primitive has none: the renderer derives them */
+        out->tangents = static_cast<float *>(calloc((size_t)out->tri_count * 12, sizeof(float)));
+        if (!out->tangents) {
+            fprintf(stderr, "probecast: out of memory (tangents of %u triangles)\n",
+                    out->tri_count);
+            abort();
+        }
+    }
     for (size_t p = 0; p < prims.size(); p++) {
         const Primitive &pr = prims[p];
         for (uint64_t t = 0; t < pr.tris; t++, t_out++) {
@@ -1281,6 +1344,12 @@ void Converter::fill_mesh(size_t mesh, const std::vector<Primitive> &prims, rd_m
                     read_floats(pr.nrm, vi, n);
                     if (!rd_vec3_normalize(nrm, n, nullptr))
                         rd_vec3_set(nrm, 0, 0, 0); /* filled with the flat normal below */
+                }
+                if (pr.has_tan) {
+                    float *tg = &out->tangents[t_out * 12 + (size_t)k * 4];
+                    read_floats(pr.tan, vi, tg);
+                    if (!rd_vec3_isfinite(tg) || !std::isfinite(tg[3]))
+                        memset(tg, 0, 4 * sizeof(float)); /* derived from the UVs instead */
                 }
                 float *uv = &out->uvs[t_out * 6 + (size_t)k * 2];
                 if (pr.has_uv) {

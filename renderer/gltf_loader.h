@@ -4,6 +4,19 @@
  * failure is reported as a result code plus one human sentence, never a crash (only
  * out-of-memory aborts). Loading from memory never touches the file system unless a base
  * directory is given, and then only files below it (no absolute URIs, no ".." components).
+ *
+ * Materials: glTF 2.0 metallic-roughness (base colour, metallic, roughness, emission with
+ * KHR_materials_emissive_strength, metallicRoughnessTexture, normalTexture with scale,
+ * occlusionTexture with strength), rendered with the specification's Appendix B BRDF.
+ * What is approximated or ignored, each reported in rd_scene.warnings:
+ *   - textures read through TEXCOORD_n with n != 0 are ignored (only TEXCOORD_0 is loaded);
+ *   - alphaMode BLEND is drawn opaque (no transparency, no coverage); MASK cuts out texels
+ *     below alphaCutoff for every ray type;
+ *   - other material extensions (KHR_materials_transmission, clearcoat, sheen, volume, ior,
+ *     specular, ...) are ignored: one warning per extension, naming how many materials use it.
+ * Primitives without a material use materials[0] (scene.h), a white Lambertian, not the
+ * specification's default (metallic 1, roughness 1). TANGENT attributes are kept (scene.h
+ * rd_mesh.tangents); without them the renderer derives tangents from the UVs per triangle.
  */
 #ifndef RD_GLTF_LOADER_H
 #define RD_GLTF_LOADER_H

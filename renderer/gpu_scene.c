@@ -40,21 +40,70 @@ static rd_vk_result upload_new(rd_vk *vk, rd_buffer *b, const void *data, size_t
     return r;
 }
 
+/* Texture index + 1 for the GPU (0 = none or out of range). */
+static uint32_t tex_ref(int32_t index, uint32_t texture_count)
+{
+    return index >= 0 && (uint32_t)index < texture_count ? (uint32_t)index + 1 : 0;
+}
+
+static float clamp01(float x)
+{
+    return x > 0.0f ? (x < 1.0f ? x : 1.0f) : 0.0f; /* NaN -> 0 */
+}
+
 static void fill_material(pc_material *g, const rd_material *m, uint32_t texture_count)
 {
     memset(g, 0, sizeof *g);
     g->base_color =
         (pc_vec4){m->base_color[0], m->base_color[1], m->base_color[2], m->base_color[3]};
     g->emission = (pc_vec4){m->emission[0], m->emission[1], m->emission[2], 0};
-    bool bc = m->base_color_texture >= 0 && (uint32_t)m->base_color_texture < texture_count;
-    bool em = m->emissive_texture >= 0 && (uint32_t)m->emissive_texture < texture_count;
-    g->tex.x = bc ? (uint32_t)m->base_color_texture + 1 : 0;
-    g->tex.y = em ? (uint32_t)m->emissive_texture + 1 : 0;
+    g->tex.x = tex_ref(m->base_color_texture, texture_count);
+    g->tex.y = tex_ref(m->emissive_texture, texture_count);
     g->tex.z = m->alpha_mode == RD_ALPHA_MASK    ? PC_ALPHA_MASK
                : m->alpha_mode == RD_ALPHA_BLEND ? PC_ALPHA_BLEND
                                                  : PC_ALPHA_OPAQUE;
     g->tex.w = m->double_sided ? 1u : 0u;
-    g->params.x = m->alpha_cutoff;
+    g->params = (pc_vec4){m->alpha_cutoff, m->normal_scale, clamp01(m->occlusion_strength),
+                          clamp01(m->specular)};
+    g->pbr = (pc_vec4){clamp01(m->metallic), clamp01(m->roughness), 0, 0};
+    g->tex2.x = tex_ref(m->metallic_roughness_texture, texture_count);
+    g->tex2.y = tex_ref(m->normal_texture, texture_count);
+    g->tex2.z = tex_ref(m->occlusion_texture, texture_count);
+}
+
+/* Octahedral encoding of a unit vector (Cigolle et al., JCGT 2014) as packSnorm2x16 bits;
+ * shaders/common.glsl decodes it. */
+static uint32_t pack_octahedral(const float v[3])
+{
+    float l1 = fabsf(v[0]) + fabsf(v[1]) + fabsf(v[2]);
+    float x = l1 > 0 ? v[0] / l1 : 0, y = l1 > 0 ? v[1] / l1 : 0;
+    if (v[2] < 0) {
+        float ox = (1.0f - fabsf(y)) * (x >= 0 ? 1.0f : -1.0f);
+        float oy = (1.0f - fabsf(x)) * (y >= 0 ? 1.0f : -1.0f);
+        x = ox, y = oy;
+    }
+    int32_t ix = (int32_t)lrintf(clamp01(x * 0.5f + 0.5f) * 65534.0f) - 32767;
+    int32_t iy = (int32_t)lrintf(clamp01(y * 0.5f + 0.5f) * 65534.0f) - 32767;
+    return ((uint32_t)ix & 0xffffu) | ((uint32_t)iy & 0xffffu) << 16;
+}
+
+/* The triangle's TANGENT attribute in pc_tri_attr.tangents form (zero when the mesh has none
+ * or a tangent is not a finite non-zero vector: the shader then derives one from the UVs). */
+static pc_uvec4 pack_tangents(const float *t)
+{
+    pc_uvec4 out = {0, 0, 0, 0};
+    if (!t) return out;
+    uint32_t packed[3], flags = PC_TANGENT_PRESENT;
+    for (int k = 0; k < 3; k++) {
+        const float *v = t + 4 * k;
+        float len = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        if (!(len > 1e-12f) || !isfinite(len)) return out;
+        const float u[3] = {v[0] / len, v[1] / len, v[2] / len};
+        packed[k] = pack_octahedral(u);
+        if (v[3] < 0) flags |= PC_TANGENT_FLIP << k;
+    }
+    out = (pc_uvec4){packed[0], packed[1], packed[2], flags};
+    return out;
 }
 
 static rd_vk_result upload_materials(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, char *err,
@@ -161,6 +210,7 @@ rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *s, char 
             a->n0 = v4(n, 0), a->n1 = v4(n + 3, 0), a->n2 = v4(n + 6, 0);
             a->uv01 = (pc_vec4){uv[0], uv[1], uv[2], uv[3]};
             a->uv2 = (pc_vec4){uv[4], uv[5], 0, 0};
+            a->tangents = pack_tangents(mesh->tangents ? &mesh->tangents[src * 12] : NULL);
         }
         node_base += bvh->node_count;
         tri_base += mesh->tri_count;

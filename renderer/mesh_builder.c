@@ -99,7 +99,10 @@ uint32_t rd_build_material(rd_scene *s, const char *name, float r, float g, floa
                          float eg, float eb)
 {
     rd_material m = {.name = (char *)name, .base_color = {r, g, b, 1}, .emission = {er, eg, eb},
-                     .base_color_texture = -1, .emissive_texture = -1, .alpha_cutoff = 0.5f};
+                     .roughness = 1.0f, .normal_scale = 1.0f, .occlusion_strength = 1.0f,
+                     .base_color_texture = -1, .emissive_texture = -1,
+                     .metallic_roughness_texture = -1, .normal_texture = -1,
+                     .occlusion_texture = -1, .alpha_cutoff = 0.5f};
     return rd_scene_add_material(s, &m);
 }
 

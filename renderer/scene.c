@@ -81,8 +81,14 @@ void rd_scene_init(rd_scene *s)
     rd_material def = {
         .name = "default",
         .base_color = {1.0f, 1.0f, 1.0f, 1.0f},
+        .roughness = 1.0f,
+        .normal_scale = 1.0f,
+        .occlusion_strength = 1.0f,
         .base_color_texture = -1,
         .emissive_texture = -1,
+        .metallic_roughness_texture = -1,
+        .normal_texture = -1,
+        .occlusion_texture = -1,
         .alpha_mode = RD_ALPHA_OPAQUE,
         .alpha_cutoff = 0.5f,
         .double_sided = false,
@@ -103,6 +109,7 @@ void rd_scene_destroy(rd_scene *s)
         free(m->positions);
         free(m->normals);
         free(m->uvs);
+        free(m->tangents);
         free(m->material);
     }
     free(s->meshes);

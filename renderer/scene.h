@@ -21,6 +21,9 @@ typedef struct rd_mesh {
     float *positions;   /* 9 floats per triangle, object space */
     float *normals;     /* 9 floats per triangle (unit vectors) */
     float *uvs;         /* 6 floats per triangle (TEXCOORD_0; zeros when absent) */
+    /* 12 floats per triangle (TANGENT: xyz unit tangent, w = +-1 handedness, per vertex), or
+     * NULL: the renderer then derives tangents per triangle from the UVs. Owned; malloc'd. */
+    float *tangents;
     uint32_t *material; /* material index per triangle (always valid: see default material) */
 } rd_mesh;
 
@@ -39,12 +42,26 @@ typedef struct rd_node {
 enum { RD_ALPHA_OPAQUE = 0, RD_ALPHA_MASK = 1, RD_ALPHA_BLEND = 2 };
 enum { RD_WRAP_REPEAT = 0, RD_WRAP_CLAMP = 1, RD_WRAP_MIRROR = 2 };
 
+/* glTF 2.0 metallic-roughness material; the BRDF is the glTF 2.0 specification's Appendix B
+ * (shaders/brdf.glsl). Texture indices are -1 when absent (a zeroed struct is NOT a valid
+ * material: set every texture index). Zero metallic and specular give a pure Lambertian,
+ * which procedural scenes and the analytic tests use. */
 typedef struct rd_material {
     char *name;
     float base_color[4]; /* linear factor, alpha in [3] */
     float emission[3];   /* emissiveFactor * KHR_materials_emissive_strength */
+    float metallic;      /* metallicFactor, 0..1 */
+    float roughness;     /* roughnessFactor (perceptual: GGX alpha = roughness^2), 0..1 */
+    /* weight of the dielectric specular lobe (the F of Appendix B's dielectric mix is scaled by
+     * it): 1 for glTF materials, 0 for a pure Lambertian dielectric. Metals ignore it. */
+    float specular;
+    float normal_scale;         /* normalTexture.scale (default 1) */
+    float occlusion_strength;   /* occlusionTexture.strength (default 1) */
     int32_t base_color_texture; /* texture index or -1 */
     int32_t emissive_texture;   /* texture index or -1 */
+    int32_t metallic_roughness_texture; /* B = metallic, G = roughness (linear), or -1 */
+    int32_t normal_texture;             /* tangent-space normal map (linear), or -1 */
+    int32_t occlusion_texture;          /* R = occlusion (linear), or -1 */
     uint32_t alpha_mode;        /* RD_ALPHA_* */
     float alpha_cutoff;         /* default 0.5 */
     bool double_sided;
@@ -52,7 +69,9 @@ typedef struct rd_material {
 
 typedef struct rd_texture {
     uint32_t width, height;
-    uint8_t *rgba; /* width * height * 4 bytes, colour sRGB-encoded as stored in the file */
+    /* width * height * 4 bytes as stored in the file: colour textures are sRGB-encoded, data
+     * textures (metallic-roughness, normal, occlusion) linear; the sampler decides */
+    uint8_t *rgba;
     uint32_t wrap_s, wrap_t; /* RD_WRAP_* */
     bool nearest;            /* magFilter NEAREST */
 } rd_texture;

@@ -1,6 +1,7 @@
 /* common.glsl: scene access shared by every pass: buffer references, push constants,
- * texture sampling, surface reconstruction at a hit, punctual-light evaluation, and the
- * trace routine (trace.glsl). Passes include this file first. */
+ * texture sampling, surface reconstruction at a hit (materials, normal mapping),
+ * punctual-light evaluation with the BRDF of brdf.glsl, and the trace routine (trace.glsl).
+ * Passes include this file first. */
 #ifndef PC_COMMON_GLSL
 #define PC_COMMON_GLSL
 
@@ -54,17 +55,18 @@ int wrap_coord(int i, int n, uint mode)
     return ((i % n) + n) % n;
 }
 
-vec4 texel_fetch(pc_scene_refs s, pc_texture t, int x, int y)
+vec4 texel_fetch(pc_scene_refs s, pc_texture t, int x, int y, bool srgb)
 {
     int w = int(t.info.y), h = int(t.info.z);
     x = wrap_coord(x, w, t.info.w & 15u);
     y = wrap_coord(y, h, (t.info.w >> 4) & 15u);
     vec4 c = unpackUnorm4x8(TexelRef(s.texels).v[t.info.x + uint(y * w + x)]);
-    return vec4(srgb_to_linear(c.rgb), c.a); /* filter in linear space */
+    return srgb ? vec4(srgb_to_linear(c.rgb), c.a) : c; /* filter in linear space */
 }
 
-/* Samples texture index (0-based) at uv; colour returned linear, alpha as stored. */
-vec4 sample_texture(pc_scene_refs s, uint index, vec2 uv)
+/* Samples texture index (0-based) at uv. srgb: colour data (decoded to linear; alpha as
+ * stored); else data as stored (metallic-roughness, normal and occlusion maps). */
+vec4 sample_texture_as(pc_scene_refs s, uint index, vec2 uv, bool srgb)
 {
     pc_texture t = TextureRef(s.textures).v[index];
     vec2 size = vec2(t.info.y, t.info.z);
@@ -73,14 +75,18 @@ vec4 sample_texture(pc_scene_refs s, uint index, vec2 uv)
     vec2 p = uv * size - 0.5;
     if ((t.info.w & 0x100u) != 0u) {
         ivec2 ip = ivec2(floor(p + 0.5));
-        return texel_fetch(s, t, ip.x, ip.y);
+        return texel_fetch(s, t, ip.x, ip.y, srgb);
     }
     ivec2 i0 = ivec2(floor(p));
     vec2 f = p - vec2(i0);
-    vec4 a = texel_fetch(s, t, i0.x, i0.y), b = texel_fetch(s, t, i0.x + 1, i0.y);
-    vec4 c = texel_fetch(s, t, i0.x, i0.y + 1), d = texel_fetch(s, t, i0.x + 1, i0.y + 1);
+    vec4 a = texel_fetch(s, t, i0.x, i0.y, srgb), b = texel_fetch(s, t, i0.x + 1, i0.y, srgb);
+    vec4 c = texel_fetch(s, t, i0.x, i0.y + 1, srgb);
+    vec4 d = texel_fetch(s, t, i0.x + 1, i0.y + 1, srgb);
     return mix(mix(a, b, f.x), mix(c, d, f.x), f.y);
 }
+
+vec4 sample_texture(pc_scene_refs s, uint index, vec2 uv) { return sample_texture_as(s, index, uv, true); }
+vec4 sample_data_texture(pc_scene_refs s, uint index, vec2 uv) { return sample_texture_as(s, index, uv, false); }
 
 vec2 tri_uv(pc_tri_attr a, float u, float v)
 {
@@ -102,21 +108,94 @@ bool trace_alpha_pass(pc_scene_refs s, uint tri, float u, float v)
 
 #include "environment.glsl"
 #include "trace.glsl"
+#include "brdf.glsl"
 
 /* ---- surfaces ---------------------------------------------------------------------------- */
 
 struct pc_surface {
     vec3 position;    /* world */
-    vec3 normal;      /* shading normal, facing the incoming ray's origin side */
+    vec3 normal;      /* shading normal (normal-mapped), facing the incoming ray's origin side */
     vec3 geom_normal; /* geometric normal, same side */
     vec3 albedo;      /* linear base colour */
     vec3 emission;    /* emitted radiance (only from the front face or double-sided) */
+    float metallic;   /* 0..1 */
+    float roughness;  /* perceptual, 0..1 */
+    float specular;   /* weight of the dielectric specular lobe (pc_material.params.w) */
+    float occlusion;  /* ambient occlusion of indirect light, 1 = none */
 };
+
+/* The surface's BRDF (brdf.glsl). */
+pc_brdf surface_brdf(pc_surface sf)
+{
+    return brdf_make(sf.albedo, sf.metallic, sf.roughness, sf.specular);
+}
 
 vec3 xform_point(vec4 rows[3], vec3 p)
 {
     vec4 h = vec4(p, 1.0);
     return vec3(dot(rows[0], h), dot(rows[1], h), dot(rows[2], h));
+}
+
+/* Direction transform: M v (no translation), with M given as rows. */
+vec3 xform_vector(vec4 rows[3], vec3 v)
+{
+    return vec3(dot(rows[0].xyz, v), dot(rows[1].xyz, v), dot(rows[2].xyz, v));
+}
+
+vec3 octahedral_decode(uint bits)
+{
+    vec2 e = unpackSnorm2x16(bits);
+    vec3 v = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+    if (v.z < 0.0)
+        v.xy = (1.0 - abs(v.yx)) * mix(vec2(-1.0), vec2(1.0), greaterThanEqual(v.xy, vec2(0.0)));
+    return normalize(v);
+}
+
+/* Tangent-space normal map (glTF 2.0: +X along the tangent (increasing u), +Y along the
+ * bitangent = cross(normal, tangent) * handedness, +Z along the normal). ns is the front-side
+ * world shading normal. The object-space tangent T and bitangent B come from the TANGENT
+ * attribute, or (without one) from the triangle's UV gradient: T = dp/du and B = -dp/dv (glTF's
+ * v runs down the image, so "up" in the map is -v). Both are carried to world space by the
+ * object-to-world matrix and made orthonormal against ns, which makes mirrored instances and
+ * mirrored UVs right without a separate handedness rule. Returns ns when the frame is
+ * degenerate. */
+vec3 apply_normal_map(pc_scene_refs s, pc_material m, pc_tri t, pc_tri_attr a, pc_instance inst,
+                      pc_hit hit, vec2 uv, vec3 ns)
+{
+    float w = 1.0 - hit.u - hit.v;
+    vec3 T, B;
+    if ((a.tangents.w & PC_TANGENT_PRESENT) != 0u) {
+        vec3 t0 = octahedral_decode(a.tangents.x), t1 = octahedral_decode(a.tangents.y);
+        vec3 t2 = octahedral_decode(a.tangents.z);
+        float h0 = (a.tangents.w & PC_TANGENT_FLIP) != 0u ? -1.0 : 1.0;
+        float h1 = (a.tangents.w & (PC_TANGENT_FLIP << 1)) != 0u ? -1.0 : 1.0;
+        float h2 = (a.tangents.w & (PC_TANGENT_FLIP << 2)) != 0u ? -1.0 : 1.0;
+        T = t0 * w + t1 * hit.u + t2 * hit.v;
+        vec3 n_obj = a.n0.xyz * w + a.n1.xyz * hit.u + a.n2.xyz * hit.v;
+        B = cross(n_obj, T) * (h0 * w + h1 * hit.u + h2 * hit.v >= 0.0 ? 1.0 : -1.0);
+    } else {
+        vec3 dp1 = t.v1.xyz - t.v0.xyz, dp2 = t.v2.xyz - t.v0.xyz;
+        vec2 duv1 = a.uv01.zw - a.uv01.xy, duv2 = a.uv2.xy - a.uv01.xy;
+        float det = duv1.x * duv2.y - duv2.x * duv1.y;
+        if (abs(det) < 1e-20 || isnan(det)) return ns;
+        T = (dp1 * duv2.y - dp2 * duv1.y) / det;
+        B = -(dp2 * duv1.x - dp1 * duv2.x) / det;
+    }
+    T = xform_vector(inst.object_to_world, T);
+    B = xform_vector(inst.object_to_world, B);
+    T -= ns * dot(ns, T);
+    float tl = length(T);
+    if (!(tl > 1e-20) || isinf(tl)) return ns;
+    T /= tl;
+    B -= ns * dot(ns, B) + T * dot(T, B);
+    float bl = length(B);
+    if (!(bl > 1e-20) || isinf(bl)) return ns;
+    B /= bl;
+    vec3 tn = sample_data_texture(s, m.tex2.y - 1u, uv).xyz * 2.0 - 1.0;
+    tn.xy *= m.params.y;
+    vec3 n = T * tn.x + B * tn.y + ns * tn.z;
+    float nl = length(n);
+    return nl > 1e-20 && !isinf(nl) ? n / nl : ns;
 }
 
 /* Normal transform: (M^-1)^T n, with M^-1 given as rows. */
@@ -146,6 +225,16 @@ pc_surface surface_at(pc_scene_refs s, pc_hit hit, vec3 ray_dir)
     float ns_len = length(ns);
     ns = ns_len > 1e-20 && !isinf(ns_len) && !isnan(ns_len) ? ns / ns_len : ng;
     if (dot(ns, ng) < 0.0) ns = -ns; /* vertex normals authored against the winding */
+
+    uint mat_index = floatBitsToUint(t.v0.w);
+    pc_material m = MaterialRef(s.materials).v[mat_index];
+    vec2 uv = tri_uv(a, hit.u, hit.v);
+    if (m.tex2.y != 0u) {
+        ns = apply_normal_map(s, m, t, a, inst, hit, uv, ns);
+        /* keep the mapped normal on the front side of the true surface */
+        float c = dot(ns, ng);
+        if (c < 0.01) ns = normalize(ns + ng * (0.01 - c));
+    }
     bool facing_away = dot(ng, ray_dir) > 0.0;
     if (facing_away) {
         ng = -ng;
@@ -154,9 +243,6 @@ pc_surface surface_at(pc_scene_refs s, pc_hit hit, vec3 ray_dir)
     sf.normal = ns;
     sf.geom_normal = ng;
 
-    uint mat_index = floatBitsToUint(t.v0.w);
-    pc_material m = MaterialRef(s.materials).v[mat_index];
-    vec2 uv = tri_uv(a, hit.u, hit.v);
     vec3 albedo = m.base_color.rgb;
     if (m.tex.x != 0u) albedo *= sample_texture(s, m.tex.x - 1u, uv).rgb;
     vec3 emission = m.emission.rgb;
@@ -165,7 +251,28 @@ pc_surface surface_at(pc_scene_refs s, pc_hit hit, vec3 ray_dir)
     bool double_sided = m.tex.w != 0u;
     sf.albedo = clamp(albedo, 0.0, 1.0);
     sf.emission = (!hit.backface || double_sided) ? max(emission, vec3(0.0)) : vec3(0.0);
+    sf.metallic = m.pbr.x;
+    sf.roughness = m.pbr.y;
+    if (m.tex2.x != 0u) { /* glTF: B = metalness, G = roughness, linear */
+        vec4 mr = sample_data_texture(s, m.tex2.x - 1u, uv);
+        sf.metallic *= mr.b;
+        sf.roughness *= mr.g;
+    }
+    sf.specular = m.params.w;
+    sf.occlusion = 1.0;
+    if (m.tex2.z != 0u) /* glTF: occlusion = 1 + strength * (R - 1) */
+        sf.occlusion = 1.0 + m.params.z * (sample_data_texture(s, m.tex2.z - 1u, uv).r - 1.0);
+    sf.metallic = clamp(sf.metallic, 0.0, 1.0);
+    sf.roughness = clamp(sf.roughness, 0.0, 1.0);
+    sf.occlusion = clamp(sf.occlusion, 0.0, 1.0);
     return sf;
+}
+
+/* The BRDF of a G-buffer texel (pc_gbuffer_texel.material: metallic, roughness, occlusion,
+ * specular weight). */
+pc_brdf gbuffer_brdf(pc_gbuffer_texel t)
+{
+    return brdf_make(t.albedo.rgb, t.material.x, t.material.y, t.material.w);
 }
 
 /* ---- punctual lights (KHR_lights_punctual) --------------------------------------------- */
@@ -194,10 +301,11 @@ vec3 light_incident(pc_light l, vec3 p, out vec3 wi, out float dist)
     return l.radiance.rgb * atten;
 }
 
-/* Direct irradiance-weighted radiance from all punctual lights at a surface: sum over lights of
- * E_i * cos * visibility (multiply by albedo/pi for Lambertian outgoing radiance). Counts the
- * shadow rays it traces into *rays. */
-vec3 direct_irradiance(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, inout uint rays)
+/* Radiance reflected toward v by a surface with BRDF b from all punctual lights:
+ * sum over lights of f(v, l) * E_i * cos * visibility, with ray-traced hard shadows (shadow
+ * rays start on the geometric side; lights below the shading or the geometric surface give
+ * nothing). Counts the shadow rays it traces into *rays. */
+vec3 direct_radiance(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, vec3 v, pc_brdf b, inout uint rays)
 {
     vec3 sum = vec3(0.0);
     vec3 origin = offset_ray_origin(p, ng);
@@ -211,7 +319,7 @@ vec3 direct_irradiance(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, inout uint rays
         pc_hit sh;
         rays++;
         if (trace_ray(s, origin, wi, 0.0, dist, PC_TRACE_ANY_HIT, sh)) continue;
-        sum += e * cos_n;
+        sum += brdf_eval(b, n, v, wi) * e * cos_n;
     }
     return sum;
 }

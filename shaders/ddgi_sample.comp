@@ -1,6 +1,8 @@
 #version 460
-/* GI sampling for the camera (paper Sec. 5): adds albedo/pi * E(P, n) from the probe field
- * to each pixel's direct radiance, with v = the direction toward the camera. View modes:
+/* GI sampling for the camera (paper Sec. 5): adds occlusion * diffuse albedo/pi * E(P, n)
+ * from the probe field to each pixel's direct radiance, with v = the direction toward the
+ * camera; the diffuse albedo is (1 - metallic) * baseColor (brdf_diffuse_albedo) and the
+ * occlusion map darkens only this indirect term (glTF: occlusion applies to indirect light). View modes:
  * PC_VIEW_IRRADIANCE writes E/pi alone (the indirect light as if albedo were 1);
  * PC_VIEW_PROBES draws every probe as a small sphere shaded with its stored irradiance, and
  * its state: sleeping (converged) plain, awake with a yellow rim, off (inside geometry) dark red.
@@ -26,7 +28,8 @@ void main()
         vec3 p = t.position.xyz;
         vec3 v = normalize(g.view.eye.xyz - p);
         vec3 e = ddgi_irradiance(g.ddgi, env_irradiance(g.env, t.normal.xyz), p, t.normal.xyz, v);
-        l = view == PC_VIEW_IRRADIANCE ? e / PC_PI : l + t.albedo.rgb / PC_PI * e;
+        vec3 a = brdf_diffuse_albedo(gbuffer_brdf(t)) * t.material.z;
+        l = view == PC_VIEW_IRRADIANCE ? e / PC_PI : l + a / PC_PI * e;
     } else if (view == PC_VIEW_IRRADIANCE) {
         l = vec3(0.0);
     }

@@ -1,7 +1,10 @@
 #version 460
 /* DDGI probe-ray shading (paper Sec. 4.1 and 5): radiance leaving each probe ray's hit toward
- * the probe = emission + albedo/pi * direct irradiance (shadow rays) + min(albedo, 0.9)/pi *
- * the previous update's irradiance at the hit. The last term carries light across updates,
+ * the probe = emission + A/pi * direct irradiance (shadow rays) + occlusion * min(A, 0.9)/pi *
+ * the previous update's irradiance at the hit, where A = brdf_lambert_albedo: the hit is
+ * shaded as a Lambertian whose albedo folds in the specular lobe's Fresnel-averaged energy
+ * (paper: probe hits are shaded diffusely; folding keeps the metals' energy instead of
+ * dropping it, and A <= 1 keeps energy conserved). The last term carries light across updates,
  * one more bounce per update; the 0.9 cap guards energy (production practice). Misses see
  * the sky; back faces of single-sided surfaces carry no radiance.
  * Works on the update's probe list, like ddgi_trace.comp.
@@ -39,12 +42,16 @@ void main()
             hit.backface = false; /* a front hit, or a back hit of a double-sided surface */
             vec3 dir = ddgi_ray_dir(vol, ray);
             pc_surface sf = surface_at(g.scene, hit, dir);
-            vec3 e = direct_irradiance(g.scene, sf.position, sf.normal, sf.geom_normal, shadow_rays);
+            vec3 albedo = brdf_lambert_albedo(surface_brdf(sf));
+            pc_brdf lambert = brdf_make(albedo, 0.0, 1.0, 0.0); /* f = albedo / pi */
+            vec3 direct = direct_radiance(g.scene, sf.position, sf.normal, sf.geom_normal, -dir,
+                                          lambert, shadow_rays);
             vec3 indirect = vec3(0.0);
             if (pc.params.y != 0u)
                 indirect = ddgi_irradiance(vol, env_irradiance(g.env, sf.normal), sf.position,
                                            sf.normal, -dir);
-            radiance = sf.emission + sf.albedo / PC_PI * e + min(sf.albedo, vec3(0.9)) / PC_PI * indirect;
+            radiance = sf.emission + direct +
+                       sf.occlusion * min(albedo, vec3(0.9)) / PC_PI * indirect;
         }
         if (any(isnan(radiance)) || any(isinf(radiance))) radiance = vec3(0.0);
         DdgiRayRef(vol.rays).v[slot] = vec4(radiance, r.w);

@@ -62,7 +62,7 @@ static inline float pc_u2f(uint32_t u)
 
 #define PC_ALPHA_OPAQUE 0u
 #define PC_ALPHA_MASK 1u
-#define PC_ALPHA_BLEND 2u /* treated as opaque: no transparency in a diffuse renderer */
+#define PC_ALPHA_BLEND 2u /* drawn as opaque (no transparency): see renderer/gltf_loader.h */
 
 #define PC_WRAP_REPEAT 0u
 #define PC_WRAP_CLAMP 1u
@@ -101,7 +101,11 @@ PC_STRUCT(pc_tri)
 PC_END(pc_tri);
 
 /* Shading attributes of the triangle with the same index as in the pc_tri array.
- * n0..n2: object-space vertex normals (xyz); uv01 = (u0, v0, u1, v1); uv2 = (u2, v2, -, -). */
+ * n0..n2: object-space vertex normals (xyz); uv01 = (u0, v0, u1, v1); uv2 = (u2, v2, -, -);
+ * tangents: the mesh's TANGENT attribute, x/y/z = vertex 0/1/2's object-space tangent as
+ * octahedral unit vectors (packSnorm2x16 bits), w = flag bits: PC_TANGENT_PRESENT, and
+ * PC_TANGENT_FLIP << k when vertex k has handedness -1. Without PC_TANGENT_PRESENT the
+ * tangent frame comes from the triangle's UVs (shaders/common.glsl). */
 PC_STRUCT(pc_tri_attr)
 {
     pc_vec4 n0;
@@ -109,8 +113,11 @@ PC_STRUCT(pc_tri_attr)
     pc_vec4 n2;
     pc_vec4 uv01;
     pc_vec4 uv2;
+    pc_uvec4 tangents;
 }
 PC_END(pc_tri_attr);
+#define PC_TANGENT_PRESENT 8u
+#define PC_TANGENT_FLIP 1u
 
 /* BVH node (bottom and top level). bmin.w and bmax.w hold uint bits:
  * count = bmax.w; count == 0: interior node, children at index bmin.w and bmin.w + 1;
@@ -135,15 +142,21 @@ PC_STRUCT(pc_instance)
 }
 PC_END(pc_instance);
 
-/* base_color: linear factor (a = alpha factor); emission: rgb = emissiveFactor * strength;
+/* glTF 2.0 metallic-roughness material (BRDF: shaders/brdf.glsl).
+ * base_color: linear factor (a = alpha factor); emission: rgb = emissiveFactor * strength;
  * tex.x/y: base colour / emissive texture index + 1 (0 = none); tex.z: PC_ALPHA_*;
- * tex.w: 1 if double sided; params.x: alpha cutoff. */
+ * tex.w: 1 if double sided; params: x alpha cutoff, y normalTexture scale, z occlusionTexture
+ * strength, w weight of the dielectric specular lobe (1: glTF, 0: pure Lambertian);
+ * pbr: x metallicFactor, y roughnessFactor, z/w unused;
+ * tex2.x/y/z: metallic-roughness / normal / occlusion texture index + 1 (0 = none). */
 PC_STRUCT(pc_material)
 {
     pc_vec4 base_color;
     pc_vec4 emission;
     pc_uvec4 tex;
     pc_vec4 params;
+    pc_vec4 pbr;
+    pc_uvec4 tex2;
 }
 PC_END(pc_material);
 
@@ -335,7 +348,9 @@ PC_END(pc_globals);
  * position: xyz world position, w = hit distance (< 0: miss);
  * normal: xyz shading normal facing the viewer, w = instance index (uint bits);
  * geom_normal: xyz geometric normal facing the viewer, w = triangle index (uint bits);
- * albedo: rgb base colour (linear); emission: rgb emitted radiance. */
+ * albedo: rgb base colour (linear); emission: rgb emitted radiance;
+ * material: x metallic, y roughness (perceptual), z ambient occlusion (1 = none), w weight of
+ * the dielectric specular lobe (pc_material.params.w). The shading normal is normal-mapped. */
 PC_STRUCT(pc_gbuffer_texel)
 {
     pc_vec4 position;
@@ -343,6 +358,7 @@ PC_STRUCT(pc_gbuffer_texel)
     pc_vec4 geom_normal;
     pc_vec4 albedo;
     pc_vec4 emission;
+    pc_vec4 material;
 }
 PC_END(pc_gbuffer_texel);
 
@@ -376,18 +392,21 @@ PC_END(pc_push);
 PC_CHECK(pc_tri, 48);
 PC_OFF(pc_tri, v1, 16);
 PC_OFF(pc_tri, v2, 32);
-PC_CHECK(pc_tri_attr, 80);
+PC_CHECK(pc_tri_attr, 96);
 PC_OFF(pc_tri_attr, uv01, 48);
 PC_OFF(pc_tri_attr, uv2, 64);
+PC_OFF(pc_tri_attr, tangents, 80);
 PC_CHECK(pc_bvh_node, 32);
 PC_OFF(pc_bvh_node, bmax, 16);
 PC_CHECK(pc_instance, 112);
 PC_OFF(pc_instance, world_to_object, 48);
 PC_OFF(pc_instance, info, 96);
-PC_CHECK(pc_material, 64);
+PC_CHECK(pc_material, 96);
 PC_OFF(pc_material, emission, 16);
 PC_OFF(pc_material, tex, 32);
 PC_OFF(pc_material, params, 48);
+PC_OFF(pc_material, pbr, 64);
+PC_OFF(pc_material, tex2, 80);
 PC_CHECK(pc_texture, 16);
 PC_CHECK(pc_light, 80);
 PC_OFF(pc_light, direction, 16);
@@ -418,8 +437,10 @@ PC_CHECK(pc_globals, 608);
 PC_OFF(pc_globals, view, 96);
 PC_OFF(pc_globals, ddgi, 192);
 PC_OFF(pc_globals, env, 400);
-PC_CHECK(pc_gbuffer_texel, 80);
+PC_CHECK(pc_gbuffer_texel, 96);
 PC_OFF(pc_gbuffer_texel, albedo, 48);
+PC_OFF(pc_gbuffer_texel, emission, 64);
+PC_OFF(pc_gbuffer_texel, material, 80);
 PC_CHECK(pc_counters, 32);
 PC_OFF(pc_counters, probe_shadow_rays, 16);
 PC_CHECK(pc_push, 48);

@@ -1,12 +1,17 @@
 #version 460
 /* Reference path tracer: one path per pixel per dispatch, accumulated in a float buffer.
- * Unbiased for our material model (Lambertian + emission, punctual lights): the camera ray
- * goes through the pixel centre (the same point DDGI shades, so errors compare per pixel);
- * every vertex adds emission (emitters are reached only by BSDF sampling, so no MIS is
- * needed) and next-event estimation of every punctual light with a shadow ray; directions
- * are cosine-weighted (throughput *= albedo); Russian roulette from bounce 3 on with
- * survival max(throughput) capped at 0.95, no clamping. Back faces of single-sided
- * surfaces absorb (the same convention as DDGI's probe rays). Deterministic per seed.
+ * Unbiased for our material model (glTF metallic-roughness, brdf.glsl; emission; punctual
+ * lights): the camera ray goes through the pixel centre (the same point DDGI shades, so
+ * errors compare per pixel); every vertex adds emission and next-event estimation of every
+ * punctual light with a shadow ray and the full BRDF. Punctual lights are deltas, so NEE is
+ * their only strategy; emissive surfaces and the sky have no light-sampling strategy (they are
+ * reached only by BSDF sampling), so no MIS between light and BSDF sampling is needed or
+ * possible. Directions come from brdf_sample: a mixture of GGX visible-normal sampling and
+ * cosine sampling weighted by its mixture pdf (a pure Lambertian takes the cosine sampler
+ * alone, with the same random numbers as before). Russian roulette from bounce 3 on with
+ * survival max(throughput) capped at 0.95, no clamping. Occlusion maps are ignored: the
+ * reference resolves the geometry they stand for. Back faces of single-sided surfaces absorb
+ * (the same convention as DDGI's probe rays). Deterministic per seed.
  * push: globals, buf0 = vec4 accumulation[], buf1 = pc_counters,
  *       params.x = sample index, params.y = max bounces (0 = 64). */
 #extension GL_GOOGLE_include_directive : require
@@ -27,18 +32,6 @@ float rnd(inout uint s)
 {
     s = pcg(s);
     return float(s >> 8) * (1.0 / 16777216.0);
-}
-
-/* Cosine-weighted direction around n (Duff et al. 2017 orthonormal basis). */
-vec3 sample_cosine(vec3 n, float u1, float u2)
-{
-    float sign_z = n.z >= 0.0 ? 1.0 : -1.0;
-    float a = -1.0 / (sign_z + n.z);
-    float b = n.x * n.y * a;
-    vec3 t = vec3(1.0 + sign_z * n.x * n.x * a, sign_z * b, -sign_z * n.x);
-    vec3 bt = vec3(b, sign_z + n.y * n.y * a, -n.y);
-    float r = sqrt(u1), phi = 2.0 * PC_PI * u2;
-    return normalize(t * (r * cos(phi)) + bt * (r * sin(phi)) + n * sqrt(max(0.0, 1.0 - u1)));
 }
 
 void main()
@@ -69,19 +62,27 @@ void main()
             }
             radiance += throughput * sf.emission;
             uint shadow = 0u;
-            vec3 e = direct_irradiance(g.scene, sf.position, sf.normal, sf.geom_normal, shadow);
+            pc_brdf b = surface_brdf(sf);
+            vec3 v = -dir;
+            radiance += throughput * direct_radiance(g.scene, sf.position, sf.normal,
+                                                     sf.geom_normal, v, b, shadow);
             rays += shadow;
-            radiance += throughput * sf.albedo / PC_PI * e;
             if (bounce == max_bounces) break;
-            throughput *= sf.albedo;
+            /* random numbers in the order of the Lambertian-only tracer: roulette, then the
+             * direction, then (only with two lobes) the lobe */
+            float u_rr = bounce >= 3u ? rnd(s) : 0.0;
+            float u1 = rnd(s), u2 = rnd(s);
+            float p_spec = brdf_specular_probability(b);
+            float u3 = p_spec > 0.0 && p_spec < 1.0 ? rnd(s) : 0.5;
+            vec3 weight;
+            if (!brdf_sample(b, sf.normal, v, vec3(u1, u2, u3), dir, weight)) break;
+            throughput *= weight;
             if (bounce >= 3u) {
                 float q = min(0.95, max(throughput.r, max(throughput.g, throughput.b)));
-                if (rnd(s) >= q) break;
+                if (u_rr >= q) break;
                 throughput /= q;
             }
             if (all(equal(throughput, vec3(0.0)))) break;
-            float u1 = rnd(s), u2 = rnd(s);
-            dir = sample_cosine(sf.normal, u1, u2);
             if (dot(dir, sf.geom_normal) <= 0.0) break; /* below the true surface */
             org = offset_ray_origin(sf.position, sf.geom_normal);
         }

@@ -1,6 +1,7 @@
 #version 460
 /* Primary pass: one camera ray per pixel, closest hit, writes the G-buffer (surface position,
- * normals, albedo, emission; position.w < 0 for a miss). Back faces of single-sided
+ * normals (the shading normal normal-mapped), base colour, emission, metallic, roughness,
+ * occlusion, specular weight; position.w < 0 for a miss). Back faces of single-sided
  * materials are culled, as a rasteriser would; alpha-masked texels are cut out.
  * push: globals, buf0 = pc_gbuffer_texel[width*height], buf1 = pc_counters. */
 #extension GL_GOOGLE_include_directive : require
@@ -27,12 +28,14 @@ void main()
             o.geom_normal = vec4(sf.geom_normal, uintBitsToFloat(hit.tri));
             o.albedo = vec4(sf.albedo, 1.0);
             o.emission = vec4(sf.emission, 0.0);
+            o.material = vec4(sf.metallic, sf.roughness, sf.occlusion, sf.specular);
         } else {
             o.position = vec4(dir, -1.0);
             o.normal = vec4(0.0);
             o.geom_normal = vec4(0.0);
             o.albedo = vec4(0.0);
             o.emission = vec4(env_radiance(g.env, dir), 0.0);
+            o.material = vec4(0.0, 1.0, 1.0, 0.0);
         }
         GBufferRef(pc.buf0).v[px.y * g.view.size.x + px.x] = o;
     }

@@ -1,7 +1,8 @@
 #version 460
 /* Shade pass: outgoing radiance toward the camera per pixel =
- *   emission + albedo/pi * (sum over punctual lights of E * cos * visibility)
- * with ray-traced hard shadows (any-hit rays). Misses keep the sky radiance.
+ *   emission + sum over punctual lights of f(v, l) * E * cos * visibility
+ * with f the glTF metallic-roughness BRDF (brdf.glsl), v toward the camera and ray-traced hard
+ * shadows (any-hit rays). Misses keep the sky radiance.
  * push: globals, buf0 = pc_gbuffer_texel[], buf1 = pc_counters, buf2 = vec4 radiance[]. */
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
@@ -21,8 +22,9 @@ void main()
         pc_gbuffer_texel t = GBufferRef(pc.buf0).v[i];
         vec3 l = t.emission.rgb;
         if (t.position.w >= 0.0) {
-            vec3 e = direct_irradiance(g.scene, t.position.xyz, t.normal.xyz, t.geom_normal.xyz, rays);
-            l += t.albedo.rgb / PC_PI * e;
+            vec3 p = t.position.xyz, v = normalize(g.view.eye.xyz - p);
+            pc_brdf b = gbuffer_brdf(t);
+            l += direct_radiance(g.scene, p, t.normal.xyz, t.geom_normal.xyz, v, b, rays);
         }
         RadianceRef(pc.buf2).v[i] = vec4(l, 1.0);
     }

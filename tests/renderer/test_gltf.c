@@ -521,6 +521,77 @@ static void test_warnings(void)
     free(b.p);
 }
 
+/* glTF 2.0 metallic-roughness: factors, the three data textures with scale and strength,
+ * TANGENT, the specification's defaults, and warnings for BLEND, TEXCOORD_1 and unsupported
+ * material extensions (one per extension, not one more for extensionsUsed). */
+static void test_pbr_materials(void)
+{
+    bin png;
+    make_png(&png, 2, 2, PNG_COLOR_TYPE_RGB_ALPHA, 8, kRgba);
+    char *uri = png_data_uri(&png);
+    bin b;
+    std_bin(&b, NULL);
+    const float tangents[16] = {1, 0, 0, 1, 1, 0, 0, -1, 0, 1, 0, 1, 0, 0, 1, -1};
+    size_t off = bin_put(&b, tangents, sizeof tangents);
+    char *views = test_xprintf(STD_VIEWS ",{'buffer':0,'byteOffset':%zu,'byteLength':64}", off);
+    char *rest = test_xprintf(
+        "'extensionsUsed':['KHR_materials_clearcoat','KHR_materials_transmission'],"
+        "'images':[{'uri':'%s'}],'textures':[{'source':0},{'source':0},{'source':0}],"
+        "'materials':[{'pbrMetallicRoughness':{'metallicFactor':0.25,'roughnessFactor':0.75,"
+        "'metallicRoughnessTexture':{'index':1}},'normalTexture':{'index':2,'scale':0.5},"
+        "'occlusionTexture':{'index':0,'strength':0.3},'alphaMode':'BLEND',"
+        "'extensions':{'KHR_materials_clearcoat':{},'KHR_materials_transmission':{}}},"
+        "{'extensions':{'KHR_materials_clearcoat':{'clearcoatFactor':1}},"
+        "'normalTexture':{'index':0,'texCoord':1}}],"
+        "'meshes':[{'primitives':[{'attributes':{'POSITION':0,'NORMAL':1,'TEXCOORD_0':2,"
+        "'TANGENT':6},'indices':3,'material':0},{'attributes':{'POSITION':0},'indices':3,"
+        "'material':1}]}],'nodes':[{'mesh':0}]",
+        uri);
+    char *j = gltf_json(
+        &b, 0, views,
+        STD_ACCESSORS ",{'bufferView':8,'componentType':5126,'count':4,'type':'VEC4'}", rest);
+    rd_scene s;
+    CHECKF(load_text(j, &s) == RD_GLTF_OK, "%s", gltf_err);
+    CHECK(s.material_count == 3 && s.texture_count == 3); /* one per glTF texture used */
+    if (s.material_count == 3) {
+        const rd_material *m = &s.materials[1], *d = &s.materials[2];
+        CHECK(m->metallic == 0.25f && m->roughness == 0.75f && m->specular == 1.0f);
+        CHECK(m->normal_scale == 0.5f && fabsf(m->occlusion_strength - 0.3f) < 1e-6f);
+        /* rd textures in order of first use: glTF textures 1, 2, 0 */
+        CHECK(m->metallic_roughness_texture == 0 && m->normal_texture == 1 &&
+              m->occlusion_texture == 2 && m->base_color_texture == -1);
+        CHECK(m->alpha_mode == RD_ALPHA_BLEND);
+        /* the specification's defaults: metallic 1, roughness 1, scale 1, strength 1 */
+        CHECK(d->metallic == 1.0f && d->roughness == 1.0f && d->specular == 1.0f);
+        CHECK(d->normal_scale == 1.0f && d->occlusion_strength == 1.0f);
+        CHECK(d->metallic_roughness_texture == -1 && d->normal_texture == -1 &&
+              d->occlusion_texture == -1);
+        /* the default material stays a white Lambertian */
+        CHECK(s.materials[0].metallic == 0.0f && s.materials[0].specular == 0.0f);
+    }
+    const rd_mesh *mesh = &s.meshes[0];
+    CHECK(mesh->tri_count == 4 && mesh->tangents != NULL);
+    if (mesh->tangents) {
+        /* triangle 0 = vertices 0 1 2, triangle 1 = 0 2 3; the second primitive has none */
+        CHECK(memcmp(&mesh->tangents[0], &tangents[0], 12 * sizeof(float)) == 0);
+        CHECK(memcmp(&mesh->tangents[20], &tangents[12], 4 * sizeof(float)) == 0);
+        for (int k = 24; k < 48; k++)
+            CHECK(mesh->tangents[k] == 0.0f);
+    }
+    CHECK(has_warning(&s, "BLEND"));
+    CHECK(has_warning(&s, "KHR_materials_clearcoat (on 2 material(s))"));
+    CHECK(has_warning(&s, "KHR_materials_transmission (on 1 material(s))"));
+    CHECK(has_warning(&s, "normal texture with TEXCOORD_1"));
+    CHECK(s.warning_count == 4);
+    rd_scene_destroy(&s);
+    free(j);
+    free(rest);
+    free(views);
+    free(uri);
+    free(png.p);
+    free(b.p);
+}
+
 int main(void)
 {
     test_indexed_hierarchy();
@@ -528,6 +599,7 @@ int main(void)
     test_flat_normals_and_modes();
     test_matrix_node_and_sparse();
     test_materials();
+    test_pbr_materials();
     test_textures();
     test_lights();
     test_cameras();

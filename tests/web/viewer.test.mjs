@@ -510,6 +510,32 @@ test('the rendering panel switches GI mode and the probe view', { timeout: 30000
   await until(async () => (await http('GET', '/v1/settings')).json.gi_mode === 'ddgi', 'gi_mode ddgi');
 });
 
+test('the environment controls set a gradient and upload an HDR image', { timeout: 60000 }, async () => {
+  await page.locator('#sky-modes button[data-value=gradient]').click();
+  await until(async () => (await http('GET', '/v1/settings')).json.sky_mode === 'gradient', 'sky_mode gradient');
+  assert.equal(await page.locator('#ground-row').isVisible(), true, 'the ground colour shows in gradient mode');
+  await page.locator('#ground-color').fill('#ff0000');
+  await page.locator('#ground-strength').fill('0.5');
+  await page.locator('#ground-strength').dispatchEvent('change');
+  await until(async () => {
+    const g = (await http('GET', '/v1/settings')).json.sky_ground;
+    return g[0] === 0.5 && g[1] === 0 && g[2] === 0;
+  }, 'sky_ground red 0.5');
+  // a 2 x 1 Radiance file through the file input: the mode becomes image, the scene names it
+  const hdr = Buffer.concat([Buffer.from('#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 1 +X 2\n'),
+    Buffer.from([0x80, 0x40, 0x20, 0x81, 0x40, 0x40, 0x40, 0x81])]);
+  await page.locator('#hdr-file').setInputFiles({ name: 'tiny.hdr', mimeType: 'image/vnd.radiance', buffer: hdr });
+  await until(async () => (await http('GET', '/v1/settings')).json.sky_mode === 'image', 'sky_mode image');
+  const img = (await http('GET', '/v1/scene')).json.environment_image;
+  assert.deepEqual(img, { width: 2, height: 1 });
+  await until(async () => /tiny\.hdr/.test(await page.locator('#hdr-out').textContent()), 'the file name shown');
+  assert.equal(await page.locator('#hdr-rotation-row').isVisible(), true, 'rotation shows in image mode');
+  // back to what the other tests expect: no image, a uniform black sky, no ground
+  assert.equal((await http('DELETE', '/v1/environment')).status, 204);
+  await http('PATCH', '/v1/settings', { sky_mode: 'uniform', sky_ground: [0, 0, 0] });
+  await until(async () => (await page.locator('#sky-modes button[data-value=uniform]').getAttribute('aria-checked')) === 'true', 'uniform checked');
+});
+
 /* ---- views: one world, many views (protocol/stream.md, version 2) ---------------------------- */
 
 // A second page with another window size (and so another render size). It shares the browser

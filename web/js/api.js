@@ -123,6 +123,31 @@ export class Api {
     }
   }
 
+  /* PUT of a binary body (a file) with its media type; resolves to the JSON answer. */
+  async putBytes(path, body, type, { timeoutMs = 120000 } = {}) {
+    for (let attempt = 0; ; attempt++) {
+      const ctl = new AbortController();
+      const timer = setTimeout(() => ctl.abort(), timeoutMs);
+      let res;
+      try {
+        res = await fetch(path, { method: 'PUT', headers: this.headers({ 'Content-Type': type }),
+          body, signal: ctl.signal, cache: 'no-store' });
+      } catch (e) {
+        throw new ApiError(0, 'network', ctl.signal.aborted ? 'The server did not answer in time.'
+                                                           : 'The server cannot be reached.');
+      } finally {
+        clearTimeout(timer);
+      }
+      const text = await res.text().catch(() => '');
+      if (res.ok) {
+        try { return text ? JSON.parse(text) : null; } catch { return text; }
+      }
+      const err = errorFrom(res.status, text);
+      if (res.status === 401 && attempt === 0 && (await this.reauthorize(err))) continue;
+      throw err;
+    }
+  }
+
   get(path, opts) { return this.request('GET', path, undefined, opts); }
   patch(path, body, opts) { return this.request('PATCH', path, body, opts); }
   post(path, body, opts) { return this.request('POST', path, body, opts); }

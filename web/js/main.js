@@ -172,6 +172,7 @@ function firstScene(gen) {
 function setScene(s) {
   scene = s;
   scenePanel.render(s);
+  renderPanel.setEnvironmentImage(s && s.environment_image);
   const b = s && s.bounds;
   if (b && b.min && b.max) camera.sceneSize = Math.max(1e-3, Math.hypot(b.max[0] - b.min[0], b.max[1] - b.min[1], b.max[2] - b.min[2]));
 }

@@ -232,6 +232,20 @@ export class StatsPanel {
 
 /* ---- rendering settings ------------------------------------------------------------------ */
 const GI_LABELS = [['off', 'Off'], ['classic', 'Classic'], ['ddgi', 'DDGI'], ['pathtrace', 'Path trace']];
+const SKY_LABELS = [['uniform', 'Uniform'], ['gradient', 'Gradient'], ['image', 'HDR image']];
+
+/* A linear radiance (r, g, b) as a colour picker value and a strength (its largest channel),
+ * and back: what the sky and ground controls show and send. */
+export function radianceToPicker(rgb) {
+  const k = Math.max(rgb[0], rgb[1], rgb[2]);
+  if (!(k > 0)) return { color: '#ffffff', strength: 0 };
+  return { color: linearToHex(rgb.map((c) => c / k)), strength: k };
+}
+export function pickerToRadiance(color, strength) {
+  const v = hexToLinear(color);
+  const k = Math.max(...v) || 1;
+  return v.map((c) => Math.round((c / k) * strength * 10000) / 10000);
+}
 const VIEW_LABELS = [['final', 'Final'], ['irradiance', 'Irradiance'], ['probes', 'Probes']];
 const GI_TITLES = {
   off: 'Direct light only',
@@ -259,6 +273,57 @@ export class RenderPanel {
       this.patch({ exposure: Number(this.exposure.value) });
     });
     this.animate.addEventListener('change', () => this.patch({ animate: this.animate.checked }));
+    this.setupEnvironment();
+  }
+
+  /* The environment controls: mode, sky and ground radiance (colour x strength), the HDR image
+   * (PUT /v1/environment), its intensity and rotation. */
+  setupEnvironment() {
+    this.skyModes = $('sky-modes');
+    this.skyModes.replaceChildren(...SKY_LABELS.map(([v, label]) => h('button', {
+      type: 'button', role: 'radio', 'data-value': v, 'aria-checked': 'false',
+      title: v === 'gradient' ? 'From the ground colour (below) to the sky colour (above)'
+        : v === 'image' ? 'An equirectangular HDR image' : 'The sky colour in every direction',
+      onclick: () => (v === 'image' && !this.hasImage ? $('hdr-file').click() : this.patch({ sky_mode: v })),
+    }, label)));
+    const sendSky = () => this.patch({ sky: pickerToRadiance($('sky-color').value, Number($('sky-strength').value) || 0) });
+    const sendGround = () => this.patch({ sky_ground: pickerToRadiance($('ground-color').value, Number($('ground-strength').value) || 0) });
+    $('sky-color').addEventListener('input', sendSky);
+    $('sky-strength').addEventListener('change', sendSky);
+    $('ground-color').addEventListener('input', sendGround);
+    $('ground-strength').addEventListener('change', sendGround);
+    $('sky-intensity').addEventListener('input', () => {
+      $('sky-intensity-out').textContent = Number($('sky-intensity').value).toFixed(2);
+      this.patch({ sky_intensity: Number($('sky-intensity').value) });
+    });
+    $('sky-rotation').addEventListener('input', () => {
+      $('sky-rotation-out').textContent = `${$('sky-rotation').value}°`;
+      this.patch({ sky_rotation: Number($('sky-rotation').value) });
+    });
+    $('hdr-btn').addEventListener('click', () => $('hdr-file').click());
+    $('hdr-file').addEventListener('change', async () => {
+      const f = $('hdr-file').files[0];
+      $('hdr-file').value = '';
+      if (!f) return;
+      $('hdr-out').textContent = 'uploading…';
+      try {
+        const r = await this.api.putBytes('/v1/environment', f, 'image/vnd.radiance');
+        this.hasImage = true;
+        $('hdr-out').textContent = `${f.name} (${r.width}×${r.height})`;
+        if (!this.eventsLive) this.refresh(); // else the settings event brings sky_mode image
+      } catch (e) {
+        $('hdr-out').textContent = '';
+        this.toasts.error(e);
+      }
+    });
+  }
+
+  /* The scene document says whether an environment image is loaded. */
+  setEnvironmentImage(img) {
+    this.hasImage = !!img;
+    if (!img) $('hdr-out').textContent = '';
+    else if (!$('hdr-out').textContent || $('hdr-out').textContent === 'uploading…')
+      $('hdr-out').textContent = `${img.width}×${img.height}`;
   }
 
   /* gi, view: the enums the API offers (from /v1/openapi.yaml); defaults are those of v1. */
@@ -316,6 +381,29 @@ export class RenderPanel {
       this.exposureOut.textContent = `${Number(s.exposure).toFixed(1)} EV`;
     }
     this.animate.checked = !!s.animate;
+    if (s.sky_mode) {
+      for (const b of this.skyModes.querySelectorAll('button')) b.setAttribute('aria-checked', String(b.dataset.value === s.sky_mode));
+      $('ground-row').hidden = s.sky_mode !== 'gradient';
+      for (const id of ['hdr-intensity-row', 'hdr-rotation-row']) $(id).hidden = s.sky_mode !== 'image';
+      $('sky-label').textContent = s.sky_mode === 'gradient' ? 'Sky (zenith)' : 'Sky';
+      const busy = this.queue.busy('s');
+      const show = (colorId, strengthId, rgb) => {
+        if (!Array.isArray(rgb) || busy || [colorId, strengthId].includes(document.activeElement && document.activeElement.id)) return;
+        const p = radianceToPicker(rgb);
+        $(colorId).value = p.color;
+        $(strengthId).value = Number(p.strength.toPrecision(4));
+      };
+      show('sky-color', 'sky-strength', s.sky);
+      show('ground-color', 'ground-strength', s.sky_ground);
+      if (!busy && document.activeElement !== $('sky-intensity') && Number.isFinite(s.sky_intensity)) {
+        $('sky-intensity').value = s.sky_intensity;
+        $('sky-intensity-out').textContent = Number(s.sky_intensity).toFixed(2);
+      }
+      if (!busy && document.activeElement !== $('sky-rotation') && Number.isFinite(s.sky_rotation)) {
+        $('sky-rotation').value = s.sky_rotation;
+        $('sky-rotation-out').textContent = `${s.sky_rotation}°`;
+      }
+    }
   }
 
   async patch(p) {
