@@ -186,9 +186,20 @@ static uint64_t scene_hash(const rd_scene *s, const eval_args *a, unsigned seed)
     for (uint32_t i = 0; i < s->node_count; i++)
         h = fnv(h, s->nodes[i].world, sizeof(float) * 16);
     for (uint32_t i = 0; i < s->material_count; i++) {
-        h = fnv(h, s->materials[i].base_color, sizeof s->materials[i].base_color);
-        h = fnv(h, s->materials[i].emission, sizeof s->materials[i].emission);
+        const rd_material *m = &s->materials[i];
+        h = fnv(h, m->base_color, sizeof m->base_color);
+        h = fnv(h, m->emission, sizeof m->emission);
+        const float f[5] = {m->metallic, m->roughness, m->specular, m->normal_scale,
+                            m->occlusion_strength};
+        const int32_t t[7] = {m->base_color_texture, m->emissive_texture,
+                              m->metallic_roughness_texture, m->normal_texture,
+                              m->occlusion_texture, (int32_t)m->alpha_mode, m->double_sided};
+        h = fnv(h, f, sizeof f);
+        h = fnv(h, t, sizeof t);
+        h = fnv(h, &m->alpha_cutoff, sizeof m->alpha_cutoff);
     }
+    for (uint32_t i = 0; i < s->texture_count; i++)
+        h = fnv(h, s->textures[i].rgba, (size_t)s->textures[i].width * s->textures[i].height * 4);
     for (uint32_t i = 0; i < s->light_count; i++) {
         const rd_light *l = &s->lights[i];
         h = fnv(h, l->position, sizeof l->position);
