@@ -1,6 +1,7 @@
 /* persist.c: atomic files in --data-dir written by a background thread. */
 #include "persist.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <libgen.h>
@@ -178,6 +179,38 @@ static void *persist_main(void *arg)
     return NULL;
 }
 
+/* A run killed while it wrote a file leaves NAME.tmp beside the intact NAME (rename is the
+ * commit): those are removed at start. */
+static void remove_stray_temporaries(const srv_persist *p)
+{
+    DIR *d = opendir(p->dir);
+    if (!d) return;
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL) {
+        size_t n = strlen(e->d_name);
+        if (n < 5 || strcmp(e->d_name + n - 4, ".tmp") != 0) continue;
+        char path[1400];
+        snprintf(path, sizeof path, "%s/%s", p->dir, e->d_name);
+        if (unlink(path) == 0)
+            srv_info("persist", "removed %s, left by a run that stopped while writing it", path);
+    }
+    closedir(d);
+}
+
+/* A file that does not read as what it should be is renamed NAME.bad-TIME (kept for a look,
+ * never read again) so that the next start does not trip over it. */
+static void keep_aside(const srv_persist *p, const char *name, const char *why)
+{
+    char from[1100], to[1200];
+    path_of(p, name, from, sizeof from);
+    snprintf(to, sizeof to, "%s.bad-%lld", from, (long long)time(NULL));
+    if (rename(from, to) == 0)
+        srv_warn("persist", "%s %s: kept as %s; starting without it", from, why, to);
+    else
+        srv_warn("persist", "%s %s; ignored (and it cannot be moved aside: %s)", from, why,
+                 strerror(errno));
+}
+
 srv_persist *srv_persist_open(const char *dir, char *err, size_t errlen)
 {
     if (strlen(dir) >= 1000) {
@@ -196,6 +229,7 @@ srv_persist *srv_persist_open(const char *dir, char *err, size_t errlen)
     srv_persist *p = calloc(1, sizeof *p);
     if (!p) abort();
     snprintf(p->dir, sizeof p->dir, "%s", dir);
+    remove_stray_temporaries(p);
     pthread_mutex_init(&p->mu, NULL);
     pthread_cond_init(&p->cv, NULL);
     if (pthread_create(&p->thread, NULL, persist_main, p) != 0) {
@@ -325,8 +359,7 @@ void srv_persist_load(srv_persist *p, srv_saved *out)
             out->scene_generation = (uint64_t)g->valuedouble;
         } else {
             free(scene);
-            srv_warn("persist", "%s/scene.bin is missing or does not match scene.json; ignored",
-                     p->dir);
+            keep_aside(p, "scene.json", "does not describe scene.bin");
         }
         cJSON_Delete(m);
         free(meta);
@@ -348,7 +381,7 @@ void srv_persist_load(srv_persist *p, srv_saved *out)
             snprintf(out->state_source, sizeof out->state_source, "%s", src->valuestring);
         } else {
             cJSON_Delete(state);
-            srv_warn("persist", "%s/state.json is not a saved state; ignored", p->dir);
+            keep_aside(p, "state.json", "is not a saved state");
         }
         cJSON_Delete(doc);
         free(text);

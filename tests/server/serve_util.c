@@ -3,6 +3,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <fcntl.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -22,9 +23,10 @@ void pc_sleep_ms(int ms)
 
 bool pc_daemon_start(pc_daemon *d, const char *const *args)
 {
-    const char *token = d->token;
+    const char *token = d->token, *log_path = d->log_path;
     memset(d, 0, sizeof *d);
     d->token = token;
+    d->log_path = log_path;
     int out[2];
     if (pipe(out) != 0) return false;
     const char *argv[64];
@@ -50,6 +52,10 @@ bool pc_daemon_start(pc_daemon *d, const char *const *args)
         dup2(out[1], 1);
         close(out[0]);
         close(out[1]);
+        if (log_path) {
+            int fd = open(log_path, O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+            if (fd >= 0) dup2(fd, 2);
+        }
         execv(argv[0], (char *const *)argv);
         _exit(127);
     }

@@ -16,10 +16,11 @@
 typedef struct pc_daemon {
     pid_t pid;
     unsigned http_port, ws_port;
-    const char *token; /* sent by the helpers below when not NULL */
+    const char *token;    /* sent by the helpers below when not NULL */
+    const char *log_path; /* when set (before start): the daemon's stderr goes to this file */
 } pc_daemon;
 
-/* Starts `probecast serve` with args (NULL-terminated; --http/--ws 127.0.0.1:0 are added) and
+/* Starts `probecast serve` with args (NULL-terminated; --http 127.0.0.1:0 is added) and
  * waits for its "probecast serving" line. Returns false on failure. */
 bool pc_daemon_start(pc_daemon *d, const char *const *args);
 /* SIGTERM, then waits; returns the exit status (or -1 when it did not exit in time / crashed). */
