@@ -513,7 +513,7 @@ test('the rendering panel switches GI mode and the probe view', { timeout: 30000
 test('the environment controls set a gradient and upload an HDR image', { timeout: 60000 }, async () => {
   await page.locator('#sky-modes button[data-value=gradient]').click();
   await until(async () => (await http('GET', '/v1/settings')).json.sky_mode === 'gradient', 'sky_mode gradient');
-  assert.equal(await page.locator('#ground-row').isVisible(), true, 'the ground colour shows in gradient mode');
+  await until(async () => page.locator('#ground-row').isVisible(), 'the ground colour shows in gradient mode');
   await page.locator('#ground-color').fill('#ff0000');
   await page.locator('#ground-strength').fill('0.5');
   await page.locator('#ground-strength').dispatchEvent('change');
@@ -529,7 +529,8 @@ test('the environment controls set a gradient and upload an HDR image', { timeou
   const img = (await http('GET', '/v1/scene')).json.environment_image;
   assert.deepEqual(img, { width: 2, height: 1 });
   await until(async () => /tiny\.hdr/.test(await page.locator('#hdr-out').textContent()), 'the file name shown');
-  assert.equal(await page.locator('#hdr-rotation-row').isVisible(), true, 'rotation shows in image mode');
+  // the panel follows the settings event (or the answer), which may come a moment later
+  await until(async () => page.locator('#hdr-rotation-row').isVisible(), 'rotation shows in image mode');
   // back to what the other tests expect: no image, a uniform black sky, no ground
   assert.equal((await http('DELETE', '/v1/environment')).status, 204);
   await http('PATCH', '/v1/settings', { sky_mode: 'uniform', sky_ground: [0, 0, 0] });
