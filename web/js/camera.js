@@ -131,7 +131,7 @@ function typingInto(el) {
 /* Pointer, wheel and keyboard controls of an OrbitCamera on an element.
  *   left drag / one finger: orbit      right or middle drag, shift+drag / two fingers: pan
  *   wheel / pinch: zoom                W A S D fly, Q E down/up, Shift faster; arrows orbit
- *   double-click or F: onFrame()       (the caller frames the scene)
+ *   double-click, Home or '.': onFrame() (the caller frames the scene; F is full screen, main.js)
  * onChange() is called after every change; update(dt) applies held keys and returns whether
  * the camera moved (call it every animation frame while keysHeld()). While `enabled` is false
  * (the viewer follows another view) input is ignored: drags, wheel, pinch and keys do nothing. */
@@ -235,7 +235,7 @@ export class CameraControls {
 
   keyDown(e) {
     if (!this.enabled || typingInto(e.target) || e.ctrlKey || e.metaKey || e.altKey) return;
-    if (e.code === 'KeyF') { this.onFrame(); return; }
+    if (e.code === 'Home' || e.code === 'Period' || e.code === 'NumpadDecimal') { e.preventDefault(); this.onFrame(); return; }
     this.shift = e.shiftKey;
     if (!(e.code in FLY_KEYS) && !(e.code in ORBIT_KEYS)) return;
     e.preventDefault();
@@ -244,6 +244,9 @@ export class CameraControls {
   }
 
   keysHeld() { return this.keys.size > 0; }
+
+  /* Whether an interaction is under way: a pointer is down or a key is held. */
+  get active() { return this.pointers.size > 0 || this.keys.size > 0; }
 
   /* Applies held keys over dt seconds. */
   update(dt) {

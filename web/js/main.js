@@ -1,8 +1,9 @@
 // main.js: wires the viewer together: the stream on the canvas, camera controls (one camera
-// message per animation frame at most), the render size (debounced resize messages), the
+// message per animation frame at most), the render size (quality.js: debounced resize
+// messages, a reduced size while the camera moves), the layout of the panels (layout.js), the
 // panels (fed by the stream's world events; the animation panel plays, pauses and seeks the
-// scene's glTF animations), following other views, stats polling, drag-and-drop upload and the
-// view restore after a reconnect.
+// scene's glTF animations), following other views, stats polling, keys, drag-and-drop upload
+// and the view restore after a reconnect.
 //
 // Views (protocol/stream.md, version 2): every connection owns a view of its own; this page's
 // camera and size change only that view. The world (scene, lights, settings, views, animation)
@@ -13,10 +14,12 @@
 import { Api } from './api.js';
 import { CameraControls, OrbitCamera } from './camera.js';
 import { AnimationPanel } from './animation.js';
-import { LightsPanel, RenderPanel, ScenePanel, StatsPanel, Toasts, TokenPrompt, ViewsPanel } from './panels.js';
+import { Fullscreen, HelpOverlay, Layout } from './layout.js';
+import { LightsPanel, RenderPanel, ScenePanel, Toasts, TokenPrompt, ViewsPanel } from './panels.js';
+import { QualityPanel, RenderSize } from './quality.js';
+import { StatsPanel } from './stats.js';
 import { CanvasView, FrameStream, SUBPROTOCOL } from './stream.js';
 
-const RESIZE_DEBOUNCE_MS = 150;
 const STATS_PERIOD_MS = 1000;
 const WORLD_WAIT_MS = 3000;       // how long a restore waits for the scene event before asking GET /v1/scene
 
@@ -118,7 +121,7 @@ stream.addEventListener('state', (e) => {
 const stale = (gen) => stream.gen !== gen || !stream.open;
 async function restoreView(gen) {
   try {
-    sendResize(true);
+    renderSize.connected();
     const [s] = await Promise.all([firstScene(gen), loadCapabilities()]);
     if (stale(gen)) return;
     const same = scene && s.source === scene.source && s.generation === scene.generation;
@@ -262,7 +265,7 @@ stream.addEventListener('server-error', (e) => {
 
 /* ---- camera input: coalesced to one message per animation frame ---------------------------- */
 const controls = new CameraControls(canvas, camera, {
-  onChange: () => { fadeHelp(); requestTick(); },
+  onChange: () => { fadeHelp(); renderSize.input(); requestTick(); },
   onFrame: () => {
     if (scene && scene.bounds) { camera.frameBounds(scene.bounds.min, scene.bounds.max); requestTick(); }
   },
@@ -286,30 +289,25 @@ function tick(t) {
   else lastTick = 0;
 }
 
-/* ---- render size: the canvas's CSS size x devicePixelRatio, debounced ------------------------- */
-let lastSize = '', resizeTimer = 0;
-function sendResize(force) {
-  const { width, height, dpr } = view.fitBacking();
-  if (width < 1 || height < 1) return;
-  const key = `${Math.round(width)}x${Math.round(height)}@${dpr}`;
-  if (!force && key === lastSize) return;
-  if (stream.sendResize(width, height, dpr)) lastSize = key;
-}
+/* ---- render size: the canvas's CSS size x devicePixelRatio x the Quality panel's scale ------ */
+const renderSize = new RenderSize({ stream, view, controls, settings: () => renderPanel.serverSettings });
 new ResizeObserver(() => {
   view.fitBacking(); // redraw at once at the new size; the server follows after the debounce
-  clearTimeout(resizeTimer);
-  resizeTimer = setTimeout(() => sendResize(false), RESIZE_DEBOUNCE_MS);
+  renderSize.resized();
 }).observe(canvas);
 function watchDpr() {
   matchMedia(`(resolution: ${window.devicePixelRatio}dppx)`).addEventListener('change', () => {
-    sendResize(false);
+    renderSize.send(false);
     watchDpr();
   }, { once: true });
 }
 watchDpr();
 
 /* ---- panels ------------------------------------------------------------------------------------ */
-const statsPanel = new StatsPanel();
+const layout = new Layout();
+const statsPanel = new StatsPanel({ stream });
+const qualityPanel = new QualityPanel(renderSize);
+stream.addEventListener('frame', (e) => { if (e.detail.viewId === stream.ownView) qualityPanel.show(e.detail); });
 const renderPanel = new RenderPanel(api, { toasts });
 const lightsPanel = new LightsPanel(api, {
   toasts,
@@ -358,6 +356,7 @@ async function pollStats() {
   try {
     if (!document.hidden) {
       serverStats = await api.get('/v1/stats', { timeoutMs: 3000 });
+      statsPanel.addServerSample(serverStats);
       const gen = serverStats.scene && serverStats.scene.generation;
       if (stream.open && restored && !v2() && scene && gen !== undefined && gen !== scene.generation) {
         await onScene(await api.get('/v1/scene'));
@@ -368,6 +367,7 @@ async function pollStats() {
     }
   } catch {
     serverStats = null;
+    statsPanel.addServerSample(null);
   }
   setTimeout(pollStats, STATS_PERIOD_MS);
 }
@@ -388,7 +388,10 @@ window.addEventListener('drop', (e) => {
   if (f) scenePanel.upload(f);
 });
 
-/* ---- keys, panels, help ----------------------------------------------------------------------- */
+/* ---- keys, panels, help, fullscreen ------------------------------------------------------------ */
+const help = new HelpOverlay();
+const fullscreen = new Fullscreen($('stage'), { toasts });
+$('help-btn').addEventListener('click', () => help.toggle());
 function toggleUi() {
   document.body.classList.toggle('ui-hidden');
   $('toggle-ui').title = document.body.classList.contains('ui-hidden') ? 'Show panels (H)' : 'Hide panels (H)';
@@ -397,27 +400,26 @@ $('toggle-ui').addEventListener('click', toggleUi);
 window.addEventListener('keydown', (e) => {
   const t = e.target;
   if (e.ctrlKey || e.metaKey || e.altKey || (t && /^(INPUT|TEXTAREA|SELECT)$/.test(t.tagName))) return;
+  if (e.key === '?') { e.preventDefault(); help.toggle(); return; }
+  if (e.code === 'Escape') {
+    // the innermost thing first: the help, then an open panel (narrow layouts), then following
+    if (help.isOpen) help.close();
+    else if (!layout.close() && viewsPanel.following) follow(null);
+    return;
+  }
+  if (help.isOpen) return;
   if (e.code === 'KeyH') toggleUi();
   else if (e.code === 'KeyP') renderPanel.toggleProbes();
+  else if (e.code === 'KeyF' && !e.shiftKey) { e.preventDefault(); fullscreen.toggle(); }
   else if (e.code === 'Space' && animPanel.visible && !(t && t.tagName === 'BUTTON')) {
     e.preventDefault();
     animPanel.toggle();
   }
-  else if (e.code === 'Escape' && viewsPanel.following) follow(null);
 });
 let helpTimer = setTimeout(fadeHelp, 12000);
 function fadeHelp() {
   clearTimeout(helpTimer);
   $('help').classList.add('faded');
-}
-
-// Panels remember whether they are open; on a small screen they start closed.
-for (const d of document.querySelectorAll('details.panel')) {
-  const key = 'probecast.panel.' + d.id;
-  const saved = localStorage.getItem(key);
-  if (saved !== null) d.open = saved === '1';
-  else if (innerWidth < 720) d.open = false;
-  d.addEventListener('toggle', () => localStorage.setItem(key, d.open ? '1' : '0'));
 }
 
 $('share').addEventListener('click', async () => {
@@ -455,6 +457,7 @@ window.addEventListener('pageshow', (ev) => { if (ev.persisted && !document.hidd
 // For tests and the console: the live objects and a summary of the stream state.
 window.probecast = {
   api, stream, camera, controls, view, renderPanel, lightsPanel, scenePanel, viewsPanel, animPanel, follow,
+  layout, renderSize, help, fullscreen, statsPanel,
   state: () => ({
     state: stream.state, drawnId: stream.drawnId, frames: stream.counters.drawn, inputSeq: stream.lastHeader ? stream.lastHeader.inputSeq : 0,
     sentSeq: stream.nextSeq - 1, reconnects: stream.counters.reconnects, gen: stream.gen, header: stream.lastHeader,

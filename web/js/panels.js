@@ -1,4 +1,4 @@
-// panels.js: the overlay panels: stats, views (follow), lights, rendering settings, scene
+// panels.js: the overlay panels: views (follow), lights, rendering settings, scene
 // upload, plus toasts and the token prompt. Each panel owns its DOM subtree (found by id in
 // index.html), talks to the server only through an Api (api.js) and reports failures with the
 // server's own message. The world's state reaches the panels through the stream's 'event'
@@ -7,51 +7,14 @@
 // version-1 server, which sends no events.
 
 import { sceneContentType } from './api.js';
+import { h, icon } from './dom.js';
 
 const $ = (id) => document.getElementById(id);
 
-/* h('div', { class: 'x', onclick: f }, child, 'text') */
-function h(tag, attrs = {}, ...children) {
-  const el = document.createElement(tag);
-  for (const [k, v] of Object.entries(attrs)) {
-    if (v === undefined || v === null || v === false) continue;
-    if (k.startsWith('on')) el.addEventListener(k.slice(2), v);
-    else if (k === 'class') el.className = v;
-    else if (k in el && typeof v !== 'string') el[k] = v;
-    else el.setAttribute(k, v === true ? '' : v);
-  }
-  for (const c of children.flat()) if (c !== null && c !== undefined && c !== false) el.append(c);
-  return el;
-}
-
-/* Icons as inline SVG (no icon font: glyphs such as ⌖ are missing from many system fonts). */
+/* Icons (16 x 16 stroke paths) for dom.js's icon(). */
 const ICON_TARGET = 'M8 1.5v3M8 11.5v3M1.5 8h3M11.5 8h3M8 4.5a3.5 3.5 0 1 0 0 7a3.5 3.5 0 1 0 0-7z';
 const ICON_DELETE = 'M4 4l8 8M12 4l-8 8';
-function icon(d) {
-  const svg = document.createElementNS('http://www.w3.org/2000/svg', 'svg');
-  svg.setAttribute('viewBox', '0 0 16 16');
-  svg.setAttribute('width', '14');
-  svg.setAttribute('height', '14');
-  svg.setAttribute('aria-hidden', 'true');
-  const path = document.createElementNS('http://www.w3.org/2000/svg', 'path');
-  path.setAttribute('d', d);
-  path.setAttribute('fill', 'none');
-  path.setAttribute('stroke', 'currentColor');
-  path.setAttribute('stroke-width', '1.6');
-  path.setAttribute('stroke-linecap', 'round');
-  svg.append(path);
-  return svg;
-}
 
-const fixed = (x, d) => (Number.isFinite(x) ? x.toFixed(d) : '–');
-function si(x, unit = '') {
-  if (!Number.isFinite(x)) return '–';
-  const a = Math.abs(x);
-  if (a >= 1e9) return (x / 1e9).toFixed(2) + ' G' + unit;
-  if (a >= 1e6) return (x / 1e6).toFixed(2) + ' M' + unit;
-  if (a >= 1e3) return (x / 1e3).toFixed(1) + ' k' + unit;
-  return x.toFixed(0) + (unit ? ' ' + unit : '');
-}
 const mb = (n) => (n / 1048576).toFixed(n < 10485760 ? 2 : 1) + ' MB';
 
 /* ---- colours: glTF light colours are linear RGB; <input type=color> is sRGB ---------------- */
@@ -167,66 +130,6 @@ export class TokenPrompt {
       this.dialog.showModal();
       this.input.focus();
     });
-  }
-}
-
-/* ---- stats ------------------------------------------------------------------------------- */
-export class StatsPanel {
-  constructor() {
-    this.f = {};
-    for (const k of ['fps', 'latency', 'kbps', 'frame', 'size', 'rays', 'probes', 'gpu', 'passes', 'device']) this.f[k] = $('st-' + k);
-    this.passRows = new Map();
-  }
-
-  /* client: FrameStream.metrics(); header: the last drawn frame's header (or null); server:
-   * GET /v1/stats (or null when the poll failed). */
-  render({ client, header, server }) {
-    const f = this.f;
-    const sfps = server && Number.isFinite(server.fps) ? ` <small>/ ${fixed(server.fps, 1)} server</small>` : '';
-    f.fps.innerHTML = `${fixed(client.fps, 1)}${sfps}`;
-    f.latency.textContent = client.latencyMs !== null ? `${fixed(client.latencyMs, 0)} ms`
-      : client.lastLatencyMs !== null ? `${fixed(client.lastLatencyMs, 0)} ms (idle)` : '–';
-    f.kbps.textContent = `${client.kbps >= 10000 ? (client.kbps / 1000).toFixed(1) + ' Mbit/s' : fixed(client.kbps, 0) + ' kbit/s'}`;
-    f.frame.innerHTML = header ? `#${header.frameId} <small>q${header.quality}${header.still ? ' still' : ''}</small>` : '–';
-    f.size.innerHTML = header ? `${header.width}×${header.height}${header.version >= 2 ? ` <small>view ${header.viewId}</small>` : ''}` : '–';
-    if (!server) {
-      for (const k of ['rays', 'probes', 'gpu']) f[k].textContent = '–';
-      this.renderPasses({}, 0);
-      return;
-    }
-    f.rays.textContent = si(server.rays_per_second);
-    const p = server.probes || {};
-    const active = p.mode && p.mode !== 'off' ? p.total || 0 : 0;
-    // convergence progress: the share of the lit probes that have settled (asleep)
-    const st = p.states || null;
-    const progress = st && Number.isFinite(p.convergence) && !p.converged
-      ? ` ${Math.floor(p.convergence * 100)}% · ${st.awake} awake` : '';
-    f.probes.innerHTML = active
-      ? `${active} <small>${p.mode} · ${p.converged ? 'converged' : 'converging' + progress}</small>`
-      : `0 <small>${p.mode || 'off'}</small>`;
-    f.probes.title = st ? `awake ${st.awake}, sleeping ${st.sleeping}, off ${st.off}` : '';
-    f.gpu.innerHTML = server.rendering === false ? `idle <small>(converged)</small>`
-      : `${fixed(server.gpu_ms_total, 1)} ms`;
-    f.device.textContent = server.device ? `${server.device}${server.stream ? ` · ${server.stream.viewers} viewer${server.stream.viewers === 1 ? '' : 's'}` : ''}` : '';
-    f.device.title = f.device.textContent;
-    this.renderPasses(server.gpu_ms || {}, server.gpu_ms_total);
-  }
-
-  renderPasses(passes, total) {
-    const names = Object.keys(passes);
-    const sum = total > 0 ? total : names.reduce((a, k) => a + passes[k], 0) || 1;
-    for (const [name, row] of this.passRows) if (!(name in passes)) { row.el.remove(); this.passRows.delete(name); }
-    for (const name of names) {
-      let row = this.passRows.get(name);
-      if (!row) {
-        const ms = h('span', { class: 'ms' }), bar = h('i');
-        row = { el: h('div', { class: 'pass' }, h('span', {}, name), ms, h('div', { class: 'bar' }, bar)), ms, bar };
-        this.passRows.set(name, row);
-      }
-      this.f.passes.append(row.el); // keeps the server's order
-      row.ms.textContent = fixed(passes[name], 2);
-      row.bar.style.width = `${Math.min(100, (passes[name] / sum) * 100).toFixed(1)}%`;
-    }
   }
 }
 

@@ -11,7 +11,7 @@ const BACKOFF_MIN_MS = 250;
 const BACKOFF_MAX_MS = 5000;
 const CONNECT_TIMEOUT_MS = 5000;
 const WINDOW_MS = 1000; // fps and bit rate are measured over the last second
-const WORLD_KINDS = ['scene', 'lights', 'node', 'settings', 'views'];
+const WORLD_KINDS = ['scene', 'lights', 'node', 'settings', 'views', 'animation'];
 
 /* Parses a frame header from an ArrayBuffer; throws on a message that is not a frame.
  * Versions 1 and 2 share one layout (version 2 only changes what view_id names).
@@ -107,10 +107,13 @@ export class CanvasView {
     ctx.fillRect(0, 0, canvas.width, canvas.height);
     const f = this.last;
     if (!f) return;
+    // A frame of nearly the canvas's aspect (a reduced size asked for while moving, rounded)
+    // fills the canvas; another aspect (a followed view) is letterboxed.
     const s = Math.min(canvas.width / f.width, canvas.height / f.height);
-    const w = Math.round(f.width * s), h = Math.round(f.height * s);
+    const near = Math.abs((f.width / f.height) / (canvas.width / canvas.height) - 1) < 0.03;
+    const w = near ? canvas.width : Math.round(f.width * s), h = near ? canvas.height : Math.round(f.height * s);
     ctx.imageSmoothingEnabled = true;
-    ctx.imageSmoothingQuality = s > 1 ? 'medium' : 'high';
+    ctx.imageSmoothingQuality = s > 1 ? 'medium' : 'high'; // scaled up while moving
     ctx.drawImage(f.image, (canvas.width - w) >> 1, (canvas.height - h) >> 1, w, h);
   }
 }
