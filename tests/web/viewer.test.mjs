@@ -453,7 +453,7 @@ test('wheel zooms, right-drag pans, W flies, a two-finger pinch zooms', { timeou
   await page.keyboard.press('Home'); // frame the scene again for the tests that follow (F is full screen)
 });
 
-test('a light edit in the panel changes the picture', { timeout: 40000 }, async (t) => {
+test('a light edit in the panel changes the picture', { timeout: 90000 }, async (t) => {
   await showPanel('panel-lights');
   const card = page.locator('#lights details.light').first();
   await card.waitFor({ timeout: 10000 });
