@@ -10,16 +10,28 @@
 static const rd_hard_case CASES[] = {
     {"cornell", "DDGI stays within the justified error bound of the path-traced reference"},
     {"furnace", "radiance everywhere is Le/(1-albedo) = 2 (within 3% for DDGI, 2% path traced)"},
-    {"two-rooms", "the closed, unlit room stays dark: DDGI leaks under 5% of what classic probes leak"},
-    {"thick-walls", "probes inside a 0.6 m solid wall are switched off; output finite, no dark splotches (error bounded like cornell)"},
-    {"scaled-100", "the Cornell box scaled x100 (light intensity x1e4) renders like the original (direct light to float precision, GI within its seed noise)"},
-    {"scaled-0.01", "the Cornell box scaled x0.01 (light intensity x1e-4) renders like the original (direct light to float precision, GI within its seed noise)"},
-    {"far-10km", "the Cornell box translated 10 km from the origin renders like the original (direct light to float precision, GI within its seed noise)"},
-    {"tiny-emitter", "a 1 cm emitter of 1e5 nits is the only light: every output finite (no NaN, Inf or half-float overflow) at any sample count; sampling finds it rarely (fireflies in the path tracer, DDGI may miss it entirely)"},
+    {"two-rooms",
+     "the closed, unlit room stays dark: DDGI leaks under 5% of what classic probes leak"},
+    {"thick-walls", "probes inside a 0.6 m solid wall are switched off; output finite, no dark "
+                    "splotches (error bounded like cornell)"},
+    {"scaled-100", "the Cornell box scaled x100 (light intensity x1e4) renders like the original "
+                   "(direct light to float precision, GI within its seed noise)"},
+    {"scaled-0.01", "the Cornell box scaled x0.01 (light intensity x1e-4) renders like the "
+                    "original (direct light to float precision, GI within its seed noise)"},
+    {"far-10km", "the Cornell box translated 10 km from the origin renders like the original "
+                 "(direct light to float precision, GI within its seed noise)"},
+    {"tiny-emitter", "a 1 cm emitter of 1e5 nits is the only light: every output finite (no NaN, "
+                     "Inf or half-float overflow) at any sample count; sampling finds it rarely "
+                     "(fireflies in the path tracer, DDGI may miss it entirely)"},
     {"no-lights", "no lights, no emission, black sky: every output value is exactly zero"},
-    {"degenerate", "zero-area triangles and NaN or zero normals: output finite and the floor still lit"},
-    {"mirrored", "single-sided plane under a node scaled (-1, 1, 1): renders exactly like plane-point"},
-    {"moving", "the sphere moves for several frames; output finite and GI follows (error bounded after settling)"},
+    {"degenerate",
+     "zero-area triangles and NaN or zero normals: output finite and the floor still lit"},
+    {"mirrored",
+     "single-sided plane under a node scaled (-1, 1, 1): renders exactly like plane-point"},
+    {"moving", "the sphere moves for several frames; output finite and GI follows (error bounded "
+               "after settling)"},
+    {"glossy", "the Cornell box with a gold sphere, a near-mirror block and a glossy floor: output "
+               "finite; the error shows what indirect specular (reflections) adds"},
 };
 
 const rd_hard_case *rd_hard_cases(unsigned *count)
@@ -44,7 +56,8 @@ static void transform_scene(rd_scene *s, float scale, const float move[3])
     }
     for (uint32_t i = 0; i < s->light_count; i++) {
         rd_light *l = &s->lights[i];
-        for (int k = 0; k < 3; k++) l->position[k] = l->position[k] * scale + move[k];
+        for (int k = 0; k < 3; k++)
+            l->position[k] = l->position[k] * scale + move[k];
         if (l->type != RD_LIGHT_DIRECTIONAL) l->intensity *= scale * scale;
         if (l->range > 0) l->range *= scale;
     }
@@ -73,7 +86,8 @@ static void build_tiny_emitter(rd_scene *s)
     char err[8];
     rd_scene_destroy(s);
     rd_procedural_build("cornell", s, err, sizeof err);
-    for (uint32_t i = 0; i < s->light_count; i++) s->lights[i].intensity = 0; /* lights off */
+    for (uint32_t i = 0; i < s->light_count; i++)
+        s->lights[i].intensity = 0; /* lights off */
     for (uint32_t i = 0; i < s->material_count; i++)
         if (s->materials[i].name && strcmp(s->materials[i].name, "lamp") == 0)
             s->materials[i].emission[0] = s->materials[i].emission[1] =
@@ -152,6 +166,8 @@ bool rd_hard_case_build(const char *name, rd_scene *s, char *err, size_t errlen)
     if (strcmp(name, "cornell") == 0 || strcmp(name, "furnace") == 0 ||
         strcmp(name, "two-rooms") == 0)
         base = name;
+    else if (strcmp(name, "glossy") == 0)
+        base = "cornell-glossy";
     else if (strcmp(name, "scaled-100") == 0 || strcmp(name, "scaled-0.01") == 0 ||
              strcmp(name, "far-10km") == 0 || strcmp(name, "moving") == 0)
         base = "cornell";
@@ -161,14 +177,22 @@ bool rd_hard_case_build(const char *name, rd_scene *s, char *err, size_t errlen)
         rd_scene_init(s);
     }
     const float zero[3] = {0, 0, 0}, far[3] = {10000, 0, 10000};
-    if (strcmp(name, "scaled-100") == 0) transform_scene(s, 100, zero);
-    else if (strcmp(name, "scaled-0.01") == 0) transform_scene(s, 0.01f, zero);
-    else if (strcmp(name, "far-10km") == 0) transform_scene(s, 1, far);
-    else if (strcmp(name, "thick-walls") == 0) build_thick_walls(s);
-    else if (strcmp(name, "tiny-emitter") == 0) build_tiny_emitter(s);
-    else if (strcmp(name, "no-lights") == 0) build_no_lights(s);
-    else if (strcmp(name, "degenerate") == 0) build_degenerate(s);
-    else if (strcmp(name, "mirrored") == 0) build_mirrored(s);
+    if (strcmp(name, "scaled-100") == 0)
+        transform_scene(s, 100, zero);
+    else if (strcmp(name, "scaled-0.01") == 0)
+        transform_scene(s, 0.01f, zero);
+    else if (strcmp(name, "far-10km") == 0)
+        transform_scene(s, 1, far);
+    else if (strcmp(name, "thick-walls") == 0)
+        build_thick_walls(s);
+    else if (strcmp(name, "tiny-emitter") == 0)
+        build_tiny_emitter(s);
+    else if (strcmp(name, "no-lights") == 0)
+        build_no_lights(s);
+    else if (strcmp(name, "degenerate") == 0)
+        build_degenerate(s);
+    else if (strcmp(name, "mirrored") == 0)
+        build_mirrored(s);
     else if (!base) {
         rd_scene_destroy(s);
         snprintf(err, errlen, "unknown hard case '%s'", name);

@@ -62,22 +62,38 @@ static void build_emissive(rd_scene *s)
     rd_build_camera(s, eye, NEG_Z, UP_Y, 30);
 }
 
+/* A glTF-like metallic-roughness material (rd_build_material gives a pure Lambertian). */
+static uint32_t glossy_material(rd_scene *s, const char *name, float r, float g, float b,
+                                float metallic, float roughness)
+{
+    uint32_t m = rd_build_material(s, name, r, g, b, 0, 0, 0);
+    s->materials[m].metallic = metallic;
+    s->materials[m].roughness = roughness;
+    s->materials[m].specular = 1;
+    return m;
+}
+
 /* Cornell-box-like room, 2 m wide, open at +z, with a point light under the ceiling and an
- * emissive ceiling panel. */
-static void build_cornell(rd_scene *s)
+ * emissive ceiling panel. glossy: a gold sphere (metal, roughness 0.15), a near-mirror tall block
+ * (metal, roughness 0.05) and a glossy dielectric floor (roughness 0.3) instead of Lambertians. */
+static void build_cornell(rd_scene *s, bool glossy)
 {
     rd_tri_list t = {0};
     uint32_t white = rd_build_material(s, "white", 0.73f, 0.73f, 0.73f, 0, 0, 0);
     uint32_t red = rd_build_material(s, "red", 0.63f, 0.065f, 0.05f, 0, 0, 0);
     uint32_t green = rd_build_material(s, "green", 0.14f, 0.45f, 0.091f, 0, 0, 0);
     uint32_t lamp = rd_build_material(s, "lamp", 0.78f, 0.78f, 0.78f, 8.0f, 7.0f, 5.5f);
+    uint32_t floor =
+        glossy ? glossy_material(s, "glossy floor", 0.73f, 0.73f, 0.73f, 0, 0.3f) : white;
+    uint32_t mirror = glossy ? glossy_material(s, "mirror", 0.95f, 0.95f, 0.95f, 1, 0.05f) : white;
+    uint32_t gold = glossy ? glossy_material(s, "gold", 1.0f, 0.78f, 0.34f, 1, 0.15f) : white;
     float v[8][3];
     for (int i = 0; i < 8; i++) {
         v[i][0] = (i & 1) ? 1 : -1;
         v[i][1] = (i & 2) ? 2 : 0;
         v[i][2] = (i & 4) ? 1 : -1;
     }
-    rd_tris_quad(&t, v[0], v[4], v[5], v[1], white); /* floor, faces +y */
+    rd_tris_quad(&t, v[0], v[4], v[5], v[1], floor); /* floor, faces +y */
     rd_tris_quad(&t, v[2], v[3], v[7], v[6], white); /* ceiling, faces -y */
     rd_tris_quad(&t, v[0], v[1], v[3], v[2], white); /* back wall, faces +z */
     rd_tris_quad(&t, v[0], v[2], v[6], v[4], red);   /* left wall, faces +x */
@@ -89,7 +105,7 @@ static void build_cornell(rd_scene *s)
 
     rd_tri_list b = {0};
     const float tall_lo[3] = {-0.65f, 0, -0.55f}, tall_hi[3] = {-0.05f, 1.2f, 0.05f};
-    rd_tris_box(&b, tall_lo, tall_hi, white);
+    rd_tris_box(&b, tall_lo, tall_hi, mirror);
     rd_tris_commit(&b, s, "tall-block");
     rd_tri_list c = {0};
     const float short_lo[3] = {0.1f, 0, 0.0f}, short_hi[3] = {0.7f, 0.6f, 0.6f};
@@ -98,7 +114,7 @@ static void build_cornell(rd_scene *s)
     s->nodes[node].rotation[1] = sinf(-0.15f), s->nodes[node].rotation[3] = cosf(-0.15f);
     rd_tri_list d = {0};
     const float centre[3] = {0.4f, 0.85f, 0.3f};
-    rd_tris_sphere(&d, centre, 0.25f, 24, 48, white);
+    rd_tris_sphere(&d, centre, 0.25f, 24, 48, gold);
     rd_tris_commit(&d, s, "sphere");
 
     rd_build_point_light(s, 0, 1.8f, 0.2f, 3.0f);
@@ -197,7 +213,8 @@ static void build_spheres(rd_scene *s, uint64_t min_tris)
 
 const char *rd_procedural_names(void)
 {
-    return "cornell, plane-point, plane-directional, emissive, shadow, furnace, two-rooms, "
+    return "cornell, cornell-glossy, plane-point, plane-directional, emissive, shadow, furnace, "
+           "two-rooms, "
            "white-room, "
            "spheres[:TRIANGLES], hard:CASE (the stability suite: probecast eval --list)";
 }
@@ -214,7 +231,9 @@ bool rd_procedural_build(const char *name, rd_scene *s, char *err, size_t errlen
         return false;
     }
     if (IS("cornell"))
-        build_cornell(s);
+        build_cornell(s, false);
+    else if (IS("cornell-glossy"))
+        build_cornell(s, true);
     else if (IS("plane-point"))
         build_plane_point(s, false);
     else if (IS("shadow"))

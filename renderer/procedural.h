@@ -13,6 +13,8 @@
 
 /* Builds the named scene into s (initialised here). Names:
  *   cornell           Cornell-box-like room lit by a point light under the ceiling (the demo).
+ *   cornell-glossy    the same with a gold sphere, a near-mirror tall block (metals) and a glossy
+ *                     dielectric floor (glTF metallic-roughness): reflections' test scene.
  *   plane-point       10x10 m plane of albedo 0.5 at y = 0, point light of 100 cd at (0, 2, 0),
  *                     camera looking straight down: radiance at the centre = 0.5/pi*100/4.
  *   plane-directional plane of albedo 0.5 and a 3 lux directional light 60 degrees from the
