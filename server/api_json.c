@@ -335,7 +335,7 @@ bool srv_json_viewer_msg(const char *text, size_t len, srv_viewer_msg *out, srv_
     bool ok = true;
     const cJSON *type = cJSON_GetObjectItemCaseSensitive(j, "type");
     if (!cJSON_IsString(type)) {
-        ok = BAD("A message needs a string 'type' (camera, resize, follow or ack).");
+        ok = BAD("A message needs a string 'type' (camera, resize, follow, ack or quality).");
     } else if (strcmp(type->valuestring, "camera") == 0) {
         out->type = SRV_VIEWER_CAMERA;
         bool have_seq = false;
@@ -413,9 +413,28 @@ bool srv_json_viewer_msg(const char *text, size_t len, srv_viewer_msg *out, srv_
             if (!ok) break;
         }
         if (ok && !have) ok = BAD("An ack message needs 'frame'.");
+    } else if (strcmp(type->valuestring, "quality") == 0) {
+        out->type = SRV_VIEWER_QUALITY;
+        unsigned has = 0;
+        const cJSON *it;
+        cJSON_ArrayForEach(it, j)
+        {
+            if (it == type) continue;
+            bool jpeg = strcmp(it->string, "jpeg") == 0;
+            if (jpeg || strcmp(it->string, "max_fps") == 0) {
+                ok = once(&has, jpeg ? 1 : 2, it, e);
+                if (ok && !cJSON_IsNull(it))
+                    ok = get_uint(it, 1, jpeg ? SRV_VIEW_JPEG_CAP_MAX : SRV_VIEW_FPS_CAP_MAX,
+                                  jpeg ? &out->jpeg_cap : &out->fps_cap, e);
+            } else
+                ok = BAD("Unknown quality message field '%s'.", it->string);
+            if (!ok) break;
+        }
+        if (ok && has != 3)
+            ok = BAD("A quality message needs 'jpeg' and 'max_fps' (a number, or null).");
     } else {
-        ok =
-            BAD("Unknown message type '%.40s' (camera, resize, follow or ack).", type->valuestring);
+        ok = BAD("Unknown message type '%.40s' (camera, resize, follow, ack or quality).",
+                 type->valuestring);
     }
     cJSON_Delete(j);
     return ok;

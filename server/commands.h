@@ -106,8 +106,13 @@ typedef enum srv_viewer_msg_type {
     SRV_VIEWER_CAMERA = 1,
     SRV_VIEWER_RESIZE,
     SRV_VIEWER_ACK,
-    SRV_VIEWER_FOLLOW, /* version 2 */
+    SRV_VIEWER_FOLLOW,  /* version 2 */
+    SRV_VIEWER_QUALITY, /* version 2 */
 } srv_viewer_msg_type;
+
+/* Per-view caps a viewer sets for its own view (quality message); 0 means no cap. */
+#define SRV_VIEW_JPEG_CAP_MAX 100u
+#define SRV_VIEW_FPS_CAP_MAX 240u
 
 typedef struct srv_viewer_msg {
     srv_viewer_msg_type type;
@@ -118,6 +123,8 @@ typedef struct srv_viewer_msg {
     uint64_t frame;          /* ack */
     uint32_t view;           /* follow: the view to watch */
     bool follow_own;         /* follow: null (back to the own view) */
+    unsigned jpeg_cap;       /* quality: JPEG quality 1..100 at most (0: no cap) */
+    unsigned fps_cap;        /* quality: frames per second 1..240 at most (0: no cap) */
 } srv_viewer_msg;
 
 /* ---- errors ----------------------------------------------------------------------------- */
@@ -153,6 +160,7 @@ typedef enum srv_cmd_kind {
     SRV_CMD_PATCH_ANIMATION, /* play, pause, seek the scene's animations */
     SRV_CMD_VIEWER_CAMERA,   /* from the stream; no reply */
     SRV_CMD_VIEWER_RESIZE,   /* from the stream; no reply */
+    SRV_CMD_VIEWER_QUALITY,  /* from the stream: the own view's caps; no reply */
     SRV_CMD_VIEW_OPEN,       /* a stream connection's own view (id chosen by the stream) */
     SRV_CMD_VIEW_CLOSE,      /* its connection left: free the view */
     SRV_CMD_VIEW_WATCH,      /* delta connections more (or fewer) show view `view` */
@@ -179,6 +187,7 @@ typedef struct srv_cmd {
     srv_settings_patch settings;
     srv_playback_patch playback;
     unsigned width, height;      /* VIEWER_RESIZE: device pixels */
+    unsigned jpeg_cap, fps_cap;  /* VIEWER_QUALITY: the view's caps (0: none) */
     rd_scene *scene;             /* REPLACE_SCENE: validated scene, owned by the command */
     rd_gpu_scene_prep *prepared; /* REPLACE_SCENE: its BVHs, built by the poster (owned) */
     char source[128];            /* REPLACE_SCENE: where it came from ("upload", "builtin:...") */

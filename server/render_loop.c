@@ -150,6 +150,11 @@ static void apply_view_cmd(srv_render_loop *l, srv_cmd *c, double now)
         resize_view(l, v, w, h, now);
         return;
     }
+    case SRV_CMD_VIEWER_QUALITY:
+        if (v && srv_view_set_caps(v, c->jpeg_cap, c->fps_cap))
+            srv_debug("render", "view %u: jpeg cap %u, fps cap %u (0: none)", v->id, v->jpeg_cap,
+                      v->fps_cap);
+        return;
     case SRV_CMD_VIEW_OPEN: {
         const srv_view *v0 = srv_views_find(&l->views, SRV_DEFAULT_VIEW);
         const srv_settings *s = &l->svc.st.settings;
@@ -245,7 +250,7 @@ static void on_readback(void *user, const void *blob, unsigned w, unsigned h, co
     v->last_info = info;
     const srv_settings *s = &l->svc.st.settings;
     srv_encoder_submit(l->cfg.encoders, img, &info,
-                       info.still ? s->quality_still : s->quality_interactive);
+                       srv_view_quality(v, info.still ? s->quality_still : s->quality_interactive));
 }
 
 static void poll_readback(srv_render_loop *l, uint64_t timeout_ns)
@@ -344,7 +349,8 @@ static void emit_still(srv_render_loop *l, srv_view *v)
     info.frame_id = ++l->next_frame_id;
     info.still = true;
     v->last_frame_id = info.frame_id;
-    srv_encoder_submit(l->cfg.encoders, v->last_image, &info, l->svc.st.settings.quality_still);
+    srv_encoder_submit(l->cfg.encoders, v->last_image, &info,
+                       srv_view_quality(v, l->svc.st.settings.quality_still));
     pthread_mutex_lock(&l->stats.mu);
     l->stats.s.stills_reencoded++;
     pthread_mutex_unlock(&l->stats.mu);
@@ -409,6 +415,14 @@ static void share_state(srv_render_loop *l, bool rendering)
     s->triangles = l->svc.st.scene.tri_total;
     s->views = l->views.count;
     s->views_watched = watched;
+    s->pt_target = l->svc.pt_target;
+    s->pt_samples = l->svc.pt_target ? srv_views_pt_samples_min(&l->views) : 0;
+    s->pt_view_count = 0;
+    for (unsigned i = 0; l->svc.pt_target && i < l->views.count && i < SRV_STATS_PT_VIEWS; i++) {
+        s->pt_views[i].view = l->views.items[i]->id;
+        s->pt_views[i].samples = l->views.items[i]->pt_samples;
+        s->pt_view_count = i + 1;
+    }
     pthread_mutex_unlock(&l->stats.mu);
 }
 
@@ -446,7 +460,8 @@ static void *render_main(void *arg)
                                      .renders_since_tick = v->renders_since_tick,
                                      .busy = v->in_flight,
                                      .last_render_ms = v->last_render_ms,
-                                     .last_input_ms = v->last_input_ms};
+                                     .last_input_ms = v->last_input_ms,
+                                     .frame_interval_ms = v->fps_cap ? 1000.0 / v->fps_cap : 0};
             any_watched_dirty |= sv[i].watched && (v->dirty || v->in_flight);
         }
         bool converging = srv_scene_service_converging(&l->svc);

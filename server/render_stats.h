@@ -11,6 +11,7 @@
 
 #define SRV_PASS_NAME_MAX 24
 #define SRV_FPS_WINDOW 256
+#define SRV_STATS_PT_VIEWS 64 /* views whose path-trace sample counts /v1/stats lists */
 
 /* GPU passes of one submission, copied out of an rd_frame_stats. */
 typedef struct srv_pass_times {
@@ -44,6 +45,14 @@ typedef struct srv_render_stats {
     bool gi_converged;                                  /* no probe awake: no probe work */
     double gi_drift; /* mean relative change per update of the awake probes (smoothed) */
     uint64_t scene_generation, triangles;
+    /* path tracing (gi_mode pathtrace; pt_target 0 otherwise) */
+    unsigned pt_target;  /* samples each view accumulates */
+    unsigned pt_samples; /* the fewest of the watched views (srv_views_pt_samples_min) */
+    unsigned pt_view_count;
+    struct {
+        uint32_t view;
+        unsigned samples;
+    } pt_views[SRV_STATS_PT_VIEWS]; /* the first SRV_STATS_PT_VIEWS views (view 0 first) */
     /* views */
     unsigned views, views_watched;
     unsigned viewers; /* stream connections */

@@ -3,15 +3,22 @@
 
 #include <math.h>
 
+/* When view v may be rendered next: after the global frame interval, or its own if longer. */
+static double due_at(const srv_sched_state *s, const srv_sched_view *v)
+{
+    double gap =
+        v->frame_interval_ms > s->frame_interval_ms ? v->frame_interval_ms : s->frame_interval_ms;
+    return v->last_render_ms + gap;
+}
+
 /* The first watched, dirty view, in turn from the cursor, that pred accepts and that is due
- * under the frame-rate cap; -1 when none. */
+ * under the frame-rate caps; -1 when none. */
 static int pick(const srv_sched_state *s, bool (*pred)(const srv_sched_view *))
 {
     for (unsigned n = 0; n < s->view_count; n++) {
         unsigned k = (s->cursor + n) % s->view_count;
         const srv_sched_view *v = &s->views[k];
-        if (v->watched && v->dirty && !v->busy && pred(v) &&
-            v->last_render_ms + s->frame_interval_ms <= s->now_ms)
+        if (v->watched && v->dirty && !v->busy && pred(v) && due_at(s, v) <= s->now_ms)
             return (int)k;
     }
     return -1;
@@ -44,9 +51,11 @@ srv_sched_step srv_sched_next(const srv_sched_state *s)
         if (v->last_input_ms > s->last_tick_ms || s->now_ms - v->last_input_ms < s->still_delay_ms)
             interacting = true;
         if (!v->dirty) continue;
-        if (v->behind_world) any_owed = true;
+        double due = due_at(s, v);
+        /* a view its own cap holds back lets the world tick without it */
+        bool held_back = v->frame_interval_ms > s->frame_interval_ms && due > s->now_ms;
+        if (v->behind_world && !held_back) any_owed = true;
         if (v->busy) continue; /* woken by its completion */
-        double due = v->last_render_ms + s->frame_interval_ms;
         if (due > s->now_ms) {
             if (due < step.wake_ms) step.wake_ms = due;
         } else if (!s->readback_free) {

@@ -15,6 +15,10 @@
  *   5. A watched view whose input stopped still_delay_ms ago gets its still frame (the last image
  *      re-encoded at full quality).
  *   6. Otherwise sleep until the earliest deadline among those rules, or until woken.
+ *
+ * Each view is paced by the global frame-rate cap and by its own (a viewer's quality message),
+ * whichever is slower. A view that its own cap holds back does not hold back the world: the
+ * world ticks for the others and the slow view shows the newest tick when its turn comes.
  */
 #ifndef SRV_SCHEDULER_H
 #define SRV_SCHEDULER_H
@@ -30,6 +34,7 @@ typedef struct srv_sched_view {
     bool busy;                   /* its last frame is still on the GPU: not renderable yet */
     double last_render_ms;
     double last_input_ms;
+    double frame_interval_ms; /* its own cap (its viewer's max_fps), 0: only the global one */
 } srv_sched_view;
 
 typedef struct srv_sched_state {

@@ -67,6 +67,20 @@ cJSON *srv_stats_json(const srv_stats_snapshot *s)
     cJSON_AddNumberToObject(p, "convergence", lit ? (double)r->probes_sleeping / lit : 1.0);
     cJSON_AddNumberToObject(p, "drift_per_update", r->gi_drift);
     cJSON_AddNumberToObject(p, "updates_per_second", r->world_updates_per_second);
+    if (r->pt_target) {
+        cJSON *pt = cJSON_AddObjectToObject(j, "pathtrace");
+        cJSON_AddNumberToObject(pt, "samples", r->pt_samples);
+        cJSON_AddNumberToObject(pt, "target", r->pt_target);
+        cJSON *pv = cJSON_AddArrayToObject(pt, "views");
+        for (unsigned i = 0; i < r->pt_view_count; i++) {
+            cJSON *o = cJSON_CreateObject();
+            cJSON_AddNumberToObject(o, "view", r->pt_views[i].view);
+            cJSON_AddNumberToObject(o, "samples", r->pt_views[i].samples);
+            cJSON_AddItemToArray(pv, o);
+        }
+    } else {
+        cJSON_AddNullToObject(j, "pathtrace");
+    }
     cJSON *st = cJSON_AddObjectToObject(j, "stream");
     cJSON_AddNumberToObject(st, "viewers", s->stream.viewers);
     cJSON_AddNumberToObject(st, "bandwidth_bps", s->stream.bandwidth_bps);

@@ -1,6 +1,7 @@
 /* views.c: the view table (see views.h). */
 #include "views.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -114,4 +115,30 @@ void srv_view_info_of(const srv_view *v, srv_view_info *out)
                            .height = v->height,
                            .watchers = v->watchers,
                            .camera = v->camera};
+}
+
+bool srv_view_set_caps(srv_view *v, unsigned jpeg_cap, unsigned fps_cap)
+{
+    if (v->jpeg_cap == jpeg_cap && v->fps_cap == fps_cap) return false;
+    /* re-encode the last image under the new cap (the scheduler waits for owed frames first) */
+    if (v->last_image && jpeg_cap != v->jpeg_cap) v->need_still = true;
+    v->jpeg_cap = jpeg_cap;
+    v->fps_cap = fps_cap;
+    return true;
+}
+
+unsigned srv_view_quality(const srv_view *v, unsigned base)
+{
+    return v->jpeg_cap && v->jpeg_cap < base ? v->jpeg_cap : base;
+}
+
+unsigned srv_views_pt_samples_min(const srv_views *vs)
+{
+    unsigned watched = UINT_MAX, all = UINT_MAX;
+    for (unsigned i = 0; i < vs->count; i++) {
+        const srv_view *v = vs->items[i];
+        if (v->pt_samples < all) all = v->pt_samples;
+        if ((v->watchers || v->requests) && v->pt_samples < watched) watched = v->pt_samples;
+    }
+    return watched != UINT_MAX ? watched : all != UINT_MAX ? all : 0;
 }

@@ -32,6 +32,8 @@ typedef struct srv_view {
     uint64_t input_ticket;  /* newest input command applied to it (frames carry it) */
     uint64_t last_frame_id; /* of its newest frame handed to the encoders */
     unsigned pt_samples;    /* progressive path tracing: samples accumulated */
+    unsigned jpeg_cap;      /* its owner's JPEG quality cap, 1..100 (0: none; quality message) */
+    unsigned fps_cap;       /* its owner's frame-rate cap, frames per second (0: none) */
     srv_image *last_image;
     srv_frame_info last_info;
     rd_view gpu;
@@ -63,6 +65,13 @@ void srv_views_fit(const srv_views *vs, uint32_t id, unsigned want_w, unsigned w
                    unsigned *h);
 /* Marks every view dirty (the world changed); world_tick: they now show an older tick. */
 void srv_views_mark_all(srv_views *vs, bool world_tick);
+/* Sets a view's caps (0: none); true when they changed. A changed JPEG cap asks for a still
+ * (the last image re-encoded under the new cap), so an idle view shows it at once. */
+bool srv_view_set_caps(srv_view *v, unsigned jpeg_cap, unsigned fps_cap);
+/* The JPEG quality to encode a frame of v at: base (a quality setting) under the view's cap. */
+unsigned srv_view_quality(const srv_view *v, unsigned base);
+/* Path tracing: the fewest samples among watched views (among all when none is watched). */
+unsigned srv_views_pt_samples_min(const srv_views *vs);
 /* The view as the snapshot shows it. */
 void srv_view_info_of(const srv_view *v, srv_view_info *out);
 

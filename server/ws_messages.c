@@ -1,5 +1,5 @@
 /* ws_messages.c: the stream's text messages (protocol/stream.md): what viewers say (camera,
- * resize, follow, ack) and what they are told (welcome, following, error, world events). */
+ * resize, follow, quality, ack) and what they are told (welcome, following, error, events). */
 #include "ws_internal.h"
 
 #include <math.h>
@@ -184,6 +184,19 @@ void srv_ws_handle_message(srv_ws_stream *ws, viewer *v)
             break;
         }
         srv_ws_watch(ws, v, target);
+        break;
+    }
+    case SRV_VIEWER_QUALITY: {
+        if (v->version < 2) {
+            srv_ws_close_viewer(v, LWS_CLOSE_STATUS_POLICY_VIOLATION, "quality needs probecast.v2");
+            break;
+        }
+        /* the own view's caps, also while following: the followed view keeps its owner's */
+        srv_cmd *c = srv_cmd_new(SRV_CMD_VIEWER_QUALITY);
+        c->view = v->own_view;
+        c->jpeg_cap = m.jpeg_cap;
+        c->fps_cap = m.fps_cap;
+        srv_render_post(ws->cfg.loop, c);
         break;
     }
     case SRV_VIEWER_ACK: {

@@ -126,6 +126,45 @@ static void test_viewer_messages(void)
     CHECK(!srv_json_viewer_msg(big, sizeof big, &m, &e));
 }
 
+/* The quality message: both caps required, each 1..N or null (no cap), nothing else. */
+static void test_quality_message(void)
+{
+    srv_viewer_msg m;
+    srv_api_error e;
+    const char *q = "{\"type\":\"quality\",\"jpeg\":75,\"max_fps\":30}";
+    CHECK(srv_json_viewer_msg(q, strlen(q), &m, &e) && m.type == SRV_VIEWER_QUALITY &&
+          m.jpeg_cap == 75 && m.fps_cap == 30);
+    q = "{\"max_fps\":null,\"type\":\"quality\",\"jpeg\":null}";
+    CHECKF(srv_json_viewer_msg(q, strlen(q), &m, &e) && m.type == SRV_VIEWER_QUALITY &&
+               m.jpeg_cap == 0 && m.fps_cap == 0,
+           "null: no cap (%s)", e.message);
+    q = "{\"type\":\"quality\",\"jpeg\":1,\"max_fps\":240}";
+    CHECK(srv_json_viewer_msg(q, strlen(q), &m, &e) && m.jpeg_cap == 1 && m.fps_cap == 240);
+    q = "{\"type\":\"quality\",\"jpeg\":100,\"max_fps\":1}";
+    CHECK(srv_json_viewer_msg(q, strlen(q), &m, &e) && m.jpeg_cap == 100 && m.fps_cap == 1);
+    const char *bad[] = {
+        "{\"type\":\"quality\"}",
+        "{\"type\":\"quality\",\"jpeg\":75}",
+        "{\"type\":\"quality\",\"max_fps\":30}",
+        "{\"type\":\"quality\",\"jpeg\":0,\"max_fps\":30}",
+        "{\"type\":\"quality\",\"jpeg\":101,\"max_fps\":30}",
+        "{\"type\":\"quality\",\"jpeg\":75.5,\"max_fps\":30}",
+        "{\"type\":\"quality\",\"jpeg\":\"75\",\"max_fps\":30}",
+        "{\"type\":\"quality\",\"jpeg\":-1,\"max_fps\":30}",
+        "{\"type\":\"quality\",\"jpeg\":75,\"max_fps\":0}",
+        "{\"type\":\"quality\",\"jpeg\":75,\"max_fps\":241}",
+        "{\"type\":\"quality\",\"jpeg\":75,\"max_fps\":true}",
+        "{\"type\":\"quality\",\"jpeg\":75,\"max_fps\":[30]}",
+        "{\"type\":\"quality\",\"jpeg\":75,\"max_fps\":30,\"fps\":30}",
+        "{\"type\":\"quality\",\"jpeg\":75,\"max_fps\":30,\"jpeg\":50}",
+        "{\"type\":\"Quality\",\"jpeg\":75,\"max_fps\":30}",
+        "{\"type\":\"quality\",\"jpeg\":75,\"max_fps\":30",
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof *bad; i++)
+        CHECKF(!srv_json_viewer_msg(bad[i], strlen(bad[i]), &m, &e) && e.status == 400,
+               "rejected: %s", bad[i]);
+}
+
 static void test_state(void)
 {
     srv_scene_state st;
@@ -271,6 +310,7 @@ int main(void)
     test_default_lighting();
     test_bodies();
     test_viewer_messages();
+    test_quality_message();
     test_state();
     return test_finish();
 }

@@ -1,6 +1,6 @@
 /* probecast serve in gi_mode pathtrace: while a viewer watches, frames accumulate samples
- * progressively until the target count, then the daemon idles; a camera move restarts the
- * accumulation; a view nobody watches is not rendered. */
+ * progressively until the target count (GET /v1/stats "pathtrace"), then the daemon idles; a
+ * camera move restarts the accumulation; a view nobody watches is not rendered. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -40,15 +40,27 @@ int main(void)
     pc_ws ws;
     pc_frame f = {0};
     CHECK(pc_stream_open(&d, &ws));
+    cJSON *s = pc_api_get_json(&d, "/v1/stats");
+    CHECKF(cJSON_IsNull(cJSON_GetObjectItemCaseSensitive(s, "pathtrace")),
+           "no sample count outside path tracing");
+    cJSON_Delete(s);
     CHECK(pc_api(&d, "PATCH", "/v1/settings", "{\"gi_mode\":\"pathtrace\"}", false, &r) == 200);
     CHECK(r.body && strstr(r.body, "\"pathtrace\""));
     pc_http_response_free(&r);
     double before = wait_idle(&d, 240000);
     CHECKF(before >= 64, "path tracing stopped after %g frames (64 samples expected)", before);
 
-    cJSON *s = pc_api_get_json(&d, "/v1/stats");
+    s = pc_api_get_json(&d, "/v1/stats");
     const cJSON *gpu = cJSON_GetObjectItemCaseSensitive(s, "gpu_ms");
     CHECK(cJSON_GetObjectItemCaseSensitive(gpu, "path trace") != NULL);
+    /* the sample count reached its target, for the watched view 0 and over all */
+    const cJSON *pt = cJSON_GetObjectItemCaseSensitive(s, "pathtrace");
+    double samples = pc_json_number(pt, "samples"), target = pc_json_number(pt, "target");
+    CHECKF(target >= 64 && samples == target, "path trace: %g of %g samples once idle", samples,
+           target);
+    const cJSON *v0 = cJSON_GetArrayItem(cJSON_GetObjectItemCaseSensitive(pt, "views"), 0);
+    CHECKF(pc_json_number(v0, "view") == 0 && pc_json_number(v0, "samples") == target,
+           "view 0: %g samples", pc_json_number(v0, "samples"));
     cJSON_Delete(s);
 
     pc_ws ws2;
@@ -61,8 +73,16 @@ int main(void)
     /* a camera move restarts the accumulation: 64 more frames, then idle again */
     CHECK(pc_api(&d, "PATCH", "/v1/camera", "{\"position\":[0.5,1,3.9]}", false, &r) == 200);
     pc_http_response_free(&r);
+    s = pc_api_get_json(&d, "/v1/stats");
+    samples = pc_json_number(cJSON_GetObjectItemCaseSensitive(s, "pathtrace"), "samples");
+    CHECKF(samples < target, "a camera move restarts the count: %g of %g", samples, target);
+    cJSON_Delete(s);
     double after = wait_idle(&d, 240000);
     CHECKF(after >= before + 64, "camera move: %g frames after %g", after, before);
+    s = pc_api_get_json(&d, "/v1/stats");
+    samples = pc_json_number(cJSON_GetObjectItemCaseSensitive(s, "pathtrace"), "samples");
+    CHECKF(samples == target, "after the move: %g of %g samples once idle", samples, target);
+    cJSON_Delete(s);
     pc_ws_close(&ws);
 
     /* nobody watching: a change renders nothing */

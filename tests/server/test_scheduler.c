@@ -1,4 +1,5 @@
-/* Scheduler policy without a GPU: fairness, pacing, one world tick per round, idling. */
+/* Scheduler policy without a GPU: fairness, pacing (global and per view), one world tick per
+ * round, idling. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -244,6 +245,77 @@ static void test_world_not_starved(void)
     CHECKF(ok, "every view showed each tick before the next");
 }
 
+/* A view with its own frame-rate cap (a viewer's quality message) is rendered at that rate
+ * while an uncapped view beside it runs at the global cap, with or without world ticks, and the
+ * capped view does not hold the world back. */
+static void own_cap(bool world)
+{
+    srv_sched_view v[2] = {view(true, true), view(true, true)};
+    v[0].frame_interval_ms = 100; /* 10 fps; the global cap is 100 fps */
+    srv_sched_state s = base(v, 2);
+    s.world_wants_update = world;
+    s.world_updates_left = world ? 1000000 : 0;
+    unsigned renders[2] = {0}, ticks = 0;
+    double last0 = -1e9, min_gap0 = 1e9;
+    for (int i = 0; i < 1000; i++) { /* one second, a step per millisecond */
+        s.now_ms += 1;
+        for (int k = 0; k < 2; k++) {
+            v[k].dirty = true; /* both cameras move all the time */
+            v[k].last_input_ms = s.now_ms;
+        }
+        srv_sched_step st = run(&s, v);
+        if (st.action == SRV_SCHED_ADVANCE_WORLD) ticks++;
+        if (st.action != SRV_SCHED_RENDER_VIEW) continue;
+        renders[st.view]++;
+        if (st.view == 0) {
+            if (s.now_ms - last0 < min_gap0) min_gap0 = s.now_ms - last0;
+            last0 = s.now_ms;
+        }
+    }
+    CHECKF(renders[0] >= 9 && renders[0] <= 11, "world %d: capped view: %u frames in 1 s (10)",
+           world, renders[0]);
+    CHECKF(min_gap0 >= 100 - 1e-9, "world %d: capped view frames %.0f ms apart at least", world,
+           min_gap0);
+    CHECKF(renders[1] >= 90, "world %d: the other view keeps the global rate: %u frames", world,
+           renders[1]);
+    if (world)
+        CHECKF(ticks >= 45, "the capped view does not hold the world back: %u ticks", ticks);
+}
+
+static void test_own_cap(void)
+{
+    own_cap(false);
+    own_cap(true);
+    /* the sleep deadline is the view's own due time */
+    srv_sched_view v[1] = {view(true, true)};
+    v[0].frame_interval_ms = 50;
+    srv_sched_state s = base(v, 1);
+    v[0].last_render_ms = s.now_ms - 20;
+    srv_sched_step st = srv_sched_next(&s);
+    CHECKF(st.action == SRV_SCHED_SLEEP && fabs(st.wake_ms - (s.now_ms + 30)) < 1e-9,
+           "own cap: sleep until the view is due (wake %.1f)", st.wake_ms);
+    /* an own cap looser than the global one changes nothing */
+    v[0].frame_interval_ms = 5;
+    st = srv_sched_next(&s);
+    CHECKF(st.action == SRV_SCHED_RENDER_VIEW, "a 200 fps own cap under a 100 fps global one");
+    v[0].last_render_ms = s.now_ms - 7;
+    st = srv_sched_next(&s);
+    CHECKF(st.action == SRV_SCHED_SLEEP && fabs(st.wake_ms - (s.now_ms + 3)) < 1e-9,
+           "the global cap still applies (wake %.1f)", st.wake_ms);
+    /* a capped view behind the world that is due holds the tick until it has shown it */
+    v[0].frame_interval_ms = 50;
+    v[0].behind_world = true;
+    v[0].busy = true;
+    v[0].last_render_ms = s.now_ms - 60;
+    s.world_wants_update = true;
+    s.world_updates_left = 10;
+    st = srv_sched_next(&s);
+    CHECKF(st.action == SRV_SCHED_SLEEP, "a due capped view still owes the tick");
+    v[0].last_render_ms = s.now_ms - 20;
+    st = srv_sched_next(&s);
+    CHECKF(st.action == SRV_SCHED_ADVANCE_WORLD, "one held back by its cap does not");
+}
+
 static void test_still(void)
 {
     srv_sched_view v[2] = {view(true, false), view(true, false)};
@@ -267,6 +339,7 @@ int main(void)
     test_pacing();
     test_world();
     test_world_not_starved();
+    test_own_cap();
     test_still();
     return test_finish();
 }

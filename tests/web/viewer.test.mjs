@@ -529,6 +529,17 @@ test('the rendering panel switches GI mode and the probe view', { timeout: 30000
   await until(async () => (await pt.getAttribute('aria-checked')) === 'true', 'path trace checked');
   await waitDrawnAfter((await state()).drawnId + 1);
   await shot('pathtrace.png');
+  // The stats panel counts the samples of our view up to the server's target (64 on lavapipe).
+  const target = (await until(async () => (await http('GET', '/v1/stats')).json.pathtrace, 'a path-trace sample count')).target;
+  assert.ok(target >= 1, `target ${target}`);
+  await page.waitForFunction((t) => new RegExp(`path trace · \\d+ / ${t} samples`).test(document.getElementById('st-probes').textContent),
+    target, { timeout: 10000 });
+  await page.waitForFunction((t) => document.getElementById('st-probes').textContent.includes(`· ${t} / ${t} samples`),
+    target, { timeout: 60000 });
+  assert.match(await page.locator('#st-converge').textContent(), new RegExp(`path trace: ${target} / ${target} samples`));
+  const ownView = (await state()).ownView;
+  const own = (await http('GET', '/v1/stats')).json.pathtrace.views.find((v) => v.view === ownView);
+  assert.deepEqual(own, { view: ownView, samples: target }, 'GET /v1/stats lists our view\'s samples');
   await page.locator('#gi-modes button[data-value=classic]').click();
   await until(async () => (await http('GET', '/v1/settings')).json.gi_mode === 'classic', 'gi_mode classic');
   await until(async () => (await page.locator('#gi-modes button[data-value=classic]').getAttribute('aria-checked')) === 'true', 'classic checked');
@@ -704,7 +715,7 @@ test('desktop: panels cover at most a quarter of the picture; ? shows the keys; 
   }
 });
 
-test('dragging asks for half the pixels, then the full size; the quality menu scales the size', { timeout: 60000 }, async () => {
+test('dragging asks for half the pixels, then the full size; the quality menu scales the size and caps quality and frame rate', { timeout: 60000 }, async () => {
   const vp = { width: 1280, height: 720 };
   const ctx = await browser.newContext({ viewport: vp, deviceScaleFactor: 1 });
   await recordSockets(ctx);
@@ -767,6 +778,45 @@ test('dragging asks for half the pixels, then the full size; the quality menu sc
     await p.locator('#res-scale button[data-scale="1"]').click();
     await p.waitForFunction((k) => window.__sent.slice(k).some((x) => x.m.type === 'resize'), n, { timeout: 5000 });
     assert.deepEqual((await resizesAfter(n)).map((x) => x.m), [full]);
+
+    // JPEG quality and frame-rate caps: a 'quality' message for our view; its frames (the
+    // re-encoded still, then new ones) come at quality 50 at most.
+    const qualityAfter = (k) => p.evaluate((i) => window.__sent.slice(i).filter((x) => x.m.type === 'quality').map((x) => x.m), k);
+    n = await p.evaluate(() => window.__sent.length);
+    await p.locator('#jpeg-cap button[data-value="50"]').click();
+    await p.locator('#fps-cap button[data-value="15"]').click();
+    assert.deepEqual(await qualityAfter(n), [
+      { type: 'quality', jpeg: 50, max_fps: null },
+      { type: 'quality', jpeg: 50, max_fps: 15 },
+    ]);
+    assert.equal(await p.locator('#jpeg-cap button[data-value="50"]').getAttribute('aria-checked'), 'true');
+    assert.equal(await p.locator('#fps-cap button[data-value="15"]').getAttribute('aria-checked'), 'true');
+    assert.equal(await p.locator('#fps-cap button[data-value="auto"]').getAttribute('aria-checked'), 'false');
+    assert.deepEqual(await p.evaluate(() => [localStorage.getItem('probecast.quality.jpeg'), localStorage.getItem('probecast.quality.fps')]),
+      ['50', '15']);
+    await p.evaluate(() => {
+      window.__q = [];
+      window.probecast.stream.addEventListener('frame', (e) => window.__q.push(e.detail.quality));
+    });
+    await drag(80, 0, p);
+    await p.waitForFunction(() => window.__q.length >= 2, null, { timeout: 20000 });
+    const qs = await p.evaluate(() => window.__q);
+    assert.ok(qs.every((q) => q <= 50), `frames at quality 50 at most: ${qs}`);
+    // after a reconnect (a new view, without caps) the caps are sent again after the welcome
+    n = await p.evaluate(() => window.__sent.length);
+    const gen = (await state(p)).gen;
+    await p.evaluate(() => { window.probecast.stream.stop(); window.probecast.stream.start(); });
+    await p.waitForFunction((g) => window.probecast.state().gen !== g && window.probecast.state().restored, gen, { timeout: 30000 });
+    await until(async () => (await qualityAfter(n)).length >= 1, 'the caps sent again after the welcome', 10000);
+    assert.deepEqual(await qualityAfter(n), [{ type: 'quality', jpeg: 50, max_fps: 15 }]);
+    const welcomeAt = await p.evaluate(() => window.__recv.filter((x) => x.m.type === 'welcome').pop().t);
+    const sentAt = await p.evaluate((k) => window.__sent.slice(k).find((x) => x.m.type === 'quality').t, n);
+    assert.ok(sentAt >= welcomeAt, 'after the welcome');
+    // back to auto: both caps lifted
+    n = await p.evaluate(() => window.__sent.length);
+    await p.locator('#jpeg-cap button[data-value="auto"]').click();
+    await p.locator('#fps-cap button[data-value="auto"]').click();
+    assert.deepEqual((await qualityAfter(n)).pop(), { type: 'quality', jpeg: null, max_fps: null });
   } finally {
     await ctx.close();
   }

@@ -16,7 +16,7 @@ import { CameraControls, OrbitCamera } from './camera.js';
 import { AnimationPanel } from './animation.js';
 import { Fullscreen, HelpOverlay, Layout } from './layout.js';
 import { LightsPanel, RenderPanel, ScenePanel, Toasts, TokenPrompt, ViewsPanel } from './panels.js';
-import { QualityPanel, RenderSize } from './quality.js';
+import { QualityPanel, RenderSize, ViewCaps } from './quality.js';
 import { StatsPanel } from './stats.js';
 import { CanvasView, FrameStream, SUBPROTOCOL } from './stream.js';
 
@@ -122,6 +122,7 @@ const stale = (gen) => stream.gen !== gen || !stream.open;
 async function restoreView(gen) {
   try {
     renderSize.connected();
+    viewCaps.connected(); // version 2: our view's caps (a new view has none)
     const [s] = await Promise.all([firstScene(gen), loadCapabilities()]);
     if (stale(gen)) return;
     const same = scene && s.source === scene.source && s.generation === scene.generation;
@@ -306,7 +307,9 @@ watchDpr();
 /* ---- panels ------------------------------------------------------------------------------------ */
 const layout = new Layout();
 const statsPanel = new StatsPanel({ stream });
-const qualityPanel = new QualityPanel(renderSize);
+const viewCaps = new ViewCaps({ stream });
+const qualityPanel = new QualityPanel(renderSize, viewCaps);
+stream.addEventListener('open', (e) => qualityPanel.setAvailable(e.detail.protocol === 2));
 stream.addEventListener('frame', (e) => { if (e.detail.viewId === stream.ownView) qualityPanel.show(e.detail); });
 const renderPanel = new RenderPanel(api, { toasts });
 const lightsPanel = new LightsPanel(api, {
@@ -457,7 +460,7 @@ window.addEventListener('pageshow', (ev) => { if (ev.persisted && !document.hidd
 // For tests and the console: the live objects and a summary of the stream state.
 window.probecast = {
   api, stream, camera, controls, view, renderPanel, lightsPanel, scenePanel, viewsPanel, animPanel, follow,
-  layout, renderSize, help, fullscreen, statsPanel,
+  layout, renderSize, viewCaps, help, fullscreen, statsPanel,
   state: () => ({
     state: stream.state, drawnId: stream.drawnId, frames: stream.counters.drawn, inputSeq: stream.lastHeader ? stream.lastHeader.inputSeq : 0,
     sentSeq: stream.nextSeq - 1, reconnects: stream.counters.reconnects, gen: stream.gen, header: stream.lastHeader,

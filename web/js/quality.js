@@ -1,5 +1,5 @@
-// quality.js: the render size this viewer asks for ('resize' messages, protocol/stream.md) and
-// the Quality panel that sets it.
+// quality.js: the render size this viewer asks for ('resize' messages, protocol/stream.md), the
+// caps it sets on its own view ('quality' messages) and the Quality panel that sets both.
 //
 // The size asked for is the canvas's CSS size times devicePixelRatio (the server scales it down
 // to its pixel limits), times the panel's resolution scale (100/75/50/25 % per side). While the
@@ -9,9 +9,11 @@
 // encodes fewer pixels while moving; the canvas scales the smaller frames up meanwhile.
 // Window resizes are debounced (one message per burst); repeated sizes are not sent again.
 //
-// The protocol lets a viewer choose its size only: a frame-rate cap and the JPEG quality are
-// server settings shared by every viewer (max_fps, quality_interactive, quality_still), so the
-// panel does not offer them.
+// Version 2 also lets a viewer cap its own view's JPEG quality and frame rate: 'auto' (null)
+// leaves the server's settings (quality_interactive, quality_still, max_fps), a number caps them
+// further (the server's max_fps and its lag-based quality cap still apply on top). A new view
+// starts without caps, so they are sent again after every welcome; a version-1 server has no
+// such message and the panel's choices are disabled.
 
 const RESIZE_DEBOUNCE_MS = 150;
 const INTERACTIVE_PIXELS = 0.5;    // share of the pixels asked for while the camera moves
@@ -19,6 +21,10 @@ const DEFAULT_STILL_DELAY_MS = 150;
 export const SCALES = [1, 0.75, 0.5, 0.25];
 const KEY_SCALE = 'probecast.quality.scale';
 const KEY_INTERACTIVE = 'probecast.quality.interactive';
+export const JPEG_CAPS = [null, 90, 75, 50]; // null: auto (the server's qualities)
+export const FPS_CAPS = [null, 60, 30, 15];  // null: auto (the server's max_fps)
+const KEY_JPEG = 'probecast.quality.jpeg';
+const KEY_FPS = 'probecast.quality.fps';
 
 const $ = (id) => document.getElementById(id);
 
@@ -125,30 +131,101 @@ export class RenderSize {
   onSent(fn) { this.listeners.add(fn); }
 }
 
-/* The Quality panel: resolution scale buttons, the interactive-resolution switch and a line
- * that says what was asked for and what the server renders (the last frame of our view). */
+/* A stored choice: one of `choices` (null = auto), else auto. */
+function storedCap(key, choices) {
+  const v = localStorage.getItem(key);
+  const n = v === null || v === '' ? null : Number(v);
+  return choices.includes(n) ? n : null;
+}
+
+/* The caps of this viewer's own view: JPEG quality and frame rate, null = auto (no cap).
+ * stream: FrameStream (sendQuality). */
+export class ViewCaps {
+  constructor({ stream }) {
+    this.stream = stream;
+    this.jpeg = storedCap(KEY_JPEG, JPEG_CAPS);
+    this.maxFps = storedCap(KEY_FPS, FPS_CAPS);
+    this.listeners = new Set();
+  }
+
+  /* Sends both caps; false when the stream cannot (not connected, version 1, before the
+   * welcome). */
+  send() {
+    const ok = this.stream.sendQuality(this.jpeg, this.maxFps);
+    for (const fn of this.listeners) fn();
+    return ok;
+  }
+
+  /* After the welcome: the connection's new view has no caps; set ours again (nothing to send
+   * when both are auto). */
+  connected() {
+    if (this.jpeg !== null || this.maxFps !== null) this.send();
+  }
+
+  setJpeg(q) {
+    if (!JPEG_CAPS.includes(q)) return;
+    this.jpeg = q;
+    localStorage.setItem(KEY_JPEG, q === null ? '' : String(q));
+    this.send();
+  }
+
+  setMaxFps(n) {
+    if (!FPS_CAPS.includes(n)) return;
+    this.maxFps = n;
+    localStorage.setItem(KEY_FPS, n === null ? '' : String(n));
+    this.send();
+  }
+
+  onChange(fn) { this.listeners.add(fn); }
+}
+
+const capValue = (b) => (b.dataset.value === 'auto' ? null : Number(b.dataset.value));
+
+/* The Quality panel: resolution scale buttons, the interactive-resolution switch, the JPEG
+ * quality and frame-rate caps, and a line that says what was asked for and what the server
+ * renders (the last frame of our view). */
 export class QualityPanel {
-  constructor(size) {
+  constructor(size, caps) {
     this.size = size;
+    this.caps = caps;
     this.seg = $('res-scale');
+    this.jpegSeg = $('jpeg-cap');
+    this.fpsSeg = $('fps-cap');
     this.toggle = $('interactive-res');
     this.out = $('res-out');
     for (const b of this.seg.querySelectorAll('button')) {
       b.addEventListener('click', () => { this.size.setScale(Number(b.dataset.scale)); this.show(); });
     }
+    for (const b of this.jpegSeg.querySelectorAll('button'))
+      b.addEventListener('click', () => this.caps.setJpeg(capValue(b)));
+    for (const b of this.fpsSeg.querySelectorAll('button'))
+      b.addEventListener('click', () => this.caps.setMaxFps(capValue(b)));
     this.toggle.checked = size.interactive;
     this.toggle.addEventListener('change', () => this.size.setInteractive(this.toggle.checked));
     size.onSent(() => this.show());
+    caps.onChange(() => this.show());
     this.show();
+  }
+
+  /* Version 1 servers have no per-view caps: their choices are disabled. */
+  setAvailable(on) {
+    for (const b of [...this.jpegSeg.querySelectorAll('button'), ...this.fpsSeg.querySelectorAll('button')]) {
+      b.disabled = !on;
+      b.title = on ? '' : 'This server shares one view among viewers (protocol version 1): no per-viewer caps';
+    }
   }
 
   show(header = this.header) {
     this.header = header;
     for (const b of this.seg.querySelectorAll('button'))
       b.setAttribute('aria-checked', String(Number(b.dataset.scale) === this.size.scale));
+    for (const b of this.jpegSeg.querySelectorAll('button'))
+      b.setAttribute('aria-checked', String(capValue(b) === this.caps.jpeg));
+    for (const b of this.fpsSeg.querySelectorAll('button'))
+      b.setAttribute('aria-checked', String(capValue(b) === this.caps.maxFps));
     const s = this.size.lastSent;
     const asked = s ? `asked ${Math.round(s.width * s.dpr)}×${Math.round(s.height * s.dpr)}` : 'asked –';
-    const got = header ? ` · rendering ${header.width}×${header.height}${header.still ? '' : ' (moving)'}` : '';
+    const got = header ? ` · rendering ${header.width}×${header.height}${header.still ? '' : ' (moving)'} · q${header.quality}` : '';
     this.out.textContent = asked + got;
   }
 }

@@ -83,9 +83,11 @@ export class StatsPanel {
     const p = server.probes || {};
     const st = p.states || null;
     if (p.mode === 'pathtrace') {
-      // GET /v1/stats has no sample count of the path tracer: say whether it still accumulates.
-      f.probes.innerHTML = `path trace <small>${server.rendering === false ? 'done' : 'accumulating…'}</small>`;
-      f.probes.title = 'Samples accumulate while nothing changes; the server does not report their count.';
+      const pt = this.pathTrace(server);
+      f.probes.innerHTML = pt
+        ? `path trace <small>· ${pt.samples} / ${pt.target} samples</small>`
+        : `path trace <small>· ${server.rendering === false ? 'done' : 'accumulating…'}</small>`;
+      f.probes.title = 'Samples accumulate in your view while nothing changes; any change starts over.';
     } else {
       const active = p.mode && p.mode !== 'off' ? p.total || 0 : 0;
       // convergence progress: the share of the lit probes that have settled (asleep)
@@ -104,13 +106,30 @@ export class StatsPanel {
     this.renderPasses(server.gpu_ms || {});
   }
 
+  /* The path tracer's progress in the view this page shows: { samples, target } from
+   * GET /v1/stats "pathtrace" (its entry for our view, else the fewest of the watched views);
+   * null when the server does not report it. */
+  pathTrace(server) {
+    const pt = server && server.pathtrace;
+    if (!pt || !Number.isFinite(pt.target) || pt.target <= 0) return null;
+    const mine = Array.isArray(pt.views) && this.stream.watching !== null
+      ? pt.views.find((v) => v && v.view === this.stream.watching) : null;
+    const samples = mine && Number.isFinite(mine.samples) ? mine.samples : pt.samples;
+    return Number.isFinite(samples) ? { samples: Math.min(samples, pt.target), target: pt.target } : null;
+  }
+
   /* The GI progress bar: the probes' convergence (0..1) in DDGI and classic modes; in path
-   * tracing an indeterminate bar while samples accumulate and a full one when done. */
+   * tracing the share of the target samples accumulated (without a count from the server: an
+   * indeterminate bar while it renders, a full one when done). */
   renderConvergence(server) {
     const bar = this.f.converge;
     const p = (server && server.probes) || {};
     let frac = null, label = 'GI –', busy = false;
-    if (p.mode === 'pathtrace') {
+    const pt = p.mode === 'pathtrace' ? this.pathTrace(server) : null;
+    if (pt) {
+      frac = pt.samples / pt.target;
+      label = `path trace: ${pt.samples} / ${pt.target} samples`;
+    } else if (p.mode === 'pathtrace') {
       busy = server.rendering !== false;
       frac = busy ? null : 1;
       label = busy ? 'path trace: accumulating' : 'path trace: done';

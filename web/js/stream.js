@@ -305,6 +305,14 @@ export class FrameStream extends EventTarget {
     });
   }
 
+  /* Caps the own view's JPEG quality (1..100) and frame rate (1..240); null: no cap. Version 2
+   * only: false when not possible (not connected, version 1, before the welcome). */
+  sendQuality(jpeg, maxFps) {
+    if (this.protocol !== 2 || this.ownView === null) return false;
+    const cap = (v, hi) => (v === null || v === undefined ? null : Math.max(1, Math.min(hi, Math.round(v))));
+    return this.send({ type: 'quality', jpeg: cap(jpeg, 100), max_fps: cap(maxFps, 240) });
+  }
+
   /* Watches view id (null or the own id: the own view again). Frames of the requested view are
    * drawn from now on; the server's 'following' confirms, an 'error' reverts. False when not
    * possible (not connected, version 1, before the welcome). */
