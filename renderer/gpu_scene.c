@@ -106,12 +106,25 @@ static pc_uvec4 pack_tangents(const float *t)
     return out;
 }
 
+/* Whether a surface of material g can trace reflection rays (gbuffer_traces_reflection in
+ * shaders/common.glsl): it has a specular part and a roughness that may fall below the cutoff.
+ * A metallic-roughness texture only scales the factors down, so the factors bound what the
+ * texels can give: metallic 0 stays 0, but any roughness factor may become glossy. */
+static bool material_glossy(const pc_material *g)
+{
+    bool specular = g->pbr.x > 0 || g->params.w > 0;
+    return specular && (g->pbr.y < PC_REFLECT_MAX_ROUGHNESS || g->tex2.x != 0);
+}
+
 static rd_vk_result upload_materials(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, char *err,
                                      size_t errlen)
 {
     pc_material *mats = xcalloc(s->material_count, sizeof *mats);
-    for (uint32_t i = 0; i < s->material_count; i++)
+    gs->glossy = false;
+    for (uint32_t i = 0; i < s->material_count; i++) {
         fill_material(&mats[i], &s->materials[i], s->texture_count);
+        gs->glossy |= material_glossy(&mats[i]);
+    }
     rd_vk_result r =
         upload_new(vk, &gs->materials, mats, sizeof *mats * s->material_count, err, errlen);
     free(mats);

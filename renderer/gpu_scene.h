@@ -24,6 +24,9 @@ typedef struct rd_gpu_scene {
     float *mesh_bounds;  /* 6 floats per mesh: object-space min, max */
     uint32_t instance_capacity;
     uint32_t light_capacity;
+    /* some material can trace reflection rays (glossy: see PC_REFLECT_MAX_ROUGHNESS); when
+     * none can, views record no reflection pass */
+    bool glossy;
     /* statistics */
     double blas_build_ms, tlas_build_ms, upload_ms;
     uint64_t tri_count, blas_node_count;

@@ -50,6 +50,7 @@ rd_vk_result rd_renderer_render(rd_renderer *r, const rd_gpu_scene *scene,
         .pathtrace_spp = fs->pathtrace_spp,
         .max_bounces = fs->max_bounces,
         .pathtrace_first = fs->pathtrace_first,
+        .reflections = fs->reflections,
     };
     res = rd_view_render(&r->view, &r->world, camera, &vs, err, errlen);
     rd_frame_stats_add(&r->stats, &r->world.stats);

@@ -29,6 +29,7 @@ typedef struct rd_frame_settings {
     unsigned max_bounces;     /* path tracing (0 = 64) */
     unsigned pathtrace_first; /* path tracing: samples already accumulated from an identical
                                  earlier frame (0 = start over); progressive rendering */
+    unsigned reflections;     /* PC_REFLECT_* (0 = auto; rd_view_settings) */
 } rd_frame_settings;
 
 typedef struct rd_renderer {

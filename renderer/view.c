@@ -2,18 +2,44 @@
 #include "view.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "shaders/brdf_albedo.spv.h"
 #include "shaders/ddgi_sample.spv.h"
 #include "shaders/pathtrace.spv.h"
 #include "shaders/primary.spv.h"
+#include "shaders/reflect.spv.h"
+#include "shaders/reflect_filter.spv.h"
 #include "shaders/shade.spv.h"
 #include "shaders/tonemap.spv.h"
 
 #define DEFAULT_WIDTH 960
 #define DEFAULT_HEIGHT 540
+
+/* Fills p->brdf_albedo with brdf_albedo.comp (blocking; a one-off pipeline). */
+static rd_vk_result compute_brdf_albedo(rd_vk *vk, rd_view_passes *p, char *err, size_t errlen)
+{
+    const uint32_t entries = PC_BRDF_ALBEDO_SIDE * PC_BRDF_ALBEDO_SIDE;
+    rd_pipeline gen = {0};
+    rd_vk_result res = rd_buffer_create(vk, &p->brdf_albedo, entries * 2 * sizeof(float),
+                                        RD_MEMORY_DEVICE, err, errlen);
+    if (res == RD_VK_OK)
+        res = rd_pipeline_create(vk, &gen, "brdf albedo", pc_spv_brdf_albedo,
+                                 sizeof pc_spv_brdf_albedo, sizeof(pc_push), err, errlen);
+    rd_cmd cmd;
+    if (res == RD_VK_OK) res = rd_cmd_begin(vk, &cmd, err, errlen);
+    if (res == RD_VK_OK) {
+        pc_push push = {.buf0 = p->brdf_albedo.address};
+        rd_cmd_dispatch(&cmd, &gen, &push, (entries + PC_WG_1D - 1) / PC_WG_1D, 1, 1);
+        rd_cmd_barrier(&cmd);
+        res = rd_cmd_submit_wait(vk, &cmd, err, errlen);
+    }
+    rd_pipeline_destroy(vk, &gen);
+    return res;
+}
 
 rd_vk_result rd_view_passes_create(rd_vk *vk, rd_view_passes *p, char *err, size_t errlen)
 {
@@ -32,12 +58,22 @@ rd_vk_result rd_view_passes_create(rd_vk *vk, rd_view_passes *p, char *err, size
     if (res == RD_VK_OK)
         res = rd_pipeline_create(vk, &p->pathtrace, "path trace", pc_spv_pathtrace,
                                  sizeof pc_spv_pathtrace, sizeof(pc_push), err, errlen);
+    if (res == RD_VK_OK)
+        res = rd_pipeline_create(vk, &p->reflect, "reflect", pc_spv_reflect, sizeof pc_spv_reflect,
+                                 sizeof(pc_push), err, errlen);
+    if (res == RD_VK_OK)
+        res = rd_pipeline_create(vk, &p->reflect_filter, "reflect filter", pc_spv_reflect_filter,
+                                 sizeof pc_spv_reflect_filter, sizeof(pc_push), err, errlen);
+    if (res == RD_VK_OK) res = compute_brdf_albedo(vk, p, err, errlen);
     if (res != RD_VK_OK) rd_view_passes_destroy(vk, p);
     return res;
 }
 
 void rd_view_passes_destroy(rd_vk *vk, rd_view_passes *p)
 {
+    rd_buffer_destroy(vk, &p->brdf_albedo);
+    rd_pipeline_destroy(vk, &p->reflect_filter);
+    rd_pipeline_destroy(vk, &p->reflect);
     rd_pipeline_destroy(vk, &p->pathtrace);
     rd_pipeline_destroy(vk, &p->gi_sample);
     rd_pipeline_destroy(vk, &p->tonemap);
@@ -56,6 +92,9 @@ rd_vk_result rd_view_create(rd_vk *vk, const rd_view_passes *passes, rd_view *v,
     if (res == RD_VK_OK)
         res = rd_buffer_create(vk, &v->counters, sizeof(pc_counters), RD_MEMORY_READBACK, err,
                                errlen);
+    if (res == RD_VK_OK)
+        res = rd_buffer_create(vk, &v->reflect_ctrl, sizeof(pc_reflect_control), RD_MEMORY_UPLOAD,
+                               err, errlen);
     if (res == RD_VK_OK) res = rd_timer_create(vk, &v->timer, err, errlen);
     if (res != RD_VK_OK) rd_view_destroy(v);
     return res;
@@ -63,6 +102,8 @@ rd_vk_result rd_view_create(rd_vk *vk, const rd_view_passes *passes, rd_view *v,
 
 static void free_images(rd_view *v)
 {
+    rd_buffer_destroy(v->vk, &v->reflect_history);
+    v->reflect_keyed = false;
     rd_buffer_destroy(v->vk, &v->rgba8);
     rd_buffer_destroy(v->vk, &v->radiance);
     rd_buffer_destroy(v->vk, &v->gbuffer);
@@ -77,6 +118,7 @@ void rd_view_destroy(rd_view *v)
     if (v->width || v->height) vkDeviceWaitIdle(v->vk->device);
     free_images(v);
     rd_timer_destroy(v->vk, &v->timer);
+    rd_buffer_destroy(v->vk, &v->reflect_ctrl);
     rd_buffer_destroy(v->vk, &v->counters);
     rd_buffer_destroy(v->vk, &v->globals);
     v->passes = NULL;
@@ -160,7 +202,7 @@ static rd_vk_result render_pathtraced(rd_view *v, const rd_view_settings *s, cha
 /* Sizes the images and writes this frame's globals (the world's part copied, the camera's part
  * filled here). */
 static rd_vk_result prepare(rd_view *v, const rd_world *w, const rd_view_camera *camera,
-                            const rd_view_settings *s, char *err, size_t errlen)
+                            const rd_view_settings *s, pc_globals *out, char *err, size_t errlen)
 {
     memset(&v->stats, 0, sizeof v->stats);
     if (!w->scene) {
@@ -171,6 +213,10 @@ static rd_vk_result prepare(rd_view *v, const rd_world *w, const rd_view_camera 
     unsigned height = s->height ? s->height : DEFAULT_HEIGHT;
     if (width > 16384 || height > 16384) {
         snprintf(err, errlen, "resolution %ux%u exceeds 16384 in a dimension", width, height);
+        return RD_VK_ERR_UNSUPPORTED;
+    }
+    if (s->reflections > PC_REFLECT_OFF) {
+        snprintf(err, errlen, "unknown reflections mode %u", s->reflections);
         return RD_VK_ERR_UNSUPPORTED;
     }
     rd_vk_result res = ensure_size(v, width, height, err, errlen);
@@ -184,8 +230,50 @@ static rd_vk_result prepare(rd_view *v, const rd_world *w, const rd_view_camera 
     rd_camera_to_view(&shifted, width, height, &g.view);
     g.view.size = (pc_uvec4){width, height, v->frame_index, s->seed};
     g.view.tonemap = (pc_vec4){exp2f(s->exposure_ev), (float)s->tonemap, (float)s->view, 0};
+    g.brdf_albedo = v->passes->brdf_albedo.address;
     memcpy(v->globals.mapped, &g, sizeof g);
     memset(v->counters.mapped, 0, sizeof(pc_counters));
+    if (out) *out = g;
+    return RD_VK_OK;
+}
+
+/* Whether this frame traces reflections: GI on (the hits need the probe field, and GI off
+ * means direct light only), reflections not turned off, a scene with glossy materials, and a
+ * view mode that shows them. If so, opens the frame's reflection bookkeeping: the history
+ * buffer (zeroed when created), the epoch (a new one when the history key changed) and the
+ * indirect arguments, closed (x = 0) until primary.comp sees a glossy pixel. */
+static rd_vk_result reflections_begin(rd_view *v, const rd_world *w, const rd_view_settings *s,
+                                      const pc_globals *g, bool *on, char *err, size_t errlen)
+{
+    *on = w->gi && s->reflections != PC_REFLECT_OFF && s->view != PC_VIEW_IRRADIANCE &&
+          w->scene->glossy;
+    if (!*on) return RD_VK_OK;
+    if (!v->reflect_history.buffer) {
+        VkDeviceSize bytes = (VkDeviceSize)v->width * v->height * 16;
+        rd_vk_result res =
+            rd_buffer_create(v->vk, &v->reflect_history, bytes, RD_MEMORY_DEVICE, err, errlen);
+        if (res == RD_VK_OK) res = rd_buffer_fill(v->vk, &v->reflect_history, 0, err, errlen);
+        if (res != RD_VK_OK) {
+            rd_buffer_destroy(v->vk, &v->reflect_history);
+            return res;
+        }
+        v->reflect_keyed = false;
+    }
+    rd_view_history_key key;
+    memset(&key, 0, sizeof key);
+    key.view = g->view;
+    key.view.size.z = 0; /* the frame index */
+    memset(&key.view.tonemap, 0, sizeof key.view.tonemap);
+    key.scene = g->scene;
+    key.env = g->env;
+    key.world_changes = w->changes;
+    key.gi = w->gi;
+    if (!v->reflect_keyed || memcmp(&key, &v->reflect_key, sizeof key) != 0)
+        v->reflect_epoch = (v->reflect_epoch + 1) & 0xffffffu;
+    v->reflect_key = key;
+    v->reflect_keyed = true;
+    pc_reflect_control ctrl = {.args = {0, (v->height + PC_WG_2D_Y - 1) / PC_WG_2D_Y, 1, 0}};
+    memcpy(v->reflect_ctrl.mapped, &ctrl, sizeof ctrl);
     return RD_VK_OK;
 }
 
@@ -196,7 +284,10 @@ rd_vk_result rd_view_record(rd_view *v, const rd_world *w, const rd_view_camera 
         snprintf(err, errlen, "path tracing is rendered with rd_view_render");
         return RD_VK_ERR_UNSUPPORTED;
     }
-    rd_vk_result res = prepare(v, w, camera, s, err, errlen);
+    pc_globals g;
+    bool reflect = false;
+    rd_vk_result res = prepare(v, w, camera, s, &g, err, errlen);
+    if (res == RD_VK_OK) res = reflections_begin(v, w, s, &g, &reflect, err, errlen);
     if (res != RD_VK_OK) return res;
     v->pathtrace_samples = 0; /* this frame overwrites the accumulation */
     const rd_view_passes *p = v->passes;
@@ -206,17 +297,36 @@ rd_vk_result rd_view_record(rd_view *v, const rd_world *w, const rd_view_camera 
     pc_push push = {.globals = v->globals.address,
                     .buf0 = v->gbuffer.address,
                     .buf1 = v->counters.address,
-                    .buf2 = v->radiance.address};
+                    .buf2 = reflect ? v->reflect_ctrl.address : 0};
     rd_cmd_dispatch(cmd, &p->primary, &push, gx, gy, 1);
     rd_cmd_barrier(cmd);
     rd_timer_mark(cmd, &v->timer, "primary");
+    push.buf2 = v->radiance.address;
     rd_cmd_dispatch(cmd, &p->shade, &push, gx, gy, 1);
     rd_cmd_barrier(cmd);
     rd_timer_mark(cmd, &v->timer, "shade");
     if (w->gi) {
+        push.params.x = s->reflections != PC_REFLECT_OFF; /* indirect specular */
         rd_cmd_dispatch(cmd, &p->gi_sample, &push, gx, gy, 1);
         rd_cmd_barrier(cmd);
         rd_timer_mark(cmd, &v->timer, "gi sample");
+        push.params.x = 0;
+    }
+    if (reflect) { /* both dispatches are empty when no glossy pixel is in sight */
+        const VkDeviceSize args = offsetof(pc_reflect_control, args);
+        pc_push rp = {.globals = v->globals.address,
+                      .buf0 = v->gbuffer.address,
+                      .buf1 = v->counters.address,
+                      .buf2 = v->reflect_history.address,
+                      .params = {v->reflect_epoch, 0, 0, 0}};
+        rd_cmd_dispatch_indirect(cmd, &p->reflect, &rp, &v->reflect_ctrl, args);
+        rd_cmd_barrier(cmd);
+        rd_timer_mark(cmd, &v->timer, "reflect");
+        rp.buf1 = v->reflect_history.address;
+        rp.buf2 = v->radiance.address;
+        rd_cmd_dispatch_indirect(cmd, &p->reflect_filter, &rp, &v->reflect_ctrl, args);
+        rd_cmd_barrier(cmd);
+        rd_timer_mark(cmd, &v->timer, "reflect filter");
     }
     push.buf0 = v->radiance.address;
     push.buf1 = v->rgba8.address;
@@ -238,7 +348,7 @@ rd_vk_result rd_view_render(rd_view *v, const rd_world *w, const rd_view_camera 
                             const rd_view_settings *s, char *err, size_t errlen)
 {
     if (s->pathtrace_spp > 0) {
-        rd_vk_result res = prepare(v, w, camera, s, err, errlen);
+        rd_vk_result res = prepare(v, w, camera, s, NULL, err, errlen);
         return res == RD_VK_OK ? render_pathtraced(v, s, err, errlen) : res;
     }
     rd_cmd cmd;

@@ -1,5 +1,6 @@
-/* view.h: one camera's images of a world: primary pass -> shade (direct) -> [GI sampling]
- * -> tone map, or progressive path tracing, with GPU timings and ray counts.
+/* view.h: one camera's images of a world: primary pass -> shade (direct) -> [GI sampling
+ * -> reflections -> reflection filter] -> tone map, or progressive path tracing, with GPU
+ * timings and ray counts.
  *
  * A view owns its per-resolution buffers and its own globals buffer; the pipelines
  * (rd_view_passes) are created once per device and shared by every view. Rendering reads the
@@ -25,20 +26,42 @@ typedef struct rd_view_settings { /* per frame */
     unsigned max_bounces;         /* path tracing (0 = 64) */
     unsigned pathtrace_first;     /* path tracing: samples already accumulated from an identical
                                      earlier frame of this view (0 = start over) */
+    unsigned reflections;         /* PC_REFLECT_* (0 = auto): indirect specular with GI on */
 } rd_view_settings;
 
-/* The pipelines of a view's frame; created once per device, shared by all views. */
+/* The pipelines of a view's frame and the data they share; created once per device, shared by
+ * all views. brdf_albedo: the specular albedo table (shaders/brdf_albedo.comp), computed by
+ * rd_view_passes_create. */
 typedef struct rd_view_passes {
-    rd_pipeline primary, shade, tonemap, gi_sample, pathtrace;
+    rd_pipeline primary, shade, tonemap, gi_sample, pathtrace, reflect, reflect_filter;
+    rd_buffer brdf_albedo;
 } rd_view_passes;
 
 rd_vk_result rd_view_passes_create(rd_vk *vk, rd_view_passes *p, char *err, size_t errlen);
 void rd_view_passes_destroy(rd_vk *vk, rd_view_passes *p); /* idempotent */
 
+/* What a view's accumulated reflections depend on; a frame whose key differs from the last
+ * one starts a new history epoch. Compared bytewise (no padding). */
+typedef struct rd_view_history_key {
+    pc_view view;           /* camera, size and seed; frame index and tone mapping zeroed */
+    pc_scene_refs scene;    /* a new scene has new buffers */
+    pc_environment env;     /* sky, image and its irradiance */
+    uint64_t world_changes; /* rd_world.changes: nodes, lights, GI settings */
+    uint64_t gi;            /* rd_world.gi */
+} rd_view_history_key;
+
 typedef struct rd_view {
     rd_vk *vk;
     const rd_view_passes *passes; /* not owned; must outlive the view */
     rd_buffer globals, counters, gbuffer, radiance, rgba8;
+    /* reflections (shaders/reflect.comp): this frame's pc_reflect_control (host visible) and
+     * the per-pixel history, created when a frame first traces reflections. The history is
+     * valid for one epoch, which restarts when what the view sees may have changed (camera,
+     * size, seed, scene, environment, world changes: reflect_key). */
+    rd_buffer reflect_ctrl, reflect_history;
+    uint32_t reflect_epoch;
+    bool reflect_keyed;
+    rd_view_history_key reflect_key; /* of the last frame that traced reflections */
     rd_timer timer;
     unsigned width, height; /* of the buffers (the last frame); 0 before the first */
     unsigned frame_index;
@@ -52,7 +75,10 @@ rd_vk_result rd_view_create(rd_vk *vk, const rd_view_passes *passes, rd_view *v,
 void rd_view_destroy(rd_view *v);
 /* Renders one frame of w from camera into v's buffers (blocking). Reads the world only: uses
  * the probe field as it is (no update). Path tracing when s->pathtrace_spp > 0. A size change
- * waits for the device and reallocates the buffers. */
+ * waits for the device and reallocates the buffers. With GI on, glossy pixels trace one
+ * reflection ray per frame, averaged over the frames for which camera and world stay the same
+ * (reflect_key); a scene without glossy materials (rd_gpu_scene.glossy) records no reflection
+ * pass, and a frame without glossy pixels in sight dispatches none. */
 rd_vk_result rd_view_render(rd_view *v, const rd_world *w, const rd_view_camera *camera,
                             const rd_view_settings *s, char *err, size_t errlen);
 /* The same frame without waiting: records it into cmd (begun by the caller, who submits it, e.g.

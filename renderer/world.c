@@ -72,6 +72,8 @@ static uint16_t half_of(float f)
 rd_vk_result rd_world_set_environment_image(rd_world *w, rd_env_image *img, char *err,
                                             size_t errlen)
 {
+    /* in-flight frames may still sample the image that is replaced here (a rare event) */
+    if (w->env_texels.buffer) vkDeviceWaitIdle(w->vk->device);
     rd_buffer_destroy(w->vk, &w->env_texels);
     rd_env_image_free(&w->image);
     rd_vk_result res = RD_VK_OK;
@@ -103,7 +105,11 @@ rd_vk_result rd_world_set_environment_image(rd_world *w, rd_env_image *img, char
 rd_vk_result rd_world_configure_gi(rd_world *w, const float bmin[3], const float bmax[3],
                                    const rd_ddgi_settings *gi, char *err, size_t errlen)
 {
+    /* frames of views recorded without waiting (rd_view_record) may still read the field that
+     * is freed or reallocated below; reconfiguring is rare, so wait for them */
+    if (w->ddgi.vk) vkDeviceWaitIdle(w->vk->device);
     w->gi = false;
+    w->changes++;
     if (gi->mode == PC_GI_OFF) {
         rd_ddgi_destroy(&w->ddgi); /* model only what is used: no probe memory when off */
         return RD_VK_OK;
@@ -195,6 +201,7 @@ bool rd_world_converged(const rd_world *w)
 
 void rd_world_wake_box(rd_world *w, const float lo[3], const float hi[3], float age)
 {
+    w->changes++;
     if (!w->gi) return;
     float a[3], b[3];
     for (int k = 0; k < 3; k++) {
@@ -207,5 +214,6 @@ void rd_world_wake_box(rd_world *w, const float lo[3], const float hi[3], float 
 
 void rd_world_wake_all(rd_world *w, float age)
 {
+    w->changes++;
     if (w->gi) rd_ddgi_wake_all(&w->ddgi, age);
 }

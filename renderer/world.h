@@ -31,8 +31,12 @@ typedef struct rd_world {
     rd_buffer globals, counters; /* for probe updates */
     rd_timer timer;
     uint64_t updates_total; /* probe updates run since creation (never reset; for stats) */
-    rd_frame_stats stats;   /* GPU times and rays of the last rd_world_update call (all its
-                               updates summed) */
+    /* in-place changes of what the world looks like (wake events: nodes or lights changed;
+     * GI reconfigured), counted whether GI is on or not, so that views can restart what they
+     * accumulate over frames (reflections); a new scene or environment shows in the globals */
+    uint64_t changes;
+    rd_frame_stats stats; /* GPU times and rays of the last rd_world_update call (all its
+                             updates summed) */
 } rd_world;
 
 rd_vk_result rd_world_create(rd_vk *vk, rd_world *w, char *err, size_t errlen);
@@ -64,7 +68,8 @@ rd_vk_result rd_world_update(rd_world *w, unsigned n, char *err, size_t errlen);
 rd_vk_result rd_world_converge(rd_world *w, unsigned cap, unsigned *done, char *err, size_t errlen);
 /* No probe work is wanted: GI is off, or the field has converged and nothing woke it. */
 bool rd_world_converged(const rd_world *w);
-/* Wake events (world coordinates; see rd_ddgi_wake_box). No-ops when GI is off. */
+/* Wake events (world coordinates; see rd_ddgi_wake_box): the probe work is a no-op when GI is
+ * off; both count as a change (w->changes) either way. */
 void rd_world_wake_box(rd_world *w, const float lo[3], const float hi[3], float age);
 void rd_world_wake_all(rd_world *w, float age);
 /* Fills the world part of a pass's globals: scene refs, the probe volume shifted by the scene's

@@ -221,4 +221,88 @@ bool brdf_sample(pc_brdf b, vec3 n, vec3 v, vec3 u, out vec3 l, out vec3 weight)
     return true;
 }
 
+/* ---- indirect specular (reflect.comp, ddgi_sample.comp) ---------------------------------- */
+
+/* Perceptual roughness of b (brdf_make stores alpha = roughness^2). */
+float brdf_roughness(pc_brdf b) { return sqrt(b.alpha); }
+
+/* Schlick F split as F = F0 (1 - w) + F90 w with w = (1 - V.H)^5, for the specular part of the
+ * Appendix B mix: the dielectric lobe has F0 = 0.04 s, F90 = s; the metal F0 = baseColor,
+ * F90 = 1; metallic blends the two. */
+void brdf_fresnel_terms(pc_brdf b, out vec3 f0, out float f90)
+{
+    f0 = mix(vec3(b.specular * PC_BRDF_DIELECTRIC_F0), b.base, b.metallic);
+    f90 = mix(b.specular, 1.0, b.metallic);
+}
+
+/* The specular lobe's directional albedo table (pc_globals.brdf_albedo, written once per
+ * device by brdf_albedo.comp): entry j * PC_BRDF_ALBEDO_SIDE + i holds (A, B) at N.V = i / (side
+ * - 1) and perceptual roughness j / (side - 1), with E = F0 A + F90 B the integral of
+ * F(V.H) D Vis N.L over L. */
+layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer BrdfAlbedoRef { vec2 v[]; };
+
+/* Directional albedo of the specular part of f for N.V = nv (bilinear in the table; the
+ * entries are integrals of this very BRDF). Zero for a pure Lambertian. */
+vec3 brdf_specular_albedo(uint64_t table, pc_brdf b, float nv)
+{
+    const int side = int(PC_BRDF_ALBEDO_SIDE);
+    vec2 x = vec2(clamp(nv, 0.0, 1.0), clamp(brdf_roughness(b), 0.0, 1.0)) * float(side - 1);
+    ivec2 i0 = min(ivec2(x), ivec2(side - 2));
+    vec2 f = x - vec2(i0);
+    int k = i0.y * side + i0.x;
+    BrdfAlbedoRef t = BrdfAlbedoRef(table);
+    vec2 ab = mix(mix(t.v[k], t.v[k + 1], f.x), mix(t.v[k + side], t.v[k + side + 1], f.x), f.y);
+    vec3 f0;
+    float f90;
+    brdf_fresnel_terms(b, f0, f90);
+    return f0 * ab.x + f90 * ab.y;
+}
+
+/* The diffuse albedo seen under indirect light from view N.V = nv once the specular part is
+ * added separately: Appendix B weighs the dielectric's Lambertian by (1 - F(V.H)), so its
+ * albedo is (1 - metallic) baseColor (1 - s (0.04 + 0.96 Phi(nv))) with Phi = the cosine-
+ * weighted average over L of (1 - V.H)^5. Phi(nv) ~= 0.0271 (1 - nv)^2.44 fits numerical
+ * integration within 4e-4 (0.021 at nv = 0.1, 0.005 at 0.5, 8e-5 at 1). Equals
+ * brdf_diffuse_albedo exactly when s = 0. */
+vec3 brdf_diffuse_albedo_indirect(pc_brdf b, float nv)
+{
+    float phi = 0.0271 * pow(clamp(1.0 - nv, 0.0, 1.0), 2.44);
+    float f = b.specular * (PC_BRDF_DIELECTRIC_F0 + (1.0 - PC_BRDF_DIELECTRIC_F0) * phi);
+    return brdf_diffuse_albedo(b) * (1.0 - f);
+}
+
+/* Samples the specular part of f alone by GGX visible normals (Heitz 2018): l = reflect(-v)
+ * about the sampled microfacet normal, weight = F(V.H) G2 / G1(V), the unbiased estimate of
+ * the specular part's integral against the incoming radiance along l (pdf D_v / (4 V.H),
+ * f_spec N.L / pdf = F G2 / G1). False when l falls below the shading surface. */
+bool brdf_sample_specular(pc_brdf b, vec3 n, vec3 v, vec2 u, out vec3 l, out vec3 weight)
+{
+    vec3 t, bt;
+    brdf_basis(n, t, bt);
+    vec3 ve = brdf_local_view(n, t, bt, v);
+    vec3 h = brdf_sample_vndf(ve, b.alpha, u.x, u.y);
+    vec3 le = reflect(-ve, h);
+    l = normalize(t * le.x + bt * le.y + n * le.z);
+    weight = vec3(0.0);
+    if (le.z <= 0.0) return false;
+    float a2 = b.alpha * b.alpha, nl = min(le.z, 1.0), nv = ve.z;
+    float g2_over_g1 = 4.0 * nl * nv * brdf_smith_vis(nl, nv, a2) / brdf_smith_g1(nv, a2);
+    vec3 f0;
+    float f90;
+    brdf_fresnel_terms(b, f0, f90);
+    float w = brdf_pow5(1.0 - clamp(dot(ve, h), 0.0, 1.0));
+    weight = (f0 * (1.0 - w) + f90 * w) * g2_over_g1;
+    return true;
+}
+
+/* Direction whose neighbourhood carries most of a rough lobe's reflection: the mirror
+ * direction pulled toward the normal as roughness grows (Lagarde & de Rousiers, "Moving
+ * Frostbite to PBR", 2014, Sec. 4.9.3). */
+vec3 brdf_dominant_direction(pc_brdf b, vec3 n, vec3 v)
+{
+    float r = brdf_roughness(b);
+    float k = (1.0 - r) * (sqrt(1.0 - r) + r);
+    return normalize(mix(n, reflect(-v, n), k));
+}
+
 #endif

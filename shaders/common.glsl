@@ -275,6 +275,17 @@ pc_brdf gbuffer_brdf(pc_gbuffer_texel t)
     return brdf_make(t.albedo.rgb, t.material.x, t.material.y, t.material.w);
 }
 
+/* Whether a G-buffer texel has a specular part at all, and whether it traces reflection rays
+ * (glossy: perceptual roughness below PC_REFLECT_MAX_ROUGHNESS); see gpu_types.h. */
+bool gbuffer_has_specular(pc_gbuffer_texel t)
+{
+    return t.position.w >= 0.0 && (t.material.x > 0.0 || t.material.w > 0.0);
+}
+bool gbuffer_traces_reflection(pc_gbuffer_texel t)
+{
+    return gbuffer_has_specular(t) && t.material.y < PC_REFLECT_MAX_ROUGHNESS;
+}
+
 /* ---- punctual lights (KHR_lights_punctual) --------------------------------------------- */
 
 /* Direction toward the light, distance to it (1e30 for directional) and the irradiance it
@@ -326,7 +337,7 @@ vec3 direct_radiance(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, vec3 v, pc_brdf b
 
 /* Ray counting with one global atomic per workgroup. Every invocation of the workgroup must
  * call both (no early return in between). which: 0 primary, 1 shadow, 2 probe, 3 path,
- * 4 probe shadow. */
+ * 4 probe shadow, 5 reflection. */
 shared uint pc_wg_rays;
 void count_rays_begin()
 {
@@ -343,8 +354,24 @@ void count_rays_end(uint64_t counters, uint which, uint rays)
         else if (which == 1u) atomicAdd(c.c.shadow_rays, pc_wg_rays);
         else if (which == 2u) atomicAdd(c.c.probe_rays, pc_wg_rays);
         else if (which == 3u) atomicAdd(c.c.path_rays, pc_wg_rays);
-        else atomicAdd(c.c.probe_shadow_rays, pc_wg_rays);
+        else if (which == 4u) atomicAdd(c.c.probe_shadow_rays, pc_wg_rays);
+        else atomicAdd(c.c.reflect_rays, pc_wg_rays);
     }
+}
+
+/* PCG hash (Jarzynski & Olano, JCGT 2020): random streams of the stochastic passes. */
+uint pcg(uint v)
+{
+    uint state = v * 747796405u + 2891336453u;
+    uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+/* Next uniform number in [0, 1) of stream s. */
+float rnd(inout uint s)
+{
+    s = pcg(s);
+    return float(s >> 8) * (1.0 / 16777216.0);
 }
 
 /* Camera ray through the centre of pixel (x, y); y = 0 is the top row. */

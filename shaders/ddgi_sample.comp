@@ -6,7 +6,16 @@
  * PC_VIEW_IRRADIANCE writes E/pi alone (the indirect light as if albedo were 1);
  * PC_VIEW_PROBES draws every probe as a small sphere shaded with its stored irradiance, and
  * its state: sleeping (converged) plain, awake with a yellow rim, off (inside geometry) dark red.
- * push: globals, buf0 = pc_gbuffer_texel[], buf2 = vec4 radiance[]. */
+ * With indirect specular on (params.x = 1; rd_view_settings.reflections), the two parts of
+ * Appendix B's mix share the indirect light without counting it twice: the diffuse albedo
+ * takes the dielectric's (1 - F) (brdf_diffuse_albedo_indirect), and surfaces too rough for
+ * reflection rays (roughness >= PC_REFLECT_MAX_ROUGHNESS) get their specular part here,
+ * split-sum style: occlusion * specular albedo(N.V) (brdf_specular_albedo: the integral of
+ * our BRDF, tabulated by brdf_albedo.comp) * E(P, d) / pi, where d is the lobe's dominant
+ * direction and E/pi, the probe field's cosine-weighted average of radiance around d, stands
+ * in for the lobe's average radiance (exact for uniform light, smooth for wide lobes). Glossier
+ * pixels get theirs from reflect.comp; with params.x = 0 neither happens (the old image).
+ * push: globals, buf0 = pc_gbuffer_texel[], buf2 = vec4 radiance[], params.x as above. */
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
 #include "ddgi.glsl"
@@ -28,8 +37,17 @@ void main()
         vec3 p = t.position.xyz;
         vec3 v = normalize(g.view.eye.xyz - p);
         vec3 e = ddgi_irradiance(g.ddgi, env_irradiance(g.env, t.normal.xyz), p, t.normal.xyz, v);
-        vec3 a = brdf_diffuse_albedo(gbuffer_brdf(t)) * t.material.z;
+        pc_brdf b = gbuffer_brdf(t);
+        bool specular = pc.params.x != 0u && gbuffer_has_specular(t);
+        float nv = clamp(dot(t.normal.xyz, v), 0.0, 1.0);
+        vec3 a = (specular ? brdf_diffuse_albedo_indirect(b, nv) : brdf_diffuse_albedo(b)) *
+                 t.material.z;
         l = view == PC_VIEW_IRRADIANCE ? e / PC_PI : l + a / PC_PI * e;
+        if (specular && !gbuffer_traces_reflection(t) && view != PC_VIEW_IRRADIANCE) {
+            vec3 d = brdf_dominant_direction(b, t.normal.xyz, v);
+            vec3 ed = ddgi_irradiance(g.ddgi, env_irradiance(g.env, d), p, d, v);
+            l += t.material.z * brdf_specular_albedo(g.brdf_albedo, b, nv) * ed / PC_PI;
+        }
     } else if (view == PC_VIEW_IRRADIANCE) {
         l = vec3(0.0);
     }

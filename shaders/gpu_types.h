@@ -84,6 +84,29 @@ static inline float pc_u2f(uint32_t u)
 #define PC_VIEW_IRRADIANCE 1u /* indirect irradiance only (E / pi, as if albedo were 1) */
 #define PC_VIEW_PROBES 2u     /* final image with probe spheres showing their irradiance */
 
+/* Indirect specular (shaders/reflect.comp, renderer/view.c). Pixels whose material has a
+ * specular part (metallic > 0 or a dielectric specular weight > 0) and a perceptual roughness
+ * below PC_REFLECT_MAX_ROUGHNESS trace one GGX-sampled reflection ray per frame; rougher ones
+ * take the probe field's irradiance around the lobe's dominant direction (ddgi_sample.comp).
+ * 0.6 (alpha 0.36): the lobe of a rougher surface spans most of the hemisphere, where
+ * E(r)/pi of the cosine-convolved probe field is close to the lobe's average radiance (the
+ * split-sum error shrinks with roughness), while below it highlights of the scene itself
+ * (windows, emitters, objects) are visible in the reflection and need a ray. */
+#define PC_REFLECT_MAX_ROUGHNESS 0.6
+#define PC_REFLECT_AUTO 0u /* rd_view_settings.reflections: wherever a material is glossy */
+#define PC_REFLECT_OFF 1u  /* no indirect specular at all (the renderer before reflections) */
+/* Temporal accumulation: a running average over at most this many frames while the view and
+ * the world stay the same (then an exponential average of that length, which follows the
+ * probe field as it converges). */
+#define PC_REFLECT_HISTORY_MAX 64u
+/* The specular lobe's directional albedo table (shaders/brdf_albedo.comp): entries per side
+ * (N.V and roughness) and stratified samples per side of each entry's integral. Bilinear
+ * lookups stay within 1.1% of the integral for metals and 2% for dielectrics (N.V >= 0.05). */
+#define PC_BRDF_ALBEDO_SIDE 16u
+#define PC_BRDF_ALBEDO_SAMPLES 64u
+/* Spatial filter radius in pixels at roughness PC_REFLECT_MAX_ROUGHNESS (none below 0.1). */
+#define PC_REFLECT_FILTER_RADIUS 3
+
 #define PC_BVH_STACK_SIZE 64
 #define PC_INVALID 0xffffffffu
 
@@ -334,13 +357,17 @@ PC_STRUCT(pc_ddgi_wake)
 PC_END(pc_ddgi_wake);
 
 /* Everything a pass reads, in one GPU buffer reached by address. scene, env and ddgi are the
- * world's (rd_world_fill_globals); view is the rendering view's (zero for probe updates). */
+ * world's (rd_world_fill_globals); view is the rendering view's (zero for probe updates);
+ * brdf_albedo: the device's specular albedo table (vec2[PC_BRDF_ALBEDO_SIDE^2], brdf.glsl's
+ * brdf_specular_albedo; set by views, 0 for probe updates). */
 PC_STRUCT(pc_globals)
 {
     pc_scene_refs scene;
     pc_view view;
     pc_ddgi_volume ddgi;
     pc_environment env;
+    pc_u64 brdf_albedo;
+    pc_u64 pad;
 }
 PC_END(pc_globals);
 
@@ -370,9 +397,20 @@ PC_STRUCT(pc_counters)
     pc_u32 probe_rays;
     pc_u32 path_rays;         /* path-traced rays, shadow rays included */
     pc_u32 probe_shadow_rays; /* from probe-ray hits */
-    pc_u32 pad[3];
+    pc_u32 reflect_rays;      /* reflection rays of camera pixels and their shadow rays */
+    pc_u32 pad[2];
 }
 PC_END(pc_counters);
+
+/* A view's reflection bookkeeping for one frame (host visible; reset by the CPU before the
+ * frame, written by primary.comp). args: indirect dispatch of the reflection passes: x = width
+ * groups when some visible pixel traces reflections, else 0 (nothing runs), y = height groups,
+ * z = 1; w = number of such pixels. */
+PC_STRUCT(pc_reflect_control)
+{
+    pc_uvec4 args;
+}
+PC_END(pc_reflect_control);
 
 /* Push constants shared by all passes: address of pc_globals plus pass-specific words. */
 PC_STRUCT(pc_push)
@@ -433,7 +471,8 @@ PC_OFF(pc_ddgi_volume, params, 96);
 PC_OFF(pc_ddgi_volume, info, 112);
 PC_OFF(pc_ddgi_volume, irradiance, 128);
 PC_OFF(pc_ddgi_volume, probes, 152);
-PC_CHECK(pc_globals, 608);
+PC_CHECK(pc_globals, 624);
+PC_OFF(pc_globals, brdf_albedo, 608);
 PC_OFF(pc_globals, view, 96);
 PC_OFF(pc_globals, ddgi, 192);
 PC_OFF(pc_globals, env, 400);
@@ -443,6 +482,8 @@ PC_OFF(pc_gbuffer_texel, emission, 64);
 PC_OFF(pc_gbuffer_texel, material, 80);
 PC_CHECK(pc_counters, 32);
 PC_OFF(pc_counters, probe_shadow_rays, 16);
+PC_OFF(pc_counters, reflect_rays, 20);
+PC_CHECK(pc_reflect_control, 16);
 PC_CHECK(pc_push, 48);
 PC_OFF(pc_push, params, 32);
 #undef PC_CHECK

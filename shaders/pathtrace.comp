@@ -20,20 +20,6 @@
 layout(local_size_x = PC_WG_2D_X, local_size_y = PC_WG_2D_Y) in;
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer AccumRef { vec4 v[]; };
 
-/* PCG hash (Jarzynski & Olano, JCGT 2020). */
-uint pcg(uint v)
-{
-    uint state = v * 747796405u + 2891336453u;
-    uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
-    return (word >> 22u) ^ word;
-}
-
-float rnd(inout uint s)
-{
-    s = pcg(s);
-    return float(s >> 8) * (1.0 / 16777216.0);
-}
-
 void main()
 {
     count_rays_begin();

@@ -45,7 +45,8 @@ float *test_render(rd_vk *vk, const test_render_desc *d, pc_view *view_out,
                             .gi_updates = d->updates,
                             .pathtrace_spp = d->pathtrace_spp,
                             .max_bounces = d->max_bounces,
-                            .seed = d->seed};
+                            .seed = d->seed,
+                            .reflections = d->reflections};
     rd_vk_result res = rd_gpu_scene_create(vk, &gs, &s, err, sizeof err);
     CHECKF(res == RD_VK_OK, "%s", err);
     if (res == RD_VK_OK) res = rd_renderer_create(vk, &r, err, sizeof err);
@@ -76,6 +77,35 @@ float *test_render(rd_vk *vk, const test_render_desc *d, pc_view *view_out,
         return NULL;
     }
     return rgb;
+}
+
+rd_material test_material(const float base[3], float metallic, float roughness, float specular)
+{
+    rd_material m = {.name = "m",
+                     .base_color = {base[0], base[1], base[2], 1},
+                     .metallic = metallic,
+                     .roughness = roughness,
+                     .specular = specular,
+                     .normal_scale = 1,
+                     .occlusion_strength = 1,
+                     .base_color_texture = -1,
+                     .emissive_texture = -1,
+                     .metallic_roughness_texture = -1,
+                     .normal_texture = -1,
+                     .occlusion_texture = -1,
+                     .alpha_cutoff = 0.5f};
+    return m;
+}
+
+void test_pixel_dir(const pc_view *v, unsigned width, unsigned height, int x, int y, double d[3])
+{
+    double nx = 2.0 * (x + 0.5) / width - 1.0, ny = 1.0 - 2.0 * (y + 0.5) / height;
+    d[0] = v->forward.x + nx * v->right.x + ny * v->up.x;
+    d[1] = v->forward.y + nx * v->right.y + ny * v->up.y;
+    d[2] = v->forward.z + nx * v->right.z + ny * v->up.z;
+    double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    for (int k = 0; k < 3; k++)
+        d[k] /= len;
 }
 
 double test_image_mean(const float *rgb, size_t floats, size_t *non_finite)

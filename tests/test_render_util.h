@@ -18,6 +18,7 @@ typedef struct test_render_desc {
     unsigned pathtrace_spp;     /* > 0: path-traced reference instead */
     unsigned max_bounces;
     unsigned seed;
+    unsigned reflections; /* PC_REFLECT_* (0 = auto) */
 } test_render_desc;
 
 /* Creates the device for a GPU test (the environment picks lavapipe and validation) and
@@ -31,6 +32,12 @@ int test_vk_close(rd_vk *vk);
  * view_out (optional) receives the camera's pc_view; stats_out the frame statistics. */
 float *test_render(rd_vk *vk, const test_render_desc *d, pc_view *view_out,
                    rd_frame_stats *stats_out);
+/* A glTF metallic-roughness material without textures (every texture index -1), opaque,
+ * single sided, normal scale and occlusion strength 1. */
+rd_material test_material(const float base[3], float metallic, float roughness, float specular);
+/* The unit direction of the camera ray through pixel (x, y) of a width x height image, as
+ * shaders/common.glsl's camera_dir computes it. */
+void test_pixel_dir(const pc_view *v, unsigned width, unsigned height, int x, int y, double d[3]);
 /* Mean of all channels; number of non-finite values. */
 double test_image_mean(const float *rgb, size_t floats, size_t *non_finite);
 

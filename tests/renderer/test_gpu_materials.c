@@ -25,25 +25,14 @@ static rd_vk vk;
 static uint32_t add_material(rd_scene *s, float base, float metallic, float roughness,
                              float specular)
 {
-    rd_material m = {.name = "m",
-                     .base_color = {base, base, base, 1},
-                     .metallic = metallic,
-                     .roughness = roughness,
-                     .specular = specular,
-                     .normal_scale = 1,
-                     .occlusion_strength = 1,
-                     .base_color_texture = -1,
-                     .emissive_texture = -1,
-                     .metallic_roughness_texture = -1,
-                     .normal_texture = -1,
-                     .occlusion_texture = -1,
-                     .alpha_cutoff = 0.5f};
+    const float grey[3] = {base, base, base};
+    rd_material m = test_material(grey, metallic, roughness, specular);
     return rd_scene_add_material(s, &m);
 }
 
-/* Renders s (updated here) from cam: direct light (plus one probe update when gi), or path
- * traced with spp > 0 in a sky of radiance `sky`. Returns W*H*3 linear floats (caller frees)
- * or NULL after a failed CHECK. */
+/* Renders s (updated here) from cam: direct light (plus one probe update and indirect diffuse
+ * light, no reflections, when gi), or path traced with spp > 0 in a sky of radiance `sky`.
+ * Returns W*H*3 linear floats (caller frees) or NULL after a failed CHECK. */
 static float *render_gi(rd_scene *s, const rd_view_camera *cam, unsigned spp, float sky, bool gi)
 {
     char err[512] = "";
@@ -51,8 +40,14 @@ static float *render_gi(rd_scene *s, const rd_view_camera *cam, unsigned spp, fl
     rd_gpu_scene gs;
     rd_renderer r;
     float *rgb = calloc((size_t)W * H * 3, sizeof(float));
-    rd_frame_settings fs = {
-        .width = W, .height = H, .pathtrace_spp = spp, .seed = 3, .sky = {sky, sky, sky}};
+    /* indirect diffuse alone: reflections (and the probe-based specular of rough surfaces)
+     * have their own test, test_gpu_reflections */
+    rd_frame_settings fs = {.width = W,
+                            .height = H,
+                            .pathtrace_spp = spp,
+                            .seed = 3,
+                            .sky = {sky, sky, sky},
+                            .reflections = PC_REFLECT_OFF};
     rd_vk_result res = rd_gpu_scene_create(&vk, &gs, s, err, sizeof err);
     CHECKF(res == RD_VK_OK, "%s", err);
     if (res != RD_VK_OK) {
@@ -95,13 +90,7 @@ static rd_view_camera look(float ex, float ey, float ez, const float fwd[3], con
 
 static void pixel_ray(const pc_view *v, int x, int y, double d[3])
 {
-    double nx = 2.0 * (x + 0.5) / W - 1.0, ny = 1.0 - 2.0 * (y + 0.5) / H;
-    d[0] = v->forward.x + nx * v->right.x + ny * v->up.x;
-    d[1] = v->forward.y + nx * v->right.y + ny * v->up.y;
-    d[2] = v->forward.z + nx * v->right.z + ny * v->up.z;
-    double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-    for (int k = 0; k < 3; k++)
-        d[k] /= len;
+    test_pixel_dir(v, W, H, x, y, d);
 }
 
 static double dot3(const double a[3], const double b[3])
