@@ -33,6 +33,8 @@ static void render_usage(FILE *f)
             "  --hdr FILE             linear un-tonemapped radiance as little-endian PFM\n"
             "  --exposure EV          exposure in stops before tone mapping (default 0)\n"
             "  --tonemap aces|clamp   tone curve (default aces)\n"
+            "  --reflections on|off   ray-traced reflections of glossy materials (default on;\n"
+            "                         off: no indirect specular, for comparisons)\n"
             "  --sky R,G,B            radiance of rays that leave the scene (default 0,0,0)\n"
             "  --quality Q            JPEG quality 1..100 (default 92)\n"
             "  --gi off|classic|ddgi|pathtrace  global illumination (default ddgi); classic =\n"
@@ -145,6 +147,16 @@ static int parse(int argc, char **argv, render_args *a)
                 a->fs.tonemap = PC_TONEMAP_CLAMP;
             else {
                 fprintf(stderr, "probecast render: --tonemap expects aces or clamp\n");
+                return 2;
+            }
+        } else if (strcmp(o, "--reflections") == 0) {
+            NEED_VALUE
+            if (strcmp(v, "on") == 0)
+                a->fs.reflections = PC_REFLECT_AUTO;
+            else if (strcmp(v, "off") == 0)
+                a->fs.reflections = PC_REFLECT_OFF;
+            else {
+                fprintf(stderr, "probecast render: --reflections expects on or off\n");
                 return 2;
             }
         } else if (strcmp(o, "--sky") == 0) {
