@@ -196,14 +196,25 @@ static void test_update_count(fixture *f)
 }
 
 /* Every miss pixel of every view shows the world's sky, and a new sky reaches both views. */
+/* Renders v and reads back its G-buffer (misses: position.w < 0, position.xyz = the ray's
+ * direction) and its linear radiance. False when rendering failed. */
+static bool render_and_read(fixture *f, rd_view *v, pc_gbuffer_texel **gb, float **rgb)
+{
+    if (!render(f, v)) return false;
+    size_t px = (size_t)v->width * v->height;
+    *gb = malloc(px * sizeof **gb);
+    CHECK(rd_buffer_download(&vk, &v->gbuffer, 0, *gb, px * sizeof **gb, err, sizeof err) ==
+          RD_VK_OK);
+    *rgb = read_hdr(v);
+    return true;
+}
+
 static void check_sky(fixture *f, rd_view *v, const float sky[3])
 {
-    if (!render(f, v)) return;
+    pc_gbuffer_texel *gb;
+    float *rgb;
+    if (!render_and_read(f, v, &gb, &rgb)) return;
     size_t px = (size_t)v->width * v->height;
-    pc_gbuffer_texel *gb = malloc(px * sizeof *gb);
-    CHECK(rd_buffer_download(&vk, &v->gbuffer, 0, gb, px * sizeof *gb, err, sizeof err) ==
-          RD_VK_OK);
-    float *rgb = read_hdr(v);
     size_t misses = 0, wrong = 0;
     for (size_t i = 0; i < px; i++) {
         if (gb[i].position.w >= 0) continue;
@@ -232,12 +243,10 @@ static void test_sky(fixture *f)
  * direction as the CPU twin (rd_env_radiance) computes it (the image through half floats). */
 static void check_env(fixture *f, rd_view *v, const char *what, float tol)
 {
-    if (!render(f, v)) return;
+    pc_gbuffer_texel *gb;
+    float *rgb;
+    if (!render_and_read(f, v, &gb, &rgb)) return;
     size_t px = (size_t)v->width * v->height;
-    pc_gbuffer_texel *gb = malloc(px * sizeof *gb);
-    CHECK(rd_buffer_download(&vk, &v->gbuffer, 0, gb, px * sizeof *gb, err, sizeof err) ==
-          RD_VK_OK);
-    float *rgb = read_hdr(v);
     size_t misses = 0, wrong = 0;
     double worst = 0;
     for (size_t i = 0; i < px; i++) {
