@@ -56,6 +56,7 @@ static void free_buffers(rd_ddgi *d)
     rd_buffer_destroy(d->vk, &d->probes);
     rd_buffer_destroy(d->vk, &d->stats);
     rd_buffer_destroy(d->vk, &d->list);
+    rd_buffer_destroy(d->vk, &d->order);
 }
 
 void rd_ddgi_destroy(rd_ddgi *d)
@@ -136,6 +137,63 @@ static bool place_grid(const float bmin[3], const float bmax[3], const rd_ddgi_s
     return true;
 }
 
+/* Ray order (pc_ddgi_volume.order): the spherical Fibonacci directions of shaders/ddgi.glsl
+ * (unrotated; the update's rotation moves patches as a whole) sorted by the Morton code of their
+ * octahedral coordinates, so consecutive threads, and so each warp, take neighbouring directions.
+ * Index order spirals around the sphere by the golden angle: a warp's 32 rays would be spread
+ * over a whole band of it. */
+typedef struct ray_key {
+    uint32_t code, ray;
+} ray_key;
+
+static int cmp_ray_key(const void *a, const void *b)
+{
+    const ray_key *x = a, *y = b;
+    if (x->code != y->code) return x->code < y->code ? -1 : 1;
+    return x->ray < y->ray ? -1 : x->ray > y->ray;
+}
+
+static uint32_t spread_bits(uint32_t v) /* 16 bits -> even bits of 32 */
+{
+    v &= 0xffff;
+    v = (v | (v << 8)) & 0x00ff00ff;
+    v = (v | (v << 4)) & 0x0f0f0f0f;
+    v = (v | (v << 2)) & 0x33333333;
+    v = (v | (v << 1)) & 0x55555555;
+    return v;
+}
+
+void rd_ddgi_ray_order(unsigned rays, uint32_t *order)
+{
+    ray_key keys[PC_DDGI_MAX_RAYS];
+    const double golden = 0.61803398874989484820;
+    for (unsigned i = 0; i < rays; i++) {
+        double phi = 2.0 * M_PI * fmod(i * golden, 1.0);
+        double z = 1.0 - (2.0 * i + 1.0) / rays, r = sqrt(fmax(0.0, 1.0 - z * z));
+        double x = cos(phi) * r, y = sin(phi) * r;
+        double l1 = fabs(x) + fabs(y) + fabs(z), u = x / l1, v = y / l1;
+        if (z < 0) { /* fold the lower hemisphere onto the square's corners */
+            double fu = (1.0 - fabs(v)) * (u >= 0 ? 1 : -1), fv = (1.0 - fabs(u)) * (v >= 0 ? 1 : -1);
+            u = fu, v = fv;
+        }
+        uint32_t qu = (uint32_t)fmin(65535.0, (u * 0.5 + 0.5) * 65536.0);
+        uint32_t qv = (uint32_t)fmin(65535.0, (v * 0.5 + 0.5) * 65536.0);
+        keys[i] = (ray_key){spread_bits(qu) | spread_bits(qv) << 1, i};
+    }
+    qsort(keys, rays, sizeof keys[0], cmp_ray_key);
+    for (unsigned i = 0; i < rays; i++) order[i] = keys[i].ray;
+}
+
+static rd_vk_result upload_ray_order(rd_ddgi *d, unsigned rays, char *err, size_t errlen)
+{
+    uint32_t order[PC_DDGI_MAX_RAYS];
+    rd_ddgi_ray_order(rays, order);
+    rd_vk_result r = rd_buffer_create(d->vk, &d->order, (VkDeviceSize)rays * 4, RD_MEMORY_DEVICE,
+                                      err, errlen);
+    if (r == RD_VK_OK) r = rd_buffer_upload(d->vk, &d->order, 0, order, (VkDeviceSize)rays * 4, err, errlen);
+    return r;
+}
+
 rd_vk_result rd_ddgi_configure(rd_ddgi *d, const float bmin[3], const float bmax[3],
                                const rd_ddgi_settings *s, char *err, size_t errlen)
 {
@@ -177,6 +235,7 @@ rd_vk_result rd_ddgi_configure(rd_ddgi *d, const float bmin[3], const float bmax
             r = rd_buffer_create(d->vk, &d->stats, probes * 16, RD_MEMORY_DEVICE, err, errlen);
         if (r == RD_VK_OK)
             r = rd_buffer_create(d->vk, &d->list, probes * 4, RD_MEMORY_DEVICE, err, errlen);
+        if (r == RD_VK_OK) r = upload_ray_order(d, rays, err, errlen);
         if (r != RD_VK_OK) {
             free_buffers(d);
             return r;
@@ -205,6 +264,7 @@ rd_vk_result rd_ddgi_configure(rd_ddgi *d, const float bmin[3], const float bmax
     v->list = d->list.address;
     v->ctrl = d->ctrl.address;
     v->wake = d->wake_boxes.address;
+    v->order = d->order.address;
     d->configured = true;
     return rd_ddgi_reset(d, err, errlen);
 }

@@ -36,7 +36,7 @@ typedef struct rd_ddgi_census {
 typedef struct rd_ddgi {
     rd_vk *vk;
     rd_pipeline trace, shade, blend, border, select, wake;
-    rd_buffer irradiance, distance, rays, hits, probes, stats, list;
+    rd_buffer irradiance, distance, rays, hits, probes, stats, list, order;
     rd_buffer ctrl, wake_boxes; /* host-visible: pc_ddgi_control, pc_ddgi_wake[] */
     pc_ddgi_volume vol;         /* what the shaders see (rotation of the current update) */
     rd_ddgi_settings settings;
@@ -80,6 +80,9 @@ void rd_ddgi_record_update(rd_ddgi *d, rd_cmd *c, rd_timer *timer, VkDeviceAddre
                            VkDeviceAddress counters);
 /* Call after the update's command buffer completed: reads back the census and the drift. */
 void rd_ddgi_end_update(rd_ddgi *d);
+/* The order in which a probe's threads take its rays (pc_ddgi_volume.order): a permutation of
+ * 0..rays-1 that keeps neighbouring directions in neighbouring threads. */
+void rd_ddgi_ray_order(unsigned rays, uint32_t *order);
 /* Probe count and total rays per update. */
 unsigned rd_ddgi_probe_count(const rd_ddgi *d);
 

@@ -11,6 +11,7 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer DdgiRayRef 
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer DdgiProbeRef { vec4 v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer DdgiStatsRef { vec4 v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer DdgiListRef { uint v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer DdgiOrderRef { uint v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer DdgiControlRef
 {
     uvec4 trace_args;
@@ -98,6 +99,13 @@ uint ddgi_probe_state(pc_ddgi_volume vol, uint index)
 
 /* The probe an update pass works on: entry `slot` of this update's list. */
 uint ddgi_listed_probe(pc_ddgi_volume vol, uint slot) { return DdgiListRef(vol.list).v[slot]; }
+
+/* The ray thread x of a probe's workgroups traces and shades (see pc_ddgi_volume.order);
+ * threads past the ray count keep their index (and do nothing). */
+uint ddgi_thread_ray(pc_ddgi_volume vol, uint x)
+{
+    return x < vol.counts.w ? DdgiOrderRef(vol.order).v[x] : x;
+}
 
 /* Texel (x, y) of probe's tile (side = interior + 2, border included). */
 uint ddgi_texel(uint probe, uint side, uint x, uint y) { return (probe * side + y) * side + x; }

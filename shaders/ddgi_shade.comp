@@ -22,7 +22,7 @@ void main()
     count_rays_begin();
     pc_globals g = load_globals();
     pc_ddgi_volume vol = g.ddgi;
-    uint ray = gl_GlobalInvocationID.x, probe = ddgi_listed_probe(vol, gl_WorkGroupID.y);
+    uint ray = ddgi_thread_ray(vol, gl_GlobalInvocationID.x), probe = ddgi_listed_probe(vol, gl_WorkGroupID.y);
     uint shadow_rays = 0u;
     /* off probes are never sampled: nothing to shade */
     if (ray < vol.counts.w && ddgi_probe_active(vol, probe)) {

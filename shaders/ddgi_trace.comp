@@ -20,7 +20,7 @@ void main()
     count_rays_begin();
     pc_globals g = load_globals();
     pc_ddgi_volume vol = g.ddgi;
-    uint ray = gl_GlobalInvocationID.x, probe = ddgi_listed_probe(vol, gl_WorkGroupID.y);
+    uint ray = ddgi_thread_ray(vol, gl_GlobalInvocationID.x), probe = ddgi_listed_probe(vol, gl_WorkGroupID.y);
     uint rays = 0u;
     bool wanted = ray < vol.counts.w &&
                   (ray < PC_DDGI_INACTIVE_RAYS || ddgi_probe_active(vol, probe));

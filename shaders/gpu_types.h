@@ -314,7 +314,11 @@ PC_END(pc_environment);
  *   absolute relative change per update, w = 1 when an off probe must be re-checked);
  * list: uint[] probes updated this update (written by ddgi_select.comp);
  * ctrl: pc_ddgi_control (host-visible: indirect dispatch sizes, census, drift sums);
- * wake: pc_ddgi_wake[control.z] boxes (host-visible). */
+ * wake: pc_ddgi_wake[control.z] boxes (host-visible);
+ * order: uint[counts.w], the ray each thread of a probe traces and shades: the rays sorted so
+ *   that a warp's rays point into one patch of the sphere (renderer/ddgi.c). Their hits lie
+ *   close together and their shadow rays toward a light run side by side, which the GPU
+ *   traverses far faster than scattered rays. */
 PC_STRUCT(pc_ddgi_volume)
 {
     pc_vec4 origin;
@@ -332,6 +336,8 @@ PC_STRUCT(pc_ddgi_volume)
     pc_u64 list;
     pc_u64 ctrl;
     pc_u64 wake;
+    pc_u64 order;
+    pc_u64 pad; /* std430 rounds the struct up to 16 bytes; C must see the same size */
 }
 PC_END(pc_ddgi_volume);
 
@@ -460,9 +466,10 @@ PC_OFF(pc_view, tonemap, 80);
 PC_CHECK(pc_environment, 208);
 PC_OFF(pc_environment, image, 176);
 PC_OFF(pc_environment, mode, 184);
-PC_CHECK(pc_ddgi_volume, 208);
+PC_CHECK(pc_ddgi_volume, 224);
 PC_OFF(pc_ddgi_volume, control, 160);
 PC_OFF(pc_ddgi_volume, wake, 200);
+PC_OFF(pc_ddgi_volume, order, 208);
 PC_CHECK(pc_ddgi_control, 96);
 PC_CHECK(pc_ddgi_wake, 32);
 PC_OFF(pc_ddgi_volume, counts, 32);
@@ -471,11 +478,11 @@ PC_OFF(pc_ddgi_volume, params, 96);
 PC_OFF(pc_ddgi_volume, info, 112);
 PC_OFF(pc_ddgi_volume, irradiance, 128);
 PC_OFF(pc_ddgi_volume, probes, 152);
-PC_CHECK(pc_globals, 624);
-PC_OFF(pc_globals, brdf_albedo, 608);
+PC_CHECK(pc_globals, 640);
+PC_OFF(pc_globals, brdf_albedo, 624);
 PC_OFF(pc_globals, view, 96);
 PC_OFF(pc_globals, ddgi, 192);
-PC_OFF(pc_globals, env, 400);
+PC_OFF(pc_globals, env, 416);
 PC_CHECK(pc_gbuffer_texel, 96);
 PC_OFF(pc_gbuffer_texel, albedo, 48);
 PC_OFF(pc_gbuffer_texel, emission, 64);

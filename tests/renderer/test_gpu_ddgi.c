@@ -107,6 +107,53 @@ static void border_source(unsigned x, unsigned y, unsigned side, unsigned *sx, u
 
 /* After real updates of the Cornell box, every border texel of both atlases holds exactly
  * the bits of its wrap source, and the interior is not trivially uniform. */
+/* The ray order is a permutation, and it groups directions: the mean angle between a warp's
+ * rays and their mean direction is far smaller than with the index order (the golden-angle
+ * spiral spreads 32 consecutive rays around a whole band of the sphere). */
+static double warp_spread(const uint32_t *order, unsigned n)
+{
+    double sum = 0;
+    unsigned groups = 0;
+    for (unsigned w = 0; w + 32 <= n; w += 32, groups++) {
+        double d[32][3], m[3] = {0, 0, 0};
+        for (unsigned k = 0; k < 32; k++) {
+            unsigned i = order[w + k];
+            double phi = 2 * M_PI * fmod(i * 0.61803398874989484820, 1.0);
+            double z = 1 - (2.0 * i + 1) / n, r = sqrt(fmax(0, 1 - z * z));
+            d[k][0] = cos(phi) * r, d[k][1] = sin(phi) * r, d[k][2] = z;
+            for (int c = 0; c < 3; c++) m[c] += d[k][c];
+        }
+        double ml = sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+        for (unsigned k = 0; k < 32; k++)
+            sum += acos(fmin(1.0, (d[k][0] * m[0] + d[k][1] * m[1] + d[k][2] * m[2]) / ml)) / 32;
+    }
+    return sum / groups;
+}
+
+static void test_ray_order(void)
+{
+    static const unsigned counts[] = {1, 32, 64, 100, 256, 1024};
+    for (unsigned c = 0; c < sizeof counts / sizeof counts[0]; c++) {
+        unsigned n = counts[c];
+        uint32_t order[PC_DDGI_MAX_RAYS], identity[PC_DDGI_MAX_RAYS];
+        unsigned char seen[PC_DDGI_MAX_RAYS] = {0};
+        rd_ddgi_ray_order(n, order);
+        bool perm = true;
+        for (unsigned i = 0; i < n; i++) {
+            identity[i] = i;
+            if (order[i] >= n || seen[order[i]]++) perm = false;
+        }
+        CHECKF(perm, "ray order for %u rays is a permutation", n);
+        if (n >= 256) { /* below 8 warps both orders split the sphere into halves or bands */
+            double sorted = warp_spread(order, n), plain = warp_spread(identity, n);
+            printf("ray order, %u rays: mean angle to the warp's mean %.3f rad (index order %.3f)\n",
+                   n, sorted, plain);
+            CHECKF(sorted < 0.6 * plain, "%u rays: warp spread %.3f rad sorted, %.3f in index order",
+                   n, sorted, plain);
+        }
+    }
+}
+
 static void test_borders(void)
 {
     char e[512];
@@ -274,6 +321,7 @@ static void test_debug_views(void)
 int main(void)
 {
     if (!test_vk_open(&vk)) return test_finish();
+    test_ray_order();
     test_octahedral_and_rays();
     test_borders();
     test_furnace();
