@@ -46,6 +46,7 @@ typedef struct srv_frame_info {
     uint64_t frame_id;
     uint32_t view_id;
     uint64_t capture_us;   /* Unix time when rendering began */
+    uint64_t ready_us;     /* Unix time when its pixels reached the encoders */
     uint64_t input_ticket; /* every input command with a ticket up to this one is reflected */
     bool still;            /* produced after input stopped (full quality) */
 } srv_frame_info;

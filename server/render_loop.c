@@ -247,6 +247,7 @@ static void on_readback(void *user, const void *blob, unsigned w, unsigned h, co
     memcpy(img->rgba, rgba, (size_t)w * h * 4);
     srv_image_unref(v->last_image);
     v->last_image = img;
+    info.ready_us = srv_unix_us();
     v->last_info = info;
     const srv_settings *s = &l->svc.st.settings;
     srv_encoder_submit(l->cfg.encoders, img, &info,

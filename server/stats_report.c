@@ -1,6 +1,7 @@
 /* stats_report.c: the numbers of /v1/stats and /metrics. */
 #include "stats_report.h"
 
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -90,6 +91,17 @@ cJSON *srv_stats_json(const srv_stats_snapshot *s)
     cJSON_AddNumberToObject(st, "messages_received", (double)s->stream.messages_received);
     cJSON_AddNumberToObject(st, "events_sent", (double)s->stream.events_sent);
     cJSON_AddNumberToObject(st, "lag_ms_max", s->stream.lag_ms_max);
+    const srv_latency_summary *lat = &s->stream.latency;
+    cJSON *lj = cJSON_AddObjectToObject(st, "input_to_frame");
+    cJSON_AddNumberToObject(lj, "samples", (double)lat->samples);
+    cJSON_AddNumberToObject(lj, "window", lat->count);
+    const char *kinds[3] = {"p50", "p95", "mean"};
+    const double *vals[3] = {lat->p50, lat->p95, lat->mean};
+    for (int k = 0; k < 3; k++) {
+        cJSON *o = cJSON_AddObjectToObject(lj, kinds[k]);
+        for (int i = 0; i < SRV_LAT_STAGES; i++)
+            cJSON_AddNumberToObject(o, srv_latency_stage_names[i], round(vals[k][i] * 1000) / 1000);
+    }
     cJSON_AddNumberToObject(st, "connections_rejected", (double)s->stream.connections_rejected);
     cJSON_AddNumberToObject(st, "connections_closed_for_abuse",
                             (double)s->stream.connections_closed_for_abuse);

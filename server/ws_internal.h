@@ -39,9 +39,13 @@ typedef struct viewer {
     struct {
         uint64_t ticket;
         uint32_t seq;
+        uint64_t received_us; /* Unix time the message arrived (latency stages) */
     } inputs[INPUT_RING];
     unsigned input_head, input_count;
     uint32_t evicted_seq;
+    uint32_t timed_seq;  /* newest input whose first frame gave a latency sample */
+    uint64_t cur_input_us; /* the input the current frame is the first to reflect, else 0 */
+    uint64_t cur_send_us;
     /* receive */
     char rx[SRV_VIEWER_MSG_MAX + 1];
     size_t rx_len;
@@ -98,6 +102,7 @@ struct srv_ws_stream {
     double tick_ms;
     pthread_mutex_t stats_mu;
     srv_ws_stats stats;
+    srv_latency_ring latency; /* under stats_mu */
 };
 
 void srv_ws_close_viewer(viewer *v, int code, const char *reason);

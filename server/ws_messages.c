@@ -159,6 +159,7 @@ void srv_ws_handle_message(srv_ws_stream *ws, viewer *v)
         }
         v->inputs[v->input_head].ticket = ticket;
         v->inputs[v->input_head].seq = m.seq;
+        v->inputs[v->input_head].received_us = srv_unix_us();
         v->input_head = (v->input_head + 1) % INPUT_RING;
         v->input_count++;
         break;

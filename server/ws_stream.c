@@ -176,14 +176,23 @@ static bool flow_blocked(const viewer *v, double now)
     return v->acked_any && unacked(v) >= MAX_UNACKED && now - v->last_ack_ms < ACK_STALL_MS;
 }
 
-static uint32_t seq_for(const viewer *v, uint32_t view, uint64_t ticket)
+/* The newest of the viewer's inputs that a frame of view with input ticket reflects: its ring
+ * slot, or -1 (another view's frame, or only evicted inputs). */
+static int input_for(const viewer *v, uint32_t view, uint64_t ticket)
 {
-    if (view != v->own_view) return 0; /* its camera messages go to its own view only */
+    if (view != v->own_view) return -1; /* its camera messages go to its own view only */
     for (unsigned i = 0; i < v->input_count; i++) {
         unsigned k = (v->input_head + INPUT_RING - 1 - i) % INPUT_RING;
-        if (v->inputs[k].ticket <= ticket) return v->inputs[k].seq;
+        if (v->inputs[k].ticket <= ticket) return (int)k;
     }
-    return v->evicted_seq;
+    return -1;
+}
+
+static uint32_t seq_for(const viewer *v, uint32_t view, uint64_t ticket)
+{
+    if (view != v->own_view) return 0;
+    int k = input_for(v, view, ticket);
+    return k >= 0 ? v->inputs[k].seq : v->evicted_seq;
 }
 
 /* Whether a newer frame than the viewer's last one is published. */
@@ -235,6 +244,14 @@ static int send_some(srv_ws_stream *ws, viewer *v)
         };
         h.version = (uint16_t)v->version;
         proto_frame_header_pack(&h, v->cur_header);
+        /* the first frame to reflect a new input gives a latency sample when fully sent */
+        int k = input_for(v, f->info.view_id, f->info.input_ticket);
+        v->cur_input_us = 0;
+        if (k >= 0 && v->inputs[k].seq != v->timed_seq) {
+            v->timed_seq = v->inputs[k].seq;
+            v->cur_input_us = v->inputs[k].received_us;
+            v->cur_send_us = h.send_us;
+        }
         pthread_mutex_lock(&ws->stats_mu);
         if (v->last_sent_id && f->info.frame_id > v->last_sent_id + 1)
             ws->stats.frames_skipped += f->info.frame_id - v->last_sent_id - 1;
@@ -259,6 +276,17 @@ static int send_some(srv_ws_stream *ws, viewer *v)
     pthread_mutex_lock(&ws->stats_mu);
     ws->stats.bytes_sent += chunk;
     if (last) ws->stats.frames_sent++;
+    if (last && v->cur_input_us) {
+        srv_latency_stamps st = {
+            .input_us = v->cur_input_us,
+            .capture_us = v->cur->info.capture_us,
+            .ready_us = v->cur->info.ready_us,
+            .encode_us = v->cur->encode_us,
+            .send_us = v->cur_send_us,
+            .done_us = srv_unix_us(),
+        };
+        srv_latency_add(&ws->latency, &st);
+    }
     pthread_mutex_unlock(&ws->stats_mu);
     if (last) {
         v->last_sent_id = v->cur->info.frame_id;
@@ -658,5 +686,6 @@ void srv_ws_get_stats(srv_ws_stream *ws, srv_ws_stats *out)
 {
     pthread_mutex_lock(&ws->stats_mu);
     *out = ws->stats;
+    srv_latency_summarise(&ws->latency, &out->latency);
     pthread_mutex_unlock(&ws->stats_mu);
 }

@@ -19,6 +19,7 @@
 
 #include "access.h"
 #include "encoder_pool.h"
+#include "latency_stats.h"
 #include "render_loop.h"
 
 typedef struct srv_ws_config {
@@ -44,6 +45,7 @@ typedef struct srv_ws_stats {
     uint64_t connections_rejected, connections_closed_for_abuse;
     double bandwidth_bps; /* bits per second sent over the last second */
     double lag_ms_max;    /* largest smoothed viewer lag */
+    srv_latency_summary latency; /* input-to-frame stages (server/latency_stats.h) */
 } srv_ws_stats;
 
 typedef struct srv_ws_stream srv_ws_stream;

@@ -1,6 +1,7 @@
 /* Per-viewer quality from acknowledgement lag (Guacamole's rule): a viewer that acknowledges
  * its frames 250 ms late gets them at quality 30 while a prompt viewer keeps quality 60, from
  * the same stream of frames. */
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -87,6 +88,26 @@ int main(void)
     const cJSON *st = cJSON_GetObjectItemCaseSensitive(stats, "stream");
     CHECKF(pc_json_number(st, "lag_ms_max") >= DELAY_MS * 0.8, "lag %g",
            pc_json_number(st, "lag_ms_max"));
+    /* input-to-frame stages: one sample per input of A's (its first frame), stages add up */
+    const cJSON *lat = cJSON_GetObjectItemCaseSensitive(st, "input_to_frame");
+    const cJSON *mean = cJSON_GetObjectItemCaseSensitive(lat, "mean");
+    const cJSON *p50 = cJSON_GetObjectItemCaseSensitive(lat, "p50");
+    const cJSON *p95 = cJSON_GetObjectItemCaseSensitive(lat, "p95");
+    double samples = pc_json_number(lat, "samples");
+    CHECKF(samples >= 10 && samples <= seq, "%g latency samples for %u inputs", samples, seq);
+    static const char *stages[] = {"queue_ms", "render_ms", "encode_ms", "wait_ms", "transmit_ms"};
+    double parts = 0;
+    for (int i = 0; i < 5; i++) {
+        CHECKF(pc_json_number(mean, stages[i]) >= 0, "%s", stages[i]);
+        parts += pc_json_number(mean, stages[i]);
+    }
+    double total = pc_json_number(mean, "total_ms");
+    fprintf(stderr, "input to frame: mean %.2f ms (render %.2f, encode %.2f), p50 %.2f, p95 %.2f\n",
+            total, pc_json_number(mean, "render_ms"), pc_json_number(mean, "encode_ms"),
+            pc_json_number(p50, "total_ms"), pc_json_number(p95, "total_ms"));
+    CHECKF(total > 0 && fabs(parts - total) < 0.01, "stages %g, total %g", parts, total);
+    CHECK(pc_json_number(mean, "render_ms") > 0 && pc_json_number(mean, "encode_ms") > 0);
+    CHECK(pc_json_number(p50, "total_ms") <= pc_json_number(p95, "total_ms"));
     cJSON_Delete(stats);
     pc_ws_close(&a);
     pc_ws_close(&b);
