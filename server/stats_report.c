@@ -179,6 +179,20 @@ char *srv_stats_prometheus(const srv_stats_snapshot *s)
             put(&t, "probecast_pass_gpu_seconds{pass=\"%s\"} %.17g\n", label,
                 sets[k]->ms[i] / 1000.0);
         }
+    put(&t, "# HELP probecast_input_to_frame_seconds Input-to-frame time per stage over the "
+            "newest 256 inputs (median and 95th percentile).\n"
+            "# TYPE probecast_input_to_frame_seconds gauge\n");
+    const srv_latency_summary *lat = &s->stream.latency;
+    for (int i = 0; i < SRV_LAT_STAGES; i++) {
+        char stage[24];
+        snprintf(stage, sizeof stage, "%s", srv_latency_stage_names[i]);
+        char *ms = strstr(stage, "_ms");
+        if (ms) *ms = 0;
+        put(&t, "probecast_input_to_frame_seconds{stage=\"%s\",quantile=\"0.5\"} %.17g\n", stage,
+            lat->p50[i] / 1000.0);
+        put(&t, "probecast_input_to_frame_seconds{stage=\"%s\",quantile=\"0.95\"} %.17g\n", stage,
+            lat->p95[i] / 1000.0);
+    }
     metric(&t, "probecast_world_ticks_total", "counter", "Times the shared world advanced.",
            (double)r->world_ticks);
     metric(&t, "probecast_probe_updates_total", "counter", "DDGI probe updates run.",
