@@ -367,7 +367,12 @@ rd_vk_result rd_gpu_scene_update_lights(rd_vk *vk, rd_gpu_scene *gs, const rd_sc
                                         size_t errlen)
 {
     uint32_t n = s->light_count;
-    if (n > gs->light_capacity || gs->lights.buffer == VK_NULL_HANDLE) {
+    bool grow = n > gs->light_capacity || gs->lights.buffer == VK_NULL_HANDLE;
+    if (grow) {
+        /* frames in flight may read the old buffer */
+        if (gs->lights.buffer != VK_NULL_HANDLE) rd_vk_wait_idle(vk);
+        free(gs->lights_pending);
+        gs->lights_pending = NULL;
         rd_buffer_destroy(vk, &gs->lights);
         uint32_t cap = n < 16 ? 16 : n;
         rd_vk_result r = rd_buffer_create(vk, &gs->lights, sizeof(pc_light) * cap, RD_MEMORY_DEVICE,
@@ -400,10 +405,31 @@ rd_vk_result rd_gpu_scene_update_lights(rd_vk *vk, rd_gpu_scene *gs, const rd_sc
                                     0, 0, 0};
     }
     rd_vk_result r = RD_VK_OK;
-    if (n) r = rd_buffer_upload(vk, &gs->lights, 0, lights, sizeof *lights * n, err, errlen);
-    free(lights);
     gs->refs.counts.y = n;
+    if (grow) { /* a new buffer: nothing reads it yet */
+        if (n) r = rd_buffer_upload(vk, &gs->lights, 0, lights, sizeof *lights * n, err, errlen);
+        free(lights);
+        return r;
+    }
+    free(gs->lights_pending);
+    gs->lights_pending = lights;
+    gs->lights_pending_count = n;
     return r;
+}
+
+void rd_gpu_scene_record_updates(rd_gpu_scene *gs, rd_cmd *cmd)
+{
+    if (!gs || !gs->lights_pending) return;
+    /* vkCmdUpdateBuffer takes at most 65536 bytes, a multiple of 4 */
+    const VkDeviceSize chunk = 65536 / sizeof(pc_light) * sizeof(pc_light);
+    VkDeviceSize size = (VkDeviceSize)gs->lights_pending_count * sizeof(pc_light);
+    for (VkDeviceSize off = 0; off < size; off += chunk)
+        vkCmdUpdateBuffer(cmd->cb, gs->lights.buffer, off, size - off < chunk ? size - off : chunk,
+                          (const char *)gs->lights_pending + off);
+    rd_cmd_barrier(cmd);
+    free(gs->lights_pending);
+    gs->lights_pending = NULL;
+    gs->lights_pending_count = 0;
 }
 
 rd_vk_result rd_gpu_scene_upload(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
@@ -461,8 +487,11 @@ void rd_gpu_scene_destroy(rd_vk *vk, rd_gpu_scene *gs)
         rd_buffer_destroy(vk, bufs[i]);
     free(gs->mesh_root);
     free(gs->mesh_bounds);
+    free(gs->lights_pending);
     gs->mesh_root = NULL;
     gs->mesh_bounds = NULL;
+    gs->lights_pending = NULL;
+    gs->lights_pending_count = 0;
     gs->instance_capacity = gs->light_capacity = 0;
     memset(&gs->refs, 0, sizeof gs->refs);
 }

@@ -29,7 +29,7 @@ rd_vk_result rd_renderer_configure_gi(rd_renderer *r, const float bmin[3], const
     return rd_world_configure_gi(&r->world, bmin, bmax, gi, err, errlen);
 }
 
-rd_vk_result rd_renderer_render(rd_renderer *r, const rd_gpu_scene *scene,
+rd_vk_result rd_renderer_render(rd_renderer *r, rd_gpu_scene *scene,
                                 const rd_view_camera *camera, const rd_frame_settings *fs,
                                 char *err, size_t errlen)
 {

@@ -157,8 +157,8 @@ static rd_vk_result collect_times(rd_view *v, char *err, size_t errlen)
 
 /* Reference path tracing: spp dispatches accumulate into the radiance buffer (w counts
  * samples), submitted in batches so that no single submission runs for long. */
-static rd_vk_result render_pathtraced(rd_view *v, const rd_view_settings *s, char *err,
-                                      size_t errlen)
+static rd_vk_result render_pathtraced(rd_view *v, rd_gpu_scene *gs, const rd_view_settings *s,
+                                      char *err, size_t errlen)
 {
     const rd_view_passes *p = v->passes;
     uint32_t gx = (v->width + PC_WG_2D_X - 1) / PC_WG_2D_X;
@@ -172,6 +172,7 @@ static rd_vk_result render_pathtraced(rd_view *v, const rd_view_settings *s, cha
         rd_cmd cmd;
         res = rd_cmd_begin(v->vk, &cmd, err, errlen);
         if (res != RD_VK_OK) break;
+        rd_gpu_scene_record_updates(gs, &cmd);
         rd_timer_begin(&cmd, &v->timer);
         for (unsigned k = k0; k < k0 + batch && k < end; k++) {
             pc_push push = {.globals = v->globals.address,
@@ -290,6 +291,7 @@ rd_vk_result rd_view_record(rd_view *v, const rd_world *w, const rd_view_camera 
     if (res == RD_VK_OK) res = reflections_begin(v, w, s, &g, &reflect, err, errlen);
     if (res != RD_VK_OK) return res;
     v->pathtrace_samples = 0; /* this frame overwrites the accumulation */
+    rd_gpu_scene_record_updates(w->scene, cmd);
     const rd_view_passes *p = v->passes;
     uint32_t gx = (v->width + PC_WG_2D_X - 1) / PC_WG_2D_X;
     uint32_t gy = (v->height + PC_WG_2D_Y - 1) / PC_WG_2D_Y;
@@ -349,7 +351,7 @@ rd_vk_result rd_view_render(rd_view *v, const rd_world *w, const rd_view_camera 
 {
     if (s->pathtrace_spp > 0) {
         rd_vk_result res = prepare(v, w, camera, s, NULL, err, errlen);
-        return res == RD_VK_OK ? render_pathtraced(v, s, err, errlen) : res;
+        return res == RD_VK_OK ? render_pathtraced(v, w->scene, s, err, errlen) : res;
     }
     rd_cmd cmd;
     rd_vk_result res = rd_cmd_begin(v->vk, &cmd, err, errlen);

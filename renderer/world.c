@@ -36,7 +36,7 @@ void rd_world_destroy(rd_world *w)
     w->vk = NULL;
 }
 
-void rd_world_set_scene(rd_world *w, const rd_gpu_scene *scene)
+void rd_world_set_scene(rd_world *w, rd_gpu_scene *scene)
 {
     w->scene = scene;
 }
@@ -165,6 +165,7 @@ rd_vk_result rd_world_update(rd_world *w, unsigned n, char *err, size_t errlen)
         rd_cmd cmd;
         res = rd_cmd_begin(w->vk, &cmd, err, errlen);
         if (res != RD_VK_OK) break;
+        rd_gpu_scene_record_updates(w->scene, &cmd);
         rd_timer_begin(&cmd, &w->timer);
         rd_ddgi_record_update(&w->ddgi, &cmd, &w->timer, w->globals.address, w->counters.address);
         res = rd_cmd_submit_wait(w->vk, &cmd, err, errlen);

@@ -18,7 +18,7 @@
 
 typedef struct rd_world {
     rd_vk *vk;
-    const rd_gpu_scene *scene; /* the scene being rendered; NOT owned (the caller owns and
+    rd_gpu_scene *scene; /* the scene being rendered; NOT owned (the caller owns and
                                   destroys it) */
     /* the environment seen by primary misses, probe rays and path tracing (environment.h);
      * env.image points at image, the world's own copy of an HDR image (none: width 0) */
@@ -44,7 +44,7 @@ rd_vk_result rd_world_create(rd_vk *vk, rd_world *w, char *err, size_t errlen);
 void rd_world_destroy(rd_world *w);
 /* The scene that updates and views trace; NULL until set. Changing it does not reset the probe
  * field (call rd_world_configure_gi for a different scene). */
-void rd_world_set_scene(rd_world *w, const rd_gpu_scene *scene);
+void rd_world_set_scene(rd_world *w, rd_gpu_scene *scene);
 /* A uniform sky of this radiance (rd_world_set_environment with RD_ENV_UNIFORM). */
 void rd_world_set_sky(rd_world *w, const float sky[3]);
 /* The environment's mode and parameters (e->image is ignored: the world's own image, set by

@@ -59,7 +59,8 @@ typedef enum srv_sched_action {
 } srv_sched_action;
 
 /* A busy view's frame is in flight; the caller polls for its completion, which makes the view
- * renderable again (no wake-up deadline is given for it). */
+ * renderable again (no wake-up deadline is given for it). The world does not tick while any
+ * frame is in flight. */
 
 /* Probe updates per tick while the probes converge and no input arrives: the field settles in a
  * quarter of the ticks. Fewer when the updates would hold a tick longer than a frame interval (a

@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "renderer/mesh_builder.h"
 #include "renderer/procedural.h"
 #include "renderer/readback.h"
 #include "renderer/view.h"
@@ -372,6 +373,54 @@ static void test_readback_ring(fixture *f)
     free(img_a), free(img_b);
 }
 
+static double mean_of(const float *rgb, size_t n)
+{
+    double sum = 0;
+    for (size_t i = 0; i < n; i++) sum += rgb[i];
+    return sum / n;
+}
+
+/* Light changes within the buffer's capacity are recorded into the next frame's command buffer
+ * (no wait); switching the light off and on again gives the first image back bit for bit; growing
+ * past the capacity reallocates. */
+static void test_light_updates(fixture *f)
+{
+    size_t n = (size_t)AW * AH * 3;
+    CHECK(f->scene.light_count >= 1);
+    if (!render(f, &f->a)) return;
+    float *lit = read_hdr(&f->a);
+    float intensity = f->scene.lights[0].intensity;
+    f->scene.lights[0].intensity = 0;
+    CHECK(rd_gpu_scene_update_lights(&vk, &f->gs, &f->scene, err, sizeof err) == RD_VK_OK);
+    CHECKF(f->gs.lights_pending != NULL, "a change within capacity is pending");
+    render(f, &f->a);
+    CHECKF(f->gs.lights_pending == NULL, "the frame recorded it");
+    float *dark = read_hdr(&f->a);
+    double m_lit = mean_of(lit, n), m_dark = mean_of(dark, n);
+    CHECKF(m_dark < 0.8 * m_lit, "light off: mean %g against %g", m_dark, m_lit);
+    f->scene.lights[0].intensity = intensity;
+    CHECK(rd_gpu_scene_update_lights(&vk, &f->gs, &f->scene, err, sizeof err) == RD_VK_OK);
+    render(f, &f->a);
+    float *again = read_hdr(&f->a);
+    CHECKF(memcmp(lit, again, n * sizeof *lit) == 0, "light on again: the same image");
+    /* past the capacity: the buffer grows (waiting for the device), no pending copy */
+    uint32_t cap = f->gs.light_capacity, before = f->scene.light_count;
+    while (f->scene.light_count <= cap)
+        rd_build_point_light(&f->scene, 100, 100, 100, 0); /* far away and dark */
+    CHECK(rd_gpu_scene_update_lights(&vk, &f->gs, &f->scene, err, sizeof err) == RD_VK_OK);
+    CHECKF(f->gs.light_capacity > cap && f->gs.lights_pending == NULL, "capacity %u -> %u",
+           cap, f->gs.light_capacity);
+    render(f, &f->a);
+    float *grown = read_hdr(&f->a);
+    CHECKF(fabs(mean_of(grown, n) - m_lit) < 1e-6 * m_lit + 1e-9, "dark lights add nothing");
+    f->scene.light_count = before;
+    CHECK(rd_gpu_scene_update_lights(&vk, &f->gs, &f->scene, err, sizeof err) == RD_VK_OK);
+    free(lit);
+    free(dark);
+    free(again);
+    free(grown);
+}
+
 int main(void)
 {
     if (!test_vk_open(&vk)) return test_finish();
@@ -382,6 +431,7 @@ int main(void)
         test_sky(&f);
         test_environments(&f);
         test_readback_ring(&f);
+        test_light_updates(&f);
     }
     fixture_destroy(&f);
     return test_vk_close(&vk);

@@ -313,7 +313,32 @@ static void test_own_cap(void)
     CHECKF(st.action == SRV_SCHED_SLEEP, "a due capped view still owes the tick");
     v[0].last_render_ms = s.now_ms - 20;
     st = srv_sched_next(&s);
-    CHECKF(st.action == SRV_SCHED_ADVANCE_WORLD, "one held back by its cap does not");
+    CHECKF(st.action == SRV_SCHED_SLEEP, "no tick while its frame is in flight");
+    v[0].busy = false;
+    st = srv_sched_next(&s);
+    CHECKF(st.action == SRV_SCHED_ADVANCE_WORLD, "one held back by its cap does not owe it");
+}
+
+/* A tick waits for the frames in flight: they reach the encoders first, and the tick's own
+ * GPU work does not queue behind them while the render thread waits. */
+static void test_tick_after_frames(void)
+{
+    srv_sched_view v[2] = {view(true, false), view(true, false)};
+    srv_sched_state s = base(v, 2);
+    s.world_wants_update = true;
+    s.world_updates_left = 10;
+    v[1].busy = true; /* its frame (for its own input) is on the GPU */
+    srv_sched_step st = srv_sched_next(&s);
+    CHECKF(st.action == SRV_SCHED_SLEEP && isinf(st.wake_ms),
+           "tick due, frame in flight: wait for its completion");
+    v[1].busy = false;
+    st = srv_sched_next(&s);
+    CHECKF(st.action == SRV_SCHED_ADVANCE_WORLD, "the tick once the frame is back");
+    /* an unwatched view's frame in flight counts too (it is on the same queue) */
+    v[0].watched = false;
+    v[0].busy = true;
+    st = srv_sched_next(&s);
+    CHECKF(st.action == SRV_SCHED_SLEEP, "any frame in flight defers the tick");
 }
 
 static void test_still(void)
@@ -341,5 +366,6 @@ int main(void)
     test_world_not_starved();
     test_own_cap();
     test_still();
+    test_tick_after_frames();
     return test_finish();
 }
