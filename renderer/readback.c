@@ -32,11 +32,30 @@ void rd_readback_dispose(rd_readback *rb)
     rb->vk = NULL;
 }
 
+static bool slot_free(const rd_readback_slot *s)
+{
+    return !s->busy && !atomic_load_explicit(&s->leased, memory_order_acquire);
+}
+
 bool rd_readback_has_free(const rd_readback *rb)
 {
     for (int i = 0; i < RD_READBACK_SLOTS; i++)
-        if (!rb->slots[i].busy) return true;
+        if (slot_free(&rb->slots[i])) return true;
     return false;
+}
+
+unsigned rd_readback_free_count(const rd_readback *rb)
+{
+    unsigned n = 0;
+    for (int i = 0; i < RD_READBACK_SLOTS; i++)
+        n += slot_free(&rb->slots[i]);
+    return n;
+}
+
+void rd_readback_release(rd_readback *rb, unsigned slot)
+{
+    if (slot < RD_READBACK_SLOTS)
+        atomic_store_explicit(&rb->slots[slot].leased, false, memory_order_release);
 }
 
 unsigned rd_readback_busy(const rd_readback *rb)
@@ -55,7 +74,7 @@ rd_vk_result rd_readback_begin(rd_readback *rb, rd_cmd **cmd, char *err, size_t 
     }
     rd_readback_slot *s = NULL;
     for (int i = 0; i < RD_READBACK_SLOTS && !s; i++)
-        if (!rb->slots[i].busy) s = &rb->slots[i];
+        if (slot_free(&rb->slots[i])) s = &rb->slots[i];
     if (!s) {
         rd_vk_errorf(err, errlen, "No free readback slot.");
         return RD_VK_ERR_VULKAN;
@@ -198,7 +217,9 @@ rd_vk_result rd_readback_poll(rd_readback *rb, uint64_t timeout_ns, rd_readback_
             if (vr != VK_SUCCESS)
                 return rd_vk_fail(rb->vk, vr, "vkInvalidateMappedMemoryRanges", err, errlen);
         }
-        fn(user, s->info, s->width, s->height, (const uint8_t *)s->buffer.mapped);
+        unsigned index = (unsigned)(s - rb->slots);
+        if (fn(user, s->info, s->width, s->height, (const uint8_t *)s->buffer.mapped, index))
+            atomic_store_explicit(&s->leased, true, memory_order_relaxed);
     }
     return RD_VK_OK;
 }

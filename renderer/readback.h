@@ -3,9 +3,12 @@
  * After a frame is rendered, rd_readback_submit records a copy of a view's RGBA8 buffer into a
  * free slot and submits it with its own fence, then returns at once; the render thread goes on
  * with the next frame while the copy runs. rd_readback_poll hands completed slots to a callback
- * in submission order (on the render thread; the callback copies the pixels out). A barrier at
- * the end of each copy orders it before any later write to the source buffer.
- * Render thread only: this is Vulkan.
+ * in submission order (on the render thread). The callback either copies the pixels out or keeps
+ * the slot (a lease): its memory then stays valid, unused by later frames, until
+ * rd_readback_release, which any thread may call (encoders read the pixels where the GPU put
+ * them; at 1920x1080 the copy cost the render thread about 1 ms a frame). A barrier at the end
+ * of each copy orders it before any later write to the source buffer.
+ * Render thread only (this is Vulkan), except rd_readback_release.
  *
  * One ring can carry frames of different sizes (several views): a slot's buffer grows when a
  * frame does not fit and is kept otherwise. Each frame carries an opaque caller record (info,
@@ -14,19 +17,23 @@
 #ifndef RD_READBACK_H
 #define RD_READBACK_H
 
+#include <stdatomic.h>
 #include <stdbool.h>
 #include <stdint.h>
 
 #include "vk_buffer.h"
 #include "vk_compute.h"
 
-#define RD_READBACK_SLOTS 8     /* frames in flight: the GPU works while the CPU records the next */
+/* frames in flight (the GPU works while the CPU records the next) plus leased slots; a slot's
+ * buffer is allocated when first used */
+#define RD_READBACK_SLOTS 32
 #define RD_READBACK_INFO_MAX 64 /* bytes of caller record per frame */
 
 typedef struct rd_readback_slot {
     rd_buffer buffer; /* RD_MEMORY_READBACK; at least width * height * 4 bytes */
     rd_cmd cmd;       /* command buffer and fence while busy */
     bool busy;
+    atomic_bool leased; /* delivered and kept by the callback until rd_readback_release */
     uint64_t seq; /* submission order */
     unsigned width, height;
     size_t info_size;
@@ -44,7 +51,11 @@ void rd_readback_init(rd_readback *rb, rd_vk *vk);
 /* Waits for copies in flight and frees the buffers (idempotent). */
 void rd_readback_dispose(rd_readback *rb);
 bool rd_readback_has_free(const rd_readback *rb);
+/* Slots neither in flight nor leased. */
+unsigned rd_readback_free_count(const rd_readback *rb);
 unsigned rd_readback_busy(const rd_readback *rb);
+/* Ends the lease of slot (any thread). */
+void rd_readback_release(rd_readback *rb, unsigned slot);
 /* Copies width * height * 4 bytes of src into a free slot (there must be one), with a copy of
  * info_size <= RD_READBACK_INFO_MAX bytes of info (info may be NULL when info_size is 0). */
 rd_vk_result rd_readback_submit(rd_readback *rb, const rd_buffer *src, unsigned width,
@@ -63,8 +74,10 @@ rd_vk_result rd_readback_finish(rd_readback *rb, const rd_buffer *src, unsigned 
                                 size_t errlen);
 void rd_readback_abort(rd_readback *rb);
 
-typedef void (*rd_readback_fn)(void *user, const void *info, unsigned width, unsigned height,
-                               const uint8_t *rgba);
+/* slot: the slot's index; return true to keep it leased (rgba then stays valid until
+ * rd_readback_release(rb, slot)), false when done with the pixels. */
+typedef bool (*rd_readback_fn)(void *user, const void *info, unsigned width, unsigned height,
+                               const uint8_t *rgba, unsigned slot);
 /* Delivers every completed copy, oldest first, stopping at the first one still running; with
  * timeout_ns > 0 first waits up to that long for the oldest. */
 rd_vk_result rd_readback_poll(rd_readback *rb, uint64_t timeout_ns, rd_readback_fn fn, void *user,

@@ -98,6 +98,20 @@ srv_image *srv_image_new(unsigned width, unsigned height)
     return img;
 }
 
+srv_image *srv_image_wrap(unsigned width, unsigned height, uint8_t *rgba,
+                          void (*release)(void *ctx, unsigned token), void *ctx, unsigned token)
+{
+    srv_image *img = xcalloc(1, sizeof *img);
+    atomic_init(&img->refs, 1);
+    img->width = width;
+    img->height = height;
+    img->rgba = rgba;
+    img->release = release;
+    img->release_ctx = ctx;
+    img->release_token = token;
+    return img;
+}
+
 srv_image *srv_image_ref(srv_image *img)
 {
     atomic_fetch_add(&img->refs, 1);
@@ -107,7 +121,10 @@ srv_image *srv_image_ref(srv_image *img)
 void srv_image_unref(srv_image *img)
 {
     if (img && atomic_fetch_sub(&img->refs, 1) == 1) {
-        pixels_give(img->rgba, img->cap);
+        if (img->release)
+            img->release(img->release_ctx, img->release_token);
+        else
+            pixels_give(img->rgba, img->cap);
         free(img);
     }
 }

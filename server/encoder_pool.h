@@ -34,9 +34,18 @@ typedef struct srv_image {
     unsigned width, height;
     uint8_t *rgba; /* width * height * 4 bytes, top row first */
     size_t cap;    /* bytes allocated (pixel buffers are recycled) */
+    /* pixels the image does not own (srv_image_wrap): release(ctx, token) when the last reference
+     * goes */
+    void (*release)(void *ctx, unsigned token);
+    void *release_ctx;
+    unsigned release_token;
 } srv_image;
 
 srv_image *srv_image_new(unsigned width, unsigned height);
+/* An image over pixels owned elsewhere (a leased readback slot): release(ctx, token) runs, on
+ * whichever thread drops the last reference, when nobody reads them any more. */
+srv_image *srv_image_wrap(unsigned width, unsigned height, uint8_t *rgba,
+                          void (*release)(void *ctx, unsigned token), void *ctx, unsigned token);
 srv_image *srv_image_ref(srv_image *img);
 void srv_image_unref(srv_image *img); /* NULL is fine */
 /* Frees the recycled pixel buffers (srv_encoder_pool_destroy does this). */

@@ -18,6 +18,9 @@
 #define PERSIST_INTERVAL_MS 250
 #define DEFAULT_MAX_VIEWS 64u
 #define DEFAULT_MAX_TOTAL_PIXELS (16ull * 1024 * 1024)
+/* readback slots kept for frames in flight: a frame delivered with fewer free is copied out of its
+ * slot instead of leasing it (every view holds its last frame's slot) */
+#define RENDER_SLOTS_IN_FLIGHT 8u
 
 struct srv_render_loop {
     srv_render_config cfg;
@@ -228,13 +231,22 @@ static void apply(srv_render_loop *l, srv_cmd *c)
 
 /* ---- frames --------------------------------------------------------------------------------- */
 
-static void on_readback(void *user, const void *blob, unsigned w, unsigned h, const uint8_t *rgba)
+static void release_slot(void *ctx, unsigned slot)
+{
+    rd_readback_release(&((srv_render_loop *)ctx)->rb, slot);
+}
+
+/* A frame's pixels are back: the encoders read them in the readback slot itself (leased until
+ * the last reference to the image goes: the view's next frame replaces it, and the encoders are
+ * done), unless too few slots would be left for frames in flight; then they are copied. */
+static bool on_readback(void *user, const void *blob, unsigned w, unsigned h, const uint8_t *rgba,
+                        unsigned slot)
 {
     srv_render_loop *l = user;
     srv_frame_info info;
     memcpy(&info, blob, sizeof info);
     srv_view *v = srv_views_find(&l->views, info.view_id);
-    if (!v) return;     /* the view went away while its frame was copied */
+    if (!v) return false; /* the view went away while its frame was copied */
     if (v->in_flight) { /* an asynchronous frame: its GPU times are ready now */
         v->in_flight = false;
         char err[256];
@@ -243,8 +255,14 @@ static void on_readback(void *user, const void *blob, unsigned w, unsigned h, co
         srv_stats_board_frame(&l->stats, &v->gpu.stats, w, h, v->last_render_ms,
                               srv_mono_ms() - v->last_render_ms);
     }
-    srv_image *img = srv_image_new(w, h);
-    memcpy(img->rgba, rgba, (size_t)w * h * 4);
+    bool lease = rd_readback_free_count(&l->rb) > RENDER_SLOTS_IN_FLIGHT;
+    srv_image *img;
+    if (lease) {
+        img = srv_image_wrap(w, h, (uint8_t *)rgba, release_slot, l, slot);
+    } else {
+        img = srv_image_new(w, h);
+        memcpy(img->rgba, rgba, (size_t)w * h * 4);
+    }
     srv_image_unref(v->last_image);
     v->last_image = img;
     info.ready_us = srv_unix_us();
@@ -252,6 +270,7 @@ static void on_readback(void *user, const void *blob, unsigned w, unsigned h, co
     const srv_settings *s = &l->svc.st.settings;
     srv_encoder_submit(l->cfg.encoders, img, &info,
                        srv_view_quality(v, info.still ? s->quality_still : s->quality_interactive));
+    return lease;
 }
 
 static void poll_readback(srv_render_loop *l, uint64_t timeout_ns)
@@ -608,8 +627,8 @@ void srv_render_loop_destroy(srv_render_loop *l)
     srv_mailbox_dispose(&l->mb);
     if (l->vk_ok) {
         rd_vk_wait_idle(&l->vk);
+        srv_views_dispose(&l->views); /* their last images end their readback leases */
         if (l->rb_ok) rd_readback_dispose(&l->rb);
-        srv_views_dispose(&l->views);
         if (l->svc_ok) srv_scene_service_dispose(&l->svc);
         if (l->passes_ok) rd_view_passes_destroy(&l->vk, &l->passes);
         unsigned v = rd_vk_validation_messages(&l->vk);

@@ -314,18 +314,25 @@ typedef struct delivered {
     record info[4];
     unsigned w[4], h[4];
     uint8_t *rgba[4];
+    bool lease;        /* keep the slots */
+    unsigned slot[4];
+    const uint8_t *mapped[4];
 } delivered;
 
-static void on_frame(void *user, const void *info, unsigned w, unsigned h, const uint8_t *rgba)
+static bool on_frame(void *user, const void *info, unsigned w, unsigned h, const uint8_t *rgba,
+                     unsigned slot)
 {
     delivered *d = user;
     CHECK(d->count < 4);
-    if (d->count >= 4) return;
+    if (d->count >= 4) return false;
+    d->slot[d->count] = slot;
+    d->mapped[d->count] = rgba;
     memcpy(&d->info[d->count], info, sizeof(record));
     d->w[d->count] = w, d->h[d->count] = h;
     d->rgba[d->count] = malloc((size_t)w * h * 4);
     memcpy(d->rgba[d->count], rgba, (size_t)w * h * 4);
     d->count++;
+    return d->lease;
 }
 
 static void test_readback_ring(fixture *f)
@@ -368,6 +375,23 @@ static void test_readback_ring(fixture *f)
     }
     /* slots 0 and 1 each carried both sizes: both hold the larger buffer now */
     CHECK(rb.slots[0].buffer.size == AW * AH * 4 && rb.slots[1].buffer.size == AW * AH * 4);
+    /* a leased slot keeps its pixels while later frames take other slots, until released */
+    delivered d = {.lease = true};
+    CHECK(rd_readback_submit(&rb, &f->a.rgba8, AW, AH, &ra, sizeof ra, err, sizeof err) == RD_VK_OK);
+    for (int tries = 0; tries < 100 && d.count < 1; tries++)
+        CHECK(rd_readback_poll(&rb, 100ull * 1000 * 1000, on_frame, &d, err, sizeof err) == RD_VK_OK);
+    CHECK(d.count == 1 && rd_readback_free_count(&rb) == RD_READBACK_SLOTS - 1);
+    d.lease = false;
+    for (int k = 0; k < 2; k++) /* view b's frames must not land in the leased slot */
+        CHECK(rd_readback_submit(&rb, &f->b.rgba8, BW, BH, &rb_info, sizeof rb_info, err,
+                                 sizeof err) == RD_VK_OK);
+    for (int tries = 0; tries < 100 && d.count < 3; tries++)
+        CHECK(rd_readback_poll(&rb, 100ull * 1000 * 1000, on_frame, &d, err, sizeof err) == RD_VK_OK);
+    CHECK(d.count == 3 && d.slot[1] != d.slot[0] && d.slot[2] != d.slot[0]);
+    CHECKF(memcmp(d.mapped[0], img_a, AW * AH * 4) == 0, "the leased pixels are intact");
+    rd_readback_release(&rb, d.slot[0]);
+    CHECK(rd_readback_free_count(&rb) == RD_READBACK_SLOTS);
+    for (unsigned k = 0; k < d.count; k++) free(d.rgba[k]);
     rd_readback_dispose(&rb);
     rd_readback_dispose(&rb); /* idempotent */
     free(img_a), free(img_b);
