@@ -11,10 +11,7 @@ void rd_readback_init(rd_readback *rb, rd_vk *vk)
 
 static void slot_release_cmd(rd_vk *vk, rd_readback_slot *s)
 {
-    if (s->cmd.fence) vkDestroyFence(vk->device, s->cmd.fence, NULL);
-    if (s->cmd.cb) vkFreeCommandBuffers(vk->device, vk->command_pool, 1, &s->cmd.cb);
-    s->cmd.fence = VK_NULL_HANDLE;
-    s->cmd.cb = VK_NULL_HANDLE;
+    rd_cmd_release(vk, &s->cmd);
     s->busy = false;
 }
 

@@ -100,12 +100,24 @@ void rd_pipeline_destroy(rd_vk *vk, rd_pipeline *p)
 
 /* ---- one-shot command buffers ------------------------------------------------------------- */
 
+/* A finished (or never submitted) command buffer and its fence go back to the spares. */
 static void cmd_free(rd_vk *vk, rd_cmd *c)
 {
-    if (c->fence) vkDestroyFence(vk->device, c->fence, NULL);
-    if (c->cb) vkFreeCommandBuffers(vk->device, vk->command_pool, 1, &c->cb);
+    if (c->cb && c->fence && vk->spare_count < RD_VK_SPARE_CMDS && !vk->device_lost) {
+        vk->spare_cb[vk->spare_count] = c->cb;
+        vk->spare_fence[vk->spare_count] = c->fence;
+        vk->spare_count++;
+    } else {
+        if (c->fence) vkDestroyFence(vk->device, c->fence, NULL);
+        if (c->cb) vkFreeCommandBuffers(vk->device, vk->command_pool, 1, &c->cb);
+    }
     c->fence = VK_NULL_HANDLE;
     c->cb = VK_NULL_HANDLE;
+}
+
+void rd_cmd_release(rd_vk *vk, rd_cmd *c)
+{
+    cmd_free(vk, c);
 }
 
 void rd_cmd_abandon(rd_vk *vk, rd_cmd *c)
@@ -121,23 +133,38 @@ rd_vk_result rd_cmd_begin(rd_vk *vk, rd_cmd *c, char *err, size_t errlen)
         rd_vk_errorf(err, errlen, "The Vulkan device was lost earlier.");
         return RD_VK_ERR_DEVICE_LOST;
     }
-    VkCommandBufferAllocateInfo ai = {
-        .sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO,
-        .commandPool = vk->command_pool,
-        .level = VK_COMMAND_BUFFER_LEVEL_PRIMARY,
-        .commandBufferCount = 1,
-    };
-    VkResult r = vkAllocateCommandBuffers(vk->device, &ai, &c->cb);
-    if (r != VK_SUCCESS) {
-        c->cb = VK_NULL_HANDLE;
-        return rd_vk_fail(vk, r, "vkAllocateCommandBuffers", err, errlen);
-    }
-    VkFenceCreateInfo fci = {.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-    r = vkCreateFence(vk->device, &fci, NULL, &c->fence);
-    if (r != VK_SUCCESS) {
-        c->fence = VK_NULL_HANDLE;
-        cmd_free(vk, c);
-        return rd_vk_fail(vk, r, "vkCreateFence", err, errlen);
+    VkResult r = VK_SUCCESS;
+    if (vk->spare_count) {
+        /* the pool resets buffers: vkBeginCommandBuffer starts this one afresh */
+        vk->spare_count--;
+        c->cb = vk->spare_cb[vk->spare_count];
+        c->fence = vk->spare_fence[vk->spare_count];
+        r = vkResetFences(vk->device, 1, &c->fence);
+        if (r != VK_SUCCESS) {
+            vkDestroyFence(vk->device, c->fence, NULL);
+            vkFreeCommandBuffers(vk->device, vk->command_pool, 1, &c->cb);
+            memset(c, 0, sizeof *c);
+            return rd_vk_fail(vk, r, "vkResetFences", err, errlen);
+        }
+    } else {
+        VkCommandBufferAllocateInfo ai = {
+            .sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO,
+            .commandPool = vk->command_pool,
+            .level = VK_COMMAND_BUFFER_LEVEL_PRIMARY,
+            .commandBufferCount = 1,
+        };
+        r = vkAllocateCommandBuffers(vk->device, &ai, &c->cb);
+        if (r != VK_SUCCESS) {
+            c->cb = VK_NULL_HANDLE;
+            return rd_vk_fail(vk, r, "vkAllocateCommandBuffers", err, errlen);
+        }
+        VkFenceCreateInfo fci = {.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+        r = vkCreateFence(vk->device, &fci, NULL, &c->fence);
+        if (r != VK_SUCCESS) {
+            c->fence = VK_NULL_HANDLE;
+            cmd_free(vk, c);
+            return rd_vk_fail(vk, r, "vkCreateFence", err, errlen);
+        }
     }
     VkCommandBufferBeginInfo bi = {
         .sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO,

@@ -28,6 +28,8 @@ typedef struct rd_cmd {
 } rd_cmd;
 
 rd_vk_result rd_cmd_begin(rd_vk *vk, rd_cmd *c, char *err, size_t errlen);
+/* Gives back the command buffer and fence of a finished or never submitted c (they are reused). */
+void rd_cmd_release(rd_vk *vk, rd_cmd *c);
 /* Ends, submits, waits for completion and frees the command buffer and fence. */
 rd_vk_result rd_cmd_submit_wait(rd_vk *vk, rd_cmd *c, char *err, size_t errlen);
 /* Frees a begun command buffer that will not be submitted (an error while recording). */

@@ -522,6 +522,11 @@ void rd_vk_destroy(rd_vk *vk)
     if (vk->device) {
         VkResult r = vkDeviceWaitIdle(vk->device);
         if (r != VK_SUCCESS) rd_vk_fail(vk, r, "vkDeviceWaitIdle", NULL, 0);
+        while (vk->spare_count) {
+            vk->spare_count--;
+            vkDestroyFence(vk->device, vk->spare_fence[vk->spare_count], NULL);
+        }
+        /* the spare command buffers go with their pool */
         if (vk->command_pool) vkDestroyCommandPool(vk->device, vk->command_pool, NULL);
         vk->command_pool = VK_NULL_HANDLE;
         vkDestroyDevice(vk->device, NULL);

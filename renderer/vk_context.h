@@ -39,6 +39,8 @@ typedef struct rd_vk_options {
     int validation;     /* 0 = $PROBECAST_VALIDATION, 1 = on, -1 = off */
 } rd_vk_options;
 
+#define RD_VK_SPARE_CMDS 32
+
 typedef struct rd_vk {
     VkInstance instance;
     VkDebugUtilsMessengerEXT messenger;
@@ -47,6 +49,11 @@ typedef struct rd_vk {
     VkQueue queue;
     uint32_t queue_family;
     VkCommandPool command_pool;
+    /* finished command buffers and their fences, reused by rd_cmd_begin: allocating both cost
+     * 0.42 ms a frame on an H200 (vk_compute.c) */
+    VkCommandBuffer spare_cb[RD_VK_SPARE_CMDS];
+    VkFence spare_fence[RD_VK_SPARE_CMDS];
+    unsigned spare_count;
     VkPhysicalDeviceProperties properties;
     VkPhysicalDeviceMemoryProperties memory;
     double timestamp_period_ns; /* 0 when the queue has no timestamps */
