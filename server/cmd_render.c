@@ -7,12 +7,14 @@
 #include <time.h>
 
 #include "cli.h"
+#include "clock.h"
 #include "renderer/animation_clip.h"
 #include "renderer/image_io.h"
 #include "renderer/procedural.h"
 #include "renderer/render.h"
 
 #define RENDER_MAX_UPDATES 2000u /* default cap of the convergence without --frames */
+#define RENDER_WARMUP_MS 500.0 /* --timings renders untimed frames this long first */
 
 static void render_usage(FILE *f)
 {
@@ -56,7 +58,8 @@ static void render_usage(FILE *f)
             "  --dump-probes PREFIX   write the probe atlases as PREFIX-irradiance.{pfm,png}\n"
             "                         and PREFIX-distance.pfm\n"
             "  --timings              print BVH build time, per-pass GPU times and rays/s\n"
-            "  --repeat N             frames to render and average for --timings (default 5)\n"
+            "  --repeat N             frames to time for --timings, after 0.5 s of warm-up;\n"
+            "                         each pass's median is reported (default 5)\n"
             "  --device INDEX|NAME    GPU to use (default: $PROBECAST_DEVICE, else a discrete\n"
             "                         GPU, else lavapipe)\n"
             "  --list-devices         list the Vulkan devices and exit\n"
@@ -65,7 +68,6 @@ static void render_usage(FILE *f)
             (double)RD_DDGI_DEFAULT_HYSTERESIS);
 }
 
-#define RENDER_MAX_UPDATES 2000u
 
 typedef struct render_args {
     const char *scene, *out, *hdr, *device, *dump;
@@ -282,6 +284,18 @@ static double now_ms(void)
     return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
 }
 
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double median(double *v, unsigned n)
+{
+    qsort(v, n, sizeof *v, cmp_double);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
 static void print_timings(const rd_vk *vk, const rd_scene *s, const rd_gpu_scene *gs,
                           const rd_frame_stats *avg, unsigned frames, unsigned w, unsigned h)
 {
@@ -292,7 +306,8 @@ static void print_timings(const rd_vk *vk, const rd_scene *s, const rd_gpu_scene
            "%.1f ms upload\n",
            gs->blas_build_ms, (unsigned long long)gs->blas_node_count, gs->max_blas_depth,
            gs->tlas_build_ms, gs->upload_ms);
-    printf("frame       %ux%u, mean of %u frames\n", w, h, frames);
+    printf("frame       %ux%u, median of %u frames after %.1f s of warm-up\n", w, h, frames,
+           RENDER_WARMUP_MS / 1000.0);
     if (!avg->timed) {
         printf("(this device has no GPU timestamps)\n");
         return;
@@ -421,22 +436,45 @@ int cli_render(int argc, char **argv)
                     done, c->sleeping, c->off);
     }
     unsigned frames = a.timings ? a.repeat : 1;
-    rd_frame_stats sum = {0};
-    for (unsigned f = 0; vr == RD_VK_OK && f < frames + (a.timings ? 1 : 0); f++) {
+    rd_frame_stats med = {0};
+    /* per timed frame and pass; the report gives each pass's median */
+    double *samples = calloc((size_t)frames * RD_TIMER_MAX, sizeof *samples);
+    if (!samples) abort();
+    double warm_until = 0;
+    unsigned timed = 0;
+    for (unsigned f = 0; vr == RD_VK_OK && timed < frames; f++) {
         /* the first frame takes --frames updates (after the convergence above: one, which
-         * finds every probe asleep); timed frames after it do one update each */
+         * finds every probe asleep); frames after it do one update each */
         a.fs.gi_updates = f == 0 && a.frames ? a.frames : 1;
         vr = rd_renderer_render(&r, &gs, &cam, &a.fs, err, sizeof err);
-        if (vr != RD_VK_OK || (a.timings && f == 0)) continue; /* frame 0 warms up */
-        const rd_frame_stats *st = &r.stats;
-        sum.timed = st->timed;
-        sum.pass_count = st->pass_count;
-        for (unsigned i = 0; i < st->pass_count; i++) {
-            sum.pass_name[i] = st->pass_name[i];
-            sum.pass_ms[i] += st->pass_ms[i] / frames;
+        if (vr != RD_VK_OK) break;
+        if (!a.timings) {
+            med.pass_count = 0;
+            timed++;
+            continue;
         }
-        sum.rays = st->rays;
+        /* warm up for 0.5 s first (at least 2 frames): a GPU idle before the run starts at low
+         * clocks, which made short runs read 2-5 times slower on the H200 */
+        double now = srv_mono_ms();
+        if (f == 0) warm_until = now + RENDER_WARMUP_MS;
+        if (f < 2 || now < warm_until) continue;
+        const rd_frame_stats *st = &r.stats;
+        med.timed = st->timed;
+        med.pass_count = st->pass_count;
+        for (unsigned i = 0; i < st->pass_count; i++) {
+            med.pass_name[i] = st->pass_name[i];
+            samples[(size_t)timed * RD_TIMER_MAX + i] = st->pass_ms[i];
+        }
+        med.rays = st->rays;
+        timed++;
     }
+    for (unsigned i = 0; timed && i < med.pass_count; i++) {
+        double col[1000];
+        for (unsigned k = 0; k < timed; k++)
+            col[k] = samples[(size_t)k * RD_TIMER_MAX + i];
+        med.pass_ms[i] = median(col, timed);
+    }
+    free(samples);
     size_t px = (size_t)a.fs.width * a.fs.height;
     if (vr == RD_VK_OK && a.out) {
         uint8_t *rgba = malloc(px * 4);
@@ -459,7 +497,7 @@ int cli_render(int argc, char **argv)
     if (vr == RD_VK_OK && a.dump) vr = dump_probes(&r, a.dump, err, sizeof err);
     if (vr == RD_VK_OK && a.timings) {
         printf("scene load  %.1f ms\n", load_ms);
-        print_timings(&vk, &scene, &gs, &sum, frames, a.fs.width, a.fs.height);
+        print_timings(&vk, &scene, &gs, &med, frames, a.fs.width, a.fs.height);
     }
     if (vr != RD_VK_OK) fprintf(stderr, "probecast: %s\n", err);
     rd_renderer_destroy(&r);
