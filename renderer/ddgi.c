@@ -6,8 +6,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "shaders/ddgi_bin.spv.h"
 #include "shaders/ddgi_blend.spv.h"
 #include "shaders/ddgi_border.spv.h"
+#include "shaders/ddgi_scan.spv.h"
 #include "shaders/ddgi_select.spv.h"
 #include "shaders/ddgi_shade.spv.h"
 #include "shaders/ddgi_trace.spv.h"
@@ -39,6 +41,14 @@ rd_vk_result rd_ddgi_create(rd_vk *vk, rd_ddgi *d, char *err, size_t errlen)
         r = rd_pipeline_create(vk, &d->wake, "probe wake", pc_spv_ddgi_wake,
                                sizeof pc_spv_ddgi_wake, sizeof(pc_push), err, errlen);
     if (r == RD_VK_OK)
+        r = rd_pipeline_create(vk, &d->bin, "probe bin", pc_spv_ddgi_bin, sizeof pc_spv_ddgi_bin,
+                               sizeof(pc_push), err, errlen);
+    if (r == RD_VK_OK)
+        r = rd_pipeline_create(vk, &d->scan, "probe bin scan", pc_spv_ddgi_scan,
+                               sizeof pc_spv_ddgi_scan, sizeof(pc_push), err, errlen);
+    if (r == RD_VK_OK)
+        r = rd_buffer_create(vk, &d->bins, PC_DDGI_BINS * 4, RD_MEMORY_DEVICE, err, errlen);
+    if (r == RD_VK_OK)
         r = rd_buffer_create(vk, &d->ctrl, sizeof(pc_ddgi_control), RD_MEMORY_UPLOAD, err, errlen);
     if (r == RD_VK_OK)
         r = rd_buffer_create(vk, &d->wake_boxes, sizeof(pc_ddgi_wake) * PC_DDGI_WAKE_MAX,
@@ -57,6 +67,7 @@ static void free_buffers(rd_ddgi *d)
     rd_buffer_destroy(d->vk, &d->stats);
     rd_buffer_destroy(d->vk, &d->list);
     rd_buffer_destroy(d->vk, &d->order);
+    rd_buffer_destroy(d->vk, &d->sorted);
 }
 
 void rd_ddgi_destroy(rd_ddgi *d)
@@ -65,6 +76,9 @@ void rd_ddgi_destroy(rd_ddgi *d)
     free_buffers(d);
     rd_buffer_destroy(d->vk, &d->ctrl);
     rd_buffer_destroy(d->vk, &d->wake_boxes);
+    rd_buffer_destroy(d->vk, &d->bins);
+    rd_pipeline_destroy(d->vk, &d->scan);
+    rd_pipeline_destroy(d->vk, &d->bin);
     rd_pipeline_destroy(d->vk, &d->wake);
     rd_pipeline_destroy(d->vk, &d->select);
     rd_pipeline_destroy(d->vk, &d->border);
@@ -236,6 +250,9 @@ rd_vk_result rd_ddgi_configure(rd_ddgi *d, const float bmin[3], const float bmax
         if (r == RD_VK_OK)
             r = rd_buffer_create(d->vk, &d->list, probes * 4, RD_MEMORY_DEVICE, err, errlen);
         if (r == RD_VK_OK) r = upload_ray_order(d, rays, err, errlen);
+        if (r == RD_VK_OK)
+            r = rd_buffer_create(d->vk, &d->sorted, probes * rays * 4, RD_MEMORY_DEVICE, err,
+                                 errlen);
         if (r != RD_VK_OK) {
             free_buffers(d);
             return r;
@@ -424,12 +441,30 @@ void rd_ddgi_record_update(rd_ddgi *d, rd_cmd *c, rd_timer *timer, VkDeviceAddre
     rd_cmd_dispatch(c, &d->select, &push, probe_groups, 1, 1);
     rd_cmd_barrier(c);
     /* everything below works on the listed probes only (indirect sizes) */
+    vkCmdFillBuffer(c->cb, d->bins.buffer, 0, VK_WHOLE_SIZE, 0);
     rd_cmd_dispatch_indirect(c, &d->trace, &push, &d->ctrl, offsetof(pc_ddgi_control, trace_args));
     rd_cmd_barrier(c);
     if (timer) rd_timer_mark(c, timer, "probe trace");
-    push.params.y = d->updates > 0;
-    rd_cmd_dispatch_indirect(c, &d->shade, &push, &d->ctrl, offsetof(pc_ddgi_control, trace_args));
+    /* the hits sorted by place (a counting sort over a grid of cells), then shaded in that order */
+    pc_push bin = {.globals = globals,
+                   .buf0 = d->bins.address,
+                   .buf1 = d->hits.address,
+                   .buf2 = d->sorted.address};
+    rd_cmd_dispatch_indirect(c, &d->bin, &bin, &d->ctrl, offsetof(pc_ddgi_control, trace_args));
     rd_cmd_barrier(c);
+    rd_cmd_dispatch(c, &d->scan, &bin, 1, 1, 1);
+    rd_cmd_barrier(c);
+    bin.params.x = 1;
+    rd_cmd_dispatch_indirect(c, &d->bin, &bin, &d->ctrl, offsetof(pc_ddgi_control, trace_args));
+    rd_cmd_barrier(c);
+    if (timer) rd_timer_mark(c, timer, "probe sort");
+    push.params.y = d->updates > 0;
+    push.params.z = 1; /* sorted */
+    push.buf2 = d->sorted.address;
+    rd_cmd_dispatch_indirect(c, &d->shade, &push, &d->ctrl, offsetof(pc_ddgi_control, shade_args));
+    rd_cmd_barrier(c);
+    push.params.z = 0;
+    push.buf2 = 0;
     if (timer) rd_timer_mark(c, timer, "probe shade");
     /* distance first: the irradiance blend re-classifies probes, and both must see the
      * classification the trace used */

@@ -20,6 +20,7 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer DdgiControl
     uvec4 before;
     uvec4 after;
     ivec4 drift;
+    uvec4 shade_args;
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer DdgiWakeRef
 {

@@ -283,6 +283,10 @@ PC_END(pc_environment);
  * it changes (2021 paper: off probes trace a few fixed rays), and is neither shaded nor
  * blended; it is traced once every PC_DDGI_OFF_RECHECK updates, or after a wake in its box. */
 #define PC_DDGI_INACTIVE_RAYS 32u
+/* Probe-hit bins for sorted shading (ddgi_bin.comp): a PC_DDGI_BIN_SIDE^3 grid over the probe
+ * volume. */
+#define PC_DDGI_BIN_SIDE 16u
+#define PC_DDGI_BINS (PC_DDGI_BIN_SIDE * PC_DDGI_BIN_SIDE * PC_DDGI_BIN_SIDE)
 #define PC_DDGI_OFF_RECHECK 16u
 /* Adaptive hysteresis: a probe of age a (updates since it was woken, counted only while the
  * awake field shows no drift) blends with h = min(h_max, a / (a + PC_DDGI_AGE_RAMP)), and
@@ -351,6 +355,7 @@ PC_STRUCT(pc_ddgi_control)
     pc_uvec4 after;       /* states the listed probes ended in: x awake, y sleeping, z off */
     pc_uvec4 drift;       /* over blended probes: x sum of relative change (int, fixed point),
                              y sum of its square (fixed point), z probes, w unused */
+    pc_uvec4 shade_args;  /* sorted probe shading: x groups, y 1, z 1, w rays (ddgi_scan.comp) */
 }
 PC_END(pc_ddgi_control);
 
@@ -470,7 +475,7 @@ PC_CHECK(pc_ddgi_volume, 224);
 PC_OFF(pc_ddgi_volume, control, 160);
 PC_OFF(pc_ddgi_volume, wake, 200);
 PC_OFF(pc_ddgi_volume, order, 208);
-PC_CHECK(pc_ddgi_control, 96);
+PC_CHECK(pc_ddgi_control, 112);
 PC_CHECK(pc_ddgi_wake, 32);
 PC_OFF(pc_ddgi_volume, counts, 32);
 PC_OFF(pc_ddgi_volume, rotation, 48);
