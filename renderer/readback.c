@@ -34,19 +34,17 @@ static bool slot_free(const rd_readback_slot *s)
     return !s->busy && !atomic_load_explicit(&s->leased, memory_order_acquire);
 }
 
-bool rd_readback_has_free(const rd_readback *rb)
-{
-    for (int i = 0; i < RD_READBACK_SLOTS; i++)
-        if (slot_free(&rb->slots[i])) return true;
-    return false;
-}
-
 unsigned rd_readback_free_count(const rd_readback *rb)
 {
     unsigned n = 0;
     for (int i = 0; i < RD_READBACK_SLOTS; i++)
         n += slot_free(&rb->slots[i]);
     return n;
+}
+
+bool rd_readback_has_free(const rd_readback *rb)
+{
+    return rd_readback_free_count(rb) > 0;
 }
 
 void rd_readback_release(rd_readback *rb, unsigned slot)

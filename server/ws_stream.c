@@ -190,9 +190,8 @@ static int input_for(const viewer *v, uint32_t view, uint64_t ticket)
 
 static uint32_t seq_for(const viewer *v, uint32_t view, uint64_t ticket)
 {
-    if (view != v->own_view) return 0;
     int k = input_for(v, view, ticket);
-    return k >= 0 ? v->inputs[k].seq : v->evicted_seq;
+    return k >= 0 ? v->inputs[k].seq : view == v->own_view ? v->evicted_seq : 0;
 }
 
 /* Whether a newer frame than the viewer's last one is published. */
