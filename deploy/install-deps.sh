@@ -12,6 +12,7 @@ packages=(
   libtinygltf-dev libstb-dev nlohmann-json3-dev  # glTF / GLB loading, image decoding
   libpng-dev libturbojpeg0-dev                   # PNG and JPEG output
   libjpeg62-turbo-dev      # libjpeg API of libjpeg-turbo: restart intervals for striped JPEG
+  libopenexr-dev           # OpenEXR 3 (OpenEXRCore, its C API): .exr environment images
   libmicrohttpd-dev libwebsockets-dev libcjson-dev  # probecast serve: HTTP API, frame stream, JSON
   libssl-dev               # checks --tls-cert/--tls-key (OpenSSL, which libwebsockets links)
 )

@@ -1,4 +1,5 @@
-/* environment.c: environment models, the Radiance .hdr reader and the SH9 irradiance. */
+/* environment.c: environment models, format detection, the Radiance .hdr reader and the SH9
+ * irradiance (the OpenEXR reader is environment_exr.c). */
 #include "environment.h"
 
 #include <math.h>
@@ -7,6 +8,63 @@
 #include <string.h>
 
 #define PI_F 3.14159265358979323846f
+
+/* ---- formats ------------------------------------------------------------------------------ */
+
+rd_env_format rd_env_image_format(const uint8_t *d, size_t len)
+{
+    static const uint8_t exr_magic[4] = {0x76, 0x2f, 0x31, 0x01};
+    if (len >= sizeof exr_magic && memcmp(d, exr_magic, sizeof exr_magic) == 0)
+        return RD_ENV_FORMAT_EXR;
+    if (len >= 2 && d[0] == '#' && d[1] == '?') return RD_ENV_FORMAT_HDR;
+    return RD_ENV_FORMAT_UNKNOWN;
+}
+
+const char *rd_env_format_extension(rd_env_format f)
+{
+    switch (f) {
+    case RD_ENV_FORMAT_HDR:
+        return "hdr";
+    case RD_ENV_FORMAT_EXR:
+        return "exr";
+    default:
+        return NULL;
+    }
+}
+
+bool rd_env_image_parse(const uint8_t *d, size_t len, rd_env_image *out, char *err, size_t errlen)
+{
+    switch (rd_env_image_format(d, len)) {
+    case RD_ENV_FORMAT_HDR:
+        return rd_env_image_parse_hdr(d, len, out, err, errlen);
+    case RD_ENV_FORMAT_EXR:
+        return rd_env_image_parse_exr(d, len, out, err, errlen);
+    default:
+        memset(out, 0, sizeof *out);
+        snprintf(err, errlen,
+                 "the environment image is neither a Radiance .hdr file (beginning with #?) nor "
+                 "an OpenEXR .exr file");
+        return false;
+    }
+}
+
+bool rd_env_image_size_ok(uint64_t w, uint64_t h, const char *format, char *err, size_t errlen)
+{
+    if (w < 2 || h < 1 || w > RD_ENV_MAX_DIM || h > RD_ENV_MAX_DIM) {
+        snprintf(err, errlen, "%s size %llux%llu is out of range (2..%u wide, 1..%u high)", format,
+                 (unsigned long long)w, (unsigned long long)h, RD_ENV_MAX_DIM, RD_ENV_MAX_DIM);
+        return false;
+    }
+    if (w * h * 3 * sizeof(float) > RD_ENV_MAX_BYTES) {
+        snprintf(err, errlen,
+                 "%s size %llux%llu would take %llu MiB decoded (at most %llu MiB are accepted)",
+                 format, (unsigned long long)w, (unsigned long long)h,
+                 (unsigned long long)(w * h * 3 * sizeof(float) >> 20),
+                 (unsigned long long)(RD_ENV_MAX_BYTES >> 20));
+        return false;
+    }
+    return true;
+}
 
 /* ---- Radiance RGBE (.hdr) ---------------------------------------------------------------- */
 
@@ -92,11 +150,7 @@ bool rd_env_image_parse_hdr(const uint8_t *d, size_t len, rd_env_image *out, cha
                  "are not supported)");
         return false;
     }
-    if (w < 2 || h < 1 || w > RD_ENV_HDR_MAX_DIM || h > RD_ENV_HDR_MAX_DIM) {
-        snprintf(err, errlen, "HDR size %ux%u is out of range (2..%u wide, 1..%u high)", w, h,
-                 RD_ENV_HDR_MAX_DIM, RD_ENV_HDR_MAX_DIM);
-        return false;
-    }
+    if (!rd_env_image_size_ok(w, h, "HDR", err, errlen)) return false;
     /* every scanline is at least 4 bytes per pixel flat, or some bytes of runs: a file far too
      * short for its size is refused before the allocation */
     if ((uint64_t)(len - pos) * 128 < (uint64_t)w * h * 4 / 127) {

@@ -1,11 +1,13 @@
 /* environment.h: the light that reaches the scene from outside it (issue "environment light"):
  * a uniform radiance, a two-colour gradient from nadir to zenith, or an equirectangular HDR
- * image (a Radiance .hdr file). Primary misses, probe rays and the path tracer see it through
- * env_radiance() (shaders/environment.glsl); probe fallbacks use its irradiance, kept as the nine
- * spherical-harmonic coefficients of the cosine-convolved radiance (Ramamoorthi and Hanrahan
- * 2001), exact for the uniform and gradient skies (their radiance is linear in the direction).
+ * image (a Radiance .hdr or an OpenEXR .exr file). Primary misses, probe rays and the path tracer
+ * see it through env_radiance() (shaders/environment.glsl); probe fallbacks use its irradiance,
+ * kept as the nine spherical-harmonic coefficients of the cosine-convolved radiance (Ramamoorthi
+ * and Hanrahan 2001), exact for the uniform and gradient skies (their radiance is linear in the
+ * direction).
  *
- * Plain CPU code: parsing, the SH projection and the GPU record (world.c uploads the image).
+ * Plain CPU code: parsing (environment_exr.c reads OpenEXR), the SH projection and the GPU
+ * record (world.c uploads the image).
  */
 #ifndef RD_ENVIRONMENT_H
 #define RD_ENVIRONMENT_H
@@ -18,8 +20,10 @@
 
 /* Images are reduced (box filter, by halves) until at most this wide; the height is half. */
 #define RD_ENV_IMAGE_MAX_WIDTH 4096u
-/* The largest .hdr file header line and dimensions accepted. */
-#define RD_ENV_HDR_MAX_DIM 32768u
+/* The largest image side a file may declare (.hdr resolution line, .exr windows), and the most
+ * memory its decoded texels (three floats each) may take before the reduction above. */
+#define RD_ENV_MAX_DIM 32768u
+#define RD_ENV_MAX_BYTES ((uint64_t)2 << 30)
 
 typedef enum rd_env_mode {
     RD_ENV_UNIFORM = PC_ENV_UNIFORM,
@@ -43,12 +47,41 @@ typedef struct rd_environment {
     const rd_env_image *image; /* RD_ENV_IMAGE only; not owned */
 } rd_environment;
 
+/* The file formats an environment image is read from, told apart by their first bytes. */
+typedef enum rd_env_format {
+    RD_ENV_FORMAT_UNKNOWN = 0,
+    RD_ENV_FORMAT_HDR, /* Radiance RGBE: begins with "#?" */
+    RD_ENV_FORMAT_EXR, /* OpenEXR: begins with the magic number 76 2f 31 01 */
+    RD_ENV_FORMAT_COUNT,
+} rd_env_format;
+
+rd_env_format rd_env_image_format(const uint8_t *data, size_t len);
+/* The usual file name extension of a format ("hdr", "exr"); NULL for RD_ENV_FORMAT_UNKNOWN. */
+const char *rd_env_format_extension(rd_env_format f);
+
+/* Parses an environment image in any format above (chosen by rd_env_image_format). Same
+ * contract as the readers below; err says which formats are read when it is none of them. */
+bool rd_env_image_parse(const uint8_t *data, size_t len, rd_env_image *out, char *err,
+                        size_t errlen);
+
 /* Parses a Radiance RGBE file (.hdr/.pic: "#?RADIANCE" or "#?RGBE", FORMAT=32-bit_rle_rgbe,
  * "-Y H +X W" orientation, flat or run-length encoded scanlines). Takes no ownership of data;
  * out->rgb is malloc'd. False with a sentence in err for anything else (truncated, other
  * orientation or format, oversized, bad run lengths). */
 bool rd_env_image_parse_hdr(const uint8_t *data, size_t len, rd_env_image *out, char *err,
                             size_t errlen);
+/* Parses an OpenEXR file (environment_exr.c): one part, scanline or tiled (level 0 of a mipmap
+ * or ripmap), any compression OpenEXRCore decodes. Colour comes from the channels R, G and B
+ * (HALF, FLOAT or UINT; A and others are ignored) or, without them, from a lone luminance
+ * channel Y as grey; luminance-chroma (RY/BY), subsampled, deep and multi-part files are
+ * refused. The image is the display window: data window pixels outside it are dropped, display
+ * pixels the data window misses are black. Negative, NaN and infinite values become 0. Same
+ * ownership and error contract as rd_env_image_parse_hdr. */
+bool rd_env_image_parse_exr(const uint8_t *data, size_t len, rd_env_image *out, char *err,
+                            size_t errlen);
+/* True when a w x h image is within RD_ENV_MAX_DIM (at least 2 wide, 1 high) and
+ * RD_ENV_MAX_BYTES; else false with a sentence naming the format in err. */
+bool rd_env_image_size_ok(uint64_t w, uint64_t h, const char *format, char *err, size_t errlen);
 /* Halves the image (2x2 box) until width <= max_width. */
 void rd_env_image_limit(rd_env_image *img, uint32_t max_width);
 void rd_env_image_free(rd_env_image *img);

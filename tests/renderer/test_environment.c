@@ -1,13 +1,16 @@
 /* test_environment.c: the environment models against analytic values: the Radiance .hdr reader
  * (flat and run-length scanlines decode to the written values; broken files are refused with a
- * message, and random mutations never crash it), and the SH9 irradiance (exact for uniform and
- * gradient skies, within 1-2% for images of the same functions). */
+ * message, and random mutations never crash it), the OpenEXR reader (files written by
+ * OpenEXRCore's writer decode to exactly the values written, broken ones are refused with a
+ * message), and the SH9 irradiance (exact for uniform and gradient skies, within 1-2% for images
+ * of the same functions). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "renderer/environment.h"
+#include "renderer/exr_writer.h"
 #include "test_util.h"
 
 #define PI_F 3.14159265358979323846f
@@ -203,6 +206,329 @@ static void test_hdr_reader(void)
     free(good.d);
 }
 
+/* ---- OpenEXR ------------------------------------------------------------------------------- */
+
+/* The EXR test texel: quarters, small integers and powers of two, exact in HALF. */
+static float exr_texel(unsigned x, unsigned y, int c)
+{
+    return c == 0   ? 0.25f * (float)x + 0.125f
+           : c == 1 ? 2.0f + (float)y
+                    : 1.0f / (float)(1u << ((x + y) % 8));
+}
+
+/* w x h interleaved pixels of channels channels (exr_texel for the first three, 7 after). */
+static float *exr_pixels(unsigned w, unsigned h, int channels)
+{
+    float *p = malloc((size_t)w * h * (size_t)channels * sizeof *p);
+    if (!p) abort();
+    for (unsigned y = 0; y < h; y++)
+        for (unsigned x = 0; x < w; x++)
+            for (int c = 0; c < channels; c++)
+                p[((size_t)y * w + x) * (size_t)channels + (size_t)c] =
+                    c < 3 ? exr_texel(x, y, c) : 7.0f;
+    return p;
+}
+
+/* Every texel of img equals the test texel of (x - ox, y - oy) inside the w x h data, else 0;
+ * grey: all channels hold channel 0. */
+static unsigned exr_mismatches(const rd_env_image *img, unsigned w, unsigned h, int ox, int oy,
+                               bool grey)
+{
+    unsigned bad = 0;
+    for (unsigned y = 0; y < img->height; y++)
+        for (unsigned x = 0; x < img->width; x++) {
+            int dx = (int)x - ox, dy = (int)y - oy;
+            bool in = dx >= 0 && dy >= 0 && dx < (int)w && dy < (int)h;
+            for (int c = 0; c < 3; c++) {
+                float want = in ? exr_texel((unsigned)dx, (unsigned)dy, grey ? 0 : c) : 0.0f;
+                bad += img->rgb[((size_t)y * img->width + x) * 3 + (size_t)c] != want;
+            }
+        }
+    return bad;
+}
+
+/* Writes d, reads it back through the format sniffer; false (and a failed check) when either
+ * step fails. */
+static bool exr_roundtrip(const pc_exr_desc *d, rd_env_image *img, const char *what)
+{
+    size_t n = 0;
+    uint8_t *file = pc_exr_write(d, &n);
+    CHECKF(file != NULL, "%s: the writer failed", what);
+    if (!file) return false;
+    char err[256] = "";
+    CHECK(rd_env_image_format(file, n) == RD_ENV_FORMAT_EXR);
+    bool ok = rd_env_image_parse(file, n, img, err, sizeof err);
+    CHECKF(ok, "%s: %s", what, err);
+    free(file);
+    return ok;
+}
+
+static void test_exr_reader(void)
+{
+    rd_env_image img;
+    const exr_compression_t comps[] = {EXR_COMPRESSION_NONE, EXR_COMPRESSION_RLE,
+                                       EXR_COMPRESSION_ZIPS, EXR_COMPRESSION_ZIP,
+                                       EXR_COMPRESSION_PIZ};
+    const char *const comp_names[] = {"none", "rle", "zips", "zip", "piz"};
+    /* scanlines, HALF and FLOAT, each lossless compression; 37 x 40 spans several chunks of
+     * every kind (1, 16 and 32 lines) */
+    float *px = exr_pixels(37, 40, 3);
+    for (int t = 0; t < 2; t++)
+        for (size_t k = 0; k < sizeof comps / sizeof *comps; k++) {
+            char what[64];
+            snprintf(what, sizeof what, "%s scanlines, %s", t ? "float" : "half", comp_names[k]);
+            pc_exr_desc d = {.width = 37,
+                             .height = 40,
+                             .pixels = px,
+                             .type = t ? EXR_PIXEL_FLOAT : EXR_PIXEL_HALF,
+                             .compression = comps[k]};
+            if (!exr_roundtrip(&d, &img, what)) continue;
+            CHECKF(img.width == 37 && img.height == 40, "%s: %ux%u", what, img.width, img.height);
+            unsigned bad = exr_mismatches(&img, 37, 40, 0, 0, false);
+            CHECKF(bad == 0, "%s: %u channels differ from the written values", what, bad);
+            rd_env_image_free(&img);
+        }
+    /* tiled (8 x 8 tiles, the last ones partial), HALF with ZIP and FLOAT with PIZ */
+    for (int t = 0; t < 2; t++) {
+        pc_exr_desc d = {.width = 37,
+                         .height = 21,
+                         .pixels = px,
+                         .tile = 8,
+                         .type = t ? EXR_PIXEL_FLOAT : EXR_PIXEL_HALF,
+                         .compression = t ? EXR_COMPRESSION_PIZ : EXR_COMPRESSION_ZIP};
+        if (!exr_roundtrip(&d, &img, "tiled")) continue;
+        CHECK(img.width == 37 && img.height == 21);
+        CHECKF(exr_mismatches(&img, 37, 21, 0, 0, false) == 0, "tiled %s differs",
+               t ? "float" : "half");
+        rd_env_image_free(&img);
+    }
+    /* UINT channels */
+    pc_exr_desc u = {.width = 9, .height = 3, .pixels = px, .type = EXR_PIXEL_UINT};
+    float *ints = exr_pixels(9, 3, 3);
+    for (size_t i = 0; i < 9 * 3 * 3; i++)
+        ints[i] = (float)(i % 50);
+    u.pixels = ints;
+    if (exr_roundtrip(&u, &img, "uint")) {
+        unsigned bad = 0;
+        for (size_t i = 0; i < 9 * 3 * 3; i++)
+            bad += img.rgb[i] != (float)(i % 50);
+        CHECKF(bad == 0, "uint: %u channels differ", bad);
+        rd_env_image_free(&img);
+    }
+    free(ints);
+    /* a data window inside a larger display window, and hanging over its right edge: the
+     * image is the display window, black where no data is */
+    float *px8 = exr_pixels(8, 2, 3), *px6 = exr_pixels(6, 3, 3);
+    pc_exr_desc off = {.width = 8,
+                       .height = 2,
+                       .x = 3,
+                       .y = 1,
+                       .display_width = 8,
+                       .display_height = 4,
+                       .pixels = px8,
+                       .type = EXR_PIXEL_HALF,
+                       .compression = EXR_COMPRESSION_ZIP};
+    if (exr_roundtrip(&off, &img, "data window offset")) {
+        CHECK(img.width == 8 && img.height == 4);
+        CHECKF(exr_mismatches(&img, 8, 2, 3, 1, false) == 0, "offset data window differs");
+        rd_env_image_free(&img);
+    }
+    /* both windows away from the origin (the same box): the image is exactly the data */
+    pc_exr_desc moved = {.width = 6,
+                         .height = 3,
+                         .x = -5,
+                         .y = 7,
+                         .pixels = px6,
+                         .type = EXR_PIXEL_FLOAT,
+                         .tile = 4};
+    if (exr_roundtrip(&moved, &img, "moved windows")) {
+        CHECK(img.width == 6 && img.height == 3);
+        CHECKF(exr_mismatches(&img, 6, 3, 0, 0, false) == 0, "moved windows differ");
+        rd_env_image_free(&img);
+    }
+    free(px8);
+    free(px6);
+    /* alpha and other channels are ignored (channels stored in any order) */
+    static const char *const abgr[] = {"A", "B", "G", "R", "Z"};
+    float *five = exr_pixels(5, 4, 5);
+    for (size_t i = 0; i < 5 * 4; i++) { /* the writer's order: A, B, G, R, Z */
+        float r = five[i * 5], g = five[i * 5 + 1], b = five[i * 5 + 2];
+        five[i * 5] = 0.5f, five[i * 5 + 1] = b, five[i * 5 + 2] = g, five[i * 5 + 3] = r;
+        five[i * 5 + 4] = 9.0f;
+    }
+    pc_exr_desc rgba = {.width = 5,
+                        .height = 4,
+                        .pixels = five,
+                        .type = EXR_PIXEL_HALF,
+                        .channel_count = 5,
+                        .channels = abgr};
+    if (exr_roundtrip(&rgba, &img, "with alpha")) {
+        CHECKF(exr_mismatches(&img, 5, 4, 0, 0, false) == 0, "RGBA (and Z) differs");
+        rd_env_image_free(&img);
+    }
+    free(five);
+    /* a lone Y is grey */
+    static const char *const y_only[] = {"Y"};
+    float *lum = exr_pixels(4, 2, 1);
+    pc_exr_desc grey = {.width = 4,
+                        .height = 2,
+                        .pixels = lum,
+                        .type = EXR_PIXEL_HALF,
+                        .channel_count = 1,
+                        .channels = y_only};
+    if (exr_roundtrip(&grey, &img, "luminance")) {
+        CHECKF(exr_mismatches(&img, 4, 2, 0, 0, true) == 0, "Y is not read as grey");
+        rd_env_image_free(&img);
+    }
+    free(lum);
+    /* negative, NaN and infinite values become 0 */
+    float odd[2 * 1 * 3] = {-1.0f, NAN, INFINITY, 3.0f, -INFINITY, -0.0f};
+    pc_exr_desc special = {.width = 2, .height = 1, .pixels = odd, .type = EXR_PIXEL_FLOAT};
+    if (exr_roundtrip(&special, &img, "special values")) {
+        const float want[6] = {0, 0, 0, 3.0f, 0, 0};
+        CHECKF(memcmp(img.rgb, want, sizeof want) == 0, "%g %g %g %g %g %g", (double)img.rgb[0],
+               (double)img.rgb[1], (double)img.rgb[2], (double)img.rgb[3], (double)img.rgb[4],
+               (double)img.rgb[5]);
+        rd_env_image_free(&img);
+    }
+
+    /* refused with a message, never a crash */
+    char err[256];
+    static const char *const no_rgb[] = {"Z"};
+    static const char *const yc[] = {"BY", "RY", "Y"};
+    static const char *const rg[] = {"G", "R"};
+    struct {
+        const char *what, *expect; /* expect: a phrase of the message */
+        pc_exr_desc d;
+    } refused[] = {
+        {"no colour",
+         "R, G and B",
+         {.width = 4,
+          .height = 2,
+          .pixels = px,
+          .type = EXR_PIXEL_HALF,
+          .channel_count = 1,
+          .channels = no_rgb}},
+        {"R and G only",
+         "R, G and B",
+         {.width = 4,
+          .height = 2,
+          .pixels = px,
+          .type = EXR_PIXEL_HALF,
+          .channel_count = 2,
+          .channels = rg}},
+        {"luminance-chroma",
+         "chroma",
+         {.width = 4,
+          .height = 2,
+          .pixels = px,
+          .type = EXR_PIXEL_HALF,
+          .channel_count = 3,
+          .channels = yc}},
+        {"display too wide",
+         "out of range",
+         {.width = 4,
+          .height = 2,
+          .pixels = px,
+          .type = EXR_PIXEL_HALF,
+          .display_width = 40000,
+          .display_height = 2}},
+        {"display too large",
+         "MiB",
+         {.width = 4,
+          .height = 2,
+          .pixels = px,
+          .type = EXR_PIXEL_HALF,
+          .display_width = 32768,
+          .display_height = 32768}},
+        {"one pixel wide",
+         "out of range",
+         {.width = 1, .height = 2, .pixels = px, .type = EXR_PIXEL_HALF}},
+    };
+    for (size_t i = 0; i < sizeof refused / sizeof *refused; i++) {
+        size_t n = 0;
+        uint8_t *file = pc_exr_write(&refused[i].d, &n);
+        CHECKF(file != NULL, "%s: the writer failed", refused[i].what);
+        if (!file) continue;
+        err[0] = 0;
+        bool ok = rd_env_image_parse(file, n, &img, err, sizeof err);
+        CHECKF(!ok && strstr(err, refused[i].expect), "%s: %s", refused[i].what,
+               ok ? "accepted" : err);
+        if (ok) rd_env_image_free(&img);
+        free(file);
+    }
+    /* a data window wider than RD_ENV_MAX_DIM (the writer makes it; 40000 x 1 halves) */
+    float *wide = calloc(40000 * 3, sizeof *wide);
+    pc_exr_desc too_wide = {.width = 40000, .height = 1, .pixels = wide, .type = EXR_PIXEL_HALF};
+    size_t wn = 0;
+    uint8_t *wf = pc_exr_write(&too_wide, &wn);
+    CHECK(wf != NULL);
+    if (wf) {
+        err[0] = 0;
+        CHECKF(!rd_env_image_parse(wf, wn, &img, err, sizeof err) && err[0], "40000 wide: %s", err);
+        free(wf);
+    }
+    free(wide);
+
+    /* truncated and garbage files */
+    pc_exr_desc zd = {.width = 37,
+                      .height = 40,
+                      .pixels = px,
+                      .type = EXR_PIXEL_HALF,
+                      .compression = EXR_COMPRESSION_ZIP};
+    size_t n = 0;
+    uint8_t *good = pc_exr_write(&zd, &n);
+    CHECK(good != NULL && n > 400);
+    if (!good) {
+        free(px);
+        return;
+    }
+    const size_t cuts[] = {4, 8, 60, n / 3, n / 2, n - 40, n - 1};
+    for (size_t i = 0; i < sizeof cuts / sizeof *cuts; i++) {
+        err[0] = 0;
+        bool ok = rd_env_image_parse(good, cuts[i], &img, err, sizeof err);
+        CHECKF(!ok && err[0], "cut to %zu of %zu bytes: %s", cuts[i], n, ok ? "accepted" : "");
+        if (ok) rd_env_image_free(&img);
+    }
+    printf("exr cut to %zu bytes: %s\n", n / 2, err);
+    uint8_t garbage[300];
+    srand(11);
+    for (int g = 0; g < 50; g++) {
+        memcpy(garbage, good, 4); /* the magic number, then noise */
+        for (size_t i = 4; i < sizeof garbage; i++)
+            garbage[i] = (uint8_t)rand();
+        if (g == 0) memset(garbage + 4, 0, sizeof garbage - 4);
+        err[0] = 0;
+        bool ok = rd_env_image_parse(garbage, sizeof garbage, &img, err, sizeof err);
+        CHECKF(!ok && err[0], "garbage after the magic number %s", ok ? "accepted" : "");
+        if (ok) rd_env_image_free(&img);
+    }
+    printf("exr garbage: %s\n", err);
+    err[0] = 0;
+    CHECK(!rd_env_image_parse((const uint8_t *)"P6\n", 3, &img, err, sizeof err) &&
+          strstr(err, "neither"));
+
+    /* mutations of a valid file: never a crash (ASan watches), any accepted image has its size */
+    unsigned accepted = 0;
+    for (int m = 0; m < 1500; m++) {
+        uint8_t *d = malloc(n);
+        memcpy(d, good, n);
+        int flips = 1 + rand() % 4;
+        for (int f = 0; f < flips; f++)
+            d[(size_t)rand() % n] = (uint8_t)rand();
+        size_t len = rand() % 4 == 0 ? (size_t)rand() % n : n;
+        if (rd_env_image_parse(d, len, &img, err, sizeof err)) {
+            accepted++;
+            CHECK(img.width >= 2 && img.height >= 1 && img.rgb);
+            rd_env_image_free(&img);
+        }
+        free(d);
+    }
+    printf("exr mutations: %u of 1500 still read\n", accepted);
+    free(good);
+    free(px);
+}
+
 static void test_irradiance(void)
 {
     const float normals[][3] = {
@@ -273,6 +599,7 @@ static void test_irradiance(void)
 int main(void)
 {
     test_hdr_reader();
+    test_exr_reader();
     test_irradiance();
     return test_finish();
 }
