@@ -278,11 +278,11 @@ static bool refuse_early(srv_http *h, struct MHD_Connection *conn, request *rq,
         rq->body = BODY_SCENE;
         rq->limit = h->cfg.max_upload;
     } else if (rq->route == R_ENVIRONMENT && rq->method == M_PUT) {
-        if (mt && strcmp(mt, "image/vnd.radiance") != 0 &&
+        if (mt && strcmp(mt, "image/vnd.radiance") != 0 && strcmp(mt, "image/x-exr") != 0 &&
             strcmp(mt, "application/octet-stream") != 0)
             return REFUSE(415, SRV_ERR_MEDIA_TYPE,
-                          "An environment is uploaded as image/vnd.radiance (.hdr) or "
-                          "application/octet-stream (got %s).",
+                          "An environment is uploaded as image/vnd.radiance (.hdr), image/x-exr "
+                          "(.exr) or application/octet-stream (got %s).",
                           mt);
         rq->body = BODY_SCENE; /* raw bytes, counted against the upload cap */
         rq->limit = h->cfg.max_upload;

@@ -187,8 +187,9 @@ enum MHD_Result srv_http_handle_upload(srv_http *h, struct MHD_Connection *conn,
     return r;
 }
 
-/* PUT /v1/environment: a Radiance .hdr, parsed and reduced here (never on the render thread),
- * becomes the environment (sky_mode image); DELETE drops it. */
+/* PUT /v1/environment: a Radiance .hdr or an OpenEXR .exr (told apart by its first bytes),
+ * parsed and reduced here (never on the render thread), becomes the environment (sky_mode
+ * image); DELETE drops it. */
 enum MHD_Result srv_http_handle_environment(srv_http *h, struct MHD_Connection *conn, request *rq)
 {
     srv_cmd *c = srv_cmd_new(SRV_CMD_SET_ENVIRONMENT);
@@ -196,7 +197,7 @@ enum MHD_Result srv_http_handle_environment(srv_http *h, struct MHD_Connection *
         char err[256] = "";
         rd_env_image *img = calloc(1, sizeof *img);
         if (!img) abort();
-        if (!rd_env_image_parse_hdr(rq->data, rq->len, img, err, sizeof err)) {
+        if (!rd_env_image_parse(rq->data, rq->len, img, err, sizeof err)) {
             free(img);
             srv_cmd_unref(c);
             srv_info("http", "environment upload of %zu bytes rejected: %s", rq->len, err);

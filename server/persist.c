@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include "log.h"
+#include "renderer/environment.h"
 
 #define STATE_INTERVAL_MS 250
 
@@ -98,19 +99,47 @@ static void write_scene(srv_persist *p, uint64_t gen, const uint8_t *bytes, size
                  size);
 }
 
+/* The data folder's name for an environment image of format f: environment.EXT. */
+static bool environment_path(const srv_persist *p, rd_env_format f, char *out, size_t outlen)
+{
+    const char *ext = rd_env_format_extension(f);
+    if (!ext) return false;
+    char name[64];
+    snprintf(name, sizeof name, "environment.%s", ext);
+    path_of(p, name, out, outlen);
+    return true;
+}
+
+/* Removes the saved environment images of every format but keep (all when it is UNKNOWN). */
+static int remove_environments(const srv_persist *p, rd_env_format keep)
+{
+    int rc = 0;
+    char path[1100];
+    for (int f = RD_ENV_FORMAT_UNKNOWN + 1; f < RD_ENV_FORMAT_COUNT; f++)
+        if (f != (int)keep && environment_path(p, (rd_env_format)f, path, sizeof path) &&
+            unlink(path) != 0 && errno != ENOENT)
+            rc = errno;
+    return rc;
+}
+
+/* Saves the image as environment.hdr or environment.exr (by its first bytes), then removes the
+ * other one: a crash in between leaves both, and srv_persist_load takes the newer. */
 static void write_environment(srv_persist *p, const uint8_t *bytes, size_t size)
 {
+    rd_env_format f = bytes ? rd_env_image_format(bytes, size) : RD_ENV_FORMAT_UNKNOWN;
     char path[1100];
-    path_of(p, "environment.hdr", path, sizeof path);
     int rc = 0;
-    if (bytes)
-        rc = srv_write_file_atomic(path, bytes, size);
-    else if (unlink(path) != 0 && errno != ENOENT)
-        rc = errno;
+    if (bytes && !environment_path(p, f, path, sizeof path)) {
+        srv_error("persist", "the environment image is of no known format; not saved");
+        return;
+    }
+    if (bytes) rc = srv_write_file_atomic(path, bytes, size);
+    if (rc == 0) rc = remove_environments(p, f);
     if (rc != 0)
         srv_error("persist", "cannot save the environment in %s: %s", p->dir, strerror(rc));
     else if (bytes)
-        srv_info("persist", "saved the environment image (%zu bytes)", size);
+        srv_info("persist", "saved the environment image as environment.%s (%zu bytes)",
+                 rd_env_format_extension(f), size);
     else
         srv_info("persist", "removed the environment image");
 }
@@ -336,6 +365,37 @@ static uint8_t *read_file(const char *path, size_t max, size_t *size)
     return buf;
 }
 
+/* The saved environment image: the newest of environment.hdr and environment.exr (two exist
+ * only after a crash between writing one and removing the other; the older is removed). */
+static void load_environment(const srv_persist *p, srv_saved *out)
+{
+    char path[1100];
+    rd_env_format newest = RD_ENV_FORMAT_UNKNOWN;
+    struct timespec newest_time = {0, 0};
+    int found = 0;
+    for (int f = RD_ENV_FORMAT_UNKNOWN + 1; f < RD_ENV_FORMAT_COUNT; f++) {
+        struct stat sb;
+        if (!environment_path(p, (rd_env_format)f, path, sizeof path) || stat(path, &sb) != 0)
+            continue;
+        found++;
+        if (newest == RD_ENV_FORMAT_UNKNOWN || sb.st_mtim.tv_sec > newest_time.tv_sec ||
+            (sb.st_mtim.tv_sec == newest_time.tv_sec && sb.st_mtim.tv_nsec > newest_time.tv_nsec)) {
+            newest = (rd_env_format)f;
+            newest_time = sb.st_mtim;
+        }
+    }
+    if (newest == RD_ENV_FORMAT_UNKNOWN) return;
+    if (found > 1) {
+        srv_info("persist",
+                 "%d saved environment images: environment.%s is the newest, the others "
+                 "are removed",
+                 found, rd_env_format_extension(newest));
+        remove_environments(p, newest);
+    }
+    environment_path(p, newest, path, sizeof path);
+    out->environment = read_file(path, (size_t)1 << 31, &out->environment_size);
+}
+
 void srv_persist_load(srv_persist *p, srv_saved *out)
 {
     memset(out, 0, sizeof *out);
@@ -364,8 +424,7 @@ void srv_persist_load(srv_persist *p, srv_saved *out)
         cJSON_Delete(m);
         free(meta);
     }
-    path_of(p, "environment.hdr", path, sizeof path);
-    out->environment = read_file(path, (size_t)1 << 31, &out->environment_size);
+    load_environment(p, out);
     path_of(p, "state.json", path, sizeof path);
     uint8_t *text = read_file(path, 64u << 20, &size);
     if (text) {

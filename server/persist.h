@@ -2,7 +2,8 @@
  *
  * DIR/scene.bin        the bytes of the last accepted uploaded scene (.glb or .gltf)
  * DIR/scene.json       {"generation": G, "size": N} written after scene.bin
- * DIR/environment.hdr the environment image of PUT /v1/environment (gone after DELETE)
+ * DIR/environment.EXT  the environment image of PUT /v1/environment as uploaded: EXT is hdr
+ *                      (Radiance) or exr (OpenEXR), one file only; gone after DELETE
  * DIR/state.json       {"version": 1, "generation": G, "source": S, "state": {camera,
  *                      settings, lights, nodes}} (scene_state.h's document)
  * Every file is written as a temporary file, fsync'ed, renamed over the old one, and the
@@ -45,7 +46,8 @@ void srv_saved_free(srv_saved *s);
 
 /* Queues the bytes of an accepted upload (ownership of bytes passes to p; free()d). */
 void srv_persist_post_scene(srv_persist *p, uint64_t generation, uint8_t *bytes, size_t size);
-/* Queues the bytes of an accepted environment image (taken, free()d), or its removal (NULL). */
+/* Queues the bytes of an accepted environment image (taken, free()d), or its removal (NULL).
+ * The file is named after the image's format (rd_env_image_format); the other one goes. */
 void srv_persist_post_environment(srv_persist *p, uint8_t *bytes, size_t size);
 /* Queues a state document (ownership of doc passes to p). */
 void srv_persist_post_state(srv_persist *p, uint64_t generation, const char *source, cJSON *doc);
