@@ -135,7 +135,7 @@ export class TokenPrompt {
 
 /* ---- rendering settings ------------------------------------------------------------------ */
 const GI_LABELS = [['off', 'Off'], ['classic', 'Classic'], ['ddgi', 'DDGI'], ['pathtrace', 'Path trace']];
-const SKY_LABELS = [['uniform', 'Uniform'], ['gradient', 'Gradient'], ['image', 'HDR image']];
+const SKY_LABELS = [['uniform', 'Uniform'], ['gradient', 'Gradient'], ['image', 'HDR/EXR image']];
 
 /* A linear radiance (r, g, b) as a colour picker value and a strength (its largest channel),
  * and back: what the sky and ground controls show and send. */
@@ -180,13 +180,13 @@ export class RenderPanel {
   }
 
   /* The environment controls: mode, sky and ground radiance (colour x strength), the HDR image
-   * (PUT /v1/environment), its intensity and rotation. */
+   * (a Radiance .hdr or OpenEXR .exr, PUT /v1/environment), its intensity and rotation. */
   setupEnvironment() {
     this.skyModes = $('sky-modes');
     this.skyModes.replaceChildren(...SKY_LABELS.map(([v, label]) => h('button', {
       type: 'button', role: 'radio', 'data-value': v, 'aria-checked': 'false',
       title: v === 'gradient' ? 'From the ground colour (below) to the sky colour (above)'
-        : v === 'image' ? 'An equirectangular HDR image' : 'The sky colour in every direction',
+        : v === 'image' ? 'An equirectangular HDR image (Radiance .hdr or OpenEXR .exr)' : 'The sky colour in every direction',
       onclick: () => (v === 'image' && !this.hasImage ? $('hdr-file').click() : this.patch({ sky_mode: v })),
     }, label)));
     const sendSky = () => this.patch({ sky: pickerToRadiance($('sky-color').value, Number($('sky-strength').value) || 0) });
@@ -210,7 +210,9 @@ export class RenderPanel {
       if (!f) return;
       $('hdr-out').textContent = 'uploading…';
       try {
-        const r = await this.api.putBytes('/v1/environment', f, 'image/vnd.radiance');
+        // the server reads the format from the file's first bytes; the type names it
+        const type = /\.exr$/i.test(f.name) ? 'image/x-exr' : 'image/vnd.radiance';
+        const r = await this.api.putBytes('/v1/environment', f, type);
         this.hasImage = true;
         $('hdr-out').textContent = `${f.name} (${r.width}×${r.height})`;
         if (!this.eventsLive) this.refresh(); // else the settings event brings sky_mode image
