@@ -2,10 +2,13 @@
  * OpenEXRCore's writer) becomes the environment and GET /v1/scene reports its size; a broken
  * .exr is refused with 422 while the image before it stays; the data directory holds exactly one
  * environment file, named after the format of the last upload (.exr or .hdr); and a restart with
- * the same --data-dir brings the .exr environment back. */
+ * the same --data-dir brings the .exr environment back (also when an older .hdr was left beside
+ * it). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/time.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "renderer/exr_writer.h"
@@ -164,6 +167,16 @@ int main(void)
     CHECK(only_environment_file("exr"));
     CHECKF(pc_daemon_stop(&d) == 0, "clean exit after SIGTERM");
 
+    /* a run killed between saving environment.exr and removing the older environment.hdr
+     * leaves both: the restart takes the newer and removes the other */
+    char stale[600];
+    snprintf(stale, sizeof stale, "%s/environment.hdr", data_dir);
+    FILE *f = fopen(stale, "wb");
+    CHECK(f && fwrite(hdr, 1, sizeof hdr - 1, f) == sizeof hdr - 1);
+    if (f) fclose(f);
+    struct timeval old[2] = {{.tv_sec = time(NULL) - 3600}, {.tv_sec = time(NULL) - 3600}};
+    CHECK(utimes(stale, old) == 0);
+
     /* a restart with the same data directory: the .exr environment is back */
     pc_daemon d2 = {0};
     if (!start(&d2)) {
@@ -176,6 +189,7 @@ int main(void)
         if (!(w == 16 && h == 8)) pc_sleep_ms(100);
     }
     CHECKF(w == 16 && h == 8, "after the restart: %dx%d", w, h);
+    CHECK(only_environment_file("exr"));
     cJSON *s = pc_api_get_json(&d2, "/v1/settings");
     mode = cJSON_GetObjectItemCaseSensitive(s, "sky_mode");
     CHECK(cJSON_IsString(mode) && strcmp(mode->valuestring, "image") == 0);
