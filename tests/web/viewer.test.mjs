@@ -557,7 +557,43 @@ test('the rendering panel switches GI mode and the probe view', { timeout: 30000
   await until(async () => (await http('GET', '/v1/settings')).json.gi_mode === 'ddgi', 'gi_mode ddgi');
 });
 
-test('the environment controls set a gradient and upload an HDR image', { timeout: 60000 }, async () => {
+/* A w x h OpenEXR file, one part, scanlines, no compression, HALF channels B, G, R (the order
+ * the format stores them: by name) from rgb(x, y) -> [r, g, b] as IEEE half bits. */
+function tinyExr(w, h, rgb) {
+  const parts = [];
+  const u8 = (...b) => parts.push(Buffer.from(b));
+  const i32 = (...v) => { const b = Buffer.alloc(4 * v.length); v.forEach((x, i) => b.writeInt32LE(x, 4 * i)); parts.push(b); };
+  const f32 = (...v) => { const b = Buffer.alloc(4 * v.length); v.forEach((x, i) => b.writeFloatLE(x, 4 * i)); parts.push(b); };
+  const attr = (name, type, size) => { parts.push(Buffer.from(`${name}\0${type}\0`)); i32(size); };
+  u8(0x76, 0x2f, 0x31, 0x01, 2, 0, 0, 0); // magic, version 2, single-part scanline
+  attr('channels', 'chlist', 3 * 18 + 1);
+  for (const c of ['B', 'G', 'R']) { parts.push(Buffer.from(`${c}\0`)); i32(1); u8(0, 0, 0, 0); i32(1, 1); }
+  u8(0);
+  attr('compression', 'compression', 1); u8(0);
+  attr('dataWindow', 'box2i', 16); i32(0, 0, w - 1, h - 1);
+  attr('displayWindow', 'box2i', 16); i32(0, 0, w - 1, h - 1);
+  attr('lineOrder', 'lineOrder', 1); u8(0);
+  attr('pixelAspectRatio', 'float', 4); f32(1);
+  attr('screenWindowCenter', 'v2f', 8); f32(0, 0);
+  attr('screenWindowWidth', 'float', 4); f32(1);
+  u8(0);
+  const header = Buffer.concat(parts.splice(0));
+  const line = 8 + 3 * w * 2; // y, size, then the planes
+  const table = Buffer.alloc(8 * h);
+  for (let y = 0; y < h; y++) table.writeBigUInt64LE(BigInt(header.length + table.length + y * line), 8 * y);
+  const body = Buffer.alloc(line * h);
+  for (let y = 0; y < h; y++) {
+    body.writeInt32LE(y, y * line);
+    body.writeInt32LE(3 * w * 2, y * line + 4);
+    for (let x = 0; x < w; x++) {
+      const [r, g, b] = rgb(x, y);
+      [b, g, r].forEach((v, c) => body.writeUInt16LE(v, y * line + 8 + (c * w + x) * 2));
+    }
+  }
+  return Buffer.concat([header, table, body]);
+}
+
+test('the environment controls set a gradient and upload HDR and EXR images', { timeout: 60000 }, async () => {
   await showPanel('panel-render');
   await page.locator('#sky-modes button[data-value=gradient]').click();
   await until(async () => (await http('GET', '/v1/settings')).json.sky_mode === 'gradient', 'sky_mode gradient');
@@ -577,6 +613,12 @@ test('the environment controls set a gradient and upload an HDR image', { timeou
   const img = (await http('GET', '/v1/scene')).json.environment_image;
   assert.deepEqual(img, { width: 2, height: 1 });
   await until(async () => /tiny\.hdr/.test(await page.locator('#hdr-out').textContent()), 'the file name shown');
+  // an OpenEXR file through the same input (it offers .exr): the answer's size shows
+  assert.match(await page.locator('#hdr-file').getAttribute('accept'), /\.exr/);
+  const exr = tinyExr(4, 2, (x, y) => [0x3c00, x === 0 ? 0x3800 : 0, y ? 0x3400 : 0]);
+  await page.locator('#hdr-file').setInputFiles({ name: 'tiny.exr', mimeType: 'image/x-exr', buffer: exr });
+  await until(async () => /tiny\.exr \(4×2\)/.test(await page.locator('#hdr-out').textContent()), 'the .exr name and size shown');
+  assert.deepEqual((await http('GET', '/v1/scene')).json.environment_image, { width: 4, height: 2 });
   // the panel follows the settings event (or the answer), which may come a moment later
   await until(async () => page.locator('#hdr-rotation-row').isVisible(), 'rotation shows in image mode');
   // back to what the other tests expect: no image, a uniform black sky, no ground
