@@ -57,8 +57,8 @@ static bool fail_lib(const exr_source *s, exr_result_t rv, const char *what, cha
     return false;
 }
 
-/* Where the decoded colour comes from: plane[c] is the channel index of R, G, B (all three the
- * one of Y for a luminance image). */
+/* Where the decoded colour comes from: channel[c] is the index (in the header's channel list) of
+ * R, G and B, or all three that of Y for a luminance image. */
 typedef struct exr_layout {
     int channel[3];
 } exr_layout;
@@ -152,6 +152,7 @@ static bool read_chunk(exr_reader *r, const exr_chunk_info_t *ci, int64_t x0, in
         if (rv != EXR_ERR_SUCCESS) return fail_lib(r->src, rv, what, err, errlen);
     }
     /* each wanted channel into its own float plane; the others are skipped */
+    unsigned planes = 0;
     for (int i = 0; i < r->dec.channel_count; i++) {
         exr_coding_channel_info_t *c = &r->dec.channels[i];
         c->decode_to_ptr = NULL;
@@ -166,15 +167,21 @@ static bool read_chunk(exr_reader *r, const exr_chunk_info_t *ci, int64_t x0, in
                 c->user_bytes_per_element = (int16_t)sizeof(float);
                 c->user_pixel_stride = (int32_t)sizeof(float);
                 c->user_line_stride = (int32_t)(cw * sizeof(float));
+                planes |= 1u << p;
             }
     }
+    /* a grey image decodes Y into plane 0 only */
+    int plane_of[3] = {0, r->lay.channel[1] == r->lay.channel[0] ? 0 : 1,
+                       r->lay.channel[2] == r->lay.channel[0] ? 0 : 2};
+    for (int c = 0; c < 3; c++)
+        if (!(planes & (1u << plane_of[c]))) {
+            snprintf(err, errlen, "the EXR file's %s lacks a colour channel of its header", what);
+            return false;
+        }
     rv = exr_decoding_choose_default_routines(r->ctxt, 0, &r->dec);
     if (rv == EXR_ERR_SUCCESS) rv = exr_decoding_run(r->ctxt, 0, &r->dec);
     if (rv != EXR_ERR_SUCCESS) return fail_lib(r->src, rv, what, err, errlen);
 
-    /* a grey image decoded Y into plane 0 only */
-    int plane_of[3] = {0, r->lay.channel[1] == r->lay.channel[0] ? 0 : 1,
-                       r->lay.channel[2] == r->lay.channel[0] ? 0 : 2};
     rd_env_image *img = r->img;
     for (uint64_t y = 0; y < ch; y++) {
         int64_t iy = y0 + (int64_t)y - r->display.min.y;
