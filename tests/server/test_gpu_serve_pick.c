@@ -258,6 +258,13 @@ int main(void)
                  "{\"translation\":[0.9,0.5,-0.3],\"rotation\":[0,0.38268343,0,0.9238795]}", false,
                  &r) == 200);
     pc_http_response_free(&r);
+    /* GET /v1/scene lists the node where it is now */
+    cJSON *doc = pc_api_get_json(&d, "/v1/scene");
+    float moved[3] = {0, 0, 0};
+    CHECK(vec_of(cJSON_GetArrayItem(cJSON_GetObjectItemCaseSensitive(doc, "nodes"), 1),
+                 "translation", moved, 3) &&
+          moved[0] == 0.9f && moved[1] == 0.5f && moved[2] == -0.3f);
+    cJSON_Delete(doc);
     const float t[3] = {0.9f, 0.5f, -0.3f}, q[4] = {0, 0.38268343f, 0, 0.9238795f};
     memcpy(sc.nodes[1].translation, t, sizeof t);
     memcpy(sc.nodes[1].rotation, q, sizeof q);
