@@ -1,0 +1,91 @@
+// scene_panel.js: the Scene panel: what GET /v1/scene says about the scene, and uploads with
+// PUT /v1/scene (drag-and-drop or the file picker, with progress). Moved out of panels.js.
+
+import { sceneContentType } from './api.js';
+import { h } from './dom.js';
+
+const $ = (id) => document.getElementById(id);
+const mb = (n) => (n / 1048576).toFixed(n < 10485760 ? 2 : 1) + ' MB';
+
+/* ---- scene and upload -------------------------------------------------------------------- */
+/* Shows GET /v1/scene and uploads files with PUT /v1/scene (XMLHttpRequest for progress).
+ * onSceneChanged(scene) runs after a successful upload. */
+export class ScenePanel {
+  constructor(api, { toasts, onSceneChanged }) {
+    this.api = api;
+    this.toasts = toasts;
+    this.onSceneChanged = onSceneChanged;
+    this.info = $('scene-info');
+    this.btn = $('upload-btn');
+    this.file = $('upload-file');
+    this.box = $('upload');
+    this.bar = $('upload-bar');
+    this.text = $('upload-text');
+    this.err = $('upload-error');
+    this.job = null;
+    this.btn.addEventListener('click', () => this.file.click());
+    this.file.addEventListener('change', () => {
+      const f = this.file.files && this.file.files[0];
+      this.file.value = '';
+      if (f) this.upload(f);
+    });
+    $('upload-cancel').addEventListener('click', () => this.job && this.job.abort());
+    this.err.title = 'Click to dismiss';
+    this.err.addEventListener('click', () => { this.err.hidden = true; });
+  }
+
+  render(s) {
+    if (!s) return;
+    const p = s.probes || {};
+    const src = s.source === 'upload' ? 'uploaded scene' : s.source;
+    this.info.replaceChildren(
+      h('div', {}, h('b', {}, src || '–'), s.generation ? ` · generation ${s.generation}` : ''),
+      h('div', {}, `${(s.triangles || 0).toLocaleString('en')} triangles · ${s.node_count ?? '–'} nodes · ${s.light_count ?? '–'} lights`),
+      p.counts ? h('div', {}, `probes ${p.counts.join('×')} (${p.total}) · ${p.rays_per_probe} rays · ${p.mode}`) : '',
+      ...(s.warnings || []).slice(0, 3).map((w) => h('div', { class: 'hint' }, '⚠ ' + w)));
+  }
+
+  showError(name, e) {
+    this.err.replaceChildren(h('b', {}, `${name} was not loaded`), h('span', { class: 'msg' }, e.message),
+      e.status ? h('div', { class: 'hint' }, `HTTP ${e.status} · ${e.code}`) : '');
+    this.err.hidden = false;
+    this.err.scrollIntoView({ block: 'nearest' });
+    // The panel shows the message; a toast only when the panels are hidden (H).
+    if (document.body.classList.contains('ui-hidden')) this.toasts.show(`${name}: ${e.message}`, 'error');
+  }
+
+  async upload(file) {
+    if (this.job) { this.toasts.show('An upload is already running.', 'error'); return; }
+    const panel = $('panel-scene');
+    panel.open = true;
+    requestAnimationFrame(() => panel.scrollIntoView({ block: 'nearest' }));
+    this.err.hidden = true;
+    this.box.hidden = false;
+    this.btn.disabled = true;
+    const progress = this.bar.parentElement;
+    progress.classList.remove('indeterminate');
+    this.job = this.api.upload('/v1/scene', file, sceneContentType(file), (frac, phase) => {
+      if (phase === 'process') {
+        progress.classList.add('indeterminate');
+        this.text.textContent = 'Validating and building the BVH…';
+      } else {
+        this.bar.style.width = `${(frac * 100).toFixed(1)}%`;
+        this.text.textContent = `Uploading ${(frac * 100).toFixed(0)} % · ${mb(frac * file.size)} of ${mb(file.size)}`;
+      }
+    });
+    try {
+      const scene = await this.job.promise;
+      this.toasts.show(`Loaded ${file.name}: ${(scene && scene.triangles || 0).toLocaleString('en')} triangles.`, 'ok');
+      this.render(scene);
+      this.onSceneChanged(scene);
+    } catch (e) {
+      if (e.code !== 'aborted') this.showError(file.name, e);
+    } finally {
+      this.job = null;
+      this.box.hidden = true;
+      this.btn.disabled = false;
+      progress.classList.remove('indeterminate');
+      this.bar.style.width = '0';
+    }
+  }
+}
