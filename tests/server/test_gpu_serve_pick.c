@@ -237,6 +237,21 @@ int main(void)
           pc_json_number(j, "node") == 1);
     cJSON_Delete(j);
 
+    /* a ray exactly through the box's centre (a zero direction component, and the origin of
+     * the instance's object space): the primary pass hits it, so must the pick */
+    CHECK(pc_api(&d, "PUT", "/v1/camera", "{\"position\":[0,1.2,3.5],\"target\":[0,0.5,0]}", false,
+                 &r) == 200);
+    pc_http_response_free(&r);
+    j = pick("/v1/views/0/pick", 0.5f, 0.5f, &status);
+    CHECKF(status == 200 && pc_json_number(j, "node") == 1 &&
+               fabs(pc_json_number(j, "distance") - (sqrt(0.7 * 0.7 + 3.5 * 3.5) * 3.0 / 3.5)) <
+                   1e-3,
+           "the centre ray hits the box's front face");
+    cJSON_Delete(j);
+    CHECK(pc_api(&d, "PUT", "/v1/camera", "{\"position\":[0.2,1.2,3.5],\"target\":[0,0.4,0]}",
+                 false, &r) == 200);
+    pc_http_response_free(&r);
+
     /* bad requests */
     expect_status("POST", "/v1/views/0/pick", "{", 400, "malformed JSON");
     expect_status("POST", "/v1/views/0/pick", "[0.5,0.5]", 400, "not an object");
