@@ -1109,6 +1109,9 @@ test('a rejected upload shows the server\'s message', { timeout: 30000 }, async 
     assert.equal(expected.status, 422, expected.text);
     assert.ok(expected.json.message.length > 0);
     if (c.hint) assert.match(expected.json.message, c.hint);
+    // the page packs a .gltf with separate files itself and names the missing one
+    // (gltf_pack.js; scene.test.mjs checks its message)
+    if (c.name.endsWith('.gltf')) continue;
     await page.locator('#upload-file').setInputFiles({ name: c.name, mimeType: c.mimeType, buffer: c.buffer });
     await page.waitForFunction((msg) => {
       const el = document.querySelector('#upload-error .msg');

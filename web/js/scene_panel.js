@@ -1,15 +1,20 @@
-// scene_panel.js: the Scene panel: what GET /v1/scene says about the scene, and uploads with
-// PUT /v1/scene (drag-and-drop or the file picker, with progress). Moved out of panels.js.
+// scene_panel.js: the Scene panel: what GET /v1/scene says about the scene (the uploaded file's
+// name first), and uploads with PUT /v1/scene?name=FILE (drag-and-drop, the file picker or a
+// folder, with progress). Several files — a .gltf with its .bin and images — are packed into one
+// .glb in the page first (gltf_pack.js); a file the .gltf needs and that was not chosen is
+// reported by name before anything is sent.
 
 import { sceneContentType } from './api.js';
 import { h } from './dom.js';
+import { prepareSceneUpload } from './gltf_pack.js';
 
 const $ = (id) => document.getElementById(id);
 const mb = (n) => (n / 1048576).toFixed(n < 10485760 ? 2 : 1) + ' MB';
 
 /* ---- scene and upload -------------------------------------------------------------------- */
 /* Shows GET /v1/scene and uploads files with PUT /v1/scene (XMLHttpRequest for progress).
- * onSceneChanged(scene) runs after a successful upload. */
+ * onSceneChanged(scene) runs after a successful upload. upload() takes a File or a list of
+ * them. */
 export class ScenePanel {
   constructor(api, { toasts, onSceneChanged }) {
     this.api = api;
@@ -24,11 +29,15 @@ export class ScenePanel {
     this.err = $('upload-error');
     this.job = null;
     this.btn.addEventListener('click', () => this.file.click());
-    this.file.addEventListener('change', () => {
-      const f = this.file.files && this.file.files[0];
-      this.file.value = '';
-      if (f) this.upload(f);
-    });
+    this.folder = $('upload-folder');
+    $('upload-folder-btn').addEventListener('click', () => this.folder.click());
+    for (const input of [this.file, this.folder]) {
+      input.addEventListener('change', () => {
+        const files = [...(input.files || [])];
+        input.value = '';
+        if (files.length) this.upload(files);
+      });
+    }
     $('upload-cancel').addEventListener('click', () => this.job && this.job.abort());
     this.err.title = 'Click to dismiss';
     this.err.addEventListener('click', () => { this.err.hidden = true; });
@@ -39,6 +48,7 @@ export class ScenePanel {
     const p = s.probes || {};
     const src = s.source === 'upload' ? 'uploaded scene' : s.source;
     this.info.replaceChildren(
+      s.file_name ? h('div', { class: 'file-name', id: 'scene-file', title: s.file_name }, s.file_name) : '',
       h('div', {}, h('b', {}, src || '–'), s.generation ? ` · generation ${s.generation}` : ''),
       h('div', {}, `${(s.triangles || 0).toLocaleString('en')} triangles · ${s.node_count ?? '–'} nodes · ${s.light_count ?? '–'} lights`),
       p.counts ? h('div', {}, `probes ${p.counts.join('×')} (${p.total}) · ${p.rays_per_probe} rays · ${p.mode}`) : '',
@@ -54,17 +64,31 @@ export class ScenePanel {
     if (document.body.classList.contains('ui-hidden')) this.toasts.show(`${name}: ${e.message}`, 'error');
   }
 
-  async upload(file) {
-    if (this.job) { this.toasts.show('An upload is already running.', 'error'); return; }
+  async upload(chosen) {
+    if (this.job || this.packing) { this.toasts.show('An upload is already running.', 'error'); return; }
+    const files = chosen instanceof Blob ? [chosen] : [...chosen];
     const panel = $('panel-scene');
     panel.open = true;
     requestAnimationFrame(() => panel.scrollIntoView({ block: 'nearest' }));
     this.err.hidden = true;
+    let up;
+    this.packing = true;
+    try {
+      up = await prepareSceneUpload(files);
+    } catch (e) {
+      this.showError(files.length === 1 ? files[0].name : `${files.length} files`, e);
+      return;
+    } finally {
+      this.packing = false;
+    }
+    const file = up.body;
+    const type = files.includes(file) ? sceneContentType(file) : up.type;
     this.box.hidden = false;
     this.btn.disabled = true;
     const progress = this.bar.parentElement;
     progress.classList.remove('indeterminate');
-    this.job = this.api.upload('/v1/scene', file, sceneContentType(file), (frac, phase) => {
+    const path = '/v1/scene?name=' + encodeURIComponent(up.name);
+    this.job = this.api.upload(path, file, type, (frac, phase) => {
       if (phase === 'process') {
         progress.classList.add('indeterminate');
         this.text.textContent = 'Validating and building the BVH…';
@@ -75,11 +99,11 @@ export class ScenePanel {
     });
     try {
       const scene = await this.job.promise;
-      this.toasts.show(`Loaded ${file.name}: ${(scene && scene.triangles || 0).toLocaleString('en')} triangles.`, 'ok');
+      this.toasts.show(`Loaded ${up.name}: ${(scene && scene.triangles || 0).toLocaleString('en')} triangles.`, 'ok');
       this.render(scene);
       this.onSceneChanged(scene);
     } catch (e) {
-      if (e.code !== 'aborted') this.showError(file.name, e);
+      if (e.code !== 'aborted') this.showError(up.name, e);
     } finally {
       this.job = null;
       this.box.hidden = true;
