@@ -51,15 +51,11 @@ rd_vk_result rd_pick_trace(rd_pick *p, const rd_world *w, const rd_view_camera *
                  (double)y, width, height);
         return RD_VK_ERR_UNSUPPORTED;
     }
-    /* the view's globals as a frame of this camera and size would have them (view.c) */
+    /* the globals a frame of this camera and size would have (view.c) */
     pc_globals g;
     memset(&g, 0, sizeof g);
     rd_world_fill_globals(w, &g);
-    rd_view_camera shifted = *camera;
-    for (int k = 0; k < 3; k++)
-        shifted.eye[k] -= w->scene->origin_shift[k];
-    rd_camera_to_view(&shifted, width, height, &g.view);
-    g.view.size = (pc_uvec4){width, height, 0, 0};
+    rd_world_fill_camera(w, camera, width, height, &g);
     memcpy(p->globals.mapped, &g, sizeof g);
 
     rd_cmd cmd;
