@@ -12,11 +12,10 @@
 
 import { after, before, test } from 'node:test';
 import assert from 'node:assert/strict';
-import { spawn } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
-import readline from 'node:readline';
 import { chromium } from 'playwright-core';
+import { CHROMIUM_ARGS, httpClient, sleep, startDaemon, stopDaemon, until } from './util.mjs';
 
 const env = process.env;
 for (const k of ['PCWEB_EXE', 'PCWEB_OUT', 'PCWEB_ROOT']) {
@@ -25,56 +24,12 @@ for (const k of ['PCWEB_EXE', 'PCWEB_OUT', 'PCWEB_ROOT']) {
 const OUT = env.PCWEB_OUT;
 const VIEWPORT = { width: 960, height: 600 };
 const MAX_PIXELS = 15360; // 156 x 97 for the 960 x 600 page: lavapipe shares two cores
-const CHROMIUM_ARGS = ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
-  '--disable-background-networking', '--disable-component-update', '--disable-sync'];
 
-let daemon, BASE, browser, page;
+let daemon, http, browser, page;
 const pageErrors = [];
 const posts = []; // [{ path, body }] of the page's POST and PATCH requests
 
-const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
-
-async function http(method, url, body, headers = {}) {
-  const res = await fetch(BASE + url, {
-    method,
-    headers: body !== undefined && !(body instanceof Uint8Array) ? { 'Content-Type': 'application/json', ...headers } : headers,
-    body: body === undefined ? undefined : body instanceof Uint8Array ? body : JSON.stringify(body),
-  });
-  const text = await res.text();
-  let json = null;
-  try { json = text ? JSON.parse(text) : null; } catch { /* not JSON */ }
-  return { status: res.status, json, text };
-}
-
-async function until(fn, what, timeoutMs = 20000, everyMs = 100) {
-  const end = Date.now() + timeoutMs;
-  let last;
-  while (Date.now() < end) {
-    last = await fn();
-    if (last) return last;
-    await sleep(everyMs);
-  }
-  throw new Error(`timed out after ${timeoutMs} ms waiting for ${what}`);
-}
-
 const shot = (name) => page.screenshot({ path: path.join(OUT, name) });
-
-function startDaemon(args, logName) {
-  return new Promise((resolve, reject) => {
-    const log = fs.openSync(path.join(OUT, logName), 'a');
-    const child = spawn(env.PCWEB_EXE, args, { stdio: ['ignore', 'pipe', log] });
-    const timer = setTimeout(() => reject(new Error('the daemon did not print its ports within 30 s')), 30000);
-    child.once('exit', (code) => reject(new Error(`the daemon exited with ${code} at start-up (see ${logName})`)));
-    const lines = readline.createInterface({ input: child.stdout });
-    lines.once('line', (line) => {
-      clearTimeout(timer);
-      const m = /^probecast serving http=(\S+) ws=(\S+)/.exec(line);
-      if (!m) { reject(new Error('unexpected first line: ' + line)); return; }
-      lines.on('line', () => {});
-      resolve({ child, http: m[1] });
-    });
-  });
-}
 
 /* Shows panel id (the 960 x 600 page has the compact layout: a toolbar opens one panel). */
 async function showPanel(id) {
@@ -155,10 +110,11 @@ async function mouseDrag(from, to, steps = 10) {
 /* ---- set-up ---------------------------------------------------------------------------------- */
 
 before(async () => {
-  daemon = await startDaemon(['serve', '--http', '127.0.0.1:0', '--ws', '127.0.0.1:0', '--width', '156', '--height', '97',
+  daemon = await startDaemon(env.PCWEB_EXE, OUT, ['serve', '--http', '127.0.0.1:0', '--ws', '127.0.0.1:0', '--width', '156', '--height', '97',
     '--probes', '2,2,2', '--rays', '8', '--hysteresis', '0.5', '--no-animate', '--encoders', '1', '--max-fps', '20',
     '--web-dir', path.join(env.PCWEB_ROOT, 'web')], 'daemon-scene.log');
-  BASE = `http://${daemon.http}`;
+  const BASE = `http://${daemon.http}`;
+  http = httpClient(BASE);
   assert.equal((await http('PATCH', '/v1/settings', { max_pixels: MAX_PIXELS })).status, 200);
   browser = await chromium.launch({ executablePath: env.PCWEB_CHROMIUM || '/usr/bin/chromium', args: CHROMIUM_ARGS });
   const context = await browser.newContext({ viewport: VIEWPORT, deviceScaleFactor: 1 });
@@ -174,11 +130,7 @@ before(async () => {
 
 after(async () => {
   if (browser) await browser.close().catch(() => {});
-  if (daemon && daemon.child.exitCode === null) {
-    const exited = new Promise((r) => daemon.child.once('exit', r));
-    daemon.child.kill('SIGTERM');
-    await Promise.race([exited, sleep(10000)]);
-  }
+  if (daemon) await stopDaemon(daemon.child);
 });
 
 /* ---- tests ----------------------------------------------------------------------------------- */
@@ -203,8 +155,8 @@ test('a .gltf and its .bin chosen together are packed into a .glb and load; the 
   await page.locator('#upload-file').setInputFiles([gltf, bin]);
   await page.waitForFunction(() => [...document.querySelectorAll('.toast.ok')].some((t) => /Loaded scene\.gltf/.test(t.textContent)),
     null, { timeout: 30000 });
-  const put = posts.slice(n).find((p) => p.method === 'PUT');
-  assert.ok(put && put.path === '/v1/scene?name=scene.gltf', JSON.stringify(put && put.path));
+  const put = await until(() => posts.slice(n).find((p) => p.method === 'PUT'), 'the PUT request', 5000);
+  assert.equal(put.path, '/v1/scene?name=scene.gltf');
   const sc = (await http('GET', '/v1/scene')).json;
   assert.equal(sc.file_name, 'scene.gltf');
   assert.equal(sc.triangles, 14);
@@ -236,8 +188,7 @@ test('clicking the picture selects the node under the cursor; the sky selects no
   const n = posts.length;
   await page.mouse.click(rect.left + rect.width / 2, rect.top + rect.height / 2);
   await page.waitForFunction((id) => window.probecast.sceneTree.selected === id, BOX, { timeout: 15000 });
-  const pick = posts.slice(n).find((p) => /\/v1\/views\/\d+\/pick$/.test(p.path));
-  assert.ok(pick, 'the click asked the pick route');
+  const pick = await until(() => posts.slice(n).find((p) => /\/v1\/views\/\d+\/pick$/.test(p.path)), 'the pick request', 5000);
   const own = (await page.evaluate(() => window.probecast.state())).ownView;
   assert.equal(pick.path, `/v1/views/${own}/pick`);
   const body = JSON.parse(pick.body);
@@ -272,7 +223,8 @@ test('editing a translation field sends PATCH and the node moves', { timeout: 30
   const x = page.locator('#node-t input').first();
   await x.fill('0.3');
   await until(async () => (await node(BOX)).translation[0] === 0.3, 'GET /v1/scene to show the box at x = 0.3', 10000);
-  assert.ok(posts.some((p) => p.method === 'PATCH' && p.path === `/v1/nodes/${BOX}`), 'PATCH /v1/nodes/{id} sent');
+  // playwright reports the page's requests asynchronously: the answer may be in first
+  await until(() => posts.some((p) => p.method === 'PATCH' && p.path === `/v1/nodes/${BOX}`), 'PATCH /v1/nodes/{id} sent', 5000);
   const world = (await http('GET', `/v1/nodes/${BOX}`)).json.world_translation;
   assert.deepEqual(world, [0.3, 0.5, 0]);
   // the rotation field in degrees becomes a quaternion about y
@@ -322,7 +274,7 @@ test('the light is drawn as an icon and dragging it moves the light', { timeout:
   await mouseDrag(icon, { x: icon.x - 60, y: icon.y });
   await until(async () => (await http('GET', '/v1/lights')).json.lights[0].position[0] < l0.position[0] - 0.1,
     'the light to move left', 10000);
-  assert.ok(posts.some((p) => p.method === 'PATCH' && p.path === `/v1/lights/${l0.id}`), 'PATCH /v1/lights/{id} sent');
+  await until(() => posts.some((p) => p.method === 'PATCH' && p.path === `/v1/lights/${l0.id}`), 'PATCH /v1/lights/{id} sent', 5000);
   await shot('scene-light-drag.png');
 });
 
@@ -336,8 +288,8 @@ test('a folder holding the .gltf and its .bin uploads as one .glb', { timeout: 6
   const n = posts.length;
   await page.locator('#upload-folder').setInputFiles(path.join(dir, 'model'));
   await until(async () => (await http('GET', '/v1/scene')).json.generation > gen, 'the folder\'s scene to load', 30000);
-  const put = posts.slice(n).find((p) => p.method === 'PUT');
-  assert.equal(put && put.path, '/v1/scene?name=scene.gltf');
+  const put = await until(() => posts.slice(n).find((p) => p.method === 'PUT'), 'the PUT request', 5000);
+  assert.equal(put.path, '/v1/scene?name=scene.gltf');
   const sc = (await http('GET', '/v1/scene')).json;
   assert.equal(sc.file_name, 'scene.gltf');
   assert.equal(sc.triangles, 14);
