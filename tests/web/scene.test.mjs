@@ -45,6 +45,9 @@ const closePanels = () => page.evaluate(() => window.probecast.layout.show(null)
 
 /* ---- the test scene: scene.gltf + scene.bin ------------------------------------------------- */
 
+/* A 1 x 1 white PNG. */
+const WHITE_PNG = 'iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAIAAACQd1PeAAAADElEQVR4nGP4//8/AAX+Av4N70a4AAAAAElFTkSuQmCC';
+
 function sceneFiles() {
   const floor = [-2, 0, -2, -2, 0, 2, 2, 0, 2, 2, 0, -2];
   const box = [];
@@ -72,7 +75,10 @@ function sceneFiles() {
       { name: 'cam', camera: 0, translation: [0, 1.2, 3.5], rotation: [-Math.sin(tilt / 2), 0, 0, Math.cos(tilt / 2)] },
     ],
     cameras: [{ type: 'perspective', perspective: { yfov: 0.8, znear: 0.05 } }],
-    materials: [{ pbrMetallicRoughness: { baseColorFactor: [0.8, 0.8, 0.8, 1] } }, { pbrMetallicRoughness: { baseColorFactor: [0.9, 0.2, 0.1, 1] } }],
+    materials: [{ pbrMetallicRoughness: { baseColorFactor: [0.8, 0.8, 0.8, 1] } },
+      { pbrMetallicRoughness: { baseColorFactor: [0.9, 0.2, 0.1, 1], baseColorTexture: { index: 0 } } }],
+    textures: [{ source: 0 }],
+    images: [{ uri: 'tex/white%20dot.png' }], // a file in a folder beside the .gltf, its name URI-encoded
     meshes: [{ primitives: [{ attributes: { POSITION: 0 }, indices: 1, material: 0 }] },
       { primitives: [{ attributes: { POSITION: 2 }, indices: 3, material: 1 }] }],
     buffers: [{ byteLength: bin.length, uri: 'scene.bin' }],
@@ -87,6 +93,7 @@ function sceneFiles() {
   return {
     gltf: { name: 'scene.gltf', mimeType: 'model/gltf+json', buffer: Buffer.from(JSON.stringify(gltf)) },
     bin: { name: 'scene.bin', mimeType: 'application/octet-stream', buffer: bin },
+    png: { name: 'white dot.png', mimeType: 'image/png', buffer: Buffer.from(WHITE_PNG, 'base64') },
   };
 }
 const BOX = 2;
@@ -149,10 +156,10 @@ test('a .gltf chosen without its .bin is not sent: the message names the file an
   await shot('scene-missing-bin.png');
 });
 
-test('a .gltf and its .bin chosen together are packed into a .glb and load; the file name shows', { timeout: 60000 }, async () => {
-  const { gltf, bin } = sceneFiles();
+test('a .gltf with its .bin and image, chosen together, is packed into a .glb and loads; the file name shows', { timeout: 60000 }, async () => {
+  const { gltf, bin, png } = sceneFiles();
   const n = posts.length;
-  await page.locator('#upload-file').setInputFiles([gltf, bin]);
+  await page.locator('#upload-file').setInputFiles([gltf, bin, png]);
   await page.waitForFunction(() => [...document.querySelectorAll('.toast.ok')].some((t) => /Loaded scene\.gltf/.test(t.textContent)),
     null, { timeout: 30000 });
   const put = await until(() => posts.slice(n).find((p) => p.method === 'PUT'), 'the PUT request', 5000);
@@ -162,6 +169,7 @@ test('a .gltf and its .bin chosen together are packed into a .glb and load; the 
   assert.equal(sc.triangles, 14);
   assert.equal(sc.node_count, 5);
   assert.equal(sc.light_count, 1);
+  assert.equal(sc.texture_count, 1, 'the image went into the .glb');
   await showPanel('panel-scene');
   assert.equal(await page.locator('#scene-file').textContent(), 'scene.gltf');
   assert.equal(await page.locator('#upload-error').isHidden(), true);
@@ -278,12 +286,13 @@ test('the light is drawn as an icon and dragging it moves the light', { timeout:
   await shot('scene-light-drag.png');
 });
 
-test('a folder holding the .gltf and its .bin uploads as one .glb', { timeout: 60000 }, async () => {
+test('a folder holding the .gltf, its .bin and a sub-folder with the image uploads as one .glb', { timeout: 60000 }, async () => {
   const dir = fs.mkdtempSync(path.join(OUT, 'scene-folder-'));
-  const { gltf, bin } = sceneFiles();
-  fs.mkdirSync(path.join(dir, 'model'));
+  const { gltf, bin, png } = sceneFiles();
+  fs.mkdirSync(path.join(dir, 'model', 'tex'), { recursive: true });
   fs.writeFileSync(path.join(dir, 'model', gltf.name), gltf.buffer);
   fs.writeFileSync(path.join(dir, 'model', bin.name), bin.buffer);
+  fs.writeFileSync(path.join(dir, 'model', 'tex', png.name), png.buffer);
   const gen = (await http('GET', '/v1/scene')).json.generation;
   const n = posts.length;
   await page.locator('#upload-folder').setInputFiles(path.join(dir, 'model'));
@@ -293,7 +302,29 @@ test('a folder holding the .gltf and its .bin uploads as one .glb', { timeout: 6
   const sc = (await http('GET', '/v1/scene')).json;
   assert.equal(sc.file_name, 'scene.gltf');
   assert.equal(sc.triangles, 14);
+  assert.equal(sc.texture_count, 1);
   fs.rmSync(dir, { recursive: true, force: true });
+});
+
+test('phone: the Nodes tab opens the tree in the bottom sheet with 44 px rows and controls', { timeout: 60000 }, async () => {
+  const ctx = await browser.newContext({ viewport: { width: 390, height: 760 }, deviceScaleFactor: 1, hasTouch: true, isMobile: true });
+  const p = await ctx.newPage();
+  p.on('pageerror', (e) => pageErrors.push(e.message));
+  try {
+    await p.goto(page.url().replace(/#.*$/, ''));
+    await p.waitForFunction(() => window.probecast && window.probecast.state().frames >= 1, null, { timeout: 60000 });
+    assert.ok(await p.evaluate(() => document.body.classList.contains('layout-phone')));
+    await p.locator('#toolbar [data-panel="panel-nodes"]').tap();
+    await p.waitForFunction(() => document.querySelectorAll('#node-tree .node-row').length === 5, null, { timeout: 10000 });
+    await p.locator(`#node-tree .node-row[data-id="${BOX}"]`).tap();
+    await p.locator('#node-edit').waitFor({ state: 'visible', timeout: 5000 });
+    const small = await p.evaluate(() => [...document.querySelectorAll('#node-tree .node-row, #gizmo-modes button, #node-edit input')]
+      .map((e) => e.getBoundingClientRect()).filter((r) => r.width > 0 && r.height < 44).length);
+    assert.equal(small, 0, 'every row, button and field is at least 44 px high');
+    await p.screenshot({ path: path.join(OUT, 'scene-phone.png') });
+  } finally {
+    await ctx.close();
+  }
 });
 
 test('no uncaught errors in the page', () => {
