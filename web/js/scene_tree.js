@@ -49,12 +49,13 @@ export class SceneTree extends EventTarget {
     this.dispatchEvent(new Event('change'));
   }
 
-  /* One node's document (a PATCH answer or a 'node' event). */
+  /* One node's document (a PATCH answer or a 'node' event). While our own changes of it are on
+   * their way, older documents would move it back: they wait for the last answer. */
   applyNode(n) {
-    if (!n || n.id === undefined) return;
+    if (!n || n.id === undefined || this.queue.busy(n.id)) return;
     this.nodes.set(n.id, n);
     if (!this.rows.has(n.id)) this.render();
-    if (n.id === this.selected && !this.queue.busy(n.id)) this.fill();
+    if (n.id === this.selected) this.fill();
     this.dispatchEvent(new Event('change'));
   }
 
