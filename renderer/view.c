@@ -225,10 +225,7 @@ static rd_vk_result prepare(rd_view *v, const rd_world *w, const rd_view_camera 
     pc_globals g;
     memset(&g, 0, sizeof g);
     rd_world_fill_globals(w, &g);
-    rd_view_camera shifted = *camera;
-    for (int k = 0; k < 3; k++)
-        shifted.eye[k] -= w->scene->origin_shift[k];
-    rd_camera_to_view(&shifted, width, height, &g.view);
+    rd_world_fill_camera(w, camera, width, height, &g);
     g.view.size = (pc_uvec4){width, height, v->frame_index, s->seed};
     g.view.tonemap = (pc_vec4){exp2f(s->exposure_ev), (float)s->tonemap, (float)s->view, 0};
     g.brdf_albedo = v->passes->brdf_albedo.address;

@@ -145,6 +145,17 @@ void rd_world_fill_globals(const rd_world *w, pc_globals *g)
     if (g->env.mode == PC_ENV_IMAGE) g->env.image = w->env_texels.address;
 }
 
+void rd_world_fill_camera(const rd_world *w, const rd_view_camera *camera, unsigned width,
+                          unsigned height, pc_globals *g)
+{
+    rd_view_camera shifted = *camera;
+    for (int k = 0; k < 3; k++)
+        shifted.eye[k] -= w->scene->origin_shift[k];
+    rd_camera_to_view(&shifted, width, height, &g->view);
+    g->view.size.x = width;
+    g->view.size.y = height;
+}
+
 rd_vk_result rd_world_update(rd_world *w, unsigned n, char *err, size_t errlen)
 {
     memset(&w->stats, 0, sizeof w->stats);

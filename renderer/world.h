@@ -9,6 +9,7 @@
 #ifndef RD_WORLD_H
 #define RD_WORLD_H
 
+#include "camera.h"
 #include "ddgi.h"
 #include "environment.h"
 #include "frame_stats.h"
@@ -75,5 +76,10 @@ void rd_world_wake_all(rd_world *w, float age);
 /* Fills the world part of a pass's globals: scene refs, the probe volume shifted by the scene's
  * floating origin (zero when GI is off), sky. Leaves g->view alone. */
 void rd_world_fill_globals(const rd_world *w, pc_globals *g);
+/* Fills the camera part of g->view (eye shifted by the scene's floating origin, basis scaled by
+ * the field of view and the aspect of width x height) and its size (x, y); a view's frames and
+ * picks (pick.h) see the same rays. Needs a scene. */
+void rd_world_fill_camera(const rd_world *w, const rd_view_camera *camera, unsigned width,
+                          unsigned height, pc_globals *g);
 
 #endif

@@ -320,6 +320,29 @@ bool srv_json_playback_patch(const cJSON *obj, srv_playback_patch *p, srv_api_er
     return true;
 }
 
+/* ---- picking -------------------------------------------------------------------------------- */
+
+bool srv_json_pick_request(const cJSON *obj, float point[2], srv_api_error *e)
+{
+    unsigned has = 0;
+    const cJSON *it;
+    cJSON_ArrayForEach(it, obj)
+    {
+        const char *k = it->string;
+        bool ok;
+        if (strcmp(k, "x") == 0)
+            ok = once(&has, 1u, it, e) && get_float(it, 0, 1, &point[0], e);
+        else if (strcmp(k, "y") == 0)
+            ok = once(&has, 2u, it, e) && get_float(it, 0, 1, &point[1], e);
+        else
+            ok = BAD("Unknown pick field '%s' (x and y, 0..1 across and down the picture).", k);
+        if (!ok) return false;
+    }
+    if (has != 3u)
+        return BAD("Give both 'x' and 'y': the point in the picture, 0..1 across and down.");
+    return true;
+}
+
 /* ---- viewer messages ------------------------------------------------------------------------ */
 
 bool srv_json_viewer_msg(const char *text, size_t len, srv_viewer_msg *out, srv_api_error *e)

@@ -43,6 +43,9 @@ bool srv_json_light_patch(const cJSON *obj, srv_light_patch *out, srv_api_error 
 bool srv_json_node_patch(const cJSON *obj, srv_node_patch *out, srv_api_error *e);
 /* PATCH /v1/animation: {"playing": bool, "time": seconds >= 0}, at least one. */
 bool srv_json_playback_patch(const cJSON *obj, srv_playback_patch *out, srv_api_error *e);
+/* POST /v1/views/{id}/pick: {"x", "y"}, both required, each in [0, 1] (normalised picture
+ * coordinates, y down). */
+bool srv_json_pick_request(const cJSON *obj, float point[2], srv_api_error *e);
 /* A text message of the stream: {"type":"camera"|"resize"|"ack", ...}. */
 bool srv_json_viewer_msg(const char *text, size_t len, srv_viewer_msg *out, srv_api_error *e);
 

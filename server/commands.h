@@ -61,6 +61,8 @@ enum {
 };
 
 #define SRV_NAME_MAX 64
+/* an uploaded scene's file name (PUT /v1/scene?name=), terminator included */
+#define SRV_FILE_NAME_MAX 128
 
 typedef struct srv_light_patch {
     unsigned has;
@@ -166,6 +168,7 @@ typedef enum srv_cmd_kind {
     SRV_CMD_VIEW_WATCH,      /* delta connections more (or fewer) show view `view` */
     SRV_CMD_FRAME_REQUEST,   /* GET /v1/frame.jpg: reply {"after": frame id} to wait past */
     SRV_CMD_SET_ENVIRONMENT, /* PUT/DELETE /v1/environment: env_image, or NULL to drop it */
+    SRV_CMD_PICK,            /* POST /v1/views/{id}/pick: what lies under pick[] in view */
 } srv_cmd_kind;
 
 /* The render thread's answer: an HTTP status and a JSON body (malloc'd, may be NULL). */
@@ -191,7 +194,9 @@ typedef struct srv_cmd {
     rd_scene *scene;             /* REPLACE_SCENE: validated scene, owned by the command */
     rd_gpu_scene_prep *prepared; /* REPLACE_SCENE: its BVHs, built by the poster (owned) */
     char source[128];            /* REPLACE_SCENE: where it came from ("upload", "builtin:...") */
-    rd_env_image *env_image;     /* SET_ENVIRONMENT: the parsed HDR image (owned), NULL = none */
+    char file_name[SRV_FILE_NAME_MAX]; /* REPLACE_SCENE: the uploaded file's name ("": none) */
+    float pick[2];                     /* PICK: normalised picture point (x across, y down), 0..1 */
+    rd_env_image *env_image; /* SET_ENVIRONMENT: the parsed HDR image (owned), NULL = none */
 
     /* Owned by render_loop.c. */
     uint64_t ticket; /* input order (see srv_render_post) */

@@ -43,6 +43,7 @@ static const unsigned route_methods[R_COUNT] = {
     [R_FRAME] = M_GET | M_HEAD,
     [R_VIEWS] = M_GET | M_HEAD,
     [R_VIEW_CAMERA] = M_GET | M_HEAD | M_PUT | M_PATCH,
+    [R_VIEW_PICK] = M_POST,
     [R_ANIMATION] = M_GET | M_HEAD | M_PATCH,
     [R_STREAM] = M_GET,
     [R_ENVIRONMENT] = M_PUT | M_DELETE,
@@ -193,7 +194,11 @@ static route match(const char *url, uint32_t *id, bool *id_ok)
     }
     if (strncmp(url, "/v1/views/", 10) == 0) {
         const char *rest = url + 10, *slash = strchr(rest, '/');
-        if (!slash || strcmp(slash, "/camera") != 0) return R_UNKNOWN;
+        if (!slash) return R_UNKNOWN;
+        route r = strcmp(slash, "/camera") == 0 ? R_VIEW_CAMERA
+                  : strcmp(slash, "/pick") == 0 ? R_VIEW_PICK
+                                                : R_UNKNOWN;
+        if (r == R_UNKNOWN) return R_UNKNOWN;
         char num[16];
         size_t n = (size_t)(slash - rest);
         *id_ok = n < sizeof num;
@@ -202,7 +207,7 @@ static route match(const char *url, uint32_t *id, bool *id_ok)
             num[n] = 0;
             *id_ok = srv_http_parse_id(num, id);
         }
-        return R_VIEW_CAMERA;
+        return r;
     }
     return R_UNKNOWN;
 }
@@ -371,6 +376,7 @@ static enum MHD_Result dispatch(srv_http *h, struct MHD_Connection *conn, reques
                                           rq->route == R_LIGHT ? "light" : "node");
         return srv_http_handle_json_route(h, conn, rq);
     case R_VIEW_CAMERA:
+    case R_VIEW_PICK:
         if (!rq->id_ok)
             return srv_http_respond_error(h, conn, rq, 404, SRV_ERR_NOT_FOUND,
                                           "Not a view id in '%s'.", url);

@@ -21,6 +21,7 @@
 #include "api_json.h"
 #include "clock.h"
 #include "log.h"
+#include "scene_state.h"
 #include "stats_report.h"
 #include "renderer/gltf_loader.h"
 
@@ -132,6 +133,12 @@ enum MHD_Result srv_http_handle_frame(srv_http *h, struct MHD_Connection *conn, 
 
 enum MHD_Result srv_http_handle_upload(srv_http *h, struct MHD_Connection *conn, request *rq)
 {
+    /* ?name=FILE: the file's name, shown by viewers (libmicrohttpd has URL-decoded it) */
+    char file_name[SRV_FILE_NAME_MAX] = "";
+    const char *qn = MHD_lookup_connection_value(conn, MHD_GET_ARGUMENT_KIND, "name");
+    if (qn && (strlen(qn) > 1024 || !srv_state_clean_file_name(qn, file_name)))
+        return srv_http_respond_error(h, conn, rq, 400, SRV_ERR_INVALID_FIELD,
+                                      "Query 'name' must be a file name of at most 1024 bytes.");
     rd_scene *scene = calloc(1, sizeof *scene);
     if (!scene) abort();
     char err[512] = "";
@@ -170,6 +177,7 @@ enum MHD_Result srv_http_handle_upload(srv_http *h, struct MHD_Connection *conn,
     c->scene = scene;
     c->prepared = prep;
     snprintf(c->source, sizeof c->source, "upload");
+    memcpy(c->file_name, file_name, sizeof c->file_name);
     srv_render_call(h->cfg.loop, c, SCENE_TIMEOUT_MS);
     pthread_mutex_lock(&h->counters_mu);
     if (c->reply.status == 200)
@@ -291,6 +299,11 @@ enum MHD_Result srv_http_handle_json_route(srv_http *h, struct MHD_Connection *c
         c->view = rq->route == R_CAMERA ? SRV_DEFAULT_VIEW : rq->id;
         c->replace = rq->method == M_PUT;
         ok = srv_json_camera_patch(body, &c->camera, &e);
+        break;
+    case R_VIEW_PICK:
+        c = srv_cmd_new(SRV_CMD_PICK);
+        c->view = rq->id;
+        ok = srv_json_pick_request(body, c->pick, &e);
         break;
     case R_LIGHTS:
         c = srv_cmd_new(SRV_CMD_ADD_LIGHT);

@@ -13,6 +13,7 @@
 #include "renderer/view.h"
 #include "scene_service.h"
 #include "scheduler.h"
+#include "view_pick.h"
 #include "views.h"
 
 #define PERSIST_INTERVAL_MS 250
@@ -28,6 +29,7 @@ struct srv_render_loop {
     bool vk_ok;
     rd_view_passes passes;
     bool passes_ok;
+    rd_pick pick; /* POST /v1/views/{id}/pick */
     srv_scene_service svc;
     bool svc_ok;
     srv_views views;
@@ -89,7 +91,8 @@ static srv_view *view_or_404(srv_render_loop *l, srv_cmd *c)
 {
     srv_view *v = srv_views_find(&l->views, c->view);
     /* only the HTTP routes wait for an answer; the stream's commands may race a closing view */
-    if (!v && (c->kind == SRV_CMD_SET_CAMERA || c->kind == SRV_CMD_FRAME_REQUEST)) {
+    if (!v && (c->kind == SRV_CMD_SET_CAMERA || c->kind == SRV_CMD_FRAME_REQUEST ||
+               c->kind == SRV_CMD_PICK)) {
         srv_api_error e;
         srv_api_fail(&e, 404, SRV_ERR_NOT_FOUND, "There is no view with id %u.", c->view);
         srv_cmd_complete_error(c, &e);
@@ -200,6 +203,9 @@ static void apply_view_cmd(srv_render_loop *l, srv_cmd *c, double now)
         srv_cmd_complete_json(c, 200, j);
         return;
     }
+    case SRV_CMD_PICK:
+        if (v) srv_view_pick(&l->pick, &l->svc, v, c);
+        return;
     default:
         srv_cmd_fail(c, 500, SRV_ERR_INTERNAL, "Unknown command.");
         return;
@@ -571,6 +577,7 @@ srv_render_loop *srv_render_loop_create(const srv_render_config *cfg, rd_scene *
     l->rb_ok = true;
     vr = rd_view_passes_create(&l->vk, &l->passes, err, errlen);
     l->passes_ok = vr == RD_VK_OK;
+    if (vr == RD_VK_OK) vr = rd_pick_create(&l->vk, &l->pick, err, errlen);
     if (vr == RD_VK_OK) {
         vr = srv_scene_service_init(&l->svc, &l->vk, cfg->snapshot, &settings, scene, source,
                                     generation, cfg->generation_base, saved_state, err, errlen);
@@ -630,6 +637,7 @@ void srv_render_loop_destroy(srv_render_loop *l)
         srv_views_dispose(&l->views); /* their last images end their readback leases */
         if (l->rb_ok) rd_readback_dispose(&l->rb);
         if (l->svc_ok) srv_scene_service_dispose(&l->svc);
+        rd_pick_destroy(&l->pick);
         if (l->passes_ok) rd_view_passes_destroy(&l->vk, &l->passes);
         unsigned v = rd_vk_validation_messages(&l->vk);
         if (v) srv_warn("render", "%u Vulkan validation message(s) during this run", v);

@@ -54,6 +54,7 @@ static cJSON *scene_json(const srv_scene_service *svc)
     const rd_scene *s = &svc->st.scene;
     cJSON *j = cJSON_CreateObject();
     cJSON_AddStringToObject(j, "source", svc->st.source);
+    cJSON_AddStringToObject(j, "file_name", svc->st.file_name);
     cJSON_AddNumberToObject(j, "generation", (double)svc->st.generation);
     cJSON_AddNumberToObject(j, "triangles", (double)s->tri_total);
     cJSON_AddNumberToObject(j, "mesh_count", s->mesh_count);
@@ -445,6 +446,7 @@ static unsigned replace_scene(srv_scene_service *svc, srv_cmd *c)
     svc->gs = ngs;
     rd_world_set_scene(&svc->world, &svc->gs);
     srv_state_set_scene(&svc->st, c->scene, c->source, ++svc->generation_counter);
+    memcpy(svc->st.file_name, c->file_name, sizeof svc->st.file_name);
     free(c->scene);
     c->scene = NULL;
     /* a scene without light got the default key light (scene_state.h), which the GPU scene,

@@ -130,6 +130,7 @@ void srv_state_set_scene(srv_scene_state *st, rd_scene *scene, const char *sourc
         st->light_ids[i] = st->next_light_id++;
     st->node_moved = xcalloc(st->scene.node_count, sizeof *st->node_moved);
     snprintf(st->source, sizeof st->source, "%s", source ? source : "");
+    st->file_name[0] = '\0'; /* the caller names an uploaded file afterwards */
     st->generation = generation;
     st->loaded = true;
 
@@ -359,6 +360,49 @@ bool srv_state_node_apply(srv_scene_state *st, uint32_t id, const srv_node_patch
     return true;
 }
 
+/* Length of the UTF-8 sequence at p (1..4), or 0 when it is not one (overlong forms,
+ * surrogates and code points past U+10FFFF included). */
+static size_t utf8_len(const unsigned char *p)
+{
+    if (p[0] < 0x80) return 1;
+    size_t n = p[0] >= 0xc2 && p[0] < 0xe0   ? 2
+               : p[0] >= 0xe0 && p[0] < 0xf0 ? 3
+               : p[0] >= 0xf0 && p[0] < 0xf5 ? 4
+                                             : 0;
+    if (!n) return 0;
+    for (size_t i = 1; i < n; i++)
+        if ((p[i] & 0xc0) != 0x80) return 0;
+    if (n == 3 && ((p[0] == 0xe0 && p[1] < 0xa0) || (p[0] == 0xed && p[1] >= 0xa0))) return 0;
+    if (n == 4 && ((p[0] == 0xf0 && p[1] < 0x90) || (p[0] == 0xf4 && p[1] >= 0x90))) return 0;
+    return n;
+}
+
+bool srv_state_clean_file_name(const char *raw, char out[SRV_FILE_NAME_MAX])
+{
+    out[0] = '\0';
+    if (!raw) return false;
+    const char *base = raw;
+    for (const char *p = raw; *p; p++)
+        if (*p == '/' || *p == '\\') base = p + 1;
+    size_t o = 0;
+    const unsigned char *p = (const unsigned char *)base;
+    while (*p) {
+        size_t n = utf8_len(p);
+        bool bad = n == 0 || (n == 1 && (*p < 0x20 || *p == 0x7f));
+        if (bad) n = 1;
+        if (o + (bad ? 1 : n) >= SRV_FILE_NAME_MAX) break;
+        if (bad) {
+            out[o++] = '_';
+        } else {
+            memcpy(out + o, p, n);
+            o += n;
+        }
+        p += n;
+    }
+    out[o] = '\0';
+    return o > 0;
+}
+
 /* ---- persistence document --------------------------------------------------------------- */
 
 cJSON *srv_state_to_json(const srv_scene_state *st)
@@ -366,6 +410,7 @@ cJSON *srv_state_to_json(const srv_scene_state *st)
     cJSON *j = cJSON_CreateObject();
     cJSON_AddItemToObject(j, "camera", srv_json_camera(&st->camera));
     cJSON_AddItemToObject(j, "settings", srv_json_settings(&st->settings));
+    cJSON_AddStringToObject(j, "file_name", st->file_name);
     cJSON *lights = cJSON_AddArrayToObject(j, "lights");
     for (uint32_t i = 0; i < st->scene.light_count; i++)
         cJSON_AddItemToArray(lights, srv_json_light(st->light_ids[i], &st->scene.lights[i]));
@@ -500,5 +545,7 @@ bool srv_state_restore(srv_scene_state *st, const cJSON *doc, srv_api_error *e)
         if (st->default_lighting) st->default_light_id = (uint32_t)dl->valuedouble;
     }
     settle_default_lighting(st);
+    const cJSON *fn = cJSON_GetObjectItemCaseSensitive(doc, "file_name");
+    if (cJSON_IsString(fn)) srv_state_clean_file_name(fn->valuestring, st->file_name);
     return true;
 }

@@ -20,6 +20,7 @@ typedef struct srv_scene_state {
     rd_scene scene;
     bool loaded;
     char source[128];    /* "upload" or the scene given on the command line */
+    char file_name[SRV_FILE_NAME_MAX]; /* the uploaded file's name, cleaned ("": not given) */
     uint64_t generation; /* increases with every scene replacement */
     uint32_t *light_ids; /* parallel to scene.lights */
     uint32_t next_light_id;
@@ -48,6 +49,12 @@ void srv_state_dispose(srv_scene_state *st); /* idempotent */
  * points the camera at it (the scene's first camera, else one framing its bounds). */
 void srv_state_set_scene(srv_scene_state *st, rd_scene *scene, const char *source,
                          uint64_t generation);
+
+/* An uploaded file's name as the client gave it (already URL-decoded) made safe to show and
+ * store: the part after the last '/' or '\\', control characters and bytes that are not UTF-8
+ * replaced by '_', cut to fewer than SRV_FILE_NAME_MAX bytes on a character boundary. False
+ * (out empty) when nothing is left. */
+bool srv_state_clean_file_name(const char *raw, char out[SRV_FILE_NAME_MAX]);
 
 /* Whether the scene lights itself: a light, or a material that emits. */
 bool srv_scene_brings_light(const rd_scene *s);

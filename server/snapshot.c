@@ -198,6 +198,12 @@ void srv_snapshot_set_node(srv_snapshot *s, uint32_t id, cJSON *doc)
     pthread_mutex_lock(&s->mu);
     bool ok = id < s->node_count;
     if (ok) {
+        /* the scene document lists the nodes too (its first ones): keep its copy current */
+        cJSON *list = s->docs[SRV_DOC_SCENE]
+                          ? cJSON_GetObjectItemCaseSensitive(s->docs[SRV_DOC_SCENE], "nodes")
+                          : NULL;
+        if (cJSON_IsArray(list) && id < (uint32_t)cJSON_GetArraySize(list))
+            cJSON_ReplaceItemInArray(list, (int)id, cJSON_Duplicate(doc, 1));
         cJSON_Delete(s->nodes[id].doc);
         s->nodes[id].doc = doc;
         s->nodes[id].version = s->node_version = ++s->clock;

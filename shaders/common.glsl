@@ -374,11 +374,17 @@ float rnd(inout uint s)
     return float(s >> 8) * (1.0 / 16777216.0);
 }
 
+/* Camera ray through the picture point uv (normalised: 0..1 across, 0..1 down from the top
+ * row). The primary pass and the pick route (pick.comp) share it. */
+vec3 camera_dir_at(pc_view v, vec2 uv)
+{
+    vec2 ndc = vec2(2.0 * uv.x - 1.0, 1.0 - 2.0 * uv.y);
+    return normalize(v.forward.xyz + ndc.x * v.right.xyz + ndc.y * v.up.xyz);
+}
+
 /* Camera ray through the centre of pixel (x, y); y = 0 is the top row. */
 vec3 camera_dir(pc_view v, uvec2 px)
 {
-    vec2 ndc = vec2((2.0 * (float(px.x) + 0.5) / float(v.size.x)) - 1.0,
-                    1.0 - 2.0 * (float(px.y) + 0.5) / float(v.size.y));
-    return normalize(v.forward.xyz + ndc.x * v.right.xyz + ndc.y * v.up.xyz);
+    return camera_dir_at(v, (vec2(px) + 0.5) / vec2(v.size.xy));
 }
 #endif

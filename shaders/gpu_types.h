@@ -423,6 +423,18 @@ PC_STRUCT(pc_reflect_control)
 }
 PC_END(pc_reflect_control);
 
+/* The answer of the pick pass (shaders/pick.comp): one camera ray through a picture point.
+ * position: xyz world position of the hit (shifted by the floating origin), w = distance from
+ * the eye; normal: xyz geometric normal facing the eye, w unused; info: x = 1 for a hit (0: a
+ * miss, nothing else set), y = instance index, z = triangle index (BVH leaf order), w unused. */
+PC_STRUCT(pc_pick_result)
+{
+    pc_vec4 position;
+    pc_vec4 normal;
+    pc_uvec4 info;
+}
+PC_END(pc_pick_result);
+
 /* Push constants shared by all passes: address of pc_globals plus pass-specific words. */
 PC_STRUCT(pc_push)
 {
@@ -496,6 +508,9 @@ PC_CHECK(pc_counters, 32);
 PC_OFF(pc_counters, probe_shadow_rays, 16);
 PC_OFF(pc_counters, reflect_rays, 20);
 PC_CHECK(pc_reflect_control, 16);
+PC_CHECK(pc_pick_result, 48);
+PC_OFF(pc_pick_result, normal, 16);
+PC_OFF(pc_pick_result, info, 32);
 PC_CHECK(pc_push, 48);
 PC_OFF(pc_push, params, 32);
 #undef PC_CHECK

@@ -22,6 +22,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     srv_json_node_patch(obj, &node, &e);
     srv_json_settings_patch(obj, &settings, &e);
     srv_json_playback_patch(obj, &playback, &e);
+    float point[2];
+    srv_json_pick_request(obj, point, &e);
     cJSON_Delete(obj);
     return 0;
 }

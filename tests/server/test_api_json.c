@@ -305,8 +305,70 @@ static void test_default_lighting(void)
     srv_state_dispose(&st);
 }
 
+/* POST /v1/views/{id}/pick bodies, and the upload's file name (PUT /v1/scene?name=). */
+static void test_pick_and_file_name(void)
+{
+    srv_api_error e;
+    float pt[2] = {-1, -1};
+    struct {
+        const char *body;
+        bool ok;
+    } cases[] = {
+        {"{\"x\":0.25,\"y\":1}", true},
+        {"{\"y\":0,\"x\":0}", true},
+        {"{\"x\":0.5}", false},
+        {"{\"x\":1.0001,\"y\":0}", false},
+        {"{\"x\":0,\"y\":-0.5}", false},
+        {"{\"x\":\"0\",\"y\":0}", false},
+        {"{\"x\":0,\"y\":0,\"z\":0}", false},
+        {"{\"x\":0,\"x\":0,\"y\":0}", false},
+        {"{\"x\":null,\"y\":0}", false},
+        {"{}", false},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+        cJSON *j = srv_json_parse_object(cases[i].body, strlen(cases[i].body), &e);
+        bool ok = j && srv_json_pick_request(j, pt, &e);
+        CHECKF(ok == cases[i].ok, "%s", cases[i].body);
+        if (!ok)
+            CHECKF(e.status == 400 && e.message[0], "%s: a 400 with a sentence", cases[i].body);
+        cJSON_Delete(j);
+    }
+    const char *body = "{\"x\":0.25,\"y\":1}";
+    cJSON *j = srv_json_parse_object(body, strlen(body), &e);
+    CHECK(j && srv_json_pick_request(j, pt, &e) && pt[0] == 0.25f && pt[1] == 1.0f);
+    cJSON_Delete(j);
+
+    char out[SRV_FILE_NAME_MAX];
+    struct {
+        const char *raw, *want;
+    } names[] = {
+        {"model.glb", "model.glb"},
+        {"dir/sub\\scene.gltf", "scene.gltf"},
+        {"a\x01"
+         "b\x7f.glb",
+         "a_b_.glb"},
+        {"\xc3\xa9t\xc3\xa9.glb", "\xc3\xa9t\xc3\xa9.glb"}, /* UTF-8 kept */
+        {"\xff\xc3(\xed\xa0\x80.glb", "__(___.glb"},        /* not UTF-8, a surrogate */
+        {"\xe2\x82", "__"},                                 /* cut short */
+    };
+    for (size_t i = 0; i < sizeof names / sizeof *names; i++) {
+        CHECK(srv_state_clean_file_name(names[i].raw, out));
+        CHECKF(strcmp(out, names[i].want) == 0, "'%s' -> '%s'", names[i].raw, out);
+    }
+    CHECK(!srv_state_clean_file_name("dir/", out) && out[0] == 0);
+    CHECK(!srv_state_clean_file_name("", out) && !srv_state_clean_file_name(NULL, out));
+    /* long names end on a character boundary */
+    char lng[400];
+    for (int i = 0; i < 199; i++)
+        memcpy(lng + 2 * i, "\xc3\xa9", 2);
+    lng[398] = 'x';
+    lng[399] = 0;
+    CHECK(srv_state_clean_file_name(lng, out) && strlen(out) == SRV_FILE_NAME_MAX - 2);
+}
+
 int main(void)
 {
+    test_pick_and_file_name();
     test_default_lighting();
     test_bodies();
     test_viewer_messages();

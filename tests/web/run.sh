@@ -2,7 +2,8 @@
 # Browser tests of the viewer (web/): starts `probecast serve` (the executable given as $1) on
 # free loopback ports with a tiny render size and a scratch --data-dir, runs
 # `node --test viewer.test.mjs` against it in Debian's headless Chromium (playwright-core), then
-# stops the daemon. The test itself kills and restarts the daemon (same ports and data dir), so
+# stops the daemon; then `node --test scene.test.mjs`, which runs a daemon of its own. The
+# viewer test itself kills and restarts the daemon (same ports and data dir), so
 # the daemon's pid lives in a file both read.
 #
 # Exit status: the tests' (0 = pass). A missing piece (Chromium, Node.js 18 or newer,
@@ -125,6 +126,13 @@ status=0
   PCWEB_ARGS="$(node -e 'process.stdout.write(JSON.stringify(process.argv.slice(1)))' -- "${restart_args[@]}")"
   export PCWEB_ARGS
   node --test --test-reporter=spec viewer.test.mjs
+) || status=$?
+# The scene tests (node tree, picking, gizmo, multi-file uploads) start a daemon of their own
+# (the viewer tests stop theirs at the end).
+(
+  cd "$here"
+  export PCWEB_EXE="$exe" PCWEB_OUT="$out" PCWEB_CHROMIUM="$chromium" PCWEB_ROOT="$root"
+  node --test --test-reporter=spec scene.test.mjs
 ) || status=$?
 
 stop_daemon

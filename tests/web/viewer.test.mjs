@@ -9,11 +9,10 @@
 
 import { after, before, test } from 'node:test';
 import assert from 'node:assert/strict';
-import { spawn } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
-import readline from 'node:readline';
 import { chromium } from 'playwright-core';
+import { CHROMIUM_ARGS, httpClient, sleep, startDaemon as launch, stopDaemon, until } from './util.mjs';
 
 const env = process.env;
 for (const k of ['PCWEB_HTTP', 'PCWEB_PIDFILE', 'PCWEB_EXE', 'PCWEB_ARGS', 'PCWEB_OUT']) {
@@ -39,40 +38,16 @@ function serverSize(w, h, maxPixels) {
   return { width: Math.min(4096, Math.max(16, w)), height: Math.min(4096, Math.max(16, h)) };
 }
 const RENDER = serverSize(VIEWPORT.width, VIEWPORT.height, MAX_PIXELS);
-const CHROMIUM_ARGS = ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
-  '--disable-background-networking', '--disable-component-update', '--disable-sync'];
 
 let browser, context, page;
 const pageErrors = [];
 const requests = new Map(); // page -> [{ t, method, path }] of every HTTP request it made
 const spawned = []; // daemons started here, stopped in after()
+const http = httpClient(BASE);
+/* Starts probecast with args; resolves { child, http, ws } after its first stdout line. */
+const startDaemon = (args, logName) => launch(env.PCWEB_EXE, OUT, args, logName, (c) => spawned.push(c));
 
 /* ---- helpers -------------------------------------------------------------------------------- */
-
-async function http(method, url, body, headers = {}) {
-  const res = await fetch(url.startsWith('http') ? url : BASE + url, {
-    method,
-    headers: body !== undefined && !(body instanceof Uint8Array) ? { 'Content-Type': 'application/json', ...headers } : headers,
-    body: body === undefined ? undefined : body instanceof Uint8Array ? body : JSON.stringify(body),
-  });
-  const text = await res.text();
-  let json = null;
-  try { json = text ? JSON.parse(text) : null; } catch { /* not JSON */ }
-  return { status: res.status, json, text };
-}
-
-const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
-
-async function until(fn, what, timeoutMs = 20000, everyMs = 100) {
-  const end = Date.now() + timeoutMs;
-  let last;
-  while (Date.now() < end) {
-    last = await fn();
-    if (last) return last;
-    await sleep(everyMs);
-  }
-  throw new Error(`timed out after ${timeoutMs} ms waiting for ${what}`);
-}
 
 const state = (p = page) => p.evaluate(() => window.probecast.state());
 
@@ -176,33 +151,6 @@ function alive(pid) {
   }
 }
 
-/* Starts probecast with args; resolves { child, http, ws } after its first stdout line. */
-function startDaemon(args, logName) {
-  return new Promise((resolve, reject) => {
-    const log = fs.openSync(path.join(OUT, logName), 'a');
-    const child = spawn(env.PCWEB_EXE, args, { stdio: ['ignore', 'pipe', log] });
-    spawned.push(child);
-    const timer = setTimeout(() => reject(new Error('the daemon did not print its ports within 30 s')), 30000);
-    child.once('exit', (code) => reject(new Error(`the daemon exited with ${code} at start-up (see ${logName})`)));
-    const lines = readline.createInterface({ input: child.stdout });
-    lines.once('line', (line) => {
-      clearTimeout(timer);
-      const m = /^probecast serving http=(\S+) ws=(\S+)/.exec(line);
-      if (!m) { reject(new Error('unexpected first line: ' + line)); return; }
-      lines.on('line', () => {}); // keep draining stdout
-      resolve({ child, http: m[1], ws: m[2] });
-    });
-  });
-}
-
-async function stopDaemon(child) {
-  if (child.exitCode !== null || child.signalCode !== null) return;
-  const exited = new Promise((r) => child.once('exit', r));
-  child.kill('SIGTERM');
-  await Promise.race([exited, sleep(10000)]);
-  if (child.exitCode === null && child.signalCode === null) child.kill('SIGKILL');
-}
-
 async function newViewerPage(ctx) {
   const p = await ctx.newPage();
   p.on('pageerror', (e) => pageErrors.push(e.message));
@@ -285,7 +233,7 @@ test('the viewer page loads from the daemon', { timeout: 30000 }, async () => {
   const res = await fetch(BASE + '/');
   assert.equal(res.status, 200);
   assert.match(res.headers.get('content-type'), /^text\/html/);
-  for (const f of ['/viewer.css', '/js/main.js', '/js/stream.js', '/js/camera.js', '/js/api.js', '/js/panels.js', '/js/animation.js',
+  for (const f of ['/viewer.css', '/js/main.js', '/js/stream.js', '/js/camera.js', '/js/api.js', '/js/panels.js', '/js/scene_panel.js', '/js/animation.js',
     '/js/dom.js', '/js/stats.js', '/js/graphs.js', '/js/layout.js', '/js/quality.js']) {
     const r = await fetch(BASE + f);
     assert.equal(r.status, 200, f);
@@ -1151,6 +1099,9 @@ test('a rejected upload shows the server\'s message', { timeout: 30000 }, async 
     assert.equal(expected.status, 422, expected.text);
     assert.ok(expected.json.message.length > 0);
     if (c.hint) assert.match(expected.json.message, c.hint);
+    // the page packs a .gltf with separate files itself and names the missing one
+    // (gltf_pack.js; scene.test.mjs checks its message)
+    if (c.name.endsWith('.gltf')) continue;
     await page.locator('#upload-file').setInputFiles({ name: c.name, mimeType: c.mimeType, buffer: c.buffer });
     await page.waitForFunction((msg) => {
       const el = document.querySelector('#upload-error .msg');

@@ -2,8 +2,9 @@
 // message per animation frame at most), the render size (quality.js: debounced resize
 // messages, a reduced size while the camera moves), the layout of the panels (layout.js), the
 // panels (fed by the stream's world events; the animation panel plays, pauses and seeks the
-// scene's glTF animations), following other views, stats polling, keys, drag-and-drop upload
-// and the view restore after a reconnect.
+// scene's glTF animations; the node tree and the gizmo over the picture select and move nodes
+// and lights), following other views, stats polling, keys, drag-and-drop upload and the view
+// restore after a reconnect.
 //
 // Views (protocol/stream.md, version 2): every connection owns a view of its own; this page's
 // camera and size change only that view. The world (scene, lights, settings, views, animation)
@@ -15,7 +16,10 @@ import { Api } from './api.js';
 import { CameraControls, OrbitCamera } from './camera.js';
 import { AnimationPanel } from './animation.js';
 import { Fullscreen, HelpOverlay, Layout } from './layout.js';
-import { LightsPanel, RenderPanel, ScenePanel, Toasts, TokenPrompt, ViewsPanel } from './panels.js';
+import { LightsPanel, RenderPanel, Toasts, TokenPrompt, ViewsPanel } from './panels.js';
+import { ScenePanel } from './scene_panel.js';
+import { SceneTree } from './scene_tree.js';
+import { Gizmo } from './gizmo.js';
 import { QualityPanel, RenderSize, ViewCaps } from './quality.js';
 import { StatsPanel } from './stats.js';
 import { CanvasView, FrameStream, SUBPROTOCOL } from './stream.js';
@@ -176,6 +180,7 @@ function firstScene(gen) {
 function setScene(s) {
   scene = s;
   scenePanel.render(s);
+  sceneTree.setScene(s);
   renderPanel.setEnvironmentImage(s && s.environment_image);
   const b = s && s.bounds;
   if (b && b.min && b.max) camera.sceneSize = Math.max(1e-3, Math.hypot(b.max[0] - b.min[0], b.max[1] - b.min[1], b.max[2] - b.min[2]));
@@ -226,11 +231,12 @@ function onViews(doc) {
 stream.addEventListener('world', (e) => {
   const { what, data } = e.detail;
   if (what === 'scene') onScene(data);
-  else if (what === 'lights') lightsPanel.applyEvent(data);
+  else if (what === 'lights') { lightsPanel.applyEvent(data); gizmo.request(); }
   else if (what === 'settings') renderPanel.applyEvent(data);
   else if (what === 'views') onViews(data);
   else if (what === 'animation') animPanel.applyEvent(data);
-  // 'node': no panel shows nodes; lights that hang on a moved node come as a 'lights' event.
+  else if (what === 'node') sceneTree.applyNode(data);
+  // lights that hang on a moved node come as a 'lights' event
 });
 
 /* ---- following another view -------------------------------------------------------------------- */
@@ -253,6 +259,7 @@ function syncFollow() {
   controls.setEnabled(!following);
   viewsPanel.update({ own: v2() ? stream.ownView : null, watching: v2() ? stream.expectView : null, single: stream.protocol === 1 });
   if (!following) requestTick(); // a camera that changed meanwhile (a new scene) goes out now
+  gizmo.request();
 }
 stream.addEventListener('following', (e) => {
   const was = viewsPanel.following;
@@ -286,6 +293,7 @@ function tick(t) {
     if (stream.sendCamera(camera.toMessage())) sentVersion = camera.version;
   }
   if (camera.version !== linkWritten) scheduleLink();
+  gizmo.request();
   if (controls.keysHeld()) requestTick();
   else lastTick = 0;
 }
@@ -327,6 +335,10 @@ const scenePanel = new ScenePanel(api, {
   },
 });
 const viewsPanel = new ViewsPanel({ onFollow: follow });
+const sceneTree = new SceneTree(api, { toasts });
+const gizmo = new Gizmo({ overlay: $('overlay'), stage: $('stage'), view, camera, controls, tree: sceneTree,
+  lights: lightsPanel, api, stream, toasts });
+stream.addEventListener('frame', () => gizmo.request()); // the picture's place may change (letterbox)
 const animPanel = new AnimationPanel(api, { toasts });
 syncFollow();
 
@@ -387,8 +399,8 @@ window.addEventListener('drop', (e) => {
   e.preventDefault();
   dragDepth = 0;
   drop.hidden = true;
-  const f = e.dataTransfer.files[0];
-  if (f) scenePanel.upload(f);
+  const files = [...e.dataTransfer.files];
+  if (files.length) scenePanel.upload(files);
 });
 
 /* ---- keys, panels, help, fullscreen ------------------------------------------------------------ */
@@ -459,7 +471,7 @@ window.addEventListener('pageshow', (ev) => { if (ev.persisted && !document.hidd
 
 // For tests and the console: the live objects and a summary of the stream state.
 window.probecast = {
-  api, stream, camera, controls, view, renderPanel, lightsPanel, scenePanel, viewsPanel, animPanel, follow,
+  api, stream, camera, controls, view, renderPanel, lightsPanel, scenePanel, viewsPanel, animPanel, follow, sceneTree, gizmo,
   layout, renderSize, viewCaps, help, fullscreen, statsPanel,
   state: () => ({
     state: stream.state, drawnId: stream.drawnId, frames: stream.counters.drawn, inputSeq: stream.lastHeader ? stream.lastHeader.inputSeq : 0,

@@ -1,12 +1,11 @@
-// panels.js: the overlay panels: views (follow), lights, rendering settings, scene
-// upload, plus toasts and the token prompt. Each panel owns its DOM subtree (found by id in
+// panels.js: the overlay panels: views (follow), lights, rendering settings, plus toasts and
+// the token prompt (the scene panel: scene_panel.js). Each panel owns its DOM subtree (found by id in
 // index.html), talks to the server only through an Api (api.js) and reports failures with the
 // server's own message. The world's state reaches the panels through the stream's 'event'
 // messages (protocol/stream.md, version 2): applyEvent(doc) takes a document that is exactly
 // the body of the matching GET; the panels never poll. refresh() (one GET) is only for a
 // version-1 server, which sends no events.
 
-import { sceneContentType } from './api.js';
 import { h, icon } from './dom.js';
 
 const $ = (id) => document.getElementById(id);
@@ -14,8 +13,6 @@ const $ = (id) => document.getElementById(id);
 /* Icons (16 x 16 stroke paths) for dom.js's icon(). */
 const ICON_TARGET = 'M8 1.5v3M8 11.5v3M1.5 8h3M11.5 8h3M8 4.5a3.5 3.5 0 1 0 0 7a3.5 3.5 0 1 0 0-7z';
 const ICON_DELETE = 'M4 4l8 8M12 4l-8 8';
-
-const mb = (n) => (n / 1048576).toFixed(n < 10485760 ? 2 : 1) + ' MB';
 
 /* ---- colours: glTF light colours are linear RGB; <input type=color> is sRGB ---------------- */
 const toSrgb = (c) => (c <= 0.0031308 ? 12.92 * c : 1.055 * Math.pow(c, 1 / 2.4) - 0.055);
@@ -601,88 +598,5 @@ export class ViewsPanel {
     this.banner.hidden = !this.following;
     this.bannerId.textContent = this.following ? String(this.watching) : '';
     document.body.classList.toggle('following', this.following);
-  }
-}
-
-/* ---- scene and upload -------------------------------------------------------------------- */
-/* Shows GET /v1/scene and uploads files with PUT /v1/scene (XMLHttpRequest for progress).
- * onSceneChanged(scene) runs after a successful upload. */
-export class ScenePanel {
-  constructor(api, { toasts, onSceneChanged }) {
-    this.api = api;
-    this.toasts = toasts;
-    this.onSceneChanged = onSceneChanged;
-    this.info = $('scene-info');
-    this.btn = $('upload-btn');
-    this.file = $('upload-file');
-    this.box = $('upload');
-    this.bar = $('upload-bar');
-    this.text = $('upload-text');
-    this.err = $('upload-error');
-    this.job = null;
-    this.btn.addEventListener('click', () => this.file.click());
-    this.file.addEventListener('change', () => {
-      const f = this.file.files && this.file.files[0];
-      this.file.value = '';
-      if (f) this.upload(f);
-    });
-    $('upload-cancel').addEventListener('click', () => this.job && this.job.abort());
-    this.err.title = 'Click to dismiss';
-    this.err.addEventListener('click', () => { this.err.hidden = true; });
-  }
-
-  render(s) {
-    if (!s) return;
-    const p = s.probes || {};
-    const src = s.source === 'upload' ? 'uploaded scene' : s.source;
-    this.info.replaceChildren(
-      h('div', {}, h('b', {}, src || '–'), s.generation ? ` · generation ${s.generation}` : ''),
-      h('div', {}, `${(s.triangles || 0).toLocaleString('en')} triangles · ${s.node_count ?? '–'} nodes · ${s.light_count ?? '–'} lights`),
-      p.counts ? h('div', {}, `probes ${p.counts.join('×')} (${p.total}) · ${p.rays_per_probe} rays · ${p.mode}`) : '',
-      ...(s.warnings || []).slice(0, 3).map((w) => h('div', { class: 'hint' }, '⚠ ' + w)));
-  }
-
-  showError(name, e) {
-    this.err.replaceChildren(h('b', {}, `${name} was not loaded`), h('span', { class: 'msg' }, e.message),
-      e.status ? h('div', { class: 'hint' }, `HTTP ${e.status} · ${e.code}`) : '');
-    this.err.hidden = false;
-    this.err.scrollIntoView({ block: 'nearest' });
-    // The panel shows the message; a toast only when the panels are hidden (H).
-    if (document.body.classList.contains('ui-hidden')) this.toasts.show(`${name}: ${e.message}`, 'error');
-  }
-
-  async upload(file) {
-    if (this.job) { this.toasts.show('An upload is already running.', 'error'); return; }
-    const panel = $('panel-scene');
-    panel.open = true;
-    requestAnimationFrame(() => panel.scrollIntoView({ block: 'nearest' }));
-    this.err.hidden = true;
-    this.box.hidden = false;
-    this.btn.disabled = true;
-    const progress = this.bar.parentElement;
-    progress.classList.remove('indeterminate');
-    this.job = this.api.upload('/v1/scene', file, sceneContentType(file), (frac, phase) => {
-      if (phase === 'process') {
-        progress.classList.add('indeterminate');
-        this.text.textContent = 'Validating and building the BVH…';
-      } else {
-        this.bar.style.width = `${(frac * 100).toFixed(1)}%`;
-        this.text.textContent = `Uploading ${(frac * 100).toFixed(0)} % · ${mb(frac * file.size)} of ${mb(file.size)}`;
-      }
-    });
-    try {
-      const scene = await this.job.promise;
-      this.toasts.show(`Loaded ${file.name}: ${(scene && scene.triangles || 0).toLocaleString('en')} triangles.`, 'ok');
-      this.render(scene);
-      this.onSceneChanged(scene);
-    } catch (e) {
-      if (e.code !== 'aborted') this.showError(file.name, e);
-    } finally {
-      this.job = null;
-      this.box.hidden = true;
-      this.btn.disabled = false;
-      progress.classList.remove('indeterminate');
-      this.bar.style.width = '0';
-    }
   }
 }

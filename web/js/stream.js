@@ -101,20 +101,36 @@ export class CanvasView {
     this.redraw();
   }
 
+  /* Where the frame goes in the canvas's backing store: a frame of nearly the canvas's aspect
+   * (a reduced size asked for while moving, rounded) fills the canvas; another aspect (a
+   * followed view) is letterboxed. */
+  placement(f = this.last) {
+    const { canvas } = this;
+    if (!f) return { x: 0, y: 0, w: canvas.width, h: canvas.height, s: 1 };
+    const s = Math.min(canvas.width / f.width, canvas.height / f.height);
+    const near = Math.abs((f.width / f.height) / (canvas.width / canvas.height) - 1) < 0.03;
+    const w = near ? canvas.width : Math.round(f.width * s), h = near ? canvas.height : Math.round(f.height * s);
+    return { x: (canvas.width - w) >> 1, y: (canvas.height - h) >> 1, w, h, s };
+  }
+
+  /* The picture's rectangle in page CSS pixels: { left, top, width, height }. */
+  pictureRect() {
+    const r = this.canvas.getBoundingClientRect();
+    const p = this.placement();
+    const k = r.width / Math.max(1, this.canvas.width);
+    return { left: r.left + p.x * k, top: r.top + p.y * k, width: p.w * k, height: p.h * k };
+  }
+
   redraw() {
     const { ctx, canvas } = this;
     ctx.fillStyle = '#0b0c10';
     ctx.fillRect(0, 0, canvas.width, canvas.height);
     const f = this.last;
     if (!f) return;
-    // A frame of nearly the canvas's aspect (a reduced size asked for while moving, rounded)
-    // fills the canvas; another aspect (a followed view) is letterboxed.
-    const s = Math.min(canvas.width / f.width, canvas.height / f.height);
-    const near = Math.abs((f.width / f.height) / (canvas.width / canvas.height) - 1) < 0.03;
-    const w = near ? canvas.width : Math.round(f.width * s), h = near ? canvas.height : Math.round(f.height * s);
+    const p = this.placement(f);
     ctx.imageSmoothingEnabled = true;
-    ctx.imageSmoothingQuality = s > 1 ? 'medium' : 'high'; // scaled up while moving
-    ctx.drawImage(f.image, (canvas.width - w) >> 1, (canvas.height - h) >> 1, w, h);
+    ctx.imageSmoothingQuality = p.s > 1 ? 'medium' : 'high'; // scaled up while moving
+    ctx.drawImage(f.image, p.x, p.y, p.w, p.h);
   }
 }
 
