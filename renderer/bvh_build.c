@@ -250,7 +250,7 @@ static void copy_subtree(rd_task *t)
     }
     const bvh_rec *r = ctx->rec[it->buf];
     for (uint32_t i = it->begin; i < it->end; i++)
-        ctx->prim_index[i] = r[i].id;
+        ctx->prim_index[i] = bvh_rec_id(&r[i]);
 }
 
 /* Writes top nodes and submits a copy task per subtree. */
@@ -322,17 +322,14 @@ static void fill_run(rd_task *t)
     bvh_bounds_empty(&j->vb);
     uint32_t v = j->out_valid, b = j->out_bad;
     for (uint32_t i = j->begin; i < j->end; i++) {
-        bvh_rec q = {.id = i};
         if (source_box(j->src, i, lo, hi)) {
-            memcpy(q.lo, lo, sizeof lo);
-            memcpy(q.hi, hi, sizeof hi);
+            bvh_rec q = bvh_rec_make(lo, hi, i);
             j->dst[v++] = q;
             bvh_rec_bounds_add(&j->vb, &q);
         } else {
-            for (int a = 0; a < 3; a++) {
-                q.lo[a] = INFINITY;
-                q.hi[a] = -INFINITY;
-            }
+            const float e_lo[3] = {INFINITY, INFINITY, INFINITY};
+            const float e_hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+            bvh_rec q = bvh_rec_make(e_lo, e_hi, i);
             j->dst[b++] = q;
         }
     }

@@ -20,13 +20,16 @@
 #define SAH_TRAVERSAL 1.0
 #define SAH_INTERSECT 1.0
 
+/* Lane 3 of each array is padding for 4-wide updates (its value means nothing). */
 typedef struct bvh_bounds {
-    float lo[3], hi[3];   /* box */
-    float clo[3], chi[3]; /* centroid bounds */
+    float lo[4], hi[4];   /* box */
+    float clo[4], chi[4]; /* centroid bounds */
 } bvh_bounds;
 
+/* A bin's box and count; lane 3 of lo/hi is padding that lets the multi-threaded builder
+ * update a box with 4-wide min/max (its value means nothing). */
 typedef struct bvh_bin {
-    float lo[3], hi[3];
+    float lo[4], hi[4];
     uint32_t count;
 } bvh_bin;
 
@@ -58,7 +61,7 @@ static inline void bvh_node_set(pc_bvh_node *n, const float lo[3], const float h
 
 static inline void bvh_bounds_empty(bvh_bounds *b)
 {
-    for (int a = 0; a < 3; a++) {
+    for (int a = 0; a < 4; a++) {
         b->lo[a] = b->clo[a] = INFINITY;
         b->hi[a] = b->chi[a] = -INFINITY;
     }
@@ -123,8 +126,9 @@ static inline void bvh_bins_reset(bvh_bin bin[3][BVH_MAX_BINS], uint32_t bins)
 {
     for (int a = 0; a < 3; a++)
         for (uint32_t i = 0; i < bins; i++)
-            bin[a][i] =
-                (bvh_bin){{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}, 0};
+            bin[a][i] = (bvh_bin){{INFINITY, INFINITY, INFINITY, INFINITY},
+                                  {-INFINITY, -INFINITY, -INFINITY, -INFINITY},
+                                  0};
 }
 
 /* Adds bin set o into b. */

@@ -15,36 +15,46 @@ void bvh_rec_bounds_of(const bvh_rec *r, uint32_t begin, uint32_t end, bvh_bound
         bvh_rec_bounds_add(b, &r[i]);
 }
 
-static inline void bin_add(bvh_bin bin[3][BVH_MAX_BINS], const bvh_rec *q, const bvh_bin_setup *s)
+static inline void bin_add(bvh_bin *row, const bvh_rec *q, int a, const bvh_bin_setup *s)
 {
-    for (int a = 0; a < 3; a++) {
-        /* An unused axis has scale 0: everything lands in bin 0 and the sweep skips it. */
-        bvh_bin *bn =
-            &bin[a][bvh_bin_of(bvh_centroid(q->lo[a], q->hi[a]), s->cmin[a], s->scale[a], s->bins)];
-        bn->count++;
-        for (int k = 0; k < 3; k++) {
-            bn->lo[k] = q->lo[k] < bn->lo[k] ? q->lo[k] : bn->lo[k];
-            bn->hi[k] = q->hi[k] > bn->hi[k] ? q->hi[k] : bn->hi[k];
-        }
+    bvh_bin *bn =
+        &row[bvh_bin_of(bvh_centroid(q->lo[a], q->hi[a]), s->cmin[a], s->scale[a], s->bins)];
+    bn->count++;
+    /* all four lanes, so that the compiler can use one 4-wide min and max */
+    for (int k = 0; k < 4; k++) {
+        bn->lo[k] = q->lo[k] < bn->lo[k] ? q->lo[k] : bn->lo[k];
+        bn->hi[k] = q->hi[k] > bn->hi[k] ? q->hi[k] : bn->hi[k];
     }
 }
 
-/* Bins [begin, end) into out (reset here). Even and odd records go to two bin sets that are
- * merged at the end: consecutive primitives often share a bin, and one set would make each
- * update wait for the previous one's store. */
+/* Ranges this long bin into two alternating bin sets (see bvh_bin_range). */
+#define BIN_TWO_SETS_FROM 256u
+
+/* Bins [begin, end) along the usable axes into out (reset here). Long ranges send even and
+ * odd records to two bin sets merged at the end: neighbouring primitives often share a bin,
+ * and with one set each update would wait for the previous one's store. */
 void bvh_bin_range(const bvh_rec *r, uint32_t begin, uint32_t end, const bvh_bin_setup *s,
                    bvh_bin out[3][BVH_MAX_BINS])
 {
-    bvh_bin odd[3][BVH_MAX_BINS];
+    int axes[3], na = 0;
+    for (int a = 0; a < 3; a++)
+        if (s->use[a]) axes[na++] = a;
     bvh_bins_reset(out, s->bins);
-    bvh_bins_reset(odd, s->bins);
     uint32_t i = begin;
-    for (; i + 1 < end; i += 2) {
-        bin_add(out, &r[i], s);
-        bin_add(odd, &r[i + 1], s);
+    if (end - begin >= BIN_TWO_SETS_FROM) {
+        bvh_bin odd[3][BVH_MAX_BINS];
+        bvh_bins_reset(odd, s->bins);
+        for (; i + 1 < end; i += 2) {
+            for (int k = 0; k < na; k++) {
+                bin_add(out[axes[k]], &r[i], axes[k], s);
+                bin_add(odd[axes[k]], &r[i + 1], axes[k], s);
+            }
+        }
+        bvh_bins_merge(out, (const bvh_bin(*)[BVH_MAX_BINS])odd, s->bins);
     }
-    if (i < end) bin_add(out, &r[i], s);
-    bvh_bins_merge(out, (const bvh_bin(*)[BVH_MAX_BINS])odd, s->bins);
+    for (; i < end; i++)
+        for (int k = 0; k < na; k++)
+            bin_add(out[axes[k]], &r[i], axes[k], s);
 }
 
 /* ---- one subtree on one thread ---------------------------------------------------------- */

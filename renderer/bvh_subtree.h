@@ -9,10 +9,8 @@
 /* A primitive: its box and original index; the centroid is derived from the box
  * (bvh_centroid) wherever it is needed, always with the same arithmetic. */
 typedef struct bvh_rec {
-    float lo[3];
-    uint32_t id;
-    float hi[3];
-    uint32_t pad;
+    float lo[4]; /* lo[3]: the original index (bvh_rec_id) */
+    float hi[4]; /* hi[3]: 0 */
 } bvh_rec;
 _Static_assert(sizeof(bvh_rec) == 32, "two records per cache line");
 
@@ -22,9 +20,25 @@ typedef struct bvh_bin_setup {
     uint32_t bins;
 } bvh_bin_setup;
 
+/* The index rides in lane 3 so that boxes load and update as 4-wide vectors; its bits are
+ * flipped at bit 30 so the lane never holds a denormal (whose arithmetic would trap into
+ * microcode in the 4-wide centroid): it is a float >= 2, inf or NaN, all harmless there. */
+#define BVH_REC_ID_FLIP 0x40000000u
+
+static inline uint32_t bvh_rec_id(const bvh_rec *r)
+{
+    return pc_f2u(r->lo[3]) ^ BVH_REC_ID_FLIP;
+}
+
+static inline bvh_rec bvh_rec_make(const float lo[3], const float hi[3], uint32_t id)
+{
+    return (bvh_rec){{lo[0], lo[1], lo[2], pc_u2f(id ^ BVH_REC_ID_FLIP)}, {hi[0], hi[1], hi[2], 0}};
+}
+
+/* All four lanes, so that the compiler can use 4-wide arithmetic, min and max. */
 static inline void bvh_rec_bounds_add(bvh_bounds *b, const bvh_rec *p)
 {
-    for (int a = 0; a < 3; a++) {
+    for (int a = 0; a < 4; a++) {
         float c = bvh_centroid(p->lo[a], p->hi[a]);
         b->lo[a] = p->lo[a] < b->lo[a] ? p->lo[a] : b->lo[a];
         b->hi[a] = p->hi[a] > b->hi[a] ? p->hi[a] : b->hi[a];
