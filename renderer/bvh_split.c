@@ -12,26 +12,28 @@ sah_split bvh_sweep_bins(const bvh_bin bin[3][BVH_MAX_BINS], const bool use[3], 
         if (!use[a]) continue;
         double right_cost[BVH_MAX_BINS];
         uint32_t right_count[BVH_MAX_BINS];
-        float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        /* lane 3 is padding: 4-wide min/max (see bvh_bin) */
+        float lo[4] = {INFINITY, INFINITY, INFINITY, INFINITY};
+        float hi[4] = {-INFINITY, -INFINITY, -INFINITY, -INFINITY};
         uint32_t n = 0;
         for (uint32_t i = bins - 1; i > 0; i--) { /* right side = bins [i, bins) */
             const bvh_bin *bn = &bin[a][i];
-            for (int k = 0; k < 3; k++) {
+            for (int k = 0; k < 4; k++) {
                 lo[k] = bn->lo[k] < lo[k] ? bn->lo[k] : lo[k];
                 hi[k] = bn->hi[k] > hi[k] ? bn->hi[k] : hi[k];
             }
             n += bn->count;
             right_count[i] = n;
-            right_cost[i] = bvh_half_area(lo, hi) * n;
+            right_cost[i] = n ? bvh_half_area(lo, hi) * n : 0.0;
         }
-        for (int k = 0; k < 3; k++) {
+        for (int k = 0; k < 4; k++) {
             lo[k] = INFINITY;
             hi[k] = -INFINITY;
         }
         n = 0;
         for (uint32_t i = 1; i < bins; i++) { /* left side = bins [0, i) */
             const bvh_bin *bn = &bin[a][i - 1];
-            for (int k = 0; k < 3; k++) {
+            for (int k = 0; k < 4; k++) {
                 lo[k] = bn->lo[k] < lo[k] ? bn->lo[k] : lo[k];
                 hi[k] = bn->hi[k] > hi[k] ? bn->hi[k] : hi[k];
             }

@@ -15,9 +15,9 @@ void bvh_rec_bounds_of(const bvh_rec *r, uint32_t begin, uint32_t end, bvh_bound
         bvh_rec_bounds_add(b, &r[i]);
 }
 
-static inline void bin_add(bvh_bin *row, const bvh_rec *q, int a, const bvh_bin_setup *s)
+static inline void bin_add(bvh_bin *row, const bvh_rec *restrict q, int a, const bvh_bin_setup *s)
 {
-    bvh_bin *bn =
+    bvh_bin *restrict bn =
         &row[bvh_bin_of(bvh_centroid(q->lo[a], q->hi[a]), s->cmin[a], s->scale[a], s->bins)];
     bn->count++;
     /* all four lanes, so that the compiler can use one 4-wide min and max */
