@@ -4,6 +4,15 @@
  * BVH over instance boxes. Nodes use the GPU layout (pc_bvh_node) with indices relative to
  * the start of this BVH's node and primitive arrays; the uploader adds base offsets.
  * Depth never exceeds RD_BVH_MAX_DEPTH (< PC_BVH_STACK_SIZE), so GPU stacks cannot overflow.
+ *
+ * The builder (bvh_build.c) bins all three axes (16 bins) and takes the cheapest SAH split,
+ * as the single-threaded reference (rd_bvh_build_reference) does, with the same decisions;
+ * it runs on a pool of threads: the top levels bin and partition over fixed chunks of
+ * primitives in parallel, the subtrees below 64 K primitives are built one per task, and
+ * rd_bvh_build_many builds several meshes at once. The output (nodes and prim_index) is
+ * bit-identical whatever the thread count. Memory while building: about 160 bytes per
+ * primitive. The caller's thread takes part; builds under 64 K primitives (one mesh) or
+ * 16 K (all meshes together) start no threads.
  */
 #ifndef RD_BVH_H
 #define RD_BVH_H
@@ -15,6 +24,10 @@
 
 #define RD_BVH_MAX_DEPTH 48
 #define RD_BVH_MAX_LEAF 8
+/* Primitives per chunk of the parallel top levels; nodes of RD_BVH_PAR_MIN_PRIMS or more are
+ * binned and partitioned over such chunks, smaller ones are built whole by one thread. */
+#define RD_BVH_CHUNK_PRIMS 16384u
+#define RD_BVH_PAR_MIN_PRIMS (4u * RD_BVH_CHUNK_PRIMS)
 
 typedef struct rd_bvh {
     pc_bvh_node *nodes; /* nodes[0] is the root */
@@ -27,7 +40,14 @@ typedef struct rd_bvh {
 typedef struct rd_bvh_options {
     uint32_t bins;     /* 0 = 16, clamped to [2, 64] */
     uint32_t max_leaf; /* 0 = 4, at most RD_BVH_MAX_LEAF */
+    uint32_t threads;  /* threads of execution, the caller's included; 0 = online cores */
 } rd_bvh_options;
+
+/* A mesh for rd_bvh_build_many: tri_count triangles of 9 floats each. */
+typedef struct rd_bvh_mesh {
+    const float *positions;
+    uint32_t tri_count;
+} rd_bvh_mesh;
 
 /* Builds over count primitive boxes (bmin/bmax: 3 floats each). Boxes with non-finite
  * coordinates (or bmin > bmax) are kept as empty leaves' members but never hit: their box is
@@ -42,10 +62,29 @@ typedef struct rd_bvh_options {
  * Returns false only when out of memory (bvh is then zeroed). */
 bool rd_bvh_build(rd_bvh *bvh, const float *bmin, const float *bmax, uint32_t count,
                   const rd_bvh_options *opt);
-/* Convenience: boxes of triangles given as 9 floats each. */
+/* Over triangles given as 9 floats each (their boxes, see rd_bvh_triangle_boxes). */
 bool rd_bvh_build_triangles(rd_bvh *bvh, const float *positions, uint32_t tri_count,
                             const rd_bvh_options *opt);
+/* One BVH per mesh into out[0 .. mesh_count), the meshes built in parallel on one pool
+ * (opt->threads). Each result equals rd_bvh_build_triangles of that mesh. Returns false when
+ * out of memory, with every out[] zeroed. */
+bool rd_bvh_build_many(rd_bvh *out, const rd_bvh_mesh *meshes, uint32_t mesh_count,
+                       const rd_bvh_options *opt);
 void rd_bvh_destroy(rd_bvh *bvh); /* idempotent */
+
+/* Boxes of triangles (9 floats each) as the builders see them: a triangle with a non-finite
+ * vertex gets the empty box [+inf, -inf]. */
+void rd_bvh_triangle_boxes(const float *positions, uint32_t tri_count, float *bmin, float *bmax);
+
+/* The single-threaded recursive builder rd_bvh_build replaced, kept for tests and the
+ * benchmark (the renderer does not use it); same contract as rd_bvh_build, threads ignored. */
+bool rd_bvh_build_reference(rd_bvh *bvh, const float *bmin, const float *bmax, uint32_t count,
+                            const rd_bvh_options *opt);
+
+/* Surface area heuristic cost of a built tree, normalised by the root's area: the sum over
+ * interior nodes of SAH_TRAVERSAL * A(node) plus over leaves of SAH_INTERSECT * A * count,
+ * divided by A(root); 0 when the root box is empty or flat. Lower is better. */
+double rd_bvh_sah_cost(const rd_bvh *bvh);
 
 /* Node field accessors (the uint bits stored in the w components). */
 uint32_t rd_bvh_node_first(const pc_bvh_node *n); /* left child or first primitive */

@@ -37,7 +37,7 @@ typedef struct rd_ddgi {
     rd_vk *vk;
     rd_pipeline trace, shade, blend, border, select, wake, bin, scan;
     rd_buffer irradiance, distance, rays, hits, probes, stats, list, order;
-    rd_buffer bins, sorted; /* probe-hit binning for sorted shading (ddgi_bin.comp) */
+    rd_buffer bins, sorted;     /* probe-hit binning for sorted shading (ddgi_bin.comp) */
     rd_buffer ctrl, wake_boxes; /* host-visible: pc_ddgi_control, pc_ddgi_wake[] */
     pc_ddgi_volume vol;         /* what the shaders see (rotation of the current update) */
     rd_ddgi_settings settings;

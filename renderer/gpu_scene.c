@@ -166,13 +166,18 @@ rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *s, char 
     p->mesh_root = xcalloc(s->mesh_count, sizeof *p->mesh_root);
     p->mesh_bounds = xcalloc(s->mesh_count, 6 * sizeof(float));
     rd_bvh *bvhs = xcalloc(s->mesh_count, sizeof *bvhs);
+    rd_bvh_mesh *meshes = xcalloc(s->mesh_count, sizeof *meshes);
+    for (uint32_t m = 0; m < s->mesh_count; m++)
+        meshes[m] = (rd_bvh_mesh){s->meshes[m].positions, s->meshes[m].tri_count};
+    /* Every mesh's BLAS at once, on all cores (this runs off the render thread). */
+    if (!rd_bvh_build_many(bvhs, meshes, s->mesh_count, NULL)) {
+        fprintf(stderr, "probecast: out of memory building a BVH\n");
+        abort();
+    }
+    free(meshes);
     uint64_t tri_total = 0, node_total = 0;
     for (uint32_t m = 0; m < s->mesh_count; m++) {
         const rd_mesh *mesh = &s->meshes[m];
-        if (!rd_bvh_build_triangles(&bvhs[m], mesh->positions, mesh->tri_count, NULL)) {
-            fprintf(stderr, "probecast: out of memory building a BVH\n");
-            abort();
-        }
         p->mesh_root[m] = (uint32_t)node_total;
         const pc_bvh_node *root = &bvhs[m].nodes[0];
         float *b = &p->mesh_bounds[m * 6];

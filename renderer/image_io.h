@@ -9,7 +9,7 @@
 typedef enum rd_image_result {
     RD_IMAGE_OK = 0,
     RD_IMAGE_ERR_IO,
-    RD_IMAGE_ERR_FORMAT,   /* unknown extension or malformed file */
+    RD_IMAGE_ERR_FORMAT, /* unknown extension or malformed file */
     RD_IMAGE_ERR_ENCODE,
 } rd_image_result;
 
@@ -25,7 +25,7 @@ rd_image_result rd_image_write_pfm(const char *path, const float *rgb, uint32_t 
                                    uint32_t height, char *err, size_t errlen);
 /* Reads a PFM written by rd_image_write_pfm (or any RGB PFM, either endianness); *rgb is
  * malloc'd, top row first. */
-rd_image_result rd_image_read_pfm(const char *path, float **rgb, uint32_t *width,
-                                  uint32_t *height, char *err, size_t errlen);
+rd_image_result rd_image_read_pfm(const char *path, float **rgb, uint32_t *width, uint32_t *height,
+                                  char *err, size_t errlen);
 
 #endif

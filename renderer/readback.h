@@ -34,7 +34,7 @@ typedef struct rd_readback_slot {
     rd_cmd cmd;       /* command buffer and fence while busy */
     bool busy;
     atomic_bool leased; /* delivered and kept by the callback until rd_readback_release */
-    uint64_t seq; /* submission order */
+    uint64_t seq;       /* submission order */
     unsigned width, height;
     size_t info_size;
     _Alignas(16) unsigned char info[RD_READBACK_INFO_MAX];

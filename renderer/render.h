@@ -48,9 +48,8 @@ rd_vk_result rd_renderer_configure_gi(rd_renderer *r, const float bmin[3], const
                                       const rd_ddgi_settings *gi, char *err, size_t errlen);
 /* Renders one frame of scene from camera into the renderer's buffers (blocking): with GI on
  * and no path tracing, settings->gi_updates probe updates (at least 1) first. */
-rd_vk_result rd_renderer_render(rd_renderer *r, rd_gpu_scene *scene,
-                                const rd_view_camera *camera, const rd_frame_settings *settings,
-                                char *err, size_t errlen);
+rd_vk_result rd_renderer_render(rd_renderer *r, rd_gpu_scene *scene, const rd_view_camera *camera,
+                                const rd_frame_settings *settings, char *err, size_t errlen);
 /* Reads back the last frame: tone-mapped RGBA8 (width*height*4 bytes) or linear radiance
  * (width*height*3 floats). */
 rd_vk_result rd_renderer_read_rgba8(rd_renderer *r, uint8_t *out, char *err, size_t errlen);

@@ -18,9 +18,9 @@ extern "C" {
 typedef struct rd_mesh {
     char *name;
     uint32_t tri_count;
-    float *positions;   /* 9 floats per triangle, object space */
-    float *normals;     /* 9 floats per triangle (unit vectors) */
-    float *uvs;         /* 6 floats per triangle (TEXCOORD_0; zeros when absent) */
+    float *positions; /* 9 floats per triangle, object space */
+    float *normals;   /* 9 floats per triangle (unit vectors) */
+    float *uvs;       /* 6 floats per triangle (TEXCOORD_0; zeros when absent) */
     /* 12 floats per triangle (TANGENT: xyz unit tangent, w = +-1 handedness, per vertex), or
      * NULL: the renderer then derives tangents per triangle from the UVs. Owned; malloc'd. */
     float *tangents;
@@ -34,9 +34,9 @@ typedef struct rd_node {
     float translation[3];
     float rotation[4]; /* quaternion x, y, z, w */
     float scale[3];
-    float matrix[16];  /* used instead of TRS when has_matrix */
+    float matrix[16]; /* used instead of TRS when has_matrix */
     bool has_matrix;
-    float world[16];   /* filled by rd_scene_update */
+    float world[16]; /* filled by rd_scene_update */
 } rd_node;
 
 enum { RD_ALPHA_OPAQUE = 0, RD_ALPHA_MASK = 1, RD_ALPHA_BLEND = 2 };
@@ -55,15 +55,15 @@ typedef struct rd_material {
     /* weight of the dielectric specular lobe (the F of Appendix B's dielectric mix is scaled by
      * it): 1 for glTF materials, 0 for a pure Lambertian dielectric. Metals ignore it. */
     float specular;
-    float normal_scale;         /* normalTexture.scale (default 1) */
-    float occlusion_strength;   /* occlusionTexture.strength (default 1) */
-    int32_t base_color_texture; /* texture index or -1 */
-    int32_t emissive_texture;   /* texture index or -1 */
+    float normal_scale;                 /* normalTexture.scale (default 1) */
+    float occlusion_strength;           /* occlusionTexture.strength (default 1) */
+    int32_t base_color_texture;         /* texture index or -1 */
+    int32_t emissive_texture;           /* texture index or -1 */
     int32_t metallic_roughness_texture; /* B = metallic, G = roughness (linear), or -1 */
     int32_t normal_texture;             /* tangent-space normal map (linear), or -1 */
     int32_t occlusion_texture;          /* R = occlusion (linear), or -1 */
-    uint32_t alpha_mode;        /* RD_ALPHA_* */
-    float alpha_cutoff;         /* default 0.5 */
+    uint32_t alpha_mode;                /* RD_ALPHA_* */
+    float alpha_cutoff;                 /* default 0.5 */
     bool double_sided;
 } rd_material;
 
@@ -80,20 +80,20 @@ enum { RD_LIGHT_POINT = 0, RD_LIGHT_SPOT = 1, RD_LIGHT_DIRECTIONAL = 2 };
 
 typedef struct rd_light {
     char *name;
-    uint32_t type;   /* RD_LIGHT_* */
-    float color[3];  /* linear */
-    float intensity; /* candela (point, spot) or lux (directional) */
-    float range;     /* 0 = unlimited */
+    uint32_t type;                /* RD_LIGHT_* */
+    float color[3];               /* linear */
+    float intensity;              /* candela (point, spot) or lux (directional) */
+    float range;                  /* 0 = unlimited */
     float inner_cone, outer_cone; /* radians (spot) */
-    int32_t node;    /* node that places the light, or -1 (then position/direction are world) */
+    int32_t node;       /* node that places the light, or -1 (then position/direction are world) */
     float position[3];  /* world, filled by rd_scene_update when node >= 0 */
     float direction[3]; /* world unit vector the light shines toward (node's -Z) */
 } rd_light;
 
 typedef struct rd_camera {
     char *name;
-    float yfov;        /* radians */
-    float aspect;      /* 0 = unknown (use the image's) */
+    float yfov;   /* radians */
+    float aspect; /* 0 = unknown (use the image's) */
     float znear;
     int32_t node;      /* node that places the camera, or -1 */
     float position[3]; /* world, filled by rd_scene_update when node >= 0 */
@@ -169,7 +169,8 @@ void rd_scene_destroy(rd_scene *s);
  * Out-of-memory aborts (the only fatal error). */
 uint32_t rd_scene_add_material(rd_scene *s, const rd_material *m);
 uint32_t rd_scene_add_texture(rd_scene *s, const rd_texture *t); /* takes ownership of t->rgba */
-/* Adds a mesh with tri_count triangles whose arrays are allocated (zeroed) for the caller to fill. */
+/* Adds a mesh with tri_count triangles whose arrays are allocated (zeroed) for the caller to fill.
+ */
 uint32_t rd_scene_add_mesh(rd_scene *s, const char *name, uint32_t tri_count);
 uint32_t rd_scene_add_node(rd_scene *s, const rd_node *n);
 uint32_t rd_scene_add_light(rd_scene *s, const rd_light *l);

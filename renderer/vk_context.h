@@ -26,7 +26,7 @@ typedef enum rd_vk_result {
     RD_VK_ERR_UNSUPPORTED,      /* device lacks a required feature */
     RD_VK_ERR_OUT_OF_MEMORY,
     RD_VK_ERR_DEVICE_LOST,
-    RD_VK_ERR_VULKAN,           /* any other VkResult failure (detail in the message) */
+    RD_VK_ERR_VULKAN, /* any other VkResult failure (detail in the message) */
 } rd_vk_result;
 
 const char *rd_vk_strerror(rd_vk_result r);
@@ -58,7 +58,7 @@ typedef struct rd_vk {
     VkPhysicalDeviceMemoryProperties memory;
     double timestamp_period_ns; /* 0 when the queue has no timestamps */
     bool validation;
-    bool is_cpu;                /* lavapipe or another CPU implementation */
+    bool is_cpu; /* lavapipe or another CPU implementation */
     atomic_uint validation_messages;
     char device_name[VK_MAX_PHYSICAL_DEVICE_NAME_SIZE];
     /* Optional features, enabled when the device has them. */
