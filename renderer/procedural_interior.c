@@ -9,13 +9,13 @@
 #include "xform.h"
 
 /* ---- floor plan (metres) ----------------------------------------------------------------- */
-#define HALF_X 10.0f      /* outer walls at x = +-HALF_X */
-#define HALF_Z 6.0f       /* outer walls at z = +-HALF_Z */
-#define CORRIDOR 1.0f     /* corridor walls at z = +-CORRIDOR */
-#define ROOM_W 5.0f       /* four rooms per side along x */
-#define HEIGHT 3.0f       /* floor at y = 0, ceiling at HEIGHT */
-#define WALL 0.12f        /* wall thickness (centred on the lines above) */
-#define SLAB 0.1f         /* floor and ceiling slab thickness */
+#define HALF_X 10.0f  /* outer walls at x = +-HALF_X */
+#define HALF_Z 6.0f   /* outer walls at z = +-HALF_Z */
+#define CORRIDOR 1.0f /* corridor walls at z = +-CORRIDOR */
+#define ROOM_W 5.0f   /* four rooms per side along x */
+#define HEIGHT 3.0f   /* floor at y = 0, ceiling at HEIGHT */
+#define WALL 0.12f    /* wall thickness (centred on the lines above) */
+#define SLAB 0.1f     /* floor and ceiling slab thickness */
 #define DOOR_TOP 2.1f
 #define WIN_LO 0.9f
 #define WIN_HI 2.2f
@@ -30,8 +30,8 @@ typedef struct ctx {
     uint32_t detail; /* segments around a curved object; rings scale with it */
     uint64_t rng;
     /* materials */
-    uint32_t wall, floor, ceiling, wood, dark_wood, fabric[3], metal, ceramic[3], book[6],
-        shade, sofa;
+    uint32_t wall, floor, ceiling, wood, dark_wood, fabric[3], metal, ceramic[3], book[6], shade,
+        sofa;
 } ctx;
 
 static float rnd(ctx *c)
@@ -42,7 +42,10 @@ static float rnd(ctx *c)
     return (float)(c->rng >> 40) * (1.0f / 16777216.0f);
 }
 
-static float rnd_range(ctx *c, float a, float b) { return a + (b - a) * rnd(c); }
+static float rnd_range(ctx *c, float a, float b)
+{
+    return a + (b - a) * rnd(c);
+}
 
 static uint32_t material(rd_scene *s, const char *name, float r, float g, float b, float metallic,
                          float roughness, bool double_sided)
@@ -102,10 +105,18 @@ static void vessel(ctx *cx, rd_tri_list *t, const float c[3], float radius, floa
         float u = (float)i / (float)(rings - 1);
         float k;
         switch (shape) {
-        case 0: k = 0.55f + 0.45f * sinf((float)M_PI * fminf(u * 1.4f, 1.0f)) + 0.25f * u * u; break;
-        case 1: k = sinf(0.15f + 1.42f * u); break;
-        case 2: k = 0.85f + 0.15f * u; break;
-        default: k = 1.0f - 0.3f * u * u * u * u; break;
+        case 0:
+            k = 0.55f + 0.45f * sinf((float)M_PI * fminf(u * 1.4f, 1.0f)) + 0.25f * u * u;
+            break;
+        case 1:
+            k = sinf(0.15f + 1.42f * u);
+            break;
+        case 2:
+            k = 0.85f + 0.15f * u;
+            break;
+        default:
+            k = 1.0f - 0.3f * u * u * u * u;
+            break;
         }
         r[i + 1] = radius * k;
         y[i + 1] = h * u;
@@ -144,7 +155,10 @@ static void wall(rd_tri_list *t, int along, float c, float a0, float a1, const o
 #undef SEG
 }
 
-static float room_x0(unsigned k) { return -HALF_X + ROOM_W * (float)k; }
+static float room_x0(unsigned k)
+{
+    return -HALF_X + ROOM_W * (float)k;
+}
 
 void rd_interior_room_bounds(unsigned i, float lo[3], float hi[3])
 {
@@ -170,7 +184,7 @@ static void building(ctx *cx)
         door[k] = (opening){xc + 0.8f, xc + 1.7f, 0, DOOR_TOP};
     }
     for (int side = -1; side <= 1; side += 2) {
-        wall(&t, 0, side * HALF_Z, -HALF_X - e, HALF_X + e, win, 8, cx->wall);  /* outer */
+        wall(&t, 0, side * HALF_Z, -HALF_X - e, HALF_X + e, win, 8, cx->wall); /* outer */
         wall(&t, 0, side * CORRIDOR, -HALF_X, HALF_X, door, 4, cx->wall);      /* corridor */
         const opening end = {-0.5f, 0.5f, WIN_LO, WIN_HI};                     /* corridor end */
         wall(&t, 2, side * HALF_X, -HALF_Z, HALF_Z, &end, 1, cx->wall);
@@ -199,8 +213,11 @@ static placed commit(rd_tri_list *t, rd_scene *s, const char *name)
  * that rd_tris_commit made; later ones add nodes sharing the mesh). */
 static void place(rd_scene *s, placed *p, float x, float z, float yaw)
 {
-    rd_node n = {.name = s->nodes[p->root].name, .parent = -1, .mesh = (int32_t)p->mesh,
-                 .translation = {x, 0, z}, .rotation = {0, sinf(yaw / 2), 0, cosf(yaw / 2)},
+    rd_node n = {.name = s->nodes[p->root].name,
+                 .parent = -1,
+                 .mesh = (int32_t)p->mesh,
+                 .translation = {x, 0, z},
+                 .rotation = {0, sinf(yaw / 2), 0, cosf(yaw / 2)},
                  .scale = {1, 1, 1}};
     if (!p->used) {
         rd_node *r = &s->nodes[p->root];
@@ -212,7 +229,10 @@ static void place(rd_scene *s, placed *p, float x, float z, float yaw)
     }
 }
 
-static unsigned small_seg(const ctx *cx) { return cx->detail / 4 < 6 ? 6 : cx->detail / 4; }
+static unsigned small_seg(const ctx *cx)
+{
+    return cx->detail / 4 < 6 ? 6 : cx->detail / 4;
+}
 
 static placed make_chair(ctx *cx, uint32_t fabric)
 {
@@ -247,7 +267,8 @@ static placed make_table_set(ctx *cx)
     const float b[3] = {0, 0.77f, 0};
     vessel(cx, &t, b, 0.16f, 0.09f, 1, cx->ceramic[2]);
     for (int k = 0; k < 5; k++) { /* fruit in the bowl */
-        const float f[3] = {0.06f * cosf(1.3f * k), 0.83f + 0.02f * (k % 2), 0.06f * sinf(1.3f * k)};
+        const float f[3] = {0.06f * cosf(1.3f * k), 0.83f + 0.02f * (k % 2),
+                            0.06f * sinf(1.3f * k)};
         rd_tris_sphere(&t, f, 0.04f, cx->detail / 4 + 3, cx->detail / 2, cx->fabric[k % 3]);
     }
     return commit(&t, cx->s, "table set");
@@ -356,8 +377,8 @@ static void build(rd_scene *s, uint32_t detail)
                                          {0.1f, 0.3f, 0.12f},  {0.7f, 0.6f, 0.4f},
                                          {0.15f, 0.12f, 0.1f}, {0.6f, 0.3f, 0.05f}};
     for (int i = 0; i < 6; i++)
-        cx.book[i] = material(s, "book", book_rgb[i][0], book_rgb[i][1], book_rgb[i][2], 0, 0.7f,
-                              false);
+        cx.book[i] =
+            material(s, "book", book_rgb[i][0], book_rgb[i][1], book_rgb[i][2], 0, 0.7f, false);
     cx.shade = rd_build_material(s, "lamp shade", 0.9f, 0.85f, 0.7f, 1.5f, 1.2f, 0.8f);
     s->materials[cx.shade].double_sided = true;
     cx.sofa = material(s, "sofa", 0.35f, 0.3f, 0.26f, 0, 1.0f, false);
@@ -398,8 +419,12 @@ static void build(rd_scene *s, uint32_t detail)
     float sun[3];
     const float sun_dir[3] = {0.25f, -0.45f, 0.85f}; /* low, through the south windows */
     rd_vec3_normalize(sun, sun_dir, NULL);
-    rd_light l = {.name = "sun", .type = RD_LIGHT_DIRECTIONAL, .color = {1, 0.93f, 0.82f},
-                  .intensity = 15.0f, .node = -1, .direction = {sun[0], sun[1], sun[2]}};
+    rd_light l = {.name = "sun",
+                  .type = RD_LIGHT_DIRECTIONAL,
+                  .color = {1, 0.93f, 0.82f},
+                  .intensity = 15.0f,
+                  .node = -1,
+                  .direction = {sun[0], sun[1], sun[2]}};
     rd_scene_add_light(s, &l);
 
     /* camera 0: a south room seen from its window corner, the door to the corridor in view;
