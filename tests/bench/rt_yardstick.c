@@ -418,6 +418,11 @@ int main(int argc, char **argv)
         status = 1;
     }
     rd_vk_wait_idle(&vk);
+    if (rd_vk_validation_messages(&vk) > 0) { /* with PROBECAST_VALIDATION=1 (the ctest) */
+        fprintf(stderr, "probecast_rtbench: %u validation messages\n",
+                rd_vk_validation_messages(&vk));
+        status = 1;
+    }
     rd_world_destroy(&world);
     rd_buffer_destroy(&vk, &b.hits_driver);
     rd_buffer_destroy(&vk, &b.hits_ours);
