@@ -9,8 +9,6 @@
 #include "bench/rtb_rgen.spv.h"
 #include "bench/rtb_rmiss.spv.h"
 
-#define LAUNCH_WIDTH 8192u /* rays per launch row */
-
 /* Device-level entry points of the two extensions (not exported by the loader). */
 static struct {
     PFN_vkGetAccelerationStructureBuildSizesKHR build_sizes;
@@ -380,14 +378,21 @@ static rd_vk_result create_pipeline(rtb_driver *d, char *err, size_t errlen)
     d->miss = (VkStridedDeviceAddressRegionKHR){start + region, stride, stride};
     d->hit = (VkStridedDeviceAddressRegionKHR){start + 2 * region, stride, stride};
     d->callable = (VkStridedDeviceAddressRegionKHR){0, 0, 0};
+    const VkPhysicalDeviceLimits *lim = &vk->properties.limits;
+    uint64_t max_w = (uint64_t)lim->maxComputeWorkGroupCount[0] * lim->maxComputeWorkGroupSize[0];
+    if (rtp.maxRayDispatchInvocationCount < max_w) max_w = rtp.maxRayDispatchInvocationCount;
+    if (d->launch_width == 0 || d->launch_width > max_w)
+        d->launch_width = max_w > UINT32_MAX ? UINT32_MAX : (uint32_t)max_w;
     return RD_VK_OK;
 }
 
 rd_vk_result rtb_driver_create(rd_vk *vk, rtb_driver *d, const rd_scene *scene,
-                               const rd_gpu_scene *gs, char *err, size_t errlen)
+                               const rd_gpu_scene *gs, uint32_t launch_width, char *err,
+                               size_t errlen)
 {
     memset(d, 0, sizeof *d);
     d->vk = vk;
+    d->launch_width = launch_width;
     if (!load_functions(vk->device)) {
         snprintf(err, errlen, "the device returned no VK_KHR ray tracing entry points");
         return RD_VK_ERR_UNSUPPORTED;
@@ -405,7 +410,9 @@ void rtb_driver_record_trace(rtb_driver *d, rd_cmd *c, VkDeviceAddress rays, VkD
         .buf0 = rays, .buf1 = hits, .buf2 = d->tlas_address, .params = {count, 0, 0, 0}};
     vkCmdBindPipeline(c->cb, VK_PIPELINE_BIND_POINT_RAY_TRACING_KHR, d->pipeline);
     vkCmdPushConstants(c->cb, d->layout, VK_SHADER_STAGE_RAYGEN_BIT_KHR, 0, sizeof push, &push);
-    uint32_t w = count < LAUNCH_WIDTH ? count : LAUNCH_WIDTH;
+    /* one row, so that a warp takes consecutive rays as ours does, unless the width limit
+     * (launch_width) asks for more rows */
+    uint32_t w = count < d->launch_width ? count : d->launch_width;
     uint32_t h = w ? (count + w - 1) / w : 0;
     if (w) fn.trace_rays(c->cb, &d->rgen, &d->miss, &d->hit, &d->callable, w, h, 1);
 }

@@ -36,14 +36,18 @@ typedef struct rtb_driver {
     VkPipelineLayout layout;
     VkPipeline pipeline;
     VkStridedDeviceAddressRegionKHR rgen, miss, hit, callable;
+    uint32_t launch_width; /* rays per launch row (the device's limit unless asked for less) */
     double blas_build_ms, tlas_build_ms; /* GPU time of the builds (0 without timestamps) */
     uint64_t as_bytes;                   /* BLASes + TLAS */
 } rtb_driver;
 
 /* Builds the BLASes and TLAS of gs (uploaded from scene) and the ray-tracing pipeline. vk must
- * have been created with rtb_driver_device_options. On failure everything is released. */
+ * have been created with rtb_driver_device_options. Traces launch rays in rows of launch_width
+ * (0: as wide as the device allows, one row: warps then take consecutive rays, as our 1D
+ * dispatches do). On failure everything is released. */
 rd_vk_result rtb_driver_create(rd_vk *vk, rtb_driver *d, const rd_scene *scene,
-                               const rd_gpu_scene *gs, char *err, size_t errlen);
+                               const rd_gpu_scene *gs, uint32_t launch_width, char *err,
+                               size_t errlen);
 /* Records a trace of count rays (two vec4 each, as rtb_rays.comp writes them) writing one
  * float hit distance per ray (-1: miss) to hits. */
 void rtb_driver_record_trace(rtb_driver *d, rd_cmd *c, VkDeviceAddress rays, VkDeviceAddress hits,

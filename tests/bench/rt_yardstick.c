@@ -40,6 +40,7 @@ typedef struct options {
     unsigned probes[3];
     unsigned rays[MAX_RAY_SETS];
     unsigned ray_sets;
+    unsigned launch_width; /* driver launch rows; 0 = one row */
 } options;
 
 typedef struct bench {
@@ -69,6 +70,7 @@ static void usage(void)
            "  --probes X,Y,Z    DDGI probe grid (default 32,8,32)\n"
            "  --rays N[,N...]   probe ray sets, rays per probe (default 64,256)\n"
            "  --csv FILE        append the rows to FILE (header when new)\n"
+           "  --launch-width N  driver launches in rows of N rays (default: one row)\n"
            "  --device SEL      GPU index or name substring\n");
 }
 
@@ -114,6 +116,14 @@ static bool parse(int argc, char **argv, options *o)
                 o->rays[o->ray_sets++] = (unsigned)n;
                 p = *end == ',' ? end + 1 : end;
             }
+        } else if (strcmp(a, "--launch-width") == 0) {
+            char *end;
+            unsigned long n = strtoul(v, &end, 10);
+            if (*end || n == 0 || n > UINT32_MAX) {
+                fprintf(stderr, "probecast_rtbench: --launch-width expects a positive count\n");
+                return false;
+            }
+            o->launch_width = (unsigned)n;
         } else if (strcmp(a, "--csv") == 0) {
             o->csv = v;
         } else if (strcmp(a, "--device") == 0) {
@@ -242,14 +252,15 @@ static rd_vk_result run_set(bench *b, uint32_t n, row *out, char *err, size_t er
 }
 
 static void print_row(FILE *f, bool csv, const char *scene, uint64_t tris, const row *r,
-                      bool driver)
+                      const rtb_driver *driver)
 {
     double og = r->ours_ms > 0 ? r->rays / (r->ours_ms * 1e6) : 0;
     double dg = driver && r->driver_ms > 0 ? r->rays / (r->driver_ms * 1e6) : 0;
     if (csv) {
-        fprintf(f, "%s,%llu,%s,%u,%.4f,%.4f,%.4f,%.4f,%.4f,%.6f,%.4f\n", scene,
+        fprintf(f, "%s,%llu,%s,%u,%.4f,%.4f,%.4f,%.4f,%.4f,%.6f,%.4f,%u\n", scene,
                 (unsigned long long)tris, r->set, r->rays, r->ours_ms, driver ? r->driver_ms : 0,
-                og, dg, dg > 0 ? og / dg : 0, driver ? r->agree : 0, r->hit_frac);
+                og, dg, dg > 0 ? og / dg : 0, driver ? r->agree : 0, r->hit_frac,
+                driver ? driver->launch_width : 0);
         return;
     }
     if (driver)
@@ -263,7 +274,7 @@ static void print_row(FILE *f, bool csv, const char *scene, uint64_t tris, const
 }
 
 static const char *CSV_HEADER = "scene,triangles,ray_set,rays,ours_ms,driver_ms,ours_grays,"
-                                "driver_grays,ratio,agree,hit_fraction\n";
+                                "driver_grays,ratio,agree,hit_fraction,driver_launch_width\n";
 
 /* Creates the device with VK_KHR ray tracing when it has it; *driver says which. */
 static rd_vk_result create_device(rd_vk *vk, const options *o, bool *driver, char *err,
@@ -316,12 +327,13 @@ int main(int argc, char **argv)
                gs.tlas_build_ms, (unsigned long long)gs.blas_node_count);
     }
     if (res == RD_VK_OK && has_driver) {
-        res = rtb_driver_create(&vk, &driver, &scene, &gs, err, sizeof err);
+        res = rtb_driver_create(&vk, &driver, &scene, &gs, o.launch_width, err, sizeof err);
         if (res == RD_VK_OK) {
             b.driver = &driver;
-            printf("driver: BLAS build %.2f ms, TLAS build %.3f ms (GPU), %.1f MiB\n",
+            printf("driver: BLAS build %.2f ms, TLAS build %.3f ms (GPU), %.1f MiB, launch rows "
+                   "of up to %u rays\n",
                    driver.blas_build_ms, driver.tlas_build_ms,
-                   (double)driver.as_bytes / (1024.0 * 1024.0));
+                   (double)driver.as_bytes / (1024.0 * 1024.0), driver.launch_width);
         }
     }
     if (res == RD_VK_OK)
@@ -389,7 +401,7 @@ int main(int argc, char **argv)
         printf("%-24s %10s  %-22s %9s %9s %9s %8s %8s %7s %9s %6s\n", "", "", "", "", "", "",
                "Grays/s", "Grays/s", "", "", "");
         for (unsigned i = 0; i < nrows; i++)
-            print_row(stdout, false, o.scene, scene.tri_total, &rows[i], b.driver != NULL);
+            print_row(stdout, false, o.scene, scene.tri_total, &rows[i], b.driver);
         for (unsigned i = 0; i < nrows && b.driver; i++) {
             if (1 - rows[i].agree > MISMATCH_MAX) {
                 fprintf(stderr,
@@ -409,7 +421,7 @@ int main(int argc, char **argv)
             } else {
                 if (fresh) fputs(CSV_HEADER, f);
                 for (unsigned i = 0; i < nrows; i++)
-                    print_row(f, true, o.scene, scene.tri_total, &rows[i], b.driver != NULL);
+                    print_row(f, true, o.scene, scene.tri_total, &rows[i], b.driver);
                 fclose(f);
             }
         }
