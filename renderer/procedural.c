@@ -7,6 +7,7 @@
 
 #include "hard_cases.h"
 #include "mesh_builder.h"
+#include "procedural_interior.h"
 #include "xform.h"
 
 /* 10 x 10 m floor at y = 0 facing +y. */
@@ -216,7 +217,7 @@ const char *rd_procedural_names(void)
     return "cornell, cornell-glossy, plane-point, plane-directional, emissive, shadow, furnace, "
            "two-rooms, "
            "white-room, "
-           "spheres[:TRIANGLES], hard:CASE (the stability suite: probecast eval --list)";
+           "spheres[:TRIANGLES], interior[:MILLIONS], hard:CASE (the stability suite: probecast eval --list)";
 }
 
 bool rd_procedural_build(const char *name, rd_scene *s, char *err, size_t errlen)
@@ -226,7 +227,7 @@ bool rd_procedural_build(const char *name, rd_scene *s, char *err, size_t errlen
     const char *colon = strchr(name, ':');
     size_t len = colon ? (size_t)(colon - name) : strlen(name);
 #define IS(n) (len == strlen(n) && strncmp(name, n, len) == 0)
-    if (colon && !IS("spheres")) {
+    if (colon && !IS("spheres") && !IS("interior")) {
         snprintf(err, errlen, "builtin scene '%.*s' takes no argument", (int)len, name);
         return false;
     }
@@ -260,6 +261,22 @@ bool rd_procedural_build(const char *name, rd_scene *s, char *err, size_t errlen
             }
         }
         build_spheres(s, n);
+    } else if (IS("interior")) {
+        double m = RD_INTERIOR_DEFAULT_MILLIONS;
+        if (colon) {
+            char *end = NULL;
+            m = strtod(colon + 1, &end);
+            if (!end || end == colon + 1 || *end) {
+                snprintf(err, errlen, "interior: '%s' is not a number of million triangles",
+                         colon + 1);
+                rd_scene_destroy(s);
+                return false;
+            }
+        }
+        if (!rd_interior_build(s, m, err, errlen)) {
+            rd_scene_destroy(s);
+            return false;
+        }
     } else {
         snprintf(err, errlen, "unknown builtin scene '%.*s' (known: %s)", (int)len, name,
                  rd_procedural_names());

@@ -28,6 +28,8 @@
  *                     the camera looks at the wall from the dark one (a light-leak test).
  *   spheres[:N]       benchmark: a lit floor and walls plus a grid of tessellated spheres with at
  *                     least N triangles in all (default 1000000).
+ *   interior[:M]      benchmark: a furnished building of about M million triangles over all
+ *                     instances (default RD_INTERIOR_DEFAULT_MILLIONS; procedural_interior.h).
  * Returns false with a message for an unknown name or bad argument. */
 bool rd_procedural_build(const char *name, rd_scene *s, char *err, size_t errlen);
 

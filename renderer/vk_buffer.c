@@ -51,6 +51,12 @@ static const char *memory_name(rd_memory where)
 rd_vk_result rd_buffer_create(rd_vk *vk, rd_buffer *b, VkDeviceSize size, rd_memory where,
                               char *err, size_t errlen)
 {
+    return rd_buffer_create_usage(vk, b, size, where, 0, err, errlen);
+}
+
+rd_vk_result rd_buffer_create_usage(rd_vk *vk, rd_buffer *b, VkDeviceSize size, rd_memory where,
+                                    VkBufferUsageFlags extra_usage, char *err, size_t errlen)
+{
     memset(b, 0, sizeof *b);
     if (size == 0) size = 16;
     const mem_choice *choices;
@@ -78,7 +84,7 @@ rd_vk_result rd_buffer_create(rd_vk *vk, rd_buffer *b, VkDeviceSize size, rd_mem
         .size = size,
         .usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
                  VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT |
-                 VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT,
+                 VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT | extra_usage,
         .sharingMode = VK_SHARING_MODE_EXCLUSIVE,
     };
     VkResult r = vkCreateBuffer(vk->device, &bci, NULL, &b->buffer);

@@ -31,6 +31,11 @@ typedef struct rd_buffer {
  * (lavapipe, ReBAR), so the staging path is the one exercised everywhere. */
 rd_vk_result rd_buffer_create(rd_vk *vk, rd_buffer *b, VkDeviceSize size, rd_memory where,
                               char *err, size_t errlen);
+/* The same with usage flags beyond the renderer's (storage, transfer, device address, indirect),
+ * for tools: tests/bench/rt_driver.c adds acceleration-structure and shader-binding-table
+ * usage. rd_buffer_create passes 0. */
+rd_vk_result rd_buffer_create_usage(rd_vk *vk, rd_buffer *b, VkDeviceSize size, rd_memory where,
+                                    VkBufferUsageFlags extra_usage, char *err, size_t errlen);
 void rd_buffer_destroy(rd_vk *vk, rd_buffer *b); /* idempotent */
 /* Blocking copies between host memory and any buffer. Mapped buffers are copied with memcpy
  * (flushing or invalidating non-coherent memory); others go through a staging buffer in chunks

@@ -382,7 +382,22 @@ static rd_vk_result pick_device(rd_vk *vk, const char *selector, char *err, size
 
 /* ---- logical device ----------------------------------------------------------------------- */
 
-static rd_vk_result create_device(rd_vk *vk, char *err, size_t errlen)
+/* Whether the physical device offers extension name. */
+static bool has_device_extension(VkPhysicalDevice pd, const char *name)
+{
+    uint32_t n = 0;
+    if (vkEnumerateDeviceExtensionProperties(pd, NULL, &n, NULL) != VK_SUCCESS) return false;
+    VkExtensionProperties *props = calloc(n ? n : 1, sizeof *props);
+    if (!props) abort();
+    bool found = false;
+    if (vkEnumerateDeviceExtensionProperties(pd, NULL, &n, props) == VK_SUCCESS)
+        for (uint32_t i = 0; i < n && !found; i++)
+            found = strcmp(props[i].extensionName, name) == 0;
+    free(props);
+    return found;
+}
+
+static rd_vk_result create_device(rd_vk *vk, const rd_vk_options *opt, char *err, size_t errlen)
 {
     uint32_t api = vk->properties.apiVersion;
     if (api < VK_API_VERSION_1_2) {
@@ -409,6 +424,14 @@ static rd_vk_result create_device(rd_vk *vk, char *err, size_t errlen)
         rd_vk_errorf(err, errlen, "Device \"%s\" lacks the required Vulkan feature %s.",
                      vk->device_name, missing);
         return RD_VK_ERR_UNSUPPORTED;
+    }
+    uint32_t extra = opt ? opt->extra_extension_count : 0;
+    for (uint32_t i = 0; i < extra; i++) {
+        if (!has_device_extension(vk->physical, opt->extra_extensions[i])) {
+            rd_vk_errorf(err, errlen, "Device \"%s\" lacks the extension %s.", vk->device_name,
+                         opt->extra_extensions[i]);
+            return RD_VK_ERR_UNSUPPORTED;
+        }
     }
     vk->has_scalar_block_layout = has12.scalarBlockLayout;
     vk->has_shader_float16 = has12.shaderFloat16;
@@ -446,6 +469,7 @@ static rd_vk_result create_device(rd_vk *vk, char *err, size_t errlen)
         .bufferDeviceAddress = VK_TRUE,
         .scalarBlockLayout = has12.scalarBlockLayout,
         .shaderFloat16 = has12.shaderFloat16,
+        .pNext = opt ? opt->extra_features : NULL,
     };
     VkPhysicalDeviceVulkan11Features en11 = {
         .sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES,
@@ -469,6 +493,8 @@ static rd_vk_result create_device(rd_vk *vk, char *err, size_t errlen)
         .pNext = &en,
         .queueCreateInfoCount = 1,
         .pQueueCreateInfos = &qci,
+        .enabledExtensionCount = extra,
+        .ppEnabledExtensionNames = extra ? opt->extra_extensions : NULL,
     };
     VkResult r = vkCreateDevice(vk->physical, &dci, NULL, &vk->device);
     if (r != VK_SUCCESS) {
@@ -511,7 +537,7 @@ rd_vk_result rd_vk_create(rd_vk *vk, const rd_vk_options *opt, char *err, size_t
 
     rd_vk_result rc = create_instance(vk, validation, err, errlen);
     if (rc == RD_VK_OK) rc = pick_device(vk, selector, err, errlen);
-    if (rc == RD_VK_OK) rc = create_device(vk, err, errlen);
+    if (rc == RD_VK_OK) rc = create_device(vk, opt, err, errlen);
     if (rc != RD_VK_OK) rd_vk_destroy(vk);
     return rc;
 }

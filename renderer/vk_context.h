@@ -37,6 +37,14 @@ rd_vk_result rd_vk_from_vkresult(VkResult r);
 typedef struct rd_vk_options {
     const char *device; /* selector, NULL = $PROBECAST_DEVICE or automatic */
     int validation;     /* 0 = $PROBECAST_VALIDATION, 1 = on, -1 = off */
+    /* Extra device extensions and feature structs, for tools that need more than the renderer
+     * (tests/bench/rt_driver.c enables VK_KHR ray tracing with them; the product never sets
+     * them). A missing extension fails creation with RD_VK_ERR_UNSUPPORTED and names it.
+     * extra_features is a pNext chain appended after the renderer's own feature structs
+     * (Vulkan 1.1 and 1.2 features: the chain must not repeat those); NULL = none. */
+    const char *const *extra_extensions;
+    uint32_t extra_extension_count;
+    void *extra_features;
 } rd_vk_options;
 
 #define RD_VK_SPARE_CMDS 32

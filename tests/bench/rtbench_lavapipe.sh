@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# rtbench_lavapipe: probecast_rtbench on lavapipe, which has no VK_KHR ray tracing: it must say
+# "unsupported: <reason>", still trace our half (a row per ray set whose rays hit something),
+# and exit 0. Usage: rtbench_lavapipe.sh PATH/TO/probecast_rtbench
+set -u
+exe="$1"
+out="$(PROBECAST_DEVICE=llvmpipe PROBECAST_VALIDATION=1 "$exe" builtin:interior:0.05 \
+    --size 48x27 --probes 4,2,4 --rays 16,8 2>&1)"
+rc=$?
+echo "$out"
+fail() { echo "rtbench_lavapipe: $*" >&2; exit 1; }
+[ "$rc" -eq 0 ] || fail "exit status $rc"
+grep -q '^unsupported: .*VK_KHR' <<<"$out" || fail "no 'unsupported: <reason>' line"
+# ours rows: rays, a positive time and a hit fraction above zero, driver columns '-'
+for set in 'primary 48x27 +1296' 'probes 4x2x4 x16 +512' 'probes 4x2x4 x8 +256'; do
+    grep -Eq "^builtin:interior:0.05 +[0-9]+ +${set} +[0-9.]+ +- .* ([1-9][0-9]?|100)\.[0-9]%$" \
+        <<<"$out" || fail "no ours row for '$set' with hits"
+done
