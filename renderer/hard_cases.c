@@ -32,6 +32,8 @@ static const rd_hard_case CASES[] = {
                "after settling)"},
     {"glossy", "the Cornell box with a gold sphere, a near-mirror block and a glossy floor: output "
                "finite; the error shows what indirect specular (reflections) adds"},
+    {"many-lights", "the Cornell box lit by four coloured lights (probe hits pick one per shadow "
+                    "ray): DDGI stays within the error bound of cornell"},
 };
 
 const rd_hard_case *rd_hard_cases(unsigned *count)
@@ -134,6 +136,21 @@ static void build_degenerate(rd_scene *s)
         m->normals[i] = (i % 2) ? NAN : 0.0f; /* NaN and zero normals */
 }
 
+/* The Cornell box's light dimmed and three coloured point lights added around the room, one
+ * of them low in a corner: probe hits reach several lights with very different weights, which
+ * direct_radiance_sampled picks from. */
+static void add_many_lights(rd_scene *s)
+{
+    for (uint32_t i = 0; i < s->light_count; i++) s->lights[i].intensity *= 0.5f;
+    const float pos[3][3] = {{-0.7f, 1.2f, 0.5f}, {0.75f, 0.35f, -0.6f}, {0.2f, 1.6f, -0.7f}};
+    const float col[3][3] = {{1.0f, 0.45f, 0.2f}, {0.25f, 0.5f, 1.0f}, {0.6f, 1.0f, 0.5f}};
+    const float cd[3] = {0.8f, 0.4f, 1.2f};
+    for (int k = 0; k < 3; k++) {
+        rd_build_point_light(s, pos[k][0], pos[k][1], pos[k][2], cd[k]);
+        memcpy(s->lights[s->light_count - 1].color, col[k], sizeof col[k]);
+    }
+}
+
 static void build_mirrored(rd_scene *s)
 {
     char err[8];
@@ -169,7 +186,8 @@ bool rd_hard_case_build(const char *name, rd_scene *s, char *err, size_t errlen)
     else if (strcmp(name, "glossy") == 0)
         base = "cornell-glossy";
     else if (strcmp(name, "scaled-100") == 0 || strcmp(name, "scaled-0.01") == 0 ||
-             strcmp(name, "far-10km") == 0 || strcmp(name, "moving") == 0)
+             strcmp(name, "far-10km") == 0 || strcmp(name, "moving") == 0 ||
+             strcmp(name, "many-lights") == 0)
         base = "cornell";
     if (base) {
         if (!rd_procedural_build(base, s, err, errlen)) return false;
@@ -193,6 +211,8 @@ bool rd_hard_case_build(const char *name, rd_scene *s, char *err, size_t errlen)
         build_degenerate(s);
     else if (strcmp(name, "mirrored") == 0)
         build_mirrored(s);
+    else if (strcmp(name, "many-lights") == 0)
+        add_many_lights(s);
     else if (!base) {
         rd_scene_destroy(s);
         snprintf(err, errlen, "unknown hard case '%s'", name);

@@ -335,6 +335,54 @@ vec3 direct_radiance(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, vec3 v, pc_brdf b
     return sum;
 }
 
+/* The same sum estimated with at most ONE shadow ray: light i is chosen with probability
+ * p_i = w_i / W, w_i the summed RGB of its unshadowed term f E_i cos (lights below the surfaces
+ * weigh 0), and its shadowed term is returned divided by p_i. Unbiased (E[result] equals
+ * direct_radiance), and exactly direct_radiance when at most one light reaches p. Probe hits use
+ * it (ddgi_shade.comp): their shadow rays are most of an update's cost and grow with the light
+ * count, while a probe texel averages hundreds of rays over many updates, which absorbs the
+ * selection noise. u: a uniform number in [0, 1). */
+vec3 direct_radiance_sampled(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, vec3 v, pc_brdf b,
+                             float u, inout uint rays)
+{
+    float total = 0.0;
+    for (uint i = 0u; i < s.counts.y; i++) {
+        vec3 wi;
+        float dist;
+        vec3 e = light_incident(LightRef(s.lights).v[i], p, wi, dist);
+        float cos_n = dot(n, wi);
+        if (cos_n <= 0.0 || dot(ng, wi) <= 0.0) continue;
+        vec3 f = brdf_eval(b, n, v, wi) * e * cos_n;
+        total += f.r + f.g + f.b;
+    }
+    if (!(total > 0.0)) return vec3(0.0);
+    float target = u * total, acc = 0.0;
+    vec3 chosen = vec3(0.0), chosen_wi = vec3(0.0);
+    float chosen_w = 0.0, chosen_dist = 0.0;
+    for (uint i = 0u; i < s.counts.y; i++) {
+        vec3 wi;
+        float dist;
+        vec3 e = light_incident(LightRef(s.lights).v[i], p, wi, dist);
+        float cos_n = dot(n, wi);
+        if (cos_n <= 0.0 || dot(ng, wi) <= 0.0) continue;
+        vec3 f = brdf_eval(b, n, v, wi) * e * cos_n;
+        float w = f.r + f.g + f.b;
+        if (!(w > 0.0)) continue;
+        /* the last light with weight takes any rounding left at the top of [0, total) */
+        chosen = f;
+        chosen_w = w;
+        chosen_wi = wi;
+        chosen_dist = dist;
+        acc += w;
+        if (target < acc) break;
+    }
+    pc_hit sh;
+    rays++;
+    if (trace_ray(s, offset_ray_origin(p, ng), chosen_wi, 0.0, chosen_dist, PC_TRACE_ANY_HIT, sh))
+        return vec3(0.0);
+    return chosen * (total / chosen_w);
+}
+
 /* Ray counting with one global atomic per workgroup. Every invocation of the workgroup must
  * call both (no early return in between). which: 0 primary, 1 shadow, 2 probe, 3 path,
  * 4 probe shadow, 5 reflection. */

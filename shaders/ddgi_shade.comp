@@ -1,7 +1,9 @@
 #version 460
 /* DDGI probe-ray shading (paper Sec. 4.1 and 5): radiance leaving each probe ray's hit toward
  * the probe = emission + A/pi * direct irradiance (shadow rays) + occlusion * min(A, 0.9)/pi *
- * the previous update's irradiance at the hit, where A = brdf_lambert_albedo: the hit is
+ * the previous update's irradiance at the hit, where A = brdf_lambert_albedo (the direct term
+ * from one shadow ray per hit to a light chosen by its unshadowed contribution, unbiased:
+ * direct_radiance_sampled): the hit is
  * shaded as a Lambertian whose albedo folds in the specular lobe's Fresnel-averaged energy
  * (paper: probe hits are shaded diffusely; folding keeps the metals' energy instead of
  * dropping it, and A <= 1 keeps energy conserved). The last term carries light across updates,
@@ -42,8 +44,9 @@ void main()
         pc_surface sf = surface_at(g.scene, hit, dir);
         vec3 albedo = brdf_lambert_albedo(surface_brdf(sf));
         pc_brdf lambert = brdf_make(albedo, 0.0, 1.0, 0.0); /* f = albedo / pi */
-        vec3 direct = direct_radiance(g.scene, sf.position, sf.normal, sf.geom_normal, -dir,
-                                      lambert, shadow_rays);
+        uint seed = pcg(slot ^ pcg(vol.info.y * 0x9E3779B9u + 0x632BE5ABu));
+        vec3 direct = direct_radiance_sampled(g.scene, sf.position, sf.normal, sf.geom_normal,
+                                              -dir, lambert, rnd(seed), shadow_rays);
         vec3 indirect = vec3(0.0);
         if (pc.params.y != 0u)
             indirect = ddgi_irradiance(vol, env_irradiance(g.env, sf.normal), sf.position,

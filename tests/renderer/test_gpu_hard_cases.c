@@ -284,6 +284,7 @@ int main(void)
     test_pathtracer_analytic();
     test_cornell_error("cornell");
     test_cornell_error("thick-walls");
+    test_cornell_error("many-lights");
     test_thick_walls_probes();
     test_invariance();
     test_no_lights();
