@@ -312,6 +312,17 @@ vec3 light_incident(pc_light l, vec3 p, out vec3 wi, out float dist)
     return l.radiance.rgb * atten;
 }
 
+/* The unshadowed term f * E * cos of light i at p (zero when the light lies below the shading or
+ * the geometric surface), its direction and distance. */
+vec3 light_term(pc_scene_refs s, uint i, vec3 p, vec3 n, vec3 ng, vec3 v, pc_brdf b, out vec3 wi,
+                out float dist)
+{
+    vec3 e = light_incident(LightRef(s.lights).v[i], p, wi, dist);
+    float cos_n = dot(n, wi);
+    if (cos_n <= 0.0 || dot(ng, wi) <= 0.0) return vec3(0.0);
+    return brdf_eval(b, n, v, wi) * e * cos_n;
+}
+
 /* Radiance reflected toward v by a surface with BRDF b from all punctual lights:
  * sum over lights of f(v, l) * E_i * cos * visibility, with ray-traced hard shadows (shadow
  * rays start on the geometric side; lights below the shading or the geometric surface give
@@ -321,16 +332,14 @@ vec3 direct_radiance(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, vec3 v, pc_brdf b
     vec3 sum = vec3(0.0);
     vec3 origin = offset_ray_origin(p, ng);
     for (uint i = 0u; i < s.counts.y; i++) {
-        pc_light l = LightRef(s.lights).v[i];
         vec3 wi;
         float dist;
-        vec3 e = light_incident(l, p, wi, dist);
-        float cos_n = dot(n, wi);
-        if (cos_n <= 0.0 || dot(ng, wi) <= 0.0 || all(equal(e, vec3(0.0)))) continue;
+        vec3 f = light_term(s, i, p, n, ng, v, b, wi, dist);
+        if (all(equal(f, vec3(0.0)))) continue;
         pc_hit sh;
         rays++;
         if (trace_ray(s, origin, wi, 0.0, dist, PC_TRACE_ANY_HIT, sh)) continue;
-        sum += brdf_eval(b, n, v, wi) * e * cos_n;
+        sum += f;
     }
     return sum;
 }
@@ -346,13 +355,10 @@ vec3 direct_radiance_sampled(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, vec3 v, p
                              float u, inout uint rays)
 {
     float total = 0.0;
+    vec3 wi;
+    float dist;
     for (uint i = 0u; i < s.counts.y; i++) {
-        vec3 wi;
-        float dist;
-        vec3 e = light_incident(LightRef(s.lights).v[i], p, wi, dist);
-        float cos_n = dot(n, wi);
-        if (cos_n <= 0.0 || dot(ng, wi) <= 0.0) continue;
-        vec3 f = brdf_eval(b, n, v, wi) * e * cos_n;
+        vec3 f = light_term(s, i, p, n, ng, v, b, wi, dist);
         total += f.r + f.g + f.b;
     }
     if (!(total > 0.0)) return vec3(0.0);
@@ -360,12 +366,7 @@ vec3 direct_radiance_sampled(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, vec3 v, p
     vec3 chosen = vec3(0.0), chosen_wi = vec3(0.0);
     float chosen_w = 0.0, chosen_dist = 0.0;
     for (uint i = 0u; i < s.counts.y; i++) {
-        vec3 wi;
-        float dist;
-        vec3 e = light_incident(LightRef(s.lights).v[i], p, wi, dist);
-        float cos_n = dot(n, wi);
-        if (cos_n <= 0.0 || dot(ng, wi) <= 0.0) continue;
-        vec3 f = brdf_eval(b, n, v, wi) * e * cos_n;
+        vec3 f = light_term(s, i, p, n, ng, v, b, wi, dist);
         float w = f.r + f.g + f.b;
         if (!(w > 0.0)) continue;
         /* the last light with weight takes any rounding left at the top of [0, total) */
