@@ -1,0 +1,48 @@
+#version 460
+/* test_direct.comp: direct light at ray hits, for tests/renderer/test_gpu_direct_light.c. Each
+ * thread traces its ray to the closest hit, shades it as a Lambertian (the surface's
+ * Lambert-folded albedo, as probe hits are) and writes the all-lights sum (direct_radiance) and
+ * the mean of direct_radiance_sampled over params.y stratified numbers u = (k + 1/2) / n, whose
+ * limit is the same sum when the one-ray estimator is unbiased.
+ * push: globals, buf0 = rays (vec4 origin, vec4 direction), buf1 = results (vec4 exact with
+ * w = the summed RGB of the unshadowed terms, -1 for a miss; vec4 mean with w = shadow rays
+ * traced), params.x = ray count, params.y = n. */
+#extension GL_GOOGLE_include_directive : require
+#include "common.glsl"
+
+layout(local_size_x = PC_WG_1D) in;
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer RayRef { vec4 v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer OutRef { vec4 v[]; };
+
+void main()
+{
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= pc.params.x) return;
+    pc_globals g = load_globals();
+    vec3 o = RayRef(pc.buf0).v[2u * i].xyz, d = RayRef(pc.buf0).v[2u * i + 1u].xyz;
+    pc_hit hit;
+    vec4 exact = vec4(0.0, 0.0, 0.0, -1.0), mean = vec4(0.0);
+    if (trace_ray(g.scene, o, d, 0.0, 1e30, 0u, hit)) {
+        pc_surface sf = surface_at(g.scene, hit, d);
+        pc_brdf lambert = brdf_make(brdf_lambert_albedo(surface_brdf(sf)), 0.0, 1.0, 0.0);
+        uint rays = 0u;
+        float total = 0.0;
+        for (uint l = 0u; l < g.scene.counts.y; l++) {
+            vec3 wi;
+            float dist;
+            vec3 f = light_term(g.scene, l, sf.position, sf.normal, sf.geom_normal, -d, lambert,
+                                wi, dist);
+            total += f.r + f.g + f.b;
+        }
+        exact = vec4(direct_radiance(g.scene, sf.position, sf.normal, sf.geom_normal, -d, lambert,
+                                     rays), total);
+        uint n = pc.params.y, sampled = 0u;
+        vec3 sum = vec3(0.0);
+        for (uint k = 0u; k < n; k++)
+            sum += direct_radiance_sampled(g.scene, sf.position, sf.normal, sf.geom_normal, -d,
+                                           lambert, (float(k) + 0.5) / float(n), sampled);
+        mean = vec4(sum / float(n), float(sampled));
+    }
+    OutRef(pc.buf1).v[2u * i] = exact;
+    OutRef(pc.buf1).v[2u * i + 1u] = mean;
+}
