@@ -13,7 +13,11 @@
  * is reported. Results are compared ray by ray: hit or miss alike and the distance within
  * T_TOL relative; more than MISMATCH_MAX disagreeing is an error (exit status 1).
  * Without VK_KHR ray tracing (lavapipe) it says "unsupported: <reason>", still measures ours,
- * and exits 0. */
+ * and exits 0.
+ * Wide: the same BVHs collapsed to 4-wide nodes on the CPU (bvh_wide.c, rt_wide.c) and traced
+ * by tests/bench/shaders/rtb_trace_wide.comp over the same triangles and instances: a
+ * measurement of whether wider nodes would pay in the product (ratio wide/ours > 1). Its hits
+ * are compared with ours the same way, on every device; the node memory of both is printed. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -23,10 +27,12 @@
 #include "renderer/camera.h"
 #include "renderer/world.h"
 #include "rt_driver.h"
+#include "rt_wide.h"
 #include "server/cli.h"
 /* after stdint.h: the generated headers declare uint32_t arrays */
 #include "bench/rtb_rays_comp.spv.h"
 #include "bench/rtb_trace_comp.spv.h"
+#include "bench/rtb_trace_wide_comp.spv.h"
 
 #define REPEATS 9          /* timed traces per ray set (median reported) */
 #define WARMUP_S 0.5       /* untimed traces first: a GPU at idle clocks reads 2-5x slow */
@@ -45,10 +51,11 @@ typedef struct options {
 
 typedef struct bench {
     rd_vk *vk;
-    rd_pipeline gen, trace;
-    rd_buffer globals, rays, hits_ours, hits_driver;
+    rd_pipeline gen, trace, trace_wide;
+    rd_buffer globals, rays, hits_ours, hits_driver, hits_wide;
     rd_timer timer;
     rtb_driver *driver; /* NULL when unsupported */
+    rtb_wide_gpu *wide;
     const rd_gpu_scene *gs;
 } bench;
 
@@ -148,18 +155,22 @@ static void grid(uint32_t n, uint32_t *gx, uint32_t *gy)
     *gy = *gx ? (groups + *gx - 1) / *gx : 0;
 }
 
-static void record(bench *b, rd_cmd *c, bool driver, uint32_t n)
+typedef enum tracer { TRACER_OURS, TRACER_DRIVER, TRACER_WIDE } tracer;
+
+static void record(bench *b, rd_cmd *c, tracer which, uint32_t n)
 {
-    if (driver) {
+    if (which == TRACER_DRIVER) {
         rtb_driver_record_trace(b->driver, c, b->rays.address, b->hits_driver.address, n);
     } else {
+        bool wide = which == TRACER_WIDE;
         uint32_t gx, gy;
         grid(n, &gx, &gy);
         pc_push push = {.globals = b->globals.address,
                         .buf0 = b->rays.address,
-                        .buf1 = b->hits_ours.address,
+                        .buf1 = wide ? b->hits_wide.address : b->hits_ours.address,
+                        .buf2 = wide ? b->wide->refs.address : 0,
                         .params = {n, 0, gx * PC_WG_1D, 0}};
-        rd_cmd_dispatch(c, &b->trace, &push, gx, gy, 1);
+        rd_cmd_dispatch(c, wide ? &b->trace_wide : &b->trace, &push, gx, gy, 1);
     }
     rtb_barrier_all(c);
 }
@@ -171,7 +182,7 @@ static int cmp_double(const void *a, const void *b)
 }
 
 /* Median GPU ms of one trace of the current ray buffer (0 when the queue has no timestamps). */
-static rd_vk_result time_trace(bench *b, bool driver, uint32_t n, double *ms, char *err,
+static rd_vk_result time_trace(bench *b, tracer which, uint32_t n, double *ms, char *err,
                                size_t errlen)
 {
     rd_cmd c;
@@ -180,14 +191,14 @@ static rd_vk_result time_trace(bench *b, bool driver, uint32_t n, double *ms, ch
     do {
         res = rd_cmd_begin(b->vk, &c, err, errlen);
         if (res != RD_VK_OK) return res;
-        record(b, &c, driver, n);
+        record(b, &c, which, n);
         res = rd_cmd_submit_wait(b->vk, &c, err, errlen);
     } while (res == RD_VK_OK && now_s() - t0 < WARMUP_S);
     if (res == RD_VK_OK) res = rd_cmd_begin(b->vk, &c, err, errlen);
     if (res != RD_VK_OK) return res;
     rd_timer_begin(&c, &b->timer);
     for (int r = 0; r < REPEATS; r++) {
-        record(b, &c, driver, n);
+        record(b, &c, which, n);
         rd_timer_mark(&c, &b->timer, "trace");
     }
     res = rd_cmd_submit_wait(b->vk, &c, err, errlen);
@@ -223,58 +234,90 @@ typedef struct row {
     char set[64];
     uint32_t rays;
     double ours_ms, driver_ms, agree, hit_frac;
+    double wide_ms, wide_agree; /* wide_agree: fraction of rays where wide matches ours */
 } row;
 
-/* Traces the ray buffer with both tracers and compares their hits. */
+/* Fraction of n rays whose hits agree: both miss, or both hit within T_TOL relative. */
+static double agreement(const float *a, const float *d, uint32_t n)
+{
+    uint64_t same = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        bool ha = a[i] >= 0, hd = d[i] >= 0;
+        if (ha == hd && (!ha || fabsf(a[i] - d[i]) <= T_TOL * fmaxf(a[i], 1.0f))) same++;
+    }
+    return n ? (double)same / n : 1;
+}
+
+/* Traces the ray buffer with every tracer and compares the driver's and wide's hits with ours. */
 static rd_vk_result run_set(bench *b, uint32_t n, row *out, char *err, size_t errlen)
 {
     out->rays = n;
-    rd_vk_result res = time_trace(b, false, n, &out->ours_ms, err, errlen);
-    if (res == RD_VK_OK && b->driver) res = time_trace(b, true, n, &out->driver_ms, err, errlen);
+    rd_vk_result res = time_trace(b, TRACER_OURS, n, &out->ours_ms, err, errlen);
+    if (res == RD_VK_OK && b->driver)
+        res = time_trace(b, TRACER_DRIVER, n, &out->driver_ms, err, errlen);
+    if (res == RD_VK_OK) res = time_trace(b, TRACER_WIDE, n, &out->wide_ms, err, errlen);
     if (res != RD_VK_OK) return res;
     float *a = malloc((size_t)n * sizeof(float)), *d = malloc((size_t)n * sizeof(float));
     if (!a || !d) abort();
     res = rd_buffer_download(b->vk, &b->hits_ours, 0, a, (VkDeviceSize)n * 4, err, errlen);
-    if (res == RD_VK_OK && b->driver)
-        res = rd_buffer_download(b->vk, &b->hits_driver, 0, d, (VkDeviceSize)n * 4, err, errlen);
-    uint64_t same = 0, hits = 0;
-    for (uint32_t i = 0; i < n && res == RD_VK_OK; i++) {
-        bool ha = a[i] >= 0, hd = b->driver ? d[i] >= 0 : ha;
-        hits += ha;
-        if (!b->driver || ha != hd) continue;
-        if (!ha || fabsf(a[i] - d[i]) <= T_TOL * fmaxf(a[i], 1.0f)) same++;
-    }
-    out->agree = n ? (double)same / n : 1;
+    uint64_t hits = 0;
+    for (uint32_t i = 0; i < n && res == RD_VK_OK; i++)
+        hits += a[i] >= 0;
     out->hit_frac = n ? (double)hits / n : 0;
+    if (res == RD_VK_OK && b->driver) {
+        res = rd_buffer_download(b->vk, &b->hits_driver, 0, d, (VkDeviceSize)n * 4, err, errlen);
+        if (res == RD_VK_OK) out->agree = agreement(a, d, n);
+    }
+    if (res == RD_VK_OK) {
+        res = rd_buffer_download(b->vk, &b->hits_wide, 0, d, (VkDeviceSize)n * 4, err, errlen);
+        if (res == RD_VK_OK) out->wide_agree = agreement(a, d, n);
+    }
     free(a);
     free(d);
     return res;
 }
 
-static void print_row(FILE *f, bool csv, const char *scene, uint64_t tris, const row *r,
-                      const rtb_driver *driver)
+static double grays(uint32_t rays, double ms)
 {
-    double og = r->ours_ms > 0 ? r->rays / (r->ours_ms * 1e6) : 0;
-    double dg = driver && r->driver_ms > 0 ? r->rays / (r->driver_ms * 1e6) : 0;
+    return ms > 0 ? rays / (ms * 1e6) : 0;
+}
+
+/* wide / ours speed: above 1, the 4-wide nodes trace faster (0 without timestamps). */
+static double wide_ratio(const row *r)
+{
+    return r->wide_ms > 0 ? r->ours_ms / r->wide_ms : 0;
+}
+
+static void print_row(FILE *f, bool csv, const char *scene, uint64_t tris, const row *r,
+                      const rtb_driver *driver, const rtb_wide_gpu *wide)
+{
+    double og = grays(r->rays, r->ours_ms), wg = grays(r->rays, r->wide_ms);
+    double dg = driver ? grays(r->rays, r->driver_ms) : 0;
     if (csv) {
-        fprintf(f, "%s,%llu,%s,%u,%.4f,%.4f,%.4f,%.4f,%.4f,%.6f,%.4f,%u\n", scene,
-                (unsigned long long)tris, r->set, r->rays, r->ours_ms, driver ? r->driver_ms : 0,
-                og, dg, dg > 0 ? og / dg : 0, driver ? r->agree : 0, r->hit_frac,
-                driver ? driver->launch_width : 0);
+        fprintf(
+            f,
+            "%s,%llu,%s,%u,%.4f,%.4f,%.4f,%.4f,%.4f,%.6f,%.4f,%u,%.4f,%.4f,%.4f,%.6f,%llu,%llu\n",
+            scene, (unsigned long long)tris, r->set, r->rays, r->ours_ms, driver ? r->driver_ms : 0,
+            og, dg, dg > 0 ? og / dg : 0, driver ? r->agree : 0, r->hit_frac,
+            driver ? driver->launch_width : 0, r->wide_ms, wg, wide_ratio(r), r->wide_agree,
+            (unsigned long long)wide->binary_node_bytes, (unsigned long long)wide->node_bytes);
         return;
     }
     if (driver)
-        fprintf(f, "%-24s %10llu  %-22s %9u %9.3f %9.3f %8.3f %8.3f %7.3f %8.4f%% %5.1f%%\n", scene,
+        fprintf(f, "%-24s %10llu  %-22s %9u %9.3f %9.3f %8.3f %8.3f %7.3f %8.4f%% %5.1f%%", scene,
                 (unsigned long long)tris, r->set, r->rays, r->ours_ms, r->driver_ms, og, dg,
                 dg > 0 ? og / dg : 0, 100 * r->agree, 100 * r->hit_frac);
     else
-        fprintf(f, "%-24s %10llu  %-22s %9u %9.3f %9s %8.3f %8s %7s %9s %5.1f%%\n", scene,
+        fprintf(f, "%-24s %10llu  %-22s %9u %9.3f %9s %8.3f %8s %7s %9s %5.1f%%", scene,
                 (unsigned long long)tris, r->set, r->rays, r->ours_ms, "-", og, "-", "-", "-",
                 100 * r->hit_frac);
+    fprintf(f, "  %9.3f %8.3f %7.3f %8.4f%%\n", r->wide_ms, wg, wide_ratio(r), 100 * r->wide_agree);
 }
 
 static const char *CSV_HEADER = "scene,triangles,ray_set,rays,ours_ms,driver_ms,ours_grays,"
-                                "driver_grays,ratio,agree,hit_fraction,driver_launch_width\n";
+                                "driver_grays,ratio,agree,hit_fraction,driver_launch_width,"
+                                "wide_ms,wide_grays,wide_ratio,wide_agree,ours_node_bytes,"
+                                "wide_node_bytes\n";
 
 /* Creates the device with VK_KHR ray tracing when it has it; *driver says which. */
 static rd_vk_result create_device(rd_vk *vk, const options *o, bool *driver, char *err,
@@ -310,7 +353,8 @@ int main(int argc, char **argv)
     rd_gpu_scene gs = {0};
     rd_world world = {0};
     rtb_driver driver = {0};
-    bench b = {.vk = &vk, .gs = &gs};
+    rtb_wide_gpu wide = {0};
+    bench b = {.vk = &vk, .gs = &gs, .wide = &wide};
     uint64_t max_rays = (uint64_t)o.width * o.height;
     uint32_t probe_count = o.probes[0] * o.probes[1] * o.probes[2];
     for (unsigned i = 0; i < o.ray_sets; i++)
@@ -336,12 +380,26 @@ int main(int argc, char **argv)
                    (double)driver.as_bytes / (1024.0 * 1024.0), driver.launch_width);
         }
     }
+    if (res == RD_VK_OK) {
+        res = rtb_wide_gpu_create(&vk, &wide, &gs, err, sizeof err);
+        if (res == RD_VK_OK)
+            printf("wide: 4-wide collapse %.1f ms (CPU), %u nodes, %u levels; node memory ours "
+                   "%.2f MiB, wide %.2f MiB (%.2fx)\n",
+                   wide.collapse_ms, wide.node_count, wide.depth,
+                   (double)wide.binary_node_bytes / (1024.0 * 1024.0),
+                   (double)wide.node_bytes / (1024.0 * 1024.0),
+                   wide.binary_node_bytes ? (double)wide.node_bytes / wide.binary_node_bytes : 0);
+    }
     if (res == RD_VK_OK)
         res = rd_pipeline_create(&vk, &b.gen, "rtb_rays", pc_spv_rtb_rays_comp,
                                  sizeof pc_spv_rtb_rays_comp, sizeof(pc_push), err, sizeof err);
     if (res == RD_VK_OK)
         res = rd_pipeline_create(&vk, &b.trace, "rtb_trace", pc_spv_rtb_trace_comp,
                                  sizeof pc_spv_rtb_trace_comp, sizeof(pc_push), err, sizeof err);
+    if (res == RD_VK_OK)
+        res =
+            rd_pipeline_create(&vk, &b.trace_wide, "rtb_trace_wide", pc_spv_rtb_trace_wide_comp,
+                               sizeof pc_spv_rtb_trace_wide_comp, sizeof(pc_push), err, sizeof err);
     if (res == RD_VK_OK) res = rd_timer_create(&vk, &b.timer, err, sizeof err);
     if (res == RD_VK_OK)
         res = rd_buffer_create(&vk, &b.globals, sizeof(pc_globals), RD_MEMORY_UPLOAD, err,
@@ -353,6 +411,8 @@ int main(int argc, char **argv)
     if (res == RD_VK_OK)
         res =
             rd_buffer_create(&vk, &b.hits_driver, max_rays * 4, RD_MEMORY_DEVICE, err, sizeof err);
+    if (res == RD_VK_OK)
+        res = rd_buffer_create(&vk, &b.hits_wide, max_rays * 4, RD_MEMORY_DEVICE, err, sizeof err);
     if (res == RD_VK_OK) res = rd_world_create(&vk, &world, err, sizeof err);
     if (res == RD_VK_OK) rd_world_set_scene(&world, &gs);
 
@@ -395,13 +455,27 @@ int main(int argc, char **argv)
     }
 
     if (res == RD_VK_OK) {
-        printf("\n%-24s %10s  %-22s %9s %9s %9s %8s %8s %7s %9s %6s\n", "scene", "triangles",
-               "ray set", "rays", "ours ms", "driver ms", "ours", "driver", "ratio", "agree",
-               "hit");
-        printf("%-24s %10s  %-22s %9s %9s %9s %8s %8s %7s %9s %6s\n", "", "", "", "", "", "",
-               "Grays/s", "Grays/s", "", "", "");
+        printf("\n%-24s %10s  %-22s %9s %9s %9s %8s %8s %7s %9s %6s  %9s %8s %7s %9s\n", "scene",
+               "triangles", "ray set", "rays", "ours ms", "driver ms", "ours", "driver", "ratio",
+               "agree", "hit", "wide ms", "wide", "wide/", "wide");
+        printf("%-24s %10s  %-22s %9s %9s %9s %8s %8s %7s %9s %6s  %9s %8s %7s %9s\n", "", "", "",
+               "", "", "", "Grays/s", "Grays/s", "", "", "", "", "Grays/s", "ours", "agree");
         for (unsigned i = 0; i < nrows; i++)
-            print_row(stdout, false, o.scene, scene.tri_total, &rows[i], b.driver);
+            print_row(stdout, false, o.scene, scene.tri_total, &rows[i], b.driver, &wide);
+        printf("\nnode bytes: ours %llu, wide %llu\n", (unsigned long long)wide.binary_node_bytes,
+               (unsigned long long)wide.node_bytes);
+        for (unsigned i = 0; i < nrows; i++)
+            printf("wide pays on %s: %s (wide/ours %.3f)\n", rows[i].set,
+                   wide_ratio(&rows[i]) > 1 ? "yes" : "no", wide_ratio(&rows[i]));
+        for (unsigned i = 0; i < nrows; i++) {
+            if (1 - rows[i].wide_agree > MISMATCH_MAX) {
+                fprintf(stderr,
+                        "probecast_rtbench: error: %s: %.4f%% of wide hits disagree with ours "
+                        "(over %.2f%%)\n",
+                        rows[i].set, 100 * (1 - rows[i].wide_agree), 100 * MISMATCH_MAX);
+                status = 1;
+            }
+        }
         for (unsigned i = 0; i < nrows && b.driver; i++) {
             if (1 - rows[i].agree > MISMATCH_MAX) {
                 fprintf(stderr,
@@ -421,7 +495,7 @@ int main(int argc, char **argv)
             } else {
                 if (fresh) fputs(CSV_HEADER, f);
                 for (unsigned i = 0; i < nrows; i++)
-                    print_row(f, true, o.scene, scene.tri_total, &rows[i], b.driver);
+                    print_row(f, true, o.scene, scene.tri_total, &rows[i], b.driver, &wide);
                 fclose(f);
             }
         }
@@ -436,14 +510,17 @@ int main(int argc, char **argv)
         status = 1;
     }
     rd_world_destroy(&world);
+    rd_buffer_destroy(&vk, &b.hits_wide);
     rd_buffer_destroy(&vk, &b.hits_driver);
     rd_buffer_destroy(&vk, &b.hits_ours);
     rd_buffer_destroy(&vk, &b.rays);
     rd_buffer_destroy(&vk, &b.globals);
     rd_timer_destroy(&vk, &b.timer);
+    rd_pipeline_destroy(&vk, &b.trace_wide);
     rd_pipeline_destroy(&vk, &b.trace);
     rd_pipeline_destroy(&vk, &b.gen);
     rtb_driver_destroy(&driver);
+    rtb_wide_gpu_destroy(&vk, &wide);
     rd_gpu_scene_destroy(&vk, &gs);
     rd_vk_destroy(&vk);
     rd_scene_destroy(&scene);
