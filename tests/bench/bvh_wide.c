@@ -117,5 +117,5 @@ void rtb_wide_destroy(rtb_wide *w)
 
 uint32_t rtb_wide_stack_need(uint32_t depth)
 {
-    return 2 * RTB_WIDE * (depth + 1) + RD_BVH_MAX_LEAF;
+    return 2 * ((RTB_WIDE - 1) * (depth + 1) + RTB_WIDE) + RD_BVH_MAX_LEAF;
 }

@@ -30,9 +30,10 @@ typedef struct rtb_wide {
 uint32_t rtb_wide_collapse(rtb_wide *w, const pc_bvh_node *bin, uint32_t root);
 void rtb_wide_destroy(rtb_wide *w); /* idempotent */
 
-/* Stack entries rtb_trace_wide.comp can need for trees of w.depth levels: a node pops itself
- * and pushes at most RTB_WIDE children, so each level of the TLAS and of one BLAS leaves at
- * most RTB_WIDE entries pending, plus a TLAS leaf's waiting instances. */
+/* Stack entries rtb_trace_wide.comp can need when no tree is deeper than depth wide levels: a
+ * node pops itself and pushes at most RTB_WIDE children, one of which is popped next, so each
+ * level of the TLAS and of one BLAS leaves at most RTB_WIDE - 1 siblings pending below the
+ * deepest node's RTB_WIDE children, plus a TLAS leaf's waiting instances. */
 uint32_t rtb_wide_stack_need(uint32_t depth);
 
 #endif
