@@ -141,7 +141,8 @@ static void build_degenerate(rd_scene *s)
  * direct_radiance_sampled picks from. */
 static void add_many_lights(rd_scene *s)
 {
-    for (uint32_t i = 0; i < s->light_count; i++) s->lights[i].intensity *= 0.5f;
+    for (uint32_t i = 0; i < s->light_count; i++)
+        s->lights[i].intensity *= 0.5f;
     const float pos[3][3] = {{-0.7f, 1.2f, 0.5f}, {0.75f, 0.35f, -0.6f}, {0.2f, 1.6f, -0.7f}};
     const float col[3][3] = {{1.0f, 0.45f, 0.2f}, {0.25f, 0.5f, 1.0f}, {0.6f, 1.0f, 0.5f}};
     const float cd[3] = {0.8f, 0.4f, 1.2f};

@@ -217,7 +217,8 @@ const char *rd_procedural_names(void)
     return "cornell, cornell-glossy, plane-point, plane-directional, emissive, shadow, furnace, "
            "two-rooms, "
            "white-room, "
-           "spheres[:TRIANGLES], interior[:MILLIONS], hard:CASE (the stability suite: probecast eval --list)";
+           "spheres[:TRIANGLES], interior[:MILLIONS], hard:CASE (the stability suite: probecast "
+           "eval --list)";
 }
 
 bool rd_procedural_build(const char *name, rd_scene *s, char *err, size_t errlen)

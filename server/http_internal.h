@@ -29,7 +29,7 @@ typedef enum route {
     R_FRAME,
     R_VIEWS,
     R_VIEW_CAMERA,
-    R_VIEW_PICK,   /* POST /v1/views/{id}/pick: what lies under a point of the picture */
+    R_VIEW_PICK, /* POST /v1/views/{id}/pick: what lies under a point of the picture */
     R_ANIMATION,
     R_STREAM,      /* GET /v1/stream: the WebSocket, handed to the stream (http_stream.c) */
     R_ENVIRONMENT, /* PUT, DELETE /v1/environment: the HDR image (http_routes.c) */

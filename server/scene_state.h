@@ -19,10 +19,10 @@
 typedef struct srv_scene_state {
     rd_scene scene;
     bool loaded;
-    char source[128];    /* "upload" or the scene given on the command line */
+    char source[128];                  /* "upload" or the scene given on the command line */
     char file_name[SRV_FILE_NAME_MAX]; /* the uploaded file's name, cleaned ("": not given) */
-    uint64_t generation; /* increases with every scene replacement */
-    uint32_t *light_ids; /* parallel to scene.lights */
+    uint64_t generation;               /* increases with every scene replacement */
+    uint32_t *light_ids;               /* parallel to scene.lights */
     uint32_t next_light_id;
     bool *node_moved; /* parallel to scene.nodes: changed through the API */
     srv_camera camera;
