@@ -58,6 +58,7 @@
 extern "C" {
 #include "xform.h"
 }
+#include "gltf_import.h"
 
 namespace
 {
@@ -66,7 +67,6 @@ using njson = nlohmann::json;
 using tinygltf::Model;
 
 const uint64_t kDefaultMaxTriangles = 50000000ull;
-const int kMaxJsonDepth = 100;
 const int kMaxImageDim = 16384;
 const uint64_t kMaxImagePixels = 1ull << 26;     /* 256 MiB as RGBA8 */
 const uint64_t kMaxDecodedBytes = 2ull << 30;    /* all images together */
@@ -346,94 +346,10 @@ bool image_callback(tinygltf::Image *image, const int index, std::string *, std:
 
 /* ---- container and JSON pre-scan ---------------------------------------------------- */
 
-struct Container {
-    bool glb = false;
-    const char *json = nullptr;
-    size_t json_size = 0;
-    size_t bin_size = 0; /* 0: no BIN chunk */
-};
-
-uint32_t le32(const unsigned char *p)
+/* Throws the C side's failure (gltf_import.h) as the loader's. */
+void check(rd_gltf_result r, const char *err)
 {
-    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
-}
-
-Container parse_container(const unsigned char *data, size_t size)
-{
-    Container c;
-    if (size == 0) fail(RD_GLTF_ERR_PARSE, "the file is empty");
-    if (size >= 4 && memcmp(data, "glTF", 4) == 0) {
-        c.glb = true;
-        if (size < 12)
-            fail(RD_GLTF_ERR_PARSE, "the GLB file is truncated: its 12-byte header is incomplete");
-        uint32_t version = le32(data + 4), length = le32(data + 8);
-        if (version != 2)
-            fail(RD_GLTF_ERR_UNSUPPORTED, "GLB version %u is not supported (only 2)", version);
-        if (length > size)
-            fail(RD_GLTF_ERR_PARSE,
-                 "the GLB file is truncated: its header declares %u bytes but only %zu are "
-                 "present",
-                 length, size);
-        if (length < 20) fail(RD_GLTF_ERR_PARSE, "the GLB file is truncated: it has no JSON chunk");
-        uint32_t json_len = le32(data + 12), json_type = le32(data + 16);
-        if (json_type != 0x4E4F534Au)
-            fail(RD_GLTF_ERR_PARSE, "the first chunk of the GLB file is not its JSON chunk");
-        if (json_len == 0 || json_len % 4 != 0)
-            fail(RD_GLTF_ERR_PARSE, "the GLB JSON chunk length %u is not a positive multiple of 4",
-                 json_len);
-        if ((uint64_t)json_len > (uint64_t)length - 20)
-            fail(RD_GLTF_ERR_PARSE,
-                 "the GLB file is truncated: its JSON chunk needs %u bytes but only %u remain",
-                 json_len, length - 20);
-        c.json = (const char *)data + 20;
-        c.json_size = json_len;
-        uint64_t at = 20ull + json_len;
-        if (at < length) {
-            if (length - at < 12)
-                fail(RD_GLTF_ERR_PARSE, "the GLB file is truncated inside its BIN chunk header");
-            uint32_t bin_len = le32(data + at), bin_type = le32(data + at + 4);
-            if (bin_type != 0x004E4942u)
-                fail(RD_GLTF_ERR_PARSE, "the second chunk of the GLB file is not a BIN chunk");
-            if (bin_len < 4 || bin_len % 4 != 0)
-                fail(RD_GLTF_ERR_PARSE,
-                     "the GLB BIN chunk length %u is not a positive multiple of 4", bin_len);
-            if ((uint64_t)bin_len > length - at - 8)
-                fail(RD_GLTF_ERR_PARSE,
-                     "the GLB file is truncated: its BIN chunk needs %u bytes but only %llu "
-                     "remain",
-                     bin_len, (unsigned long long)(length - at - 8));
-            c.bin_size = bin_len;
-        }
-    } else {
-        c.json = (const char *)data;
-        c.json_size = size;
-    }
-    return c;
-}
-
-/* Nesting depth of JSON text (tinygltf converts extras/extensions recursively). */
-void check_json_depth(const char *s, size_t n)
-{
-    int depth = 0;
-    bool in_string = false, escaped = false;
-    for (size_t i = 0; i < n; i++) {
-        char ch = s[i];
-        if (in_string) {
-            if (escaped)
-                escaped = false;
-            else if (ch == '\\')
-                escaped = true;
-            else if (ch == '"')
-                in_string = false;
-        } else if (ch == '"') {
-            in_string = true;
-        } else if (ch == '[' || ch == '{') {
-            if (++depth > kMaxJsonDepth)
-                fail(RD_GLTF_ERR_PARSE, "the glTF JSON nests deeper than %d levels", kMaxJsonDepth);
-        } else if (ch == ']' || ch == '}') {
-            depth--;
-        }
-    }
+    if (r != RD_GLTF_OK) throw LoadError{r, err};
 }
 
 bool json_uint(const njson &o, const char *key, uint64_t *out, bool required)
@@ -479,9 +395,10 @@ bool is_supported_extension(const std::string &name)
 }
 
 /* Checks what tinygltf would use unchecked, with messages that name the culprit. */
-void prescan(const Container &c, LoadContext *ctx)
+void prescan(const rd_gltf_container &c, LoadContext *ctx)
 {
-    check_json_depth(c.json, c.json_size);
+    char err[256];
+    check(rd_gltf_check_json_depth(c.json, c.json_size, err, sizeof err), err);
     njson::parser_callback_t keep = [](int depth, njson::parse_event_t ev, njson &v) {
         if (depth != 1 || ev != njson::parse_event_t::key || !v.is_string()) return true;
         const std::string &k = v.get_ref<const std::string &>();
@@ -612,23 +529,6 @@ void prescan(const Container &c, LoadContext *ctx)
 
 /* ---- accessors ---------------------------------------------------------------------- */
 
-size_t component_size(int type)
-{
-    switch (type) {
-    case TINYGLTF_COMPONENT_TYPE_BYTE:
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
-        return 1;
-    case TINYGLTF_COMPONENT_TYPE_SHORT:
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
-        return 2;
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
-    case TINYGLTF_COMPONENT_TYPE_FLOAT:
-        return 4;
-    default:
-        return 0;
-    }
-}
-
 const char *type_name(int type)
 {
     switch (type) {
@@ -651,16 +551,16 @@ const char *type_name(int type)
     }
 }
 
-/* A validated accessor: element i lies at data + i * stride (or is zero when data is null),
- * unless sparse substitution applies. */
+/* A validated accessor (gltf_import.h) and the sparse indices it points to. Moves keep the
+ * pointer valid; copies are not allowed. */
 struct Accessor {
-    int index = -1;
-    const unsigned char *data = nullptr;
-    size_t stride = 0, count = 0, elem = 0;
-    int ctype = 0, ncomp = 0;
-    bool normalized = false;
+    rd_gltf_accessor c;
     std::vector<uint32_t> sparse_index;
-    const unsigned char *sparse_values = nullptr;
+    Accessor() { memset(&c, 0, sizeof c), c.index = -1; }
+    Accessor(Accessor &&) = default;
+    Accessor &operator=(Accessor &&) = default;
+    Accessor(const Accessor &) = delete;
+    Accessor &operator=(const Accessor &) = delete;
 };
 
 /* Start of `bytes` bytes at `offset` inside buffer view `view`, or null when out of range. */
@@ -694,7 +594,8 @@ Accessor make_accessor(const Model &m, int index, const std::string &what_s, int
              what, index, m.accessors.size());
     const tinygltf::Accessor &a = m.accessors[(size_t)index];
     Accessor r;
-    r.index = index;
+    rd_gltf_accessor &c = r.c;
+    c.index = index;
     if (a.type != type)
         fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has type %s, expected %s", index, what,
              type_name(a.type), type_name(type));
@@ -708,36 +609,36 @@ Accessor make_accessor(const Model &m, int index, const std::string &what_s, int
         fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) holds integers but is not normalized", index,
              what);
     if (a.count == 0) fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has count 0", index, what);
-    r.ctype = a.componentType;
-    r.ncomp = type == TINYGLTF_TYPE_SCALAR ? 1
+    c.ctype = a.componentType;
+    c.ncomp = type == TINYGLTF_TYPE_SCALAR ? 1
               : type == TINYGLTF_TYPE_VEC2 ? 2
               : type == TINYGLTF_TYPE_VEC3 ? 3
                                            : 4;
-    r.elem = component_size(a.componentType) * (size_t)r.ncomp;
-    r.count = a.count;
-    r.normalized = a.normalized;
+    c.elem = rd_gltf_component_size(a.componentType) * (size_t)c.ncomp;
+    c.count = a.count;
+    c.normalized = a.normalized;
     if (a.bufferView < -1)
         fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has buffer view %d", index, what, a.bufferView);
     if (a.bufferView >= 0) {
         const tinygltf::BufferView *bv = (size_t)a.bufferView < m.bufferViews.size()
                                              ? &m.bufferViews[(size_t)a.bufferView]
                                              : nullptr;
-        r.stride = bv && bv->byteStride ? bv->byteStride : r.elem;
-        if (r.stride < r.elem)
+        c.stride = bv && bv->byteStride ? bv->byteStride : c.elem;
+        if (c.stride < c.elem)
             fail(RD_GLTF_ERR_INVALID,
                  "buffer view %d has byteStride %zu, smaller than the %zu-byte elements of "
                  "accessor %d",
-                 a.bufferView, r.stride, r.elem, index);
+                 a.bufferView, c.stride, c.elem, index);
         uint64_t span;
-        if (__builtin_mul_overflow((uint64_t)r.stride, (uint64_t)(r.count - 1), &span) ||
-            __builtin_add_overflow(span, (uint64_t)r.elem, &span))
+        if (__builtin_mul_overflow((uint64_t)c.stride, (uint64_t)(c.count - 1), &span) ||
+            __builtin_add_overflow(span, (uint64_t)c.elem, &span))
             fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) reads past the end of buffer view %d",
                  index, what, a.bufferView);
-        r.data = view_range(m, a.bufferView, a.byteOffset, span, index, what);
+        c.data = view_range(m, a.bufferView, a.byteOffset, span, index, what);
     }
     if (a.sparse.isSparse) {
         size_t n = a.sparse.count > 0 ? (size_t)a.sparse.count : 0;
-        if (n == 0 || n > r.count)
+        if (n == 0 || n > c.count)
             fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has an invalid sparse count %d", index,
                  what, a.sparse.count);
         int ict = a.sparse.indices.componentType;
@@ -749,83 +650,32 @@ Accessor make_accessor(const Model &m, int index, const std::string &what_s, int
         if (a.sparse.indices.byteOffset < 0 || a.sparse.values.byteOffset < 0)
             fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has a negative sparse byteOffset", index,
                  what);
-        size_t isz = component_size(ict);
+        size_t isz = rd_gltf_component_size(ict);
         const unsigned char *ip =
             view_range(m, a.sparse.indices.bufferView, (uint64_t)a.sparse.indices.byteOffset,
                        (uint64_t)n * isz, index, what);
-        r.sparse_values =
+        c.sparse_values =
             view_range(m, a.sparse.values.bufferView, (uint64_t)a.sparse.values.byteOffset,
-                       (uint64_t)n * r.elem, index, what);
+                       (uint64_t)n * c.elem, index, what);
         r.sparse_index.resize(n);
-        for (size_t i = 0; i < n; i++) {
-            uint32_t v = 0;
-            if (isz == 1) {
-                v = ip[i];
-            } else if (isz == 2) {
-                uint16_t s;
-                memcpy(&s, ip + i * 2, 2);
-                v = s;
-            } else {
-                memcpy(&v, ip + i * 4, 4);
-            }
-            if (v >= r.count || (i > 0 && v <= r.sparse_index[i - 1]))
-                fail(RD_GLTF_ERR_INVALID,
-                     "the sparse indices of accessor %d (%s) are out of range or not increasing",
-                     index, what);
-            r.sparse_index[i] = v;
-        }
+        if (!rd_gltf_read_sparse_indices(ip, ict, n, c.count, r.sparse_index.data()))
+            fail(RD_GLTF_ERR_INVALID,
+                 "the sparse indices of accessor %d (%s) are out of range or not increasing",
+                 index, what);
+        c.sparse_index = r.sparse_index.data();
+        c.sparse_count = n;
     }
     return r;
 }
 
-/* Bytes of element i (null: zeros). */
-const unsigned char *element(const Accessor &a, size_t i)
-{
-    if (!a.sparse_index.empty()) {
-        auto it = std::lower_bound(a.sparse_index.begin(), a.sparse_index.end(), (uint32_t)i);
-        if (it != a.sparse_index.end() && *it == i)
-            return a.sparse_values + (size_t)(it - a.sparse_index.begin()) * a.elem;
-    }
-    return a.data ? a.data + i * a.stride : nullptr;
-}
-
 void read_floats(const Accessor &a, size_t i, float *out)
 {
-    const unsigned char *p = element(a, i);
-    for (int c = 0; c < a.ncomp; c++) {
-        if (!p) {
-            out[c] = 0.0f;
-        } else if (a.ctype == TINYGLTF_COMPONENT_TYPE_FLOAT) {
-            memcpy(&out[c], p + c * 4, 4);
-        } else if (a.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) {
-            out[c] = p[c] / 255.0f;
-        } else if (a.ctype == TINYGLTF_COMPONENT_TYPE_BYTE) {
-            out[c] = std::max((int8_t)p[c] / 127.0f, -1.0f);
-        } else if (a.ctype == TINYGLTF_COMPONENT_TYPE_SHORT) {
-            int16_t s;
-            memcpy(&s, p + c * 2, 2);
-            out[c] = std::max(s / 32767.0f, -1.0f);
-        } else { /* normalized unsigned short */
-            uint16_t s;
-            memcpy(&s, p + c * 2, 2);
-            out[c] = s / 65535.0f;
-        }
-    }
+    rd_gltf_read_floats(&a.c, i, out);
 }
 
 uint32_t read_index(const Accessor &a, size_t i)
 {
-    const unsigned char *p = element(a, i);
-    if (!p) return 0;
-    if (a.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) return p[0];
-    if (a.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT) {
-        uint16_t s;
-        memcpy(&s, p, 2);
-        return s;
-    }
-    uint32_t v;
-    memcpy(&v, p, 4);
-    return v;
+    return rd_gltf_read_index(&a.c, i);
 }
 
 /* ---- conversion --------------------------------------------------------------------- */
@@ -1258,19 +1108,19 @@ std::vector<Primitive> Converter::plan_mesh(size_t mesh)
                                    {TINYGLTF_COMPONENT_TYPE_FLOAT});
             pr.has_tan = true;
         }
-        if ((pr.has_nrm && pr.nrm.count != pr.pos.count) ||
-            (pr.has_uv && pr.uv.count != pr.pos.count) ||
-            (pr.has_tan && pr.tan.count != pr.pos.count))
+        if ((pr.has_nrm && pr.nrm.c.count != pr.pos.c.count) ||
+            (pr.has_uv && pr.uv.c.count != pr.pos.c.count) ||
+            (pr.has_tan && pr.tan.c.count != pr.pos.c.count))
             fail(RD_GLTF_ERR_INVALID, "the attributes of %s have different vertex counts",
                  where.c_str());
-        size_t n = pr.pos.count;
+        size_t n = pr.pos.c.count;
         if (gp.indices >= 0) {
             pr.idx = make_accessor(m_, gp.indices, "indices of " + where, TINYGLTF_TYPE_SCALAR,
                                    {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
                                     TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
                                     TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT});
             pr.has_idx = true;
-            n = pr.idx.count;
+            n = pr.idx.c.count;
         }
         if (pr.mode == TINYGLTF_MODE_TRIANGLES) {
             pr.tris = n / 3;
@@ -1324,11 +1174,11 @@ void Converter::fill_mesh(size_t mesh, const std::vector<Primitive> &prims, rd_m
                 size_t vi = v[k];
                 if (pr.has_idx) {
                     uint32_t ix = read_index(pr.idx, vi);
-                    if (ix >= pr.pos.count)
+                    if (ix >= pr.pos.c.count)
                         fail(RD_GLTF_ERR_INVALID,
                              "index %zu of mesh %zu primitive %zu is %u, out of range for %zu "
                              "vertices",
-                             vi, mesh, p, ix, pr.pos.count);
+                             vi, mesh, p, ix, pr.pos.c.count);
                     vi = ix;
                 }
                 float *pos = &out->positions[t_out * 9 + (size_t)k * 3];
@@ -1512,19 +1362,19 @@ void Converter::anim_sampler(const std::string &where, const tinygltf::Animation
                              TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT})
             : make_accessor(m_, gs.output, "output of " + where, TINYGLTF_TYPE_VEC3,
                             {TINYGLTF_COMPONENT_TYPE_FLOAT});
-    size_t keys = in.count, per_key = out->interpolation == RD_INTERP_CUBICSPLINE ? 3 : 1;
-    if (val.count / per_key != keys || val.count % per_key != 0)
+    size_t keys = in.c.count, per_key = out->interpolation == RD_INTERP_CUBICSPLINE ? 3 : 1;
+    if (val.c.count / per_key != keys || val.c.count % per_key != 0)
         fail(RD_GLTF_ERR_INVALID, "%s has %zu output values for %zu input times (%s needs %zu)",
-             where.c_str(), val.count, keys, ip.c_str(), keys * per_key);
+             where.c_str(), val.c.count, keys, ip.c_str(), keys * per_key);
     out->components = rotation ? 4 : 3;
-    if (val.count <= kMaxAnimationFloats) anim_floats_ += keys + val.count * out->components;
-    if (val.count > kMaxAnimationFloats || anim_floats_ > kMaxAnimationFloats)
+    if (val.c.count <= kMaxAnimationFloats) anim_floats_ += keys + val.c.count * out->components;
+    if (val.c.count > kMaxAnimationFloats || anim_floats_ > kMaxAnimationFloats)
         fail(RD_GLTF_ERR_TOO_LARGE,
              "the animations hold more than %llu keys and values (the limit)",
              (unsigned long long)kMaxAnimationFloats);
     out->key_count = (uint32_t)keys;
     times->resize(keys);
-    values->resize(val.count * out->components);
+    values->resize(val.c.count * out->components);
     for (size_t i = 0; i < keys; i++) {
         float *t = &(*times)[i];
         read_floats(in, i, t);
@@ -1533,7 +1383,7 @@ void Converter::anim_sampler(const std::string &where, const tinygltf::Animation
                  "%s has input time %g at key %zu; times must be finite, >= 0 and not decrease",
                  where.c_str(), (double)*t, i);
     }
-    for (size_t i = 0; i < val.count; i++) {
+    for (size_t i = 0; i < val.c.count; i++) {
         float *v = &(*values)[i * out->components];
         read_floats(val, i, v);
         for (uint32_t k = 0; k < out->components; k++)
@@ -1612,7 +1462,7 @@ void Converter::animations()
                                         fmt("input of %s sampler %zu", an.c_str(), si),
                                         TINYGLTF_TYPE_SCALAR, {TINYGLTF_COMPONENT_TYPE_FLOAT});
             float last;
-            read_floats(in, in.count - 1, &last);
+            read_floats(in, in.c.count - 1, &last);
             if (std::isfinite(last) && last > a.duration) a.duration = last;
         }
         a.name = ga.name.empty() ? nullptr : const_cast<char *>(ga.name.c_str());
@@ -1671,7 +1521,9 @@ void load(const unsigned char *data, size_t size, const char *base_dir, const rd
         ctx.rules.prefix = ctx.rules.base;
         if (ctx.rules.prefix.back() != '/') ctx.rules.prefix += '/';
     }
-    Container c = parse_container(data, size);
+    rd_gltf_container c;
+    char cerr[256];
+    check(rd_gltf_parse_container(data, size, &c, cerr, sizeof cerr), cerr);
     prescan(c, &ctx);
 
     tinygltf::TinyGLTF gltf;

@@ -1,0 +1,88 @@
+/* gltf_import.h: the C side of the glTF importer — everything that works on plain bytes and
+ * arrays rather than on tinygltf's document: the GLB container, the JSON nesting pre-check,
+ * reading accessor elements, a primitive's triangles and an animation sampler's keys.
+ * gltf_loader.cpp (the one C++ file, which owns tinygltf) validates the document's indices,
+ * resolves accessors to rd_gltf_accessor and calls these. Internal to the importer; the public
+ * API is gltf_loader.h.
+ *
+ * Errors: functions that can fail return an rd_gltf_result and write one sentence to err
+ * (errlen > 0), the message the loader reports unchanged.
+ */
+#ifndef RD_GLTF_IMPORT_H
+#define RD_GLTF_IMPORT_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "gltf_loader.h"
+#include "scene.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* glTF 2.0 enumerations (accessor.componentType, primitive.mode), as the specification
+ * numbers them. */
+enum {
+    RD_GLTF_BYTE = 5120,
+    RD_GLTF_UNSIGNED_BYTE = 5121,
+    RD_GLTF_SHORT = 5122,
+    RD_GLTF_UNSIGNED_SHORT = 5123,
+    RD_GLTF_UNSIGNED_INT = 5125,
+    RD_GLTF_FLOAT = 5126
+};
+enum { RD_GLTF_MODE_TRIANGLES = 4, RD_GLTF_MODE_TRIANGLE_STRIP = 5, RD_GLTF_MODE_TRIANGLE_FAN = 6 };
+
+enum { RD_GLTF_MAX_JSON_DEPTH = 100 };
+
+/* ---- container (gltf_container.c) --------------------------------------------------------- */
+
+/* The JSON text and the BIN chunk's size of a .glb, or the whole input as JSON text. */
+typedef struct rd_gltf_container {
+    bool glb;
+    const char *json;
+    size_t json_size;
+    size_t bin_size; /* 0: no BIN chunk */
+} rd_gltf_container;
+
+/* Splits data (GLB when it starts with "glTF", else JSON text) into its chunks, checking the
+ * GLB header and chunk lengths. out points into data. */
+rd_gltf_result rd_gltf_parse_container(const unsigned char *data, size_t size,
+                                       rd_gltf_container *out, char *err, size_t errlen);
+/* Refuses JSON text nesting deeper than RD_GLTF_MAX_JSON_DEPTH (tinygltf converts extras and
+ * extensions recursively). */
+rd_gltf_result rd_gltf_check_json_depth(const char *s, size_t n, char *err, size_t errlen);
+
+/* ---- accessors (gltf_accessor.c) ----------------------------------------------------------- */
+
+/* A validated accessor: element i lies at data + i * stride (or is zero when data is null),
+ * unless sparse substitution applies (sparse_index increasing, below count). Borrows its
+ * memory from the document. */
+typedef struct rd_gltf_accessor {
+    int index;
+    const unsigned char *data;
+    size_t stride, count, elem;
+    int ctype, ncomp;
+    bool normalized;
+    const uint32_t *sparse_index;
+    size_t sparse_count;
+    const unsigned char *sparse_values;
+} rd_gltf_accessor;
+
+/* Bytes of one component of ctype (0: not a component type). */
+size_t rd_gltf_component_size(int ctype);
+/* Decodes and checks n sparse indices of component type ctype at p: each below count and
+ * increasing. false: they are not. */
+bool rd_gltf_read_sparse_indices(const unsigned char *p, int ctype, size_t n, size_t count,
+                                 uint32_t *out);
+/* Element i as floats (ncomp of them; normalized integers mapped as glTF 3.11 says). */
+void rd_gltf_read_floats(const rd_gltf_accessor *a, size_t i, float *out);
+/* Element i of an index accessor. */
+uint32_t rd_gltf_read_index(const rd_gltf_accessor *a, size_t i);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
