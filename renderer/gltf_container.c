@@ -5,9 +5,7 @@
 #include <stdio.h>
 #include <string.h>
 
-static rd_gltf_result fail(char *err, size_t errlen, rd_gltf_result code, const char *fmt, ...)
-    __attribute__((format(printf, 4, 5)));
-static rd_gltf_result fail(char *err, size_t errlen, rd_gltf_result code, const char *fmt, ...)
+rd_gltf_result rd_gltf_fail(char *err, size_t errlen, rd_gltf_result code, const char *fmt, ...)
 {
     if (err && errlen) {
         va_list ap;
@@ -17,6 +15,8 @@ static rd_gltf_result fail(char *err, size_t errlen, rd_gltf_result code, const 
     }
     return code;
 }
+
+#define fail rd_gltf_fail
 
 static uint32_t le32(const unsigned char *p)
 {

@@ -81,6 +81,38 @@ void rd_gltf_read_floats(const rd_gltf_accessor *a, size_t i, float *out);
 /* Element i of an index accessor. */
 uint32_t rd_gltf_read_index(const rd_gltf_accessor *a, size_t i);
 
+/* ---- meshes (gltf_mesh.c) ------------------------------------------------------------------ */
+
+/* A triangle primitive whose accessors were validated (counts agree, tris > 0). */
+typedef struct rd_gltf_primitive {
+    int mode; /* RD_GLTF_MODE_TRIANGLES, _STRIP or _FAN */
+    rd_gltf_accessor pos, nrm, uv, tan, idx;
+    bool has_nrm, has_uv, has_tan, has_idx;
+    uint64_t tris;
+    uint32_t material; /* rd material: glTF material + 1, 0 for none */
+} rd_gltf_primitive;
+
+/* Fills out (made by rd_scene_add_mesh with the primitives' triangle count) with the
+ * triangles of prims[0..n): positions (finite), normals (normalized, else the flat normal),
+ * TANGENT where any primitive has them (zeros elsewhere), TEXCOORD_0 and materials. Fails on
+ * an out-of-range index or a non-finite position; messages name glTF mesh `mesh` and the
+ * position in prims. */
+rd_gltf_result rd_gltf_fill_mesh(size_t mesh, const rd_gltf_primitive *prims, size_t n,
+                                 rd_mesh *out, char *err, size_t errlen);
+
+/* ---- animations (gltf_animation.c) --------------------------------------------------------- */
+
+/* Reads an animation sampler's keys: in->count times (finite, >= 0, not decreasing) and
+ * val->count values of `components` floats (finite) into times and values. where names the
+ * sampler in messages. */
+rd_gltf_result rd_gltf_read_keys(const char *where, const rd_gltf_accessor *in,
+                                 const rd_gltf_accessor *val, uint32_t components, float *times,
+                                 float *values, char *err, size_t errlen);
+
+/* Writes one message to err (errlen > 0) and returns code. */
+rd_gltf_result rd_gltf_fail(char *err, size_t errlen, rd_gltf_result code, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+
 #ifdef __cplusplus
 }
 #endif

@@ -551,12 +551,27 @@ const char *type_name(int type)
     }
 }
 
+static_assert(TINYGLTF_COMPONENT_TYPE_BYTE == RD_GLTF_BYTE &&
+                  TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE == RD_GLTF_UNSIGNED_BYTE &&
+                  TINYGLTF_COMPONENT_TYPE_SHORT == RD_GLTF_SHORT &&
+                  TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT == RD_GLTF_UNSIGNED_SHORT &&
+                  TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT == RD_GLTF_UNSIGNED_INT &&
+                  TINYGLTF_COMPONENT_TYPE_FLOAT == RD_GLTF_FLOAT,
+              "gltf_import.h numbers component types as tinygltf does");
+static_assert(TINYGLTF_MODE_TRIANGLES == RD_GLTF_MODE_TRIANGLES &&
+                  TINYGLTF_MODE_TRIANGLE_STRIP == RD_GLTF_MODE_TRIANGLE_STRIP &&
+                  TINYGLTF_MODE_TRIANGLE_FAN == RD_GLTF_MODE_TRIANGLE_FAN,
+              "gltf_import.h numbers primitive modes as tinygltf does");
+
 /* A validated accessor (gltf_import.h) and the sparse indices it points to. Moves keep the
  * pointer valid; copies are not allowed. */
 struct Accessor {
     rd_gltf_accessor c;
     std::vector<uint32_t> sparse_index;
-    Accessor() { memset(&c, 0, sizeof c), c.index = -1; }
+    Accessor()
+    {
+        memset(&c, 0, sizeof c), c.index = -1;
+    }
     Accessor(Accessor &&) = default;
     Accessor &operator=(Accessor &&) = default;
     Accessor(const Accessor &) = delete;
@@ -660,8 +675,8 @@ Accessor make_accessor(const Model &m, int index, const std::string &what_s, int
         r.sparse_index.resize(n);
         if (!rd_gltf_read_sparse_indices(ip, ict, n, c.count, r.sparse_index.data()))
             fail(RD_GLTF_ERR_INVALID,
-                 "the sparse indices of accessor %d (%s) are out of range or not increasing",
-                 index, what);
+                 "the sparse indices of accessor %d (%s) are out of range or not increasing", index,
+                 what);
         c.sparse_index = r.sparse_index.data();
         c.sparse_count = n;
     }
@@ -671,11 +686,6 @@ Accessor make_accessor(const Model &m, int index, const std::string &what_s, int
 void read_floats(const Accessor &a, size_t i, float *out)
 {
     rd_gltf_read_floats(&a.c, i, out);
-}
-
-uint32_t read_index(const Accessor &a, size_t i)
-{
-    return rd_gltf_read_index(&a.c, i);
 }
 
 /* ---- conversion --------------------------------------------------------------------- */
@@ -1146,72 +1156,15 @@ std::vector<Primitive> Converter::plan_mesh(size_t mesh)
 
 void Converter::fill_mesh(size_t mesh, const std::vector<Primitive> &prims, rd_mesh *out)
 {
-    size_t t_out = 0;
-    bool any_tan = false;
-    for (const Primitive &pr : prims)
-        any_tan = any_tan || pr.has_tan;
-    if (any_tan) { /* zeros where a primitive has none: the renderer derives them */
-        out->tangents = static_cast<float *>(calloc((size_t)out->tri_count * 12, sizeof(float)));
-        if (!out->tangents) {
-            fprintf(stderr, "probecast: out of memory (tangents of %u triangles)\n",
-                    out->tri_count);
-            abort();
-        }
-    }
+    std::vector<rd_gltf_primitive> c(prims.size());
     for (size_t p = 0; p < prims.size(); p++) {
         const Primitive &pr = prims[p];
-        for (uint64_t t = 0; t < pr.tris; t++, t_out++) {
-            size_t v[3];
-            if (pr.mode == TINYGLTF_MODE_TRIANGLES) {
-                v[0] = (size_t)t * 3, v[1] = (size_t)t * 3 + 1, v[2] = (size_t)t * 3 + 2;
-            } else if (pr.mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
-                size_t odd = (size_t)(t % 2);
-                v[0] = (size_t)t, v[1] = (size_t)t + 1 + odd, v[2] = (size_t)t + 2 - odd;
-            } else { /* fan */
-                v[0] = (size_t)t + 1, v[1] = (size_t)t + 2, v[2] = 0;
-            }
-            for (int k = 0; k < 3; k++) {
-                size_t vi = v[k];
-                if (pr.has_idx) {
-                    uint32_t ix = read_index(pr.idx, vi);
-                    if (ix >= pr.pos.c.count)
-                        fail(RD_GLTF_ERR_INVALID,
-                             "index %zu of mesh %zu primitive %zu is %u, out of range for %zu "
-                             "vertices",
-                             vi, mesh, p, ix, pr.pos.c.count);
-                    vi = ix;
-                }
-                float *pos = &out->positions[t_out * 9 + (size_t)k * 3];
-                read_floats(pr.pos, vi, pos);
-                if (!rd_vec3_isfinite(pos))
-                    fail(RD_GLTF_ERR_INVALID,
-                         "POSITION of mesh %zu primitive %zu contains NaN or infinity (vertex "
-                         "%zu)",
-                         mesh, p, vi);
-                float *nrm = &out->normals[t_out * 9 + (size_t)k * 3];
-                if (pr.has_nrm) {
-                    float n[3];
-                    read_floats(pr.nrm, vi, n);
-                    if (!rd_vec3_normalize(nrm, n, nullptr))
-                        rd_vec3_set(nrm, 0, 0, 0); /* filled with the flat normal below */
-                }
-                if (pr.has_tan) {
-                    float *tg = &out->tangents[t_out * 12 + (size_t)k * 4];
-                    read_floats(pr.tan, vi, tg);
-                    if (!rd_vec3_isfinite(tg) || !std::isfinite(tg[3]))
-                        memset(tg, 0, 4 * sizeof(float)); /* derived from the UVs instead */
-                }
-                float *uv = &out->uvs[t_out * 6 + (size_t)k * 2];
-                if (pr.has_uv) {
-                    read_floats(pr.uv, vi, uv);
-                    for (int c = 0; c < 2; c++)
-                        if (!std::isfinite(uv[c])) uv[c] = 0.0f;
-                }
-            }
-            out->material[t_out] = pr.material;
-        }
+        c[p] =
+            rd_gltf_primitive{pr.mode,    pr.pos.c,  pr.nrm.c,   pr.uv.c,    pr.tan.c, pr.idx.c,
+                              pr.has_nrm, pr.has_uv, pr.has_tan, pr.has_idx, pr.tris,  pr.material};
     }
-    rd_mesh_fill_flat_normals(out);
+    char err[256];
+    check(rd_gltf_fill_mesh(mesh, c.data(), c.size(), out, err, sizeof err), err);
 }
 
 void Converter::meshes()
@@ -1375,22 +1328,10 @@ void Converter::anim_sampler(const std::string &where, const tinygltf::Animation
     out->key_count = (uint32_t)keys;
     times->resize(keys);
     values->resize(val.c.count * out->components);
-    for (size_t i = 0; i < keys; i++) {
-        float *t = &(*times)[i];
-        read_floats(in, i, t);
-        if (!std::isfinite(*t) || *t < 0.0f || (i > 0 && *t < t[-1]))
-            fail(RD_GLTF_ERR_INVALID,
-                 "%s has input time %g at key %zu; times must be finite, >= 0 and not decrease",
-                 where.c_str(), (double)*t, i);
-    }
-    for (size_t i = 0; i < val.c.count; i++) {
-        float *v = &(*values)[i * out->components];
-        read_floats(val, i, v);
-        for (uint32_t k = 0; k < out->components; k++)
-            if (!std::isfinite(v[k]))
-                fail(RD_GLTF_ERR_INVALID, "%s has an output value that is NaN or infinite (%zu)",
-                     where.c_str(), i);
-    }
+    char err[512];
+    check(rd_gltf_read_keys(where.c_str(), &in.c, &val.c, out->components, times->data(),
+                            values->data(), err, sizeof err),
+          err);
 }
 
 /* Node animations (glTF 2.0 section 3.11). Channels that animate morph weights or an
