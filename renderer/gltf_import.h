@@ -109,6 +109,42 @@ rd_gltf_result rd_gltf_read_keys(const char *where, const rd_gltf_accessor *in,
                                  const rd_gltf_accessor *val, uint32_t components, float *times,
                                  float *values, char *err, size_t errlen);
 
+/* ---- materials (gltf_materials.c) ---------------------------------------------------------- */
+
+/* A glTF material's factors as the document holds them (glTF defaults filled in). */
+typedef struct rd_gltf_material_factors {
+    const double *base_color; /* baseColorFactor */
+    size_t base_color_count;
+    const double *emissive; /* emissiveFactor */
+    size_t emissive_count;
+    bool has_strength;       /* KHR_materials_emissive_strength.emissiveStrength is present */
+    bool strength_is_number; /* ... and a number */
+    double strength;
+    double alpha_cutoff;
+    const char *alpha_mode; /* alpha_mode_len bytes, not terminated */
+    size_t alpha_mode_len;
+    bool double_sided;
+    double metallic, roughness, normal_scale, occlusion_strength;
+} rd_gltf_material_factors;
+
+/* Material i's colour factors, emission (times its strength), alpha mode and cutoff into mt
+ * (clamped as the specification's ranges say); warns on s about an unknown alphaMode. */
+rd_gltf_result rd_gltf_material_colors(rd_scene *s, size_t i, const rd_gltf_material_factors *f,
+                                       rd_material *mt, char *err, size_t errlen);
+/* The core metallic-roughness factors beyond colour (metallic, roughness, normal scale,
+ * occlusion strength), clamped; specular = 1 (the full Appendix B BRDF). */
+rd_gltf_result rd_gltf_material_pbr(size_t i, const rd_gltf_material_factors *f, rd_material *mt,
+                                    char *err, size_t errlen);
+/* The file-wide material warnings: how many materials are BLEND. */
+void rd_gltf_material_warnings(rd_scene *s, size_t blend);
+
+/* The len bytes at s made safe for a message (which could end up in JSON or a terminal): at
+ * most max bytes (4 <= max <= 127), longer text shortened with "...", control and non-ASCII
+ * bytes replaced with '?'; out is terminated. */
+void rd_gltf_clean(const char *s, size_t len, size_t max, char out[128]);
+/* d as a finite float, false when it is not finite or out of float range. */
+bool rd_gltf_to_float(double d, float *out);
+
 /* Writes one message to err (errlen > 0) and returns code. */
 rd_gltf_result rd_gltf_fail(char *err, size_t errlen, rd_gltf_result code, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));

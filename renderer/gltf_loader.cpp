@@ -710,7 +710,6 @@ class Converter
   private:
     void hierarchy();
     void materials();
-    void metallic_roughness(const tinygltf::Material &g, size_t i, rd_material *mt);
     int32_t texture(int index, int tex_coord, size_t material, const char *slot);
     void meshes();
     std::vector<Primitive> plan_mesh(size_t mesh);
@@ -980,96 +979,71 @@ int32_t Converter::texture(int index, int tex_coord, size_t material, const char
     return out;
 }
 
+/* A material's factors for gltf_materials.c. */
+rd_gltf_material_factors factors(const tinygltf::Material &g)
+{
+    rd_gltf_material_factors f;
+    memset(&f, 0, sizeof f);
+    const tinygltf::PbrMetallicRoughness &pbr = g.pbrMetallicRoughness;
+    f.base_color = pbr.baseColorFactor.data();
+    f.base_color_count = pbr.baseColorFactor.size();
+    f.emissive = g.emissiveFactor.data();
+    f.emissive_count = g.emissiveFactor.size();
+    auto ext = g.extensions.find("KHR_materials_emissive_strength");
+    if (ext != g.extensions.end() && ext->second.Has("emissiveStrength")) {
+        const tinygltf::Value &v = ext->second.Get("emissiveStrength");
+        f.has_strength = true;
+        f.strength_is_number = v.IsNumber();
+        f.strength = v.IsNumber() ? v.GetNumberAsDouble() : 0.0;
+    }
+    f.alpha_cutoff = g.alphaCutoff;
+    f.alpha_mode = g.alphaMode.data();
+    f.alpha_mode_len = g.alphaMode.size();
+    f.double_sided = g.doubleSided;
+    f.metallic = pbr.metallicFactor;
+    f.roughness = pbr.roughnessFactor;
+    f.normal_scale = g.normalTexture.scale;
+    f.occlusion_strength = g.occlusionTexture.strength;
+    return f;
+}
+
+/* Materials: factors in gltf_materials.c, textures here (texture() reads and decodes them),
+ * in the order the checks always ran. */
 void Converter::materials()
 {
     size_t blend = 0;
     std::map<std::string, size_t> unsupported; /* material extension -> materials using it */
+    char err[256];
     for (size_t i = 0; i < m_.materials.size(); i++) {
         const tinygltf::Material &g = m_.materials[i];
+        const tinygltf::PbrMetallicRoughness &pbr = g.pbrMetallicRoughness;
         rd_material mt;
         memset(&mt, 0, sizeof mt);
         mt.name = g.name.empty() ? nullptr : const_cast<char *>(g.name.c_str());
-        const std::vector<double> &bc = g.pbrMetallicRoughness.baseColorFactor;
-        const std::vector<double> &em = g.emissiveFactor;
-        if (bc.size() != 4 || em.size() != 3)
-            fail(RD_GLTF_ERR_INVALID, "material %zu has a malformed colour factor", i);
-        bool ok = true;
-        for (int k = 0; k < 4; k++) {
-            ok = ok && to_float(bc[(size_t)k], &mt.base_color[k]);
-            mt.base_color[k] = std::min(std::max(mt.base_color[k], 0.0f), 1.0f);
-        }
-        float strength = 1.0f;
-        auto ext = g.extensions.find("KHR_materials_emissive_strength");
-        if (ext != g.extensions.end() && ext->second.Has("emissiveStrength")) {
-            const tinygltf::Value &v = ext->second.Get("emissiveStrength");
-            if (!v.IsNumber() || !to_float(v.GetNumberAsDouble(), &strength) || strength < 0.0f)
-                fail(RD_GLTF_ERR_INVALID, "material %zu has an invalid emissiveStrength", i);
-        }
-        for (int k = 0; k < 3; k++) {
-            ok = ok && to_float(em[(size_t)k], &mt.emission[k]);
-            mt.emission[k] = std::max(mt.emission[k], 0.0f) * strength;
-            ok = ok && std::isfinite(mt.emission[k]);
-        }
-        ok = ok && to_float(g.alphaCutoff, &mt.alpha_cutoff);
-        if (!ok)
-            fail(RD_GLTF_ERR_INVALID, "material %zu has a factor that is not a finite number", i);
-        mt.alpha_cutoff = std::max(mt.alpha_cutoff, 0.0f);
-        if (g.alphaMode == "OPAQUE") {
-            mt.alpha_mode = RD_ALPHA_OPAQUE;
-        } else if (g.alphaMode == "MASK") {
-            mt.alpha_mode = RD_ALPHA_MASK;
-        } else if (g.alphaMode == "BLEND") {
-            mt.alpha_mode = RD_ALPHA_BLEND;
-        } else {
-            rd_scene_warn(s_, "material %zu has an unknown alphaMode '%s'; OPAQUE is used", i,
-                          clean(g.alphaMode, 32).c_str());
-            mt.alpha_mode = RD_ALPHA_OPAQUE;
-        }
-        mt.double_sided = g.doubleSided;
+        rd_gltf_material_factors f = factors(g);
+        check(rd_gltf_material_colors(s_, i, &f, &mt, err, sizeof err), err);
         mt.base_color_texture =
-            texture(g.pbrMetallicRoughness.baseColorTexture.index,
-                    g.pbrMetallicRoughness.baseColorTexture.texCoord, i, "base colour");
+            texture(pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord, i, "base colour");
         mt.emissive_texture =
             texture(g.emissiveTexture.index, g.emissiveTexture.texCoord, i, "emissive");
-        metallic_roughness(g, i, &mt);
+        check(rd_gltf_material_pbr(i, &f, &mt, err, sizeof err), err);
+        mt.metallic_roughness_texture =
+            texture(pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord, i,
+                    "metallic-roughness");
+        mt.normal_texture = texture(g.normalTexture.index, g.normalTexture.texCoord, i, "normal");
+        mt.occlusion_texture =
+            texture(g.occlusionTexture.index, g.occlusionTexture.texCoord, i, "occlusion");
         if (mt.alpha_mode == RD_ALPHA_BLEND) blend++;
         for (const auto &e : g.extensions)
             if (!is_supported_extension(e.first)) unsupported[clean(e.first, 80)]++;
         rd_scene_add_material(s_, &mt); /* index 1 + i: materials[0] is the default */
     }
-    if (blend)
-        rd_scene_warn(s_,
-                      "%zu material(s) use alphaMode BLEND; transparency is not supported, they "
-                      "are drawn opaque",
-                      blend);
+    rd_gltf_material_warnings(s_, blend);
     for (const auto &u : unsupported)
         rd_scene_warn(s_,
                       "material extension %s (on %zu material(s)) is not supported; those "
                       "materials are drawn with the core metallic-roughness model",
                       u.first.c_str(), u.second);
-}
-
-/* The core metallic-roughness parameters beyond base colour and emission: factors (glTF
- * defaults metallic 1, roughness 1), metallicRoughnessTexture, normalTexture with its scale
- * and occlusionTexture with its strength. specular = 1: the full Appendix B BRDF. */
-void Converter::metallic_roughness(const tinygltf::Material &g, size_t i, rd_material *mt)
-{
-    const tinygltf::PbrMetallicRoughness &pbr = g.pbrMetallicRoughness;
-    bool ok = to_float(pbr.metallicFactor, &mt->metallic) &&
-              to_float(pbr.roughnessFactor, &mt->roughness) &&
-              to_float(g.normalTexture.scale, &mt->normal_scale) &&
-              to_float(g.occlusionTexture.strength, &mt->occlusion_strength);
-    if (!ok) fail(RD_GLTF_ERR_INVALID, "material %zu has a factor that is not a finite number", i);
-    mt->metallic = std::min(std::max(mt->metallic, 0.0f), 1.0f);
-    mt->roughness = std::min(std::max(mt->roughness, 0.0f), 1.0f);
-    mt->occlusion_strength = std::min(std::max(mt->occlusion_strength, 0.0f), 1.0f);
-    mt->specular = 1.0f;
-    mt->metallic_roughness_texture =
-        texture(pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord, i,
-                "metallic-roughness");
-    mt->normal_texture = texture(g.normalTexture.index, g.normalTexture.texCoord, i, "normal");
-    mt->occlusion_texture =
-        texture(g.occlusionTexture.index, g.occlusionTexture.texCoord, i, "occlusion");
 }
 
 /* Validates a mesh's primitives and counts its triangles without reading vertex data. */
