@@ -145,6 +145,35 @@ void rd_gltf_clean(const char *s, size_t len, size_t max, char out[128]);
 /* d as a finite float, false when it is not finite or out of float range. */
 bool rd_gltf_to_float(double d, float *out);
 
+/* ---- nodes (gltf_nodes.c) ------------------------------------------------------------------ */
+
+/* A list of node indices as the document holds them (a node's children, a scene's roots). */
+typedef struct rd_gltf_node_list {
+    const int *nodes;
+    size_t count;
+} rd_gltf_node_list;
+
+/* Checks the node hierarchy (children in range, one parent each, no cycle; the default scene
+ * and its roots valid) and lists the nodes the shown scene reaches, parents first: the
+ * default scene (scenes[0] when default_scene is -1), or every parentless node when the file
+ * has no scene. parent[count] gets each node's parent (-1: none); order (count entries
+ * allocated by the caller) the reachable nodes, *order_count how many. */
+rd_gltf_result rd_gltf_hierarchy(size_t count, const rd_gltf_node_list *children,
+                                 size_t scene_count, const rd_gltf_node_list *scenes,
+                                 int default_scene, int *parent, size_t *order, size_t *order_count,
+                                 char *err, size_t errlen);
+
+/* A node's transform as the document holds it (empty arrays: not given). */
+typedef struct rd_gltf_transform {
+    const double *matrix, *translation, *rotation, *scale;
+    size_t matrix_count, translation_count, rotation_count, scale_count;
+} rd_gltf_transform;
+
+/* Node index's matrix or TRS (glTF defaults where not given) into n; fails when a part has
+ * the wrong length or a value is not finite. */
+rd_gltf_result rd_gltf_node_transform(size_t index, const rd_gltf_transform *t, rd_node *n,
+                                      char *err, size_t errlen);
+
 /* Writes one message to err (errlen > 0) and returns code. */
 rd_gltf_result rd_gltf_fail(char *err, size_t errlen, rd_gltf_result code, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));

@@ -774,113 +774,33 @@ void Converter::warnings()
                       m_.skins.size());
 }
 
+/* The hierarchy and the reachable nodes' order (gltf_nodes.c). */
 void Converter::hierarchy()
 {
     size_t count = m_.nodes.size();
-    if (count > (size_t)INT32_MAX) fail(RD_GLTF_ERR_TOO_LARGE, "the file has too many nodes");
+    std::vector<rd_gltf_node_list> children(count), scenes(m_.scenes.size());
+    for (size_t i = 0; i < count; i++)
+        children[i] = {m_.nodes[i].children.data(), m_.nodes[i].children.size()};
+    for (size_t i = 0; i < scenes.size(); i++)
+        scenes[i] = {m_.scenes[i].nodes.data(), m_.scenes[i].nodes.size()};
     parent_.assign(count, -1);
-    for (size_t i = 0; i < count; i++) {
-        for (int c : m_.nodes[i].children) {
-            if (c < 0 || (size_t)c >= count)
-                fail(RD_GLTF_ERR_INVALID, "node %zu lists child %d, but there are only %zu nodes",
-                     i, c, count);
-            if ((size_t)c == i) fail(RD_GLTF_ERR_INVALID, "node %zu is its own child (a cycle)", i);
-            if (parent_[(size_t)c] >= 0)
-                fail(RD_GLTF_ERR_INVALID, "node %d has two parents (nodes %d and %zu)", c,
-                     parent_[(size_t)c], i);
-            parent_[(size_t)c] = (int)i;
-        }
-    }
-    /* with single parents, a cycle is a parent chain that returns to itself */
-    std::vector<uint8_t> state(count, 0);
-    std::vector<size_t> chain;
-    for (size_t i = 0; i < count; i++) {
-        chain.clear();
-        int j = (int)i;
-        while (j >= 0 && state[(size_t)j] == 0) {
-            state[(size_t)j] = 1;
-            chain.push_back((size_t)j);
-            j = parent_[(size_t)j];
-        }
-        if (j >= 0 && state[(size_t)j] == 1)
-            fail(RD_GLTF_ERR_INVALID, "the node hierarchy contains a cycle through node %d", j);
-        for (size_t k : chain)
-            state[k] = 2;
-    }
-
-    std::vector<int> roots;
-    if (!m_.scenes.empty()) {
-        size_t scene = 0;
-        if (m_.defaultScene >= 0 && (size_t)m_.defaultScene < m_.scenes.size())
-            scene = (size_t)m_.defaultScene;
-        else if (m_.defaultScene != -1)
-            fail(RD_GLTF_ERR_INVALID, "the default scene %d does not exist", m_.defaultScene);
-        roots = m_.scenes[scene].nodes;
-        for (int r : roots) {
-            if (r < 0 || (size_t)r >= count)
-                fail(RD_GLTF_ERR_INVALID, "scene %zu lists node %d, but there are only %zu nodes",
-                     scene, r, count);
-            if (parent_[(size_t)r] >= 0)
-                fail(RD_GLTF_ERR_INVALID,
-                     "scene %zu lists node %d as a root, but it is a child of node %d", scene, r,
-                     parent_[(size_t)r]);
-        }
-    } else {
-        for (size_t i = 0; i < count; i++)
-            if (parent_[i] < 0) roots.push_back((int)i);
-    }
-    std::vector<uint8_t> seen(count, 0);
-    std::vector<size_t> stack;
-    for (auto it = roots.rbegin(); it != roots.rend(); ++it)
-        stack.push_back((size_t)*it);
-    while (!stack.empty()) {
-        size_t n = stack.back();
-        stack.pop_back();
-        if (seen[n]) continue;
-        seen[n] = 1;
-        order_.push_back(n);
-        const std::vector<int> &ch = m_.nodes[n].children;
-        for (auto it = ch.rbegin(); it != ch.rend(); ++it)
-            stack.push_back((size_t)*it);
-    }
+    order_.assign(count, 0);
+    size_t reached = 0;
+    char err[256];
+    check(rd_gltf_hierarchy(count, children.data(), scenes.size(), scenes.data(), m_.defaultScene,
+                            parent_.data(), order_.data(), &reached, err, sizeof err),
+          err);
+    order_.resize(reached);
 }
 
 void Converter::node_transform(size_t index, rd_node *n)
 {
     const tinygltf::Node &g = m_.nodes[index];
-    bool ok = true;
-    if (!g.matrix.empty()) {
-        if (g.matrix.size() != 16)
-            fail(RD_GLTF_ERR_INVALID, "node %zu has a matrix with %zu values instead of 16", index,
-                 g.matrix.size());
-        n->has_matrix = true;
-        for (int k = 0; k < 16; k++)
-            ok = ok && to_float(g.matrix[(size_t)k], &n->matrix[k]);
-    } else {
-        n->has_matrix = false;
-    }
-    float t[3] = {0, 0, 0}, r[4] = {0, 0, 0, 1}, sc[3] = {1, 1, 1};
-    struct {
-        const std::vector<double> *v;
-        float *dst;
-        size_t n;
-        const char *name;
-    } parts[] = {{&g.translation, t, 3, "translation"},
-                 {&g.rotation, r, 4, "rotation"},
-                 {&g.scale, sc, 3, "scale"}};
-    for (auto &p : parts) {
-        if (p.v->empty()) continue;
-        if (p.v->size() != p.n)
-            fail(RD_GLTF_ERR_INVALID, "node %zu has a %s with %zu values instead of %zu", index,
-                 p.name, p.v->size(), p.n);
-        for (size_t k = 0; k < p.n; k++)
-            ok = ok && to_float((*p.v)[k], &p.dst[k]);
-    }
-    if (!ok) fail(RD_GLTF_ERR_INVALID, "node %zu has a transform that is not finite", index);
-    memcpy(n->translation, t, sizeof t);
-    memcpy(n->rotation, r, sizeof r);
-    memcpy(n->scale, sc, sizeof sc);
-    if (!n->has_matrix) rd_mat4_identity(n->matrix);
+    rd_gltf_transform t = {g.matrix.data(),   g.translation.data(), g.rotation.data(),
+                           g.scale.data(),    g.matrix.size(),      g.translation.size(),
+                           g.rotation.size(), g.scale.size()};
+    char err[256];
+    check(rd_gltf_node_transform(index, &t, n, err, sizeof err), err);
 }
 
 int32_t Converter::texture(int index, int tex_coord, size_t material, const char *slot)
