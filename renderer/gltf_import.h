@@ -174,6 +174,26 @@ typedef struct rd_gltf_transform {
 rd_gltf_result rd_gltf_node_transform(size_t index, const rd_gltf_transform *t, rd_node *n,
                                       char *err, size_t errlen);
 
+/* ---- lights and cameras (gltf_lights.c) ---------------------------------------------------- */
+
+/* A KHR_lights_punctual light as the document holds it. */
+typedef struct rd_gltf_light_params {
+    const char *type; /* type_len bytes, not terminated */
+    size_t type_len;
+    const double *color; /* color_count values; none: white */
+    size_t color_count;
+    double intensity, range, inner_cone, outer_cone;
+} rd_gltf_light_params;
+
+/* Light index's type, colour, intensity, range and spot cones into l (checked; a directional
+ * light has no range). An unknown type is warned about on s and *ignored set. */
+rd_gltf_result rd_gltf_light(rd_scene *s, size_t index, const rd_gltf_light_params *p, rd_light *l,
+                             bool *ignored, char *err, size_t errlen);
+/* Perspective camera index's yfov (0..pi), znear (> 0) and aspectRatio (>= 0; 0: the view's)
+ * into c. */
+rd_gltf_result rd_gltf_perspective(size_t index, double yfov, double znear, double aspect,
+                                   rd_camera *c, char *err, size_t errlen);
+
 /* Writes one message to err (errlen > 0) and returns code. */
 rd_gltf_result rd_gltf_fail(char *err, size_t errlen, rd_gltf_result code, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));

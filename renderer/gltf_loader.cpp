@@ -136,13 +136,6 @@ std::string errno_text(int e)
     return strerror_r(e, buf, sizeof buf); /* GNU variant returns the text */
 }
 
-bool to_float(double d, float *out)
-{
-    if (!std::isfinite(d) || std::fabs(d) > (double)FLT_MAX) return false;
-    *out = (float)d;
-    return true;
-}
-
 /* ---- files ------------------------------------------------------------------------------ */
 
 struct FileRules {
@@ -1125,11 +1118,9 @@ void Converter::lights_and_cameras()
                 memset(&c, 0, sizeof c);
                 c.name = gc.name.empty() ? nullptr : const_cast<char *>(gc.name.c_str());
                 const tinygltf::PerspectiveCamera &p = gc.perspective;
-                if (!to_float(p.yfov, &c.yfov) || !(c.yfov > 0.0f) || !(c.yfov < 3.14159f) ||
-                    !to_float(p.znear, &c.znear) || !(c.znear > 0.0f) ||
-                    !to_float(p.aspectRatio, &c.aspect) || c.aspect < 0.0f)
-                    fail(RD_GLTF_ERR_INVALID,
-                         "camera %zu has an invalid yfov, znear or aspectRatio", ci);
+                char err[256];
+                check(rd_gltf_perspective(ci, p.yfov, p.znear, p.aspectRatio, &c, err, sizeof err),
+                      err);
                 c.node = node;
                 rd_scene_add_camera(s_, &c);
             }
@@ -1148,39 +1139,14 @@ void Converter::lights_and_cameras()
         rd_light l;
         memset(&l, 0, sizeof l);
         l.name = gl.name.empty() ? nullptr : const_cast<char *>(gl.name.c_str());
-        if (gl.type == "point") {
-            l.type = RD_LIGHT_POINT;
-        } else if (gl.type == "spot") {
-            l.type = RD_LIGHT_SPOT;
-        } else if (gl.type == "directional") {
-            l.type = RD_LIGHT_DIRECTIONAL;
-        } else {
-            rd_scene_warn(s_, "light %zu has an unknown type '%s'; it is ignored", index,
-                          clean(gl.type, 32).c_str());
-            continue;
-        }
-        bool ok = true;
-        l.color[0] = l.color[1] = l.color[2] = 1.0f;
-        if (!gl.color.empty()) {
-            ok = gl.color.size() == 3;
-            for (size_t k = 0; ok && k < 3; k++)
-                ok = to_float(gl.color[k], &l.color[k]) && l.color[k] >= 0.0f;
-        }
-        ok = ok && to_float(gl.intensity, &l.intensity) && l.intensity >= 0.0f;
-        ok = ok && to_float(gl.range, &l.range) && l.range >= 0.0f;
-        if (!ok)
-            fail(RD_GLTF_ERR_INVALID, "light %zu has an invalid color, intensity or range", index);
-        if (l.type == RD_LIGHT_DIRECTIONAL) l.range = 0.0f;
-        if (l.type == RD_LIGHT_SPOT) {
-            if (!to_float(gl.spot.innerConeAngle, &l.inner_cone) ||
-                !to_float(gl.spot.outerConeAngle, &l.outer_cone) || l.inner_cone < 0.0f ||
-                !(l.inner_cone < l.outer_cone) || l.outer_cone > 1.5707964f)
-                fail(RD_GLTF_ERR_INVALID,
-                     "light %zu has invalid spot cone angles (inner %g, outer %g)", index,
-                     gl.spot.innerConeAngle, gl.spot.outerConeAngle);
-        }
+        rd_gltf_light_params lp = {gl.type.data(),         gl.type.size(),        gl.color.data(),
+                                   gl.color.size(),        gl.intensity,          gl.range,
+                                   gl.spot.innerConeAngle, gl.spot.outerConeAngle};
+        bool ignored;
+        char err[256];
+        check(rd_gltf_light(s_, index, &lp, &l, &ignored, err, sizeof err), err);
+        if (ignored) continue;
         l.node = node;
-        rd_vec3_set(l.direction, 0.0f, 0.0f, -1.0f);
         rd_scene_add_light(s_, &l);
     }
 }
