@@ -58,6 +58,7 @@
 extern "C" {
 #include "xform.h"
 }
+#include "gltf_import.h"
 
 namespace
 {
@@ -66,7 +67,6 @@ using njson = nlohmann::json;
 using tinygltf::Model;
 
 const uint64_t kDefaultMaxTriangles = 50000000ull;
-const int kMaxJsonDepth = 100;
 const int kMaxImageDim = 16384;
 const uint64_t kMaxImagePixels = 1ull << 26;     /* 256 MiB as RGBA8 */
 const uint64_t kMaxDecodedBytes = 2ull << 30;    /* all images together */
@@ -134,13 +134,6 @@ std::string errno_text(int e)
 {
     char buf[256];
     return strerror_r(e, buf, sizeof buf); /* GNU variant returns the text */
-}
-
-bool to_float(double d, float *out)
-{
-    if (!std::isfinite(d) || std::fabs(d) > (double)FLT_MAX) return false;
-    *out = (float)d;
-    return true;
 }
 
 /* ---- files ------------------------------------------------------------------------------ */
@@ -346,94 +339,10 @@ bool image_callback(tinygltf::Image *image, const int index, std::string *, std:
 
 /* ---- container and JSON pre-scan ---------------------------------------------------- */
 
-struct Container {
-    bool glb = false;
-    const char *json = nullptr;
-    size_t json_size = 0;
-    size_t bin_size = 0; /* 0: no BIN chunk */
-};
-
-uint32_t le32(const unsigned char *p)
+/* Throws the C side's failure (gltf_import.h) as the loader's. */
+void check(rd_gltf_result r, const char *err)
 {
-    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
-}
-
-Container parse_container(const unsigned char *data, size_t size)
-{
-    Container c;
-    if (size == 0) fail(RD_GLTF_ERR_PARSE, "the file is empty");
-    if (size >= 4 && memcmp(data, "glTF", 4) == 0) {
-        c.glb = true;
-        if (size < 12)
-            fail(RD_GLTF_ERR_PARSE, "the GLB file is truncated: its 12-byte header is incomplete");
-        uint32_t version = le32(data + 4), length = le32(data + 8);
-        if (version != 2)
-            fail(RD_GLTF_ERR_UNSUPPORTED, "GLB version %u is not supported (only 2)", version);
-        if (length > size)
-            fail(RD_GLTF_ERR_PARSE,
-                 "the GLB file is truncated: its header declares %u bytes but only %zu are "
-                 "present",
-                 length, size);
-        if (length < 20) fail(RD_GLTF_ERR_PARSE, "the GLB file is truncated: it has no JSON chunk");
-        uint32_t json_len = le32(data + 12), json_type = le32(data + 16);
-        if (json_type != 0x4E4F534Au)
-            fail(RD_GLTF_ERR_PARSE, "the first chunk of the GLB file is not its JSON chunk");
-        if (json_len == 0 || json_len % 4 != 0)
-            fail(RD_GLTF_ERR_PARSE, "the GLB JSON chunk length %u is not a positive multiple of 4",
-                 json_len);
-        if ((uint64_t)json_len > (uint64_t)length - 20)
-            fail(RD_GLTF_ERR_PARSE,
-                 "the GLB file is truncated: its JSON chunk needs %u bytes but only %u remain",
-                 json_len, length - 20);
-        c.json = (const char *)data + 20;
-        c.json_size = json_len;
-        uint64_t at = 20ull + json_len;
-        if (at < length) {
-            if (length - at < 12)
-                fail(RD_GLTF_ERR_PARSE, "the GLB file is truncated inside its BIN chunk header");
-            uint32_t bin_len = le32(data + at), bin_type = le32(data + at + 4);
-            if (bin_type != 0x004E4942u)
-                fail(RD_GLTF_ERR_PARSE, "the second chunk of the GLB file is not a BIN chunk");
-            if (bin_len < 4 || bin_len % 4 != 0)
-                fail(RD_GLTF_ERR_PARSE,
-                     "the GLB BIN chunk length %u is not a positive multiple of 4", bin_len);
-            if ((uint64_t)bin_len > length - at - 8)
-                fail(RD_GLTF_ERR_PARSE,
-                     "the GLB file is truncated: its BIN chunk needs %u bytes but only %llu "
-                     "remain",
-                     bin_len, (unsigned long long)(length - at - 8));
-            c.bin_size = bin_len;
-        }
-    } else {
-        c.json = (const char *)data;
-        c.json_size = size;
-    }
-    return c;
-}
-
-/* Nesting depth of JSON text (tinygltf converts extras/extensions recursively). */
-void check_json_depth(const char *s, size_t n)
-{
-    int depth = 0;
-    bool in_string = false, escaped = false;
-    for (size_t i = 0; i < n; i++) {
-        char ch = s[i];
-        if (in_string) {
-            if (escaped)
-                escaped = false;
-            else if (ch == '\\')
-                escaped = true;
-            else if (ch == '"')
-                in_string = false;
-        } else if (ch == '"') {
-            in_string = true;
-        } else if (ch == '[' || ch == '{') {
-            if (++depth > kMaxJsonDepth)
-                fail(RD_GLTF_ERR_PARSE, "the glTF JSON nests deeper than %d levels", kMaxJsonDepth);
-        } else if (ch == ']' || ch == '}') {
-            depth--;
-        }
-    }
+    if (r != RD_GLTF_OK) throw LoadError{r, err};
 }
 
 bool json_uint(const njson &o, const char *key, uint64_t *out, bool required)
@@ -479,9 +388,10 @@ bool is_supported_extension(const std::string &name)
 }
 
 /* Checks what tinygltf would use unchecked, with messages that name the culprit. */
-void prescan(const Container &c, LoadContext *ctx)
+void prescan(const rd_gltf_container &c, LoadContext *ctx)
 {
-    check_json_depth(c.json, c.json_size);
+    char err[256];
+    check(rd_gltf_check_json_depth(c.json, c.json_size, err, sizeof err), err);
     njson::parser_callback_t keep = [](int depth, njson::parse_event_t ev, njson &v) {
         if (depth != 1 || ev != njson::parse_event_t::key || !v.is_string()) return true;
         const std::string &k = v.get_ref<const std::string &>();
@@ -612,23 +522,6 @@ void prescan(const Container &c, LoadContext *ctx)
 
 /* ---- accessors ---------------------------------------------------------------------- */
 
-size_t component_size(int type)
-{
-    switch (type) {
-    case TINYGLTF_COMPONENT_TYPE_BYTE:
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
-        return 1;
-    case TINYGLTF_COMPONENT_TYPE_SHORT:
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
-        return 2;
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
-    case TINYGLTF_COMPONENT_TYPE_FLOAT:
-        return 4;
-    default:
-        return 0;
-    }
-}
-
 const char *type_name(int type)
 {
     switch (type) {
@@ -651,16 +544,31 @@ const char *type_name(int type)
     }
 }
 
-/* A validated accessor: element i lies at data + i * stride (or is zero when data is null),
- * unless sparse substitution applies. */
+static_assert(TINYGLTF_COMPONENT_TYPE_BYTE == RD_GLTF_BYTE &&
+                  TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE == RD_GLTF_UNSIGNED_BYTE &&
+                  TINYGLTF_COMPONENT_TYPE_SHORT == RD_GLTF_SHORT &&
+                  TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT == RD_GLTF_UNSIGNED_SHORT &&
+                  TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT == RD_GLTF_UNSIGNED_INT &&
+                  TINYGLTF_COMPONENT_TYPE_FLOAT == RD_GLTF_FLOAT,
+              "gltf_import.h numbers component types as tinygltf does");
+static_assert(TINYGLTF_MODE_TRIANGLES == RD_GLTF_MODE_TRIANGLES &&
+                  TINYGLTF_MODE_TRIANGLE_STRIP == RD_GLTF_MODE_TRIANGLE_STRIP &&
+                  TINYGLTF_MODE_TRIANGLE_FAN == RD_GLTF_MODE_TRIANGLE_FAN,
+              "gltf_import.h numbers primitive modes as tinygltf does");
+
+/* A validated accessor (gltf_import.h) and the sparse indices it points to. Moves keep the
+ * pointer valid; copies are not allowed. */
 struct Accessor {
-    int index = -1;
-    const unsigned char *data = nullptr;
-    size_t stride = 0, count = 0, elem = 0;
-    int ctype = 0, ncomp = 0;
-    bool normalized = false;
+    rd_gltf_accessor c;
     std::vector<uint32_t> sparse_index;
-    const unsigned char *sparse_values = nullptr;
+    Accessor()
+    {
+        memset(&c, 0, sizeof c), c.index = -1;
+    }
+    Accessor(Accessor &&) = default;
+    Accessor &operator=(Accessor &&) = default;
+    Accessor(const Accessor &) = delete;
+    Accessor &operator=(const Accessor &) = delete;
 };
 
 /* Start of `bytes` bytes at `offset` inside buffer view `view`, or null when out of range. */
@@ -694,7 +602,8 @@ Accessor make_accessor(const Model &m, int index, const std::string &what_s, int
              what, index, m.accessors.size());
     const tinygltf::Accessor &a = m.accessors[(size_t)index];
     Accessor r;
-    r.index = index;
+    rd_gltf_accessor &c = r.c;
+    c.index = index;
     if (a.type != type)
         fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has type %s, expected %s", index, what,
              type_name(a.type), type_name(type));
@@ -708,36 +617,36 @@ Accessor make_accessor(const Model &m, int index, const std::string &what_s, int
         fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) holds integers but is not normalized", index,
              what);
     if (a.count == 0) fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has count 0", index, what);
-    r.ctype = a.componentType;
-    r.ncomp = type == TINYGLTF_TYPE_SCALAR ? 1
+    c.ctype = a.componentType;
+    c.ncomp = type == TINYGLTF_TYPE_SCALAR ? 1
               : type == TINYGLTF_TYPE_VEC2 ? 2
               : type == TINYGLTF_TYPE_VEC3 ? 3
                                            : 4;
-    r.elem = component_size(a.componentType) * (size_t)r.ncomp;
-    r.count = a.count;
-    r.normalized = a.normalized;
+    c.elem = rd_gltf_component_size(a.componentType) * (size_t)c.ncomp;
+    c.count = a.count;
+    c.normalized = a.normalized;
     if (a.bufferView < -1)
         fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has buffer view %d", index, what, a.bufferView);
     if (a.bufferView >= 0) {
         const tinygltf::BufferView *bv = (size_t)a.bufferView < m.bufferViews.size()
                                              ? &m.bufferViews[(size_t)a.bufferView]
                                              : nullptr;
-        r.stride = bv && bv->byteStride ? bv->byteStride : r.elem;
-        if (r.stride < r.elem)
+        c.stride = bv && bv->byteStride ? bv->byteStride : c.elem;
+        if (c.stride < c.elem)
             fail(RD_GLTF_ERR_INVALID,
                  "buffer view %d has byteStride %zu, smaller than the %zu-byte elements of "
                  "accessor %d",
-                 a.bufferView, r.stride, r.elem, index);
+                 a.bufferView, c.stride, c.elem, index);
         uint64_t span;
-        if (__builtin_mul_overflow((uint64_t)r.stride, (uint64_t)(r.count - 1), &span) ||
-            __builtin_add_overflow(span, (uint64_t)r.elem, &span))
+        if (__builtin_mul_overflow((uint64_t)c.stride, (uint64_t)(c.count - 1), &span) ||
+            __builtin_add_overflow(span, (uint64_t)c.elem, &span))
             fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) reads past the end of buffer view %d",
                  index, what, a.bufferView);
-        r.data = view_range(m, a.bufferView, a.byteOffset, span, index, what);
+        c.data = view_range(m, a.bufferView, a.byteOffset, span, index, what);
     }
     if (a.sparse.isSparse) {
         size_t n = a.sparse.count > 0 ? (size_t)a.sparse.count : 0;
-        if (n == 0 || n > r.count)
+        if (n == 0 || n > c.count)
             fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has an invalid sparse count %d", index,
                  what, a.sparse.count);
         int ict = a.sparse.indices.componentType;
@@ -749,83 +658,27 @@ Accessor make_accessor(const Model &m, int index, const std::string &what_s, int
         if (a.sparse.indices.byteOffset < 0 || a.sparse.values.byteOffset < 0)
             fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has a negative sparse byteOffset", index,
                  what);
-        size_t isz = component_size(ict);
+        size_t isz = rd_gltf_component_size(ict);
         const unsigned char *ip =
             view_range(m, a.sparse.indices.bufferView, (uint64_t)a.sparse.indices.byteOffset,
                        (uint64_t)n * isz, index, what);
-        r.sparse_values =
+        c.sparse_values =
             view_range(m, a.sparse.values.bufferView, (uint64_t)a.sparse.values.byteOffset,
-                       (uint64_t)n * r.elem, index, what);
+                       (uint64_t)n * c.elem, index, what);
         r.sparse_index.resize(n);
-        for (size_t i = 0; i < n; i++) {
-            uint32_t v = 0;
-            if (isz == 1) {
-                v = ip[i];
-            } else if (isz == 2) {
-                uint16_t s;
-                memcpy(&s, ip + i * 2, 2);
-                v = s;
-            } else {
-                memcpy(&v, ip + i * 4, 4);
-            }
-            if (v >= r.count || (i > 0 && v <= r.sparse_index[i - 1]))
-                fail(RD_GLTF_ERR_INVALID,
-                     "the sparse indices of accessor %d (%s) are out of range or not increasing",
-                     index, what);
-            r.sparse_index[i] = v;
-        }
+        if (!rd_gltf_read_sparse_indices(ip, ict, n, c.count, r.sparse_index.data()))
+            fail(RD_GLTF_ERR_INVALID,
+                 "the sparse indices of accessor %d (%s) are out of range or not increasing", index,
+                 what);
+        c.sparse_index = r.sparse_index.data();
+        c.sparse_count = n;
     }
     return r;
 }
 
-/* Bytes of element i (null: zeros). */
-const unsigned char *element(const Accessor &a, size_t i)
-{
-    if (!a.sparse_index.empty()) {
-        auto it = std::lower_bound(a.sparse_index.begin(), a.sparse_index.end(), (uint32_t)i);
-        if (it != a.sparse_index.end() && *it == i)
-            return a.sparse_values + (size_t)(it - a.sparse_index.begin()) * a.elem;
-    }
-    return a.data ? a.data + i * a.stride : nullptr;
-}
-
 void read_floats(const Accessor &a, size_t i, float *out)
 {
-    const unsigned char *p = element(a, i);
-    for (int c = 0; c < a.ncomp; c++) {
-        if (!p) {
-            out[c] = 0.0f;
-        } else if (a.ctype == TINYGLTF_COMPONENT_TYPE_FLOAT) {
-            memcpy(&out[c], p + c * 4, 4);
-        } else if (a.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) {
-            out[c] = p[c] / 255.0f;
-        } else if (a.ctype == TINYGLTF_COMPONENT_TYPE_BYTE) {
-            out[c] = std::max((int8_t)p[c] / 127.0f, -1.0f);
-        } else if (a.ctype == TINYGLTF_COMPONENT_TYPE_SHORT) {
-            int16_t s;
-            memcpy(&s, p + c * 2, 2);
-            out[c] = std::max(s / 32767.0f, -1.0f);
-        } else { /* normalized unsigned short */
-            uint16_t s;
-            memcpy(&s, p + c * 2, 2);
-            out[c] = s / 65535.0f;
-        }
-    }
-}
-
-uint32_t read_index(const Accessor &a, size_t i)
-{
-    const unsigned char *p = element(a, i);
-    if (!p) return 0;
-    if (a.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) return p[0];
-    if (a.ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT) {
-        uint16_t s;
-        memcpy(&s, p, 2);
-        return s;
-    }
-    uint32_t v;
-    memcpy(&v, p, 4);
-    return v;
+    rd_gltf_read_floats(&a.c, i, out);
 }
 
 /* ---- conversion --------------------------------------------------------------------- */
@@ -850,7 +703,6 @@ class Converter
   private:
     void hierarchy();
     void materials();
-    void metallic_roughness(const tinygltf::Material &g, size_t i, rd_material *mt);
     int32_t texture(int index, int tex_coord, size_t material, const char *slot);
     void meshes();
     std::vector<Primitive> plan_mesh(size_t mesh);
@@ -915,113 +767,33 @@ void Converter::warnings()
                       m_.skins.size());
 }
 
+/* The hierarchy and the reachable nodes' order (gltf_nodes.c). */
 void Converter::hierarchy()
 {
     size_t count = m_.nodes.size();
-    if (count > (size_t)INT32_MAX) fail(RD_GLTF_ERR_TOO_LARGE, "the file has too many nodes");
+    std::vector<rd_gltf_node_list> children(count), scenes(m_.scenes.size());
+    for (size_t i = 0; i < count; i++)
+        children[i] = {m_.nodes[i].children.data(), m_.nodes[i].children.size()};
+    for (size_t i = 0; i < scenes.size(); i++)
+        scenes[i] = {m_.scenes[i].nodes.data(), m_.scenes[i].nodes.size()};
     parent_.assign(count, -1);
-    for (size_t i = 0; i < count; i++) {
-        for (int c : m_.nodes[i].children) {
-            if (c < 0 || (size_t)c >= count)
-                fail(RD_GLTF_ERR_INVALID, "node %zu lists child %d, but there are only %zu nodes",
-                     i, c, count);
-            if ((size_t)c == i) fail(RD_GLTF_ERR_INVALID, "node %zu is its own child (a cycle)", i);
-            if (parent_[(size_t)c] >= 0)
-                fail(RD_GLTF_ERR_INVALID, "node %d has two parents (nodes %d and %zu)", c,
-                     parent_[(size_t)c], i);
-            parent_[(size_t)c] = (int)i;
-        }
-    }
-    /* with single parents, a cycle is a parent chain that returns to itself */
-    std::vector<uint8_t> state(count, 0);
-    std::vector<size_t> chain;
-    for (size_t i = 0; i < count; i++) {
-        chain.clear();
-        int j = (int)i;
-        while (j >= 0 && state[(size_t)j] == 0) {
-            state[(size_t)j] = 1;
-            chain.push_back((size_t)j);
-            j = parent_[(size_t)j];
-        }
-        if (j >= 0 && state[(size_t)j] == 1)
-            fail(RD_GLTF_ERR_INVALID, "the node hierarchy contains a cycle through node %d", j);
-        for (size_t k : chain)
-            state[k] = 2;
-    }
-
-    std::vector<int> roots;
-    if (!m_.scenes.empty()) {
-        size_t scene = 0;
-        if (m_.defaultScene >= 0 && (size_t)m_.defaultScene < m_.scenes.size())
-            scene = (size_t)m_.defaultScene;
-        else if (m_.defaultScene != -1)
-            fail(RD_GLTF_ERR_INVALID, "the default scene %d does not exist", m_.defaultScene);
-        roots = m_.scenes[scene].nodes;
-        for (int r : roots) {
-            if (r < 0 || (size_t)r >= count)
-                fail(RD_GLTF_ERR_INVALID, "scene %zu lists node %d, but there are only %zu nodes",
-                     scene, r, count);
-            if (parent_[(size_t)r] >= 0)
-                fail(RD_GLTF_ERR_INVALID,
-                     "scene %zu lists node %d as a root, but it is a child of node %d", scene, r,
-                     parent_[(size_t)r]);
-        }
-    } else {
-        for (size_t i = 0; i < count; i++)
-            if (parent_[i] < 0) roots.push_back((int)i);
-    }
-    std::vector<uint8_t> seen(count, 0);
-    std::vector<size_t> stack;
-    for (auto it = roots.rbegin(); it != roots.rend(); ++it)
-        stack.push_back((size_t)*it);
-    while (!stack.empty()) {
-        size_t n = stack.back();
-        stack.pop_back();
-        if (seen[n]) continue;
-        seen[n] = 1;
-        order_.push_back(n);
-        const std::vector<int> &ch = m_.nodes[n].children;
-        for (auto it = ch.rbegin(); it != ch.rend(); ++it)
-            stack.push_back((size_t)*it);
-    }
+    order_.assign(count, 0);
+    size_t reached = 0;
+    char err[256];
+    check(rd_gltf_hierarchy(count, children.data(), scenes.size(), scenes.data(), m_.defaultScene,
+                            parent_.data(), order_.data(), &reached, err, sizeof err),
+          err);
+    order_.resize(reached);
 }
 
 void Converter::node_transform(size_t index, rd_node *n)
 {
     const tinygltf::Node &g = m_.nodes[index];
-    bool ok = true;
-    if (!g.matrix.empty()) {
-        if (g.matrix.size() != 16)
-            fail(RD_GLTF_ERR_INVALID, "node %zu has a matrix with %zu values instead of 16", index,
-                 g.matrix.size());
-        n->has_matrix = true;
-        for (int k = 0; k < 16; k++)
-            ok = ok && to_float(g.matrix[(size_t)k], &n->matrix[k]);
-    } else {
-        n->has_matrix = false;
-    }
-    float t[3] = {0, 0, 0}, r[4] = {0, 0, 0, 1}, sc[3] = {1, 1, 1};
-    struct {
-        const std::vector<double> *v;
-        float *dst;
-        size_t n;
-        const char *name;
-    } parts[] = {{&g.translation, t, 3, "translation"},
-                 {&g.rotation, r, 4, "rotation"},
-                 {&g.scale, sc, 3, "scale"}};
-    for (auto &p : parts) {
-        if (p.v->empty()) continue;
-        if (p.v->size() != p.n)
-            fail(RD_GLTF_ERR_INVALID, "node %zu has a %s with %zu values instead of %zu", index,
-                 p.name, p.v->size(), p.n);
-        for (size_t k = 0; k < p.n; k++)
-            ok = ok && to_float((*p.v)[k], &p.dst[k]);
-    }
-    if (!ok) fail(RD_GLTF_ERR_INVALID, "node %zu has a transform that is not finite", index);
-    memcpy(n->translation, t, sizeof t);
-    memcpy(n->rotation, r, sizeof r);
-    memcpy(n->scale, sc, sizeof sc);
-    if (!n->has_matrix) rd_mat4_identity(n->matrix);
+    rd_gltf_transform t = {g.matrix.data(),   g.translation.data(), g.rotation.data(),
+                           g.scale.data(),    g.matrix.size(),      g.translation.size(),
+                           g.rotation.size(), g.scale.size()};
+    char err[256];
+    check(rd_gltf_node_transform(index, &t, n, err, sizeof err), err);
 }
 
 int32_t Converter::texture(int index, int tex_coord, size_t material, const char *slot)
@@ -1120,96 +892,71 @@ int32_t Converter::texture(int index, int tex_coord, size_t material, const char
     return out;
 }
 
+/* A material's factors for gltf_materials.c. */
+rd_gltf_material_factors factors(const tinygltf::Material &g)
+{
+    rd_gltf_material_factors f;
+    memset(&f, 0, sizeof f);
+    const tinygltf::PbrMetallicRoughness &pbr = g.pbrMetallicRoughness;
+    f.base_color = pbr.baseColorFactor.data();
+    f.base_color_count = pbr.baseColorFactor.size();
+    f.emissive = g.emissiveFactor.data();
+    f.emissive_count = g.emissiveFactor.size();
+    auto ext = g.extensions.find("KHR_materials_emissive_strength");
+    if (ext != g.extensions.end() && ext->second.Has("emissiveStrength")) {
+        const tinygltf::Value &v = ext->second.Get("emissiveStrength");
+        f.has_strength = true;
+        f.strength_is_number = v.IsNumber();
+        f.strength = v.IsNumber() ? v.GetNumberAsDouble() : 0.0;
+    }
+    f.alpha_cutoff = g.alphaCutoff;
+    f.alpha_mode = g.alphaMode.data();
+    f.alpha_mode_len = g.alphaMode.size();
+    f.double_sided = g.doubleSided;
+    f.metallic = pbr.metallicFactor;
+    f.roughness = pbr.roughnessFactor;
+    f.normal_scale = g.normalTexture.scale;
+    f.occlusion_strength = g.occlusionTexture.strength;
+    return f;
+}
+
+/* Materials: factors in gltf_materials.c, textures here (texture() reads and decodes them),
+ * in the order the checks always ran. */
 void Converter::materials()
 {
     size_t blend = 0;
     std::map<std::string, size_t> unsupported; /* material extension -> materials using it */
+    char err[256];
     for (size_t i = 0; i < m_.materials.size(); i++) {
         const tinygltf::Material &g = m_.materials[i];
+        const tinygltf::PbrMetallicRoughness &pbr = g.pbrMetallicRoughness;
         rd_material mt;
         memset(&mt, 0, sizeof mt);
         mt.name = g.name.empty() ? nullptr : const_cast<char *>(g.name.c_str());
-        const std::vector<double> &bc = g.pbrMetallicRoughness.baseColorFactor;
-        const std::vector<double> &em = g.emissiveFactor;
-        if (bc.size() != 4 || em.size() != 3)
-            fail(RD_GLTF_ERR_INVALID, "material %zu has a malformed colour factor", i);
-        bool ok = true;
-        for (int k = 0; k < 4; k++) {
-            ok = ok && to_float(bc[(size_t)k], &mt.base_color[k]);
-            mt.base_color[k] = std::min(std::max(mt.base_color[k], 0.0f), 1.0f);
-        }
-        float strength = 1.0f;
-        auto ext = g.extensions.find("KHR_materials_emissive_strength");
-        if (ext != g.extensions.end() && ext->second.Has("emissiveStrength")) {
-            const tinygltf::Value &v = ext->second.Get("emissiveStrength");
-            if (!v.IsNumber() || !to_float(v.GetNumberAsDouble(), &strength) || strength < 0.0f)
-                fail(RD_GLTF_ERR_INVALID, "material %zu has an invalid emissiveStrength", i);
-        }
-        for (int k = 0; k < 3; k++) {
-            ok = ok && to_float(em[(size_t)k], &mt.emission[k]);
-            mt.emission[k] = std::max(mt.emission[k], 0.0f) * strength;
-            ok = ok && std::isfinite(mt.emission[k]);
-        }
-        ok = ok && to_float(g.alphaCutoff, &mt.alpha_cutoff);
-        if (!ok)
-            fail(RD_GLTF_ERR_INVALID, "material %zu has a factor that is not a finite number", i);
-        mt.alpha_cutoff = std::max(mt.alpha_cutoff, 0.0f);
-        if (g.alphaMode == "OPAQUE") {
-            mt.alpha_mode = RD_ALPHA_OPAQUE;
-        } else if (g.alphaMode == "MASK") {
-            mt.alpha_mode = RD_ALPHA_MASK;
-        } else if (g.alphaMode == "BLEND") {
-            mt.alpha_mode = RD_ALPHA_BLEND;
-        } else {
-            rd_scene_warn(s_, "material %zu has an unknown alphaMode '%s'; OPAQUE is used", i,
-                          clean(g.alphaMode, 32).c_str());
-            mt.alpha_mode = RD_ALPHA_OPAQUE;
-        }
-        mt.double_sided = g.doubleSided;
+        rd_gltf_material_factors f = factors(g);
+        check(rd_gltf_material_colors(s_, i, &f, &mt, err, sizeof err), err);
         mt.base_color_texture =
-            texture(g.pbrMetallicRoughness.baseColorTexture.index,
-                    g.pbrMetallicRoughness.baseColorTexture.texCoord, i, "base colour");
+            texture(pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord, i, "base colour");
         mt.emissive_texture =
             texture(g.emissiveTexture.index, g.emissiveTexture.texCoord, i, "emissive");
-        metallic_roughness(g, i, &mt);
+        check(rd_gltf_material_pbr(i, &f, &mt, err, sizeof err), err);
+        mt.metallic_roughness_texture =
+            texture(pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord, i,
+                    "metallic-roughness");
+        mt.normal_texture = texture(g.normalTexture.index, g.normalTexture.texCoord, i, "normal");
+        mt.occlusion_texture =
+            texture(g.occlusionTexture.index, g.occlusionTexture.texCoord, i, "occlusion");
         if (mt.alpha_mode == RD_ALPHA_BLEND) blend++;
         for (const auto &e : g.extensions)
             if (!is_supported_extension(e.first)) unsupported[clean(e.first, 80)]++;
         rd_scene_add_material(s_, &mt); /* index 1 + i: materials[0] is the default */
     }
-    if (blend)
-        rd_scene_warn(s_,
-                      "%zu material(s) use alphaMode BLEND; transparency is not supported, they "
-                      "are drawn opaque",
-                      blend);
+    rd_gltf_material_warnings(s_, blend);
     for (const auto &u : unsupported)
         rd_scene_warn(s_,
                       "material extension %s (on %zu material(s)) is not supported; those "
                       "materials are drawn with the core metallic-roughness model",
                       u.first.c_str(), u.second);
-}
-
-/* The core metallic-roughness parameters beyond base colour and emission: factors (glTF
- * defaults metallic 1, roughness 1), metallicRoughnessTexture, normalTexture with its scale
- * and occlusionTexture with its strength. specular = 1: the full Appendix B BRDF. */
-void Converter::metallic_roughness(const tinygltf::Material &g, size_t i, rd_material *mt)
-{
-    const tinygltf::PbrMetallicRoughness &pbr = g.pbrMetallicRoughness;
-    bool ok = to_float(pbr.metallicFactor, &mt->metallic) &&
-              to_float(pbr.roughnessFactor, &mt->roughness) &&
-              to_float(g.normalTexture.scale, &mt->normal_scale) &&
-              to_float(g.occlusionTexture.strength, &mt->occlusion_strength);
-    if (!ok) fail(RD_GLTF_ERR_INVALID, "material %zu has a factor that is not a finite number", i);
-    mt->metallic = std::min(std::max(mt->metallic, 0.0f), 1.0f);
-    mt->roughness = std::min(std::max(mt->roughness, 0.0f), 1.0f);
-    mt->occlusion_strength = std::min(std::max(mt->occlusion_strength, 0.0f), 1.0f);
-    mt->specular = 1.0f;
-    mt->metallic_roughness_texture =
-        texture(pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord, i,
-                "metallic-roughness");
-    mt->normal_texture = texture(g.normalTexture.index, g.normalTexture.texCoord, i, "normal");
-    mt->occlusion_texture =
-        texture(g.occlusionTexture.index, g.occlusionTexture.texCoord, i, "occlusion");
 }
 
 /* Validates a mesh's primitives and counts its triangles without reading vertex data. */
@@ -1258,19 +1005,19 @@ std::vector<Primitive> Converter::plan_mesh(size_t mesh)
                                    {TINYGLTF_COMPONENT_TYPE_FLOAT});
             pr.has_tan = true;
         }
-        if ((pr.has_nrm && pr.nrm.count != pr.pos.count) ||
-            (pr.has_uv && pr.uv.count != pr.pos.count) ||
-            (pr.has_tan && pr.tan.count != pr.pos.count))
+        if ((pr.has_nrm && pr.nrm.c.count != pr.pos.c.count) ||
+            (pr.has_uv && pr.uv.c.count != pr.pos.c.count) ||
+            (pr.has_tan && pr.tan.c.count != pr.pos.c.count))
             fail(RD_GLTF_ERR_INVALID, "the attributes of %s have different vertex counts",
                  where.c_str());
-        size_t n = pr.pos.count;
+        size_t n = pr.pos.c.count;
         if (gp.indices >= 0) {
             pr.idx = make_accessor(m_, gp.indices, "indices of " + where, TINYGLTF_TYPE_SCALAR,
                                    {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
                                     TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
                                     TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT});
             pr.has_idx = true;
-            n = pr.idx.count;
+            n = pr.idx.c.count;
         }
         if (pr.mode == TINYGLTF_MODE_TRIANGLES) {
             pr.tris = n / 3;
@@ -1296,72 +1043,15 @@ std::vector<Primitive> Converter::plan_mesh(size_t mesh)
 
 void Converter::fill_mesh(size_t mesh, const std::vector<Primitive> &prims, rd_mesh *out)
 {
-    size_t t_out = 0;
-    bool any_tan = false;
-    for (const Primitive &pr : prims)
-        any_tan = any_tan || pr.has_tan;
-    if (any_tan) { /* zeros where a primitive has none: the renderer derives them */
-        out->tangents = static_cast<float *>(calloc((size_t)out->tri_count * 12, sizeof(float)));
-        if (!out->tangents) {
-            fprintf(stderr, "probecast: out of memory (tangents of %u triangles)\n",
-                    out->tri_count);
-            abort();
-        }
-    }
+    std::vector<rd_gltf_primitive> c(prims.size());
     for (size_t p = 0; p < prims.size(); p++) {
         const Primitive &pr = prims[p];
-        for (uint64_t t = 0; t < pr.tris; t++, t_out++) {
-            size_t v[3];
-            if (pr.mode == TINYGLTF_MODE_TRIANGLES) {
-                v[0] = (size_t)t * 3, v[1] = (size_t)t * 3 + 1, v[2] = (size_t)t * 3 + 2;
-            } else if (pr.mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
-                size_t odd = (size_t)(t % 2);
-                v[0] = (size_t)t, v[1] = (size_t)t + 1 + odd, v[2] = (size_t)t + 2 - odd;
-            } else { /* fan */
-                v[0] = (size_t)t + 1, v[1] = (size_t)t + 2, v[2] = 0;
-            }
-            for (int k = 0; k < 3; k++) {
-                size_t vi = v[k];
-                if (pr.has_idx) {
-                    uint32_t ix = read_index(pr.idx, vi);
-                    if (ix >= pr.pos.count)
-                        fail(RD_GLTF_ERR_INVALID,
-                             "index %zu of mesh %zu primitive %zu is %u, out of range for %zu "
-                             "vertices",
-                             vi, mesh, p, ix, pr.pos.count);
-                    vi = ix;
-                }
-                float *pos = &out->positions[t_out * 9 + (size_t)k * 3];
-                read_floats(pr.pos, vi, pos);
-                if (!rd_vec3_isfinite(pos))
-                    fail(RD_GLTF_ERR_INVALID,
-                         "POSITION of mesh %zu primitive %zu contains NaN or infinity (vertex "
-                         "%zu)",
-                         mesh, p, vi);
-                float *nrm = &out->normals[t_out * 9 + (size_t)k * 3];
-                if (pr.has_nrm) {
-                    float n[3];
-                    read_floats(pr.nrm, vi, n);
-                    if (!rd_vec3_normalize(nrm, n, nullptr))
-                        rd_vec3_set(nrm, 0, 0, 0); /* filled with the flat normal below */
-                }
-                if (pr.has_tan) {
-                    float *tg = &out->tangents[t_out * 12 + (size_t)k * 4];
-                    read_floats(pr.tan, vi, tg);
-                    if (!rd_vec3_isfinite(tg) || !std::isfinite(tg[3]))
-                        memset(tg, 0, 4 * sizeof(float)); /* derived from the UVs instead */
-                }
-                float *uv = &out->uvs[t_out * 6 + (size_t)k * 2];
-                if (pr.has_uv) {
-                    read_floats(pr.uv, vi, uv);
-                    for (int c = 0; c < 2; c++)
-                        if (!std::isfinite(uv[c])) uv[c] = 0.0f;
-                }
-            }
-            out->material[t_out] = pr.material;
-        }
+        c[p] =
+            rd_gltf_primitive{pr.mode,    pr.pos.c,  pr.nrm.c,   pr.uv.c,    pr.tan.c, pr.idx.c,
+                              pr.has_nrm, pr.has_uv, pr.has_tan, pr.has_idx, pr.tris,  pr.material};
     }
-    rd_mesh_fill_flat_normals(out);
+    char err[256];
+    check(rd_gltf_fill_mesh(mesh, c.data(), c.size(), out, err, sizeof err), err);
 }
 
 void Converter::meshes()
@@ -1428,11 +1118,9 @@ void Converter::lights_and_cameras()
                 memset(&c, 0, sizeof c);
                 c.name = gc.name.empty() ? nullptr : const_cast<char *>(gc.name.c_str());
                 const tinygltf::PerspectiveCamera &p = gc.perspective;
-                if (!to_float(p.yfov, &c.yfov) || !(c.yfov > 0.0f) || !(c.yfov < 3.14159f) ||
-                    !to_float(p.znear, &c.znear) || !(c.znear > 0.0f) ||
-                    !to_float(p.aspectRatio, &c.aspect) || c.aspect < 0.0f)
-                    fail(RD_GLTF_ERR_INVALID,
-                         "camera %zu has an invalid yfov, znear or aspectRatio", ci);
+                char err[256];
+                check(rd_gltf_perspective(ci, p.yfov, p.znear, p.aspectRatio, &c, err, sizeof err),
+                      err);
                 c.node = node;
                 rd_scene_add_camera(s_, &c);
             }
@@ -1451,39 +1139,14 @@ void Converter::lights_and_cameras()
         rd_light l;
         memset(&l, 0, sizeof l);
         l.name = gl.name.empty() ? nullptr : const_cast<char *>(gl.name.c_str());
-        if (gl.type == "point") {
-            l.type = RD_LIGHT_POINT;
-        } else if (gl.type == "spot") {
-            l.type = RD_LIGHT_SPOT;
-        } else if (gl.type == "directional") {
-            l.type = RD_LIGHT_DIRECTIONAL;
-        } else {
-            rd_scene_warn(s_, "light %zu has an unknown type '%s'; it is ignored", index,
-                          clean(gl.type, 32).c_str());
-            continue;
-        }
-        bool ok = true;
-        l.color[0] = l.color[1] = l.color[2] = 1.0f;
-        if (!gl.color.empty()) {
-            ok = gl.color.size() == 3;
-            for (size_t k = 0; ok && k < 3; k++)
-                ok = to_float(gl.color[k], &l.color[k]) && l.color[k] >= 0.0f;
-        }
-        ok = ok && to_float(gl.intensity, &l.intensity) && l.intensity >= 0.0f;
-        ok = ok && to_float(gl.range, &l.range) && l.range >= 0.0f;
-        if (!ok)
-            fail(RD_GLTF_ERR_INVALID, "light %zu has an invalid color, intensity or range", index);
-        if (l.type == RD_LIGHT_DIRECTIONAL) l.range = 0.0f;
-        if (l.type == RD_LIGHT_SPOT) {
-            if (!to_float(gl.spot.innerConeAngle, &l.inner_cone) ||
-                !to_float(gl.spot.outerConeAngle, &l.outer_cone) || l.inner_cone < 0.0f ||
-                !(l.inner_cone < l.outer_cone) || l.outer_cone > 1.5707964f)
-                fail(RD_GLTF_ERR_INVALID,
-                     "light %zu has invalid spot cone angles (inner %g, outer %g)", index,
-                     gl.spot.innerConeAngle, gl.spot.outerConeAngle);
-        }
+        rd_gltf_light_params lp = {gl.type.data(),         gl.type.size(),        gl.color.data(),
+                                   gl.color.size(),        gl.intensity,          gl.range,
+                                   gl.spot.innerConeAngle, gl.spot.outerConeAngle};
+        bool ignored;
+        char err[256];
+        check(rd_gltf_light(s_, index, &lp, &l, &ignored, err, sizeof err), err);
+        if (ignored) continue;
         l.node = node;
-        rd_vec3_set(l.direction, 0.0f, 0.0f, -1.0f);
         rd_scene_add_light(s_, &l);
     }
 }
@@ -1512,35 +1175,23 @@ void Converter::anim_sampler(const std::string &where, const tinygltf::Animation
                              TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT})
             : make_accessor(m_, gs.output, "output of " + where, TINYGLTF_TYPE_VEC3,
                             {TINYGLTF_COMPONENT_TYPE_FLOAT});
-    size_t keys = in.count, per_key = out->interpolation == RD_INTERP_CUBICSPLINE ? 3 : 1;
-    if (val.count / per_key != keys || val.count % per_key != 0)
+    size_t keys = in.c.count, per_key = out->interpolation == RD_INTERP_CUBICSPLINE ? 3 : 1;
+    if (val.c.count / per_key != keys || val.c.count % per_key != 0)
         fail(RD_GLTF_ERR_INVALID, "%s has %zu output values for %zu input times (%s needs %zu)",
-             where.c_str(), val.count, keys, ip.c_str(), keys * per_key);
+             where.c_str(), val.c.count, keys, ip.c_str(), keys * per_key);
     out->components = rotation ? 4 : 3;
-    if (val.count <= kMaxAnimationFloats) anim_floats_ += keys + val.count * out->components;
-    if (val.count > kMaxAnimationFloats || anim_floats_ > kMaxAnimationFloats)
+    if (val.c.count <= kMaxAnimationFloats) anim_floats_ += keys + val.c.count * out->components;
+    if (val.c.count > kMaxAnimationFloats || anim_floats_ > kMaxAnimationFloats)
         fail(RD_GLTF_ERR_TOO_LARGE,
              "the animations hold more than %llu keys and values (the limit)",
              (unsigned long long)kMaxAnimationFloats);
     out->key_count = (uint32_t)keys;
     times->resize(keys);
-    values->resize(val.count * out->components);
-    for (size_t i = 0; i < keys; i++) {
-        float *t = &(*times)[i];
-        read_floats(in, i, t);
-        if (!std::isfinite(*t) || *t < 0.0f || (i > 0 && *t < t[-1]))
-            fail(RD_GLTF_ERR_INVALID,
-                 "%s has input time %g at key %zu; times must be finite, >= 0 and not decrease",
-                 where.c_str(), (double)*t, i);
-    }
-    for (size_t i = 0; i < val.count; i++) {
-        float *v = &(*values)[i * out->components];
-        read_floats(val, i, v);
-        for (uint32_t k = 0; k < out->components; k++)
-            if (!std::isfinite(v[k]))
-                fail(RD_GLTF_ERR_INVALID, "%s has an output value that is NaN or infinite (%zu)",
-                     where.c_str(), i);
-    }
+    values->resize(val.c.count * out->components);
+    char err[512];
+    check(rd_gltf_read_keys(where.c_str(), &in.c, &val.c, out->components, times->data(),
+                            values->data(), err, sizeof err),
+          err);
 }
 
 /* Node animations (glTF 2.0 section 3.11). Channels that animate morph weights or an
@@ -1612,7 +1263,7 @@ void Converter::animations()
                                         fmt("input of %s sampler %zu", an.c_str(), si),
                                         TINYGLTF_TYPE_SCALAR, {TINYGLTF_COMPONENT_TYPE_FLOAT});
             float last;
-            read_floats(in, in.count - 1, &last);
+            read_floats(in, in.c.count - 1, &last);
             if (std::isfinite(last) && last > a.duration) a.duration = last;
         }
         a.name = ga.name.empty() ? nullptr : const_cast<char *>(ga.name.c_str());
@@ -1671,7 +1322,9 @@ void load(const unsigned char *data, size_t size, const char *base_dir, const rd
         ctx.rules.prefix = ctx.rules.base;
         if (ctx.rules.prefix.back() != '/') ctx.rules.prefix += '/';
     }
-    Container c = parse_container(data, size);
+    rd_gltf_container c;
+    char cerr[256];
+    check(rd_gltf_parse_container(data, size, &c, cerr, sizeof cerr), cerr);
     prescan(c, &ctx);
 
     tinygltf::TinyGLTF gltf;
