@@ -344,6 +344,19 @@ vec3 direct_radiance(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, vec3 v, pc_brdf b
     return sum;
 }
 
+/* W: the summed RGB of every light's unshadowed term at p (the weight the choice is made by). */
+float light_weight_total(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, vec3 v, pc_brdf b)
+{
+    float total = 0.0;
+    vec3 wi;
+    float dist;
+    for (uint i = 0u; i < s.counts.y; i++) {
+        vec3 f = light_term(s, i, p, n, ng, v, b, wi, dist);
+        total += f.r + f.g + f.b;
+    }
+    return total;
+}
+
 /* The same sum estimated with at most ONE shadow ray: light i is chosen with probability
  * p_i = w_i / W, w_i the summed RGB of its unshadowed term f E_i cos (lights below the surfaces
  * weigh 0), and its shadowed term is returned divided by p_i. Unbiased (E[result] equals
@@ -354,14 +367,10 @@ vec3 direct_radiance(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, vec3 v, pc_brdf b
 vec3 direct_radiance_sampled(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, vec3 v, pc_brdf b,
                              float u, inout uint rays)
 {
-    float total = 0.0;
+    float total = light_weight_total(s, p, n, ng, v, b);
+    if (!(total > 0.0)) return vec3(0.0);
     vec3 wi;
     float dist;
-    for (uint i = 0u; i < s.counts.y; i++) {
-        vec3 f = light_term(s, i, p, n, ng, v, b, wi, dist);
-        total += f.r + f.g + f.b;
-    }
-    if (!(total > 0.0)) return vec3(0.0);
     float target = u * total, acc = 0.0;
     vec3 chosen = vec3(0.0), chosen_wi = vec3(0.0);
     float chosen_w = 0.0, chosen_dist = 0.0;

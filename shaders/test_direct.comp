@@ -26,14 +26,8 @@ void main()
         pc_surface sf = surface_at(g.scene, hit, d);
         pc_brdf lambert = brdf_make(brdf_lambert_albedo(surface_brdf(sf)), 0.0, 1.0, 0.0);
         uint rays = 0u;
-        float total = 0.0;
-        for (uint l = 0u; l < g.scene.counts.y; l++) {
-            vec3 wi;
-            float dist;
-            vec3 f = light_term(g.scene, l, sf.position, sf.normal, sf.geom_normal, -d, lambert,
-                                wi, dist);
-            total += f.r + f.g + f.b;
-        }
+        float total = light_weight_total(g.scene, sf.position, sf.normal, sf.geom_normal, -d,
+                                         lambert);
         exact = vec4(direct_radiance(g.scene, sf.position, sf.normal, sf.geom_normal, -d, lambert,
                                      rays), total);
         uint n = pc.params.y, sampled = 0u;

@@ -24,6 +24,14 @@ typedef struct test_render_desc {
 /* Creates the device for a GPU test (the environment picks lavapipe and validation) and
  * prints it; false after a failed CHECK. */
 bool test_vk_open(rd_vk *vk);
+/* Checks an rd_vk_result call; on failure reports it with the test's `err` buffer (a char array
+ * in scope, passed to the call) and jumps to the test's `done:` clean-up label. */
+#define VK_CHECK(call)                                                                             \
+    do {                                                                                           \
+        rd_vk_result rc_ = (call);                                                                 \
+        CHECKF(rc_ == RD_VK_OK, "%s: %s", #call, err);                                             \
+        if (rc_ != RD_VK_OK) goto done;                                                            \
+    } while (0)
 /* Checks that the validation layer reported nothing, destroys the device and returns the
  * test's exit status. */
 int test_vk_close(rd_vk *vk);

@@ -25,13 +25,6 @@ enum { RAYS = 2048, CHOICES = 256 };
 
 static char err[512];
 
-#define VK_CHECK(call)                                                                             \
-    do {                                                                                           \
-        rd_vk_result rc_ = (call);                                                                 \
-        CHECKF(rc_ == RD_VK_OK, "%s: %s", #call, err);                                             \
-        if (rc_ != RD_VK_OK) goto done;                                                            \
-    } while (0)
-
 int main(void)
 {
     rd_vk vk;

@@ -16,6 +16,7 @@
 #include "renderer/vk_context.h"
 #include "shaders/gpu_types.h"
 #include "shaders/test_trace.spv.h"
+#include "test_render_util.h"
 #include "test_util.h"
 
 #include <math.h>
@@ -44,7 +45,6 @@ static float rng_range(float a, float b)
 {
     return a + (b - a) * rng_f();
 }
-
 
 typedef struct mesh {
     uint32_t n;
@@ -300,13 +300,6 @@ static uint32_t compare(const char *what, const float *rays, const gpu_hit *g, c
     return ambiguous;
 }
 
-#define VK_CHECK(call)                                                                             \
-    do {                                                                                           \
-        rd_vk_result rc_ = (call);                                                                 \
-        CHECKF(rc_ == RD_VK_OK, "%s: %s", #call, err);                                             \
-        if (rc_ != RD_VK_OK) goto done;                                                            \
-    } while (0)
-
 int main(void)
 {
     rd_vk vk;
@@ -380,8 +373,7 @@ int main(void)
                 (pc_vec4){(float)inst[k].inv[r][0], (float)inst[k].inv[r][1],
                           (float)inst[k].inv[r][2], (float)inst[k].inv[r][3]};
         }
-        gi[k].info = (pc_uvec4){m->node_base, inst[k].mesh, 0u,
-                                (uint32_t)k};
+        gi[k].info = (pc_uvec4){m->node_base, inst[k].mesh, 0u, (uint32_t)k};
         /* world box of the BLAS root box's corners, widened for the float transform */
         const pc_bvh_node *root = &m->bvh.nodes[0];
         for (int a = 0; a < 3; a++) {
