@@ -1,20 +1,17 @@
 #version 460
 /* Pick pass: ONE camera ray through a picture point, traced like the primary pass's (closest
  * hit with trace_ray, back faces of single-sided materials culled, alpha-masked texels cut
- * out), for POST /v1/views/{id}/pick (renderer/pick.h). One workgroup of the usual 1D size runs
- * and only its first invocation traces: compiled for a workgroup of one, lavapipe missed a ray
- * the primary pass hits (one aimed exactly at an instance's origin; test_gpu_serve_pick).
+ * out), for POST /v1/views/{id}/pick (renderer/pick.h). One invocation runs.
  * push: globals (the view's camera in g.view), buf0 = pc_pick_result,
  * params.xy = the point (float bits; normalised picture coordinates, y down). */
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
 
-layout(local_size_x = PC_WG_1D) in;
+layout(local_size_x = 1) in;
 layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer PickRef { pc_pick_result r; };
 
 void main()
 {
-    if (gl_LocalInvocationIndex != 0u) return;
     pc_globals g = load_globals();
     vec2 uv = vec2(uintBitsToFloat(pc.params.x), uintBitsToFloat(pc.params.y));
     vec3 dir = camera_dir_at(g.view, uv);

@@ -47,12 +47,18 @@ struct pc_hit {
  * lie ulps before the entry distance of its own box (coplanar overlapping triangles). */
 #define TRACE_CULL_SLACK (1.0 / 65536.0)
 
-/* Reciprocal direction with IEEE infinities for zero components (not left to 1/0), and the
- * sign per axis that picks the near and far slab planes. */
+/* Reciprocal direction, and the sign per axis that picks the near and far slab planes. A zero
+ * component gets +-FLT_MAX (the zero's sign), not +-inf: a ray lying exactly in a slab plane
+ * would make 0 * inf = NaN in trace_box, and GLSL's max/min (SPIR-V FMax/FMin) leave NaN
+ * operands undefined -- lavapipe, compiled for one invocation, let the NaN reject the box and
+ * missed a ray the primary pass hit (a pick aimed at an instance's origin). With FLT_MAX the
+ * plane term is 0, i.e. the ray counts as inside the slab on the side its zero's sign leans
+ * to, as a ray tilted by an infinitesimal would; any other term is still beyond every tmax
+ * or +-inf. (renderer/bvh.c's CPU slab test ignores the NaN instead: both sides.) */
 void trace_setup_box(vec3 d, out vec3 inv, out bvec3 neg)
 {
-    vec3 inf = uintBitsToFloat((floatBitsToUint(d) & 0x80000000u) | 0x7f800000u);
-    inv = mix(1.0 / d, inf, equal(d, vec3(0.0)));
+    vec3 big = uintBitsToFloat((floatBitsToUint(d) & 0x80000000u) | 0x7f7fffffu);
+    inv = mix(1.0 / d, big, equal(d, vec3(0.0)));
     neg = lessThan(inv, vec3(0.0));
 }
 
