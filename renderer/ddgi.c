@@ -268,7 +268,7 @@ rd_vk_result rd_ddgi_configure(rd_ddgi *d, const float bmin[3], const float bmax
     v->spacing = (pc_vec4){spacing[0], spacing[1], spacing[2], 0};
     v->counts = (pc_uvec4){counts[0], counts[1], counts[2], rays};
     /* 2021 paper: bias = (0.2 n + 0.8 v) * 0.75 * min spacing * 0.3 */
-    v->params = (pc_vec4){hysteresis, 0.75f * min_spacing * 0.3f, 0.10f, 5.0f};
+    v->params = (pc_vec4){hysteresis, 0.75f * min_spacing * 0.3f, 0.10f, 0.0f};
     v->info = (pc_uvec4){s->mode, 0, IRR_SIDE, DIST_SIDE};
     v->irradiance = d->irradiance.address;
     v->distance = d->distance.address;
@@ -562,7 +562,7 @@ rd_vk_result rd_ddgi_read_atlases(rd_ddgi *d, float **irr_rgb, unsigned *irr_w, 
     float *a = tile_image(probes, IRR_SIDE, irr_w, irr_h);
     float *b = tile_image(probes, DIST_SIDE, dist_w, dist_h);
     unsigned per_row_a = *irr_w / IRR_SIDE, per_row_b = *dist_w / DIST_SIDE;
-    float e = d->vol.params.w;
+    float e = (float)PC_DDGI_IRRADIANCE_EXPONENT;
     for (unsigned p = 0; p < probes; p++)
         for (unsigned y = 0; y < IRR_SIDE; y++)
             for (unsigned x = 0; x < IRR_SIDE; x++) {

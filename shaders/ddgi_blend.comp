@@ -82,8 +82,8 @@ void main()
     if (mine) {
         uint texel = ddgi_texel(probe, side, t.x + 1u, t.y + 1u);
         if (irradiance) {
-            float e = vol.params.w;
-            vec3 fresh = pow(wsum > 1e-6 ? sum / wsum : vec3(0.0), vec3(1.0 / e));
+            vec3 fresh = pow(wsum > 1e-6 ? sum / wsum : vec3(0.0),
+                             vec3(1.0 / float(PC_DDGI_IRRADIANCE_EXPONENT)));
             DdgiIrradianceRef a = DdgiIrradianceRef(vol.irradiance);
             uvec2 old_packed = a.v[texel];
             vec3 old = vec3(unpackHalf2x16(old_packed.x), unpackHalf2x16(old_packed.y).x);
@@ -125,7 +125,7 @@ void main()
         vec2 m = vec2(0.0);
         for (uint i = 0u; i < TEXELS; i++) m += s_lum[i];
         /* relative change, as a change of the decoded value (x^e changes e times as much) */
-        float rel = clamp(vol.params.w * (m.y - m.x) / max(max(m.x, m.y), 1e-12), -1.0, 1.0);
+        float rel = clamp(float(PC_DDGI_IRRADIANCE_EXPONENT) * (m.y - m.x) / max(max(m.x, m.y), 1e-12), -1.0, 1.0);
         if (isnan(rel) || isinf(rel)) rel = 0.0;
         st.y = mix(st.y, rel, 0.25);
         st.z = mix(st.z, abs(rel), 0.25);

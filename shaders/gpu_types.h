@@ -299,13 +299,17 @@ PC_END(pc_environment);
 #define PC_DDGI_WAKE_AGE_NUDGE 23.0   /* one small step of an animated light: h = 0.85 */
 #define PC_DDGI_WAKE_MAX 32u          /* wake boxes per update; more become "wake all" */
 #define PC_DDGI_DRIFT_SCALE 16384.0   /* fixed point of the drift sums */
+/* Irradiance texels hold (E / pi)^(1/5) (the paper's perceptual encoding, blended in that
+ * space); readers raise the stored value to the 5th power. A fixed 5 lets the shaders decode
+ * with three multiplies instead of pow (12 per probe of an irradiance query). */
+#define PC_DDGI_IRRADIANCE_EXPONENT 5 /* an integer: the shaders test it with #if */
 
 /* origin: xyz position of probe (0,0,0), w = max ray distance for distance blending;
  * spacing: xyz grid spacing, w unused (0);
  * counts: xyz probes per axis, w = rays per probe;
  * rotation: rows of this update's random ray rotation (uniform on SO(3));
  * params: x maximum hysteresis, y bias scale (world units), z back-face ratio that deactivates
- *   a probe, w = irradiance encoding exponent (5);
+ *   a probe, w unused (0; the encoding exponent is PC_DDGI_IRRADIANCE_EXPONENT);
  * info: x PC_GI_*, y updates done since reset (0 = next is the first), z atlas irradiance
  *   tile side (interior + 2), w distance tile side (interior + 2);
  * control: x = 1 while the awake field drifts (ages hold), y = age at which a probe falls
