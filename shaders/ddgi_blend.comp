@@ -125,7 +125,9 @@ void main()
         vec2 m = vec2(0.0);
         for (uint i = 0u; i < TEXELS; i++) m += s_lum[i];
         /* relative change, as a change of the decoded value (x^e changes e times as much) */
-        float rel = clamp(float(PC_DDGI_IRRADIANCE_EXPONENT) * (m.y - m.x) / max(max(m.x, m.y), 1e-12), -1.0, 1.0);
+        float rel = clamp(float(PC_DDGI_IRRADIANCE_EXPONENT) * (m.y - m.x) /
+                              max(max(m.x, m.y), 1e-12),
+                          -1.0, 1.0);
         if (isnan(rel) || isinf(rel)) rel = 0.0;
         st.y = mix(st.y, rel, 0.25);
         st.z = mix(st.z, abs(rel), 0.25);
