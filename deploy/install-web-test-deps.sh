@@ -32,7 +32,7 @@ fi
 # playwright-core is pinned at 1.61.1, the newest release whose engines allow Node.js 18 (1.62
 # and later need 20): Debian 12's nodejs is 18, and the tests should run on a stock Debian 12 as
 # they do on Node.js 20. It drives Debian's Chromium (156 in bookworm-security; 1.61 was built
-# against 149) over CDP through everything viewer.test.mjs uses. Raise the pin once the tests no
+# against 149) over CDP through everything the viewer tests use. Raise the pin once the tests no
 # longer have to run on Node.js 18 (Debian 13 ships 20).
 # npm ci installs exactly the lock file; it is rerun when the lock file is newer than the
 # installed tree (npm writes node_modules/.package-lock.json on every install) or the installed

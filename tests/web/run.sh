@@ -2,9 +2,11 @@
 # Browser tests of the viewer (web/): starts `probecast serve` (the executable given as $1) on
 # free loopback ports with a tiny render size and a scratch --data-dir, runs
 # `node --test viewer.test.mjs` against it in Debian's headless Chromium (playwright-core), then
-# stops the daemon; then `node --test scene.test.mjs`, which runs a daemon of its own. The
-# viewer test itself kills and restarts the daemon (same ports and data dir), so
-# the daemon's pid lives in a file both read.
+# stops the daemon; then `node --test scene.test.mjs`, which runs a daemon of its own.
+# viewer.test.mjs imports the topic files under viewer/ (stream, camera, panels, layout, views,
+# daemon) in order: they are one session in one process on one page. The viewer tests
+# themselves kill and restart the daemon (same ports and data dir), so the daemon's pid lives in
+# a file both read.
 #
 # Exit status: the tests' (0 = pass). A missing piece (Chromium, Node.js 18 or newer,
 # tests/web/node_modules as the lock file pins it) is a failure, not a skip: the install step,
@@ -79,7 +81,7 @@ trap 'exit 130' INT TERM
 
 # Render small whatever the browser window: lavapipe shares these two cores with Chromium. The
 # test caps max_pixels at 15360, so the 960x600 page asks for 156x97, the size started with here:
-# the render size does not change while frames are in flight (see viewer.test.mjs, RENDER).
+# the render size does not change while frames are in flight (see viewer/session.mjs, RENDER).
 # A low hysteresis lets the probes settle within a second after each change.
 args=(serve --http 127.0.0.1:0 --ws 127.0.0.1:0 --width 156 --height 97 --probes 4,4,4 --rays 16
       --hysteresis 0.5 --no-animate --encoders 1 --max-fps 20 --data-dir "$scratch/data" --web-dir "$root/web")

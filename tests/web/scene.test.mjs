@@ -14,33 +14,20 @@ import { after, before, test } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import path from 'node:path';
-import { chromium } from 'playwright-core';
-import { CHROMIUM_ARGS, httpClient, sleep, startDaemon, stopDaemon, until } from './util.mjs';
+import {
+  MAX_PIXELS, VIEWPORT, httpClient, launchChromium, shot, showPanel, sleep, startDaemon, stopDaemon, until,
+} from './util.mjs';
 
 const env = process.env;
 for (const k of ['PCWEB_EXE', 'PCWEB_OUT', 'PCWEB_ROOT']) {
   if (!env[k]) throw new Error(`${k} is not set: run this through tests/web/run.sh`);
 }
 const OUT = env.PCWEB_OUT;
-const VIEWPORT = { width: 960, height: 600 };
-const MAX_PIXELS = 15360; // 156 x 97 for the 960 x 600 page: lavapipe shares two cores
 
 let daemon, http, browser, page;
 const pageErrors = [];
 const posts = []; // [{ path, body }] of the page's POST and PATCH requests
 
-const shot = (name) => page.screenshot({ path: path.join(OUT, name) });
-
-/* Shows panel id (the 960 x 600 page has the compact layout: a toolbar opens one panel). */
-async function showPanel(id) {
-  const shown = () => page.evaluate((pid) => {
-    const d = document.getElementById(pid);
-    return d.open && d.getBoundingClientRect().height > 0;
-  }, id);
-  if (await shown()) return;
-  await page.locator(`#toolbar [data-panel="${id}"]`).click();
-  await until(shown, `panel ${id} to show`, 5000, 50);
-}
 const closePanels = () => page.evaluate(() => window.probecast.layout.show(null));
 
 /* ---- the test scene: scene.gltf + scene.bin ------------------------------------------------- */
@@ -123,7 +110,7 @@ before(async () => {
   const BASE = `http://${daemon.http}`;
   http = httpClient(BASE);
   assert.equal((await http('PATCH', '/v1/settings', { max_pixels: MAX_PIXELS })).status, 200);
-  browser = await chromium.launch({ executablePath: env.PCWEB_CHROMIUM || '/usr/bin/chromium', args: CHROMIUM_ARGS });
+  browser = await launchChromium();
   const context = await browser.newContext({ viewport: VIEWPORT, deviceScaleFactor: 1 });
   page = await context.newPage();
   page.on('pageerror', (e) => pageErrors.push(e.message));
@@ -153,7 +140,7 @@ test('a .gltf chosen without its .bin is not sent: the message names the file an
   assert.match(await page.locator('#upload-error').textContent(), /scene\.gltf was not loaded/);
   assert.equal(posts.slice(n).filter((p) => p.method === 'PUT').length, 0, 'nothing was uploaded');
   assert.equal((await http('GET', '/v1/scene')).json.generation, gen);
-  await shot('scene-missing-bin.png');
+  await shot(page, 'scene-missing-bin.png');
 });
 
 test('a .gltf with its .bin and image, chosen together, is packed into a .glb and loads; the file name shows', { timeout: 60000 }, async () => {
@@ -170,13 +157,13 @@ test('a .gltf with its .bin and image, chosen together, is packed into a .glb an
   assert.equal(sc.node_count, 5);
   assert.equal(sc.light_count, 1);
   assert.equal(sc.texture_count, 1, 'the image went into the .glb');
-  await showPanel('panel-scene');
+  await showPanel(page, 'panel-scene');
   assert.equal(await page.locator('#scene-file').textContent(), 'scene.gltf');
   assert.equal(await page.locator('#upload-error').isHidden(), true);
 });
 
 test('the node tree lists the nodes with their hierarchy', { timeout: 30000 }, async () => {
-  await showPanel('panel-nodes');
+  await showPanel(page, 'panel-nodes');
   await page.waitForFunction(() => document.querySelectorAll('#node-tree .node-row').length === 5, null, { timeout: 10000 });
   const rows = await page.$$eval('#node-tree .node-row', (els) => els.map((e) => ({
     id: Number(e.dataset.id), name: e.textContent, level: Number(e.getAttribute('aria-level')) })));
@@ -184,7 +171,7 @@ test('the node tree lists the nodes with their hierarchy', { timeout: 30000 }, a
   assert.equal(rows.find((r) => r.name === 'box').level, 2, 'box is under group');
   assert.equal(rows.find((r) => r.name === 'group').level, 1);
   assert.match(await page.locator('#node-count').textContent(), /5/);
-  await shot('scene-tree.png');
+  await shot(page, 'scene-tree.png');
 });
 
 test('clicking the picture selects the node under the cursor; the sky selects nothing', { timeout: 40000 }, async () => {
@@ -202,7 +189,7 @@ test('clicking the picture selects the node under the cursor; the sky selects no
   const body = JSON.parse(pick.body);
   assert.ok(Math.abs(body.x - 0.5) < 0.01 && Math.abs(body.y - 0.5) < 0.01, pick.body);
   assert.equal(await page.evaluate(() => window.probecast.camera.version), camBefore, 'a click does not orbit');
-  await showPanel('panel-nodes');
+  await showPanel(page, 'panel-nodes');
   assert.equal(await page.locator(`#node-tree .node-row[data-id="${BOX}"]`).getAttribute('aria-selected'), 'true');
   assert.match(await page.locator('#node-title').textContent(), /box/);
   assert.equal(await page.locator('#node-edit').isHidden(), false);
@@ -221,13 +208,13 @@ test('clicking the picture selects the node under the cursor; the sky selects no
     p.camera.setFromServer(await p.api.get('/v1/camera'));
     p.controls.onChange();
   });
-  await showPanel('panel-nodes');
+  await showPanel(page, 'panel-nodes');
   await page.locator(`#node-tree .node-row[data-id="${BOX}"]`).click();
   await page.waitForFunction((id) => window.probecast.sceneTree.selected === id, BOX, { timeout: 5000 });
 });
 
 test('editing a translation field sends PATCH and the node moves', { timeout: 30000 }, async () => {
-  await showPanel('panel-nodes');
+  await showPanel(page, 'panel-nodes');
   const x = page.locator('#node-t input').first();
   await x.fill('0.3');
   await until(async () => (await node(BOX)).translation[0] === 0.3, 'GET /v1/scene to show the box at x = 0.3', 10000);
@@ -258,7 +245,7 @@ test('dragging the gizmo\'s x arrow moves the box along x', { timeout: 30000 }, 
     return t[0] > before[0] + 0.05 && Math.abs(t[1] - before[1]) < 1e-6 && Math.abs(t[2] - before[2]) < 1e-6;
   }, 'the box to move along x only', 10000);
   assert.equal(await page.evaluate(() => window.probecast.camera.version), camBefore, 'the camera did not orbit');
-  await shot('scene-gizmo-move.png');
+  await shot(page, 'scene-gizmo-move.png');
 });
 
 test('dragging a ring of the rotate gizmo turns the box', { timeout: 30000 }, async () => {
@@ -283,7 +270,7 @@ test('the light is drawn as an icon and dragging it moves the light', { timeout:
   await until(async () => (await http('GET', '/v1/lights')).json.lights[0].position[0] < l0.position[0] - 0.1,
     'the light to move left', 10000);
   await until(() => posts.some((p) => p.method === 'PATCH' && p.path === `/v1/lights/${l0.id}`), 'PATCH /v1/lights/{id} sent', 5000);
-  await shot('scene-light-drag.png');
+  await shot(page, 'scene-light-drag.png');
 });
 
 test('a folder holding the .gltf, its .bin and a sub-folder with the image uploads as one .glb', { timeout: 60000 }, async () => {
@@ -321,7 +308,7 @@ test('phone: the Nodes tab opens the tree in the bottom sheet with 44 px rows an
     const small = await p.evaluate(() => [...document.querySelectorAll('#node-tree .node-row, #gizmo-modes button, #node-edit input')]
       .map((e) => e.getBoundingClientRect()).filter((r) => r.width > 0 && r.height < 44).length);
     assert.equal(small, 0, 'every row, button and field is at least 44 px high');
-    await p.screenshot({ path: path.join(OUT, 'scene-phone.png') });
+    await shot(p, 'scene-phone.png');
   } finally {
     await ctx.close();
   }
