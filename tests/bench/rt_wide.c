@@ -55,9 +55,9 @@ rd_vk_result rtb_wide_gpu_create(rd_vk *vk, rtb_wide_gpu *w, const rd_gpu_scene 
         w->depth = wide.depth;
         w->node_bytes = (uint64_t)wide.node_count * sizeof(rtb_wide_node);
         w->binary_node_bytes = (nb + nt) * sizeof(pc_bvh_node);
-        if (rtb_wide_stack_need(wide.depth) > RTB_WIDE_STACK) {
+        if (rtb_wide_stack_need(RTB_WIDE, wide.depth) > RTB_WIDE_STACK) {
             snprintf(err, errlen, "wide BVH of %u levels needs %u stack entries (have %u)",
-                     wide.depth, rtb_wide_stack_need(wide.depth), RTB_WIDE_STACK);
+                     wide.depth, rtb_wide_stack_need(RTB_WIDE, wide.depth), RTB_WIDE_STACK);
             r = RD_VK_ERR_UNSUPPORTED;
         }
     }
