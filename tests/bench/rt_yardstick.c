@@ -74,8 +74,9 @@ static double now_s(void)
 static void usage(void)
 {
     printf("usage: probecast_rtbench SCENE [OPTIONS]\n\n"
-           "Traces the same rays through our BVH (shaders/trace.glsl) and the driver's\n"
-           "VK_KHR ray tracer; prints times, Grays/s and their ratio.\n"
+           "Traces the same rays through our BVH (shaders/trace.glsl), the driver's\n"
+           "VK_KHR ray tracer and our BVHs collapsed to 4-wide (wide) and compressed\n"
+           "8-wide (cwide) nodes; prints times, Grays/s and ratios to ours.\n"
            "SCENE: a .gltf/.glb file or builtin:NAME[:ARG] (builtin:spheres:N,\n"
            "builtin:interior:M, ...), loaded as probecast render loads it.\n\n"
            "  --size WxH        primary rays of the scene's default camera (default 1920x1080)\n"
