@@ -7,9 +7,10 @@
  * by the direction's sign on the packed bytes before decoding (the paper's sec. 3.2 swaps them
  * per ray octant the same way); each plane decoded as p + q * scale, the very float box the C
  * side made conservative, then tested with trace_box's arithmetic, four children per vector;
- * the hit children ordered by distance with an eight-input sorting network (19 comparators,
- * Knuth, TAOCP vol. 3, sec. 5.3.4) rather than the paper's octant order, and pushed one stack
- * entry each (the paper pushes one node group with a hit mask).
+ * the hit children ordered by distance with an eight-input sorting network (19 min/max
+ * comparators, Knuth, TAOCP vol. 3, sec. 5.3.4) over keys that carry the child's slot in their
+ * low bits, rather than the paper's octant order, and pushed one stack entry each (the paper
+ * pushes one node group with a hit mask).
  * push: as rtb_wide_trace.glsl says, buf2 = rtb_cwide_refs. */
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
@@ -30,10 +31,14 @@ vec4 cwide_bytes(uint w)
     return vec4((uvec4(w) >> uvec4(0u, 8u, 16u, 24u)) & 0xffu);
 }
 
-/* Entry distances of four children (INF where missed) whose near and far plane bytes per axis
- * are the words qn and qf, meta their meta bytes (0: an unused slot, never hit). */
-vec4 cwide_boxes4(uvec3 qn, uvec3 qf, uint meta, vec3 p, vec3 s, vec3 o, vec3 inv, float tmin,
-                  float t_cull, out bvec4 hit)
+/* Sort keys of four children whose near and far plane bytes per axis are the words qn and qf,
+ * meta their meta bytes (0: an unused slot, never hit), slot the first one's slot: the bits of
+ * a hit's entry distance, sign cleared (-0.0 is the only negative one when tmin >= 0, as
+ * rtb_rays.comp writes it), with its slot in the three low mantissa bits (after Ylitie et al.,
+ * sec. 3.3); a miss's the largest finite float with its slot. As uints they order as the
+ * distances do, and integer min/max cannot flush the denormals that keys near 0 are. */
+uvec4 cwide_keys4(uvec3 qn, uvec3 qf, uint meta, uint slot, vec3 p, vec3 s, vec3 o, vec3 inv,
+                 float tmin, float t_cull, out bvec4 hit)
 {
     vec4 t0x = (cwide_bytes(qn.x) * s.x + p.x - o.x) * inv.x;
     vec4 t1x = (cwide_bytes(qf.x) * s.x + p.x - o.x) * inv.x;
@@ -43,19 +48,31 @@ vec4 cwide_boxes4(uvec3 qn, uvec3 qf, uint meta, vec3 p, vec3 s, vec3 o, vec3 in
     vec4 t1z = (cwide_bytes(qf.z) * s.z + p.z - o.z) * inv.z;
     vec4 tnear = max(max(t0x, t0y), max(t0z, vec4(tmin)));
     vec4 tfar = min(min(min(t1x, t1y), t1z) * TRACE_TFAR_SCALE, vec4(t_cull));
-    uvec4 used = uvec4(notEqual(cwide_bytes(meta), vec4(0.0)));
+    uvec4 used = uvec4(notEqual((uvec4(meta) >> uvec4(0u, 8u, 16u, 24u)) & 0xffu, uvec4(0u)));
     hit = bvec4(uvec4(lessThanEqual(tnear, tfar)) & used);
-    return mix(vec4(WIDE_INF), tnear, hit);
+    uvec4 bits = mix(uvec4(0x7f7ffff8u), floatBitsToUint(tnear) & 0x7ffffff8u, hit);
+    return bits | (uvec4(slot) + uvec4(0u, 1u, 2u, 3u));
 }
 
-/* Stack entries of four children from their meta bytes: (child_base + r, 0) for an interior
- * child, (leaf_base + r, count) for a leaf (rtb_cwide_types.h). */
-void cwide_entries(uint meta, uint child_base, uint leaf_base, out uvec4 x, out uvec4 y)
+/* One comparator of the sorting network: a gets the smaller key. */
+void cwide_order(inout uint a, inout uint b)
 {
-    uvec4 m = (uvec4(meta) >> uvec4(0u, 8u, 16u, 24u)) & 0xffu;
-    bvec4 inner = greaterThanEqual(m, uvec4(RTB_CWIDE_INTERIOR));
-    x = mix(uvec4(leaf_base), uvec4(child_base), inner) + (m & 7u);
-    y = mix(m >> 3u, uvec4(0u), inner);
+    uint lo = min(a, b);
+    b = max(a, b);
+    a = lo;
+}
+
+/* Pushes the child whose sort key is k: its stack entry from its meta byte ((child_base + r, 0)
+ * for an interior child, (leaf_base + r, count) for a leaf; rtb_cwide_types.h) and as entry
+ * distance the key with the slot bits cleared, which is no farther than the child's box when
+ * tmin >= 0, so culling stays conservative. */
+void cwide_push(rtb_cwide_node n, uint k)
+{
+    uint slot = k & 7u;
+    uint m = ((slot < 4u ? n.refs.z : n.refs.w) >> (8u * (slot & 3u))) & 0xffu;
+    bool inner = m >= RTB_CWIDE_INTERIOR;
+    wide_push(uvec2((inner ? n.refs.x : n.refs.y) + (m & 7u), inner ? 0u : m >> 3u),
+              uintBitsToFloat(k & ~7u));
 }
 
 /* Tests eight quantised boxes and pushes the hits far to near. */
@@ -70,46 +87,40 @@ void wide_visit(rtb_cwide_refs w, uint node, vec3 o, vec3 inv, bvec3 neg, float 
     uvec4 qy = neg.y ? n.q_y.zwxy : n.q_y;
     uvec4 qz = neg.z ? n.q_z.zwxy : n.q_z;
     bvec4 ha, hb;
-    vec4 ka = cwide_boxes4(uvec3(qx.x, qy.x, qz.x), uvec3(qx.z, qy.z, qz.z), n.refs.z, p, s, o,
-                           inv, tmin, t_cull, ha);
-    vec4 kb = cwide_boxes4(uvec3(qx.y, qy.y, qz.y), uvec3(qx.w, qy.w, qz.w), n.refs.w, p, s, o,
-                           inv, tmin, t_cull, hb);
-    uvec4 xa, ya, xb, yb;
-    cwide_entries(n.refs.z, n.refs.x, n.refs.y, xa, ya);
-    cwide_entries(n.refs.w, n.refs.x, n.refs.y, xb, yb);
-    float t0 = ka.x, t1 = ka.y, t2 = ka.z, t3 = ka.w, t4 = kb.x, t5 = kb.y, t6 = kb.z, t7 = kb.w;
-    uvec2 e0 = uvec2(xa.x, ya.x), e1 = uvec2(xa.y, ya.y), e2 = uvec2(xa.z, ya.z);
-    uvec2 e3 = uvec2(xa.w, ya.w), e4 = uvec2(xb.x, yb.x), e5 = uvec2(xb.y, yb.y);
-    uvec2 e6 = uvec2(xb.z, yb.z), e7 = uvec2(xb.w, yb.w);
-    wide_order(t0, e0, t2, e2);
-    wide_order(t1, e1, t3, e3);
-    wide_order(t4, e4, t6, e6);
-    wide_order(t5, e5, t7, e7);
-    wide_order(t0, e0, t4, e4);
-    wide_order(t1, e1, t5, e5);
-    wide_order(t2, e2, t6, e6);
-    wide_order(t3, e3, t7, e7);
-    wide_order(t0, e0, t1, e1);
-    wide_order(t2, e2, t3, e3);
-    wide_order(t4, e4, t5, e5);
-    wide_order(t6, e6, t7, e7);
-    wide_order(t2, e2, t4, e4);
-    wide_order(t3, e3, t5, e5);
-    wide_order(t1, e1, t4, e4);
-    wide_order(t3, e3, t6, e6);
-    wide_order(t1, e1, t2, e2);
-    wide_order(t3, e3, t4, e4);
-    wide_order(t5, e5, t6, e6);
+    uvec4 ka = cwide_keys4(uvec3(qx.x, qy.x, qz.x), uvec3(qx.z, qy.z, qz.z), n.refs.z, 0u, p, s, o,
+                          inv, tmin, t_cull, ha);
+    uvec4 kb = cwide_keys4(uvec3(qx.y, qy.y, qz.y), uvec3(qx.w, qy.w, qz.w), n.refs.w, 4u, p, s, o,
+                          inv, tmin, t_cull, hb);
+    uint k0 = ka.x, k1 = ka.y, k2 = ka.z, k3 = ka.w, k4 = kb.x, k5 = kb.y, k6 = kb.z, k7 = kb.w;
+    cwide_order(k0, k2);
+    cwide_order(k1, k3);
+    cwide_order(k4, k6);
+    cwide_order(k5, k7);
+    cwide_order(k0, k4);
+    cwide_order(k1, k5);
+    cwide_order(k2, k6);
+    cwide_order(k3, k7);
+    cwide_order(k0, k1);
+    cwide_order(k2, k3);
+    cwide_order(k4, k5);
+    cwide_order(k6, k7);
+    cwide_order(k2, k4);
+    cwide_order(k3, k5);
+    cwide_order(k1, k4);
+    cwide_order(k3, k6);
+    cwide_order(k1, k2);
+    cwide_order(k3, k4);
+    cwide_order(k5, k6);
     uvec4 hc = uvec4(ha) + uvec4(hb);
     uint hits = hc.x + hc.y + hc.z + hc.w;
-    if (hits > 7u) wide_push(e7, t7);
-    if (hits > 6u) wide_push(e6, t6);
-    if (hits > 5u) wide_push(e5, t5);
-    if (hits > 4u) wide_push(e4, t4);
-    if (hits > 3u) wide_push(e3, t3);
-    if (hits > 2u) wide_push(e2, t2);
-    if (hits > 1u) wide_push(e1, t1);
-    if (hits > 0u) wide_push(e0, t0);
+    if (hits > 7u) cwide_push(n, k7);
+    if (hits > 6u) cwide_push(n, k6);
+    if (hits > 5u) cwide_push(n, k5);
+    if (hits > 4u) cwide_push(n, k4);
+    if (hits > 3u) cwide_push(n, k3);
+    if (hits > 2u) cwide_push(n, k2);
+    if (hits > 1u) cwide_push(n, k1);
+    if (hits > 0u) cwide_push(n, k0);
 }
 
 uint wide_leaf_first(rtb_cwide_refs w, uint x)
