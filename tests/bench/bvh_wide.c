@@ -7,7 +7,7 @@
 
 #include "renderer/bvh.h"
 
-static bool box_empty(const pc_bvh_node *n)
+bool rtb_bvh_box_empty(const pc_bvh_node *n)
 {
     return !(n->bmin.x <= n->bmax.x && n->bmin.y <= n->bmax.y && n->bmin.z <= n->bmax.z);
 }
@@ -59,7 +59,7 @@ static void emit(rtb_wide *w, const pc_bvh_node *bin, uint32_t at, const uint32_
     if (level > w->depth) w->depth = level;
     for (int k = 0; k < n; k++) {
         const pc_bvh_node *c = &bin[slots[k]];
-        if (box_empty(c)) continue; /* never hit: an unused slot */
+        if (rtb_bvh_box_empty(c)) continue; /* never hit: an unused slot */
         uint32_t first = rd_bvh_node_first(c), count = rd_bvh_node_count(c);
         uint32_t child = first;
         if (count == 0) child = collapse_at(w, bin, slots[k], level + 1);
@@ -72,34 +72,40 @@ static void emit(rtb_wide *w, const pc_bvh_node *bin, uint32_t at, const uint32_
     }
 }
 
+int rtb_bvh_open(const pc_bvh_node *bin, uint32_t b, int width, uint32_t *slots)
+{
+    int n = 0;
+    if (rtb_bvh_box_empty(&bin[b])) return 0; /* an empty mesh: every slot unused */
+    if (rd_bvh_node_count(&bin[b]) != 0) {
+        slots[n++] = b; /* a leaf root: one leaf slot */
+        return n;
+    }
+    uint32_t first = rd_bvh_node_first(&bin[b]);
+    slots[n++] = first;
+    slots[n++] = first + 1;
+    while (n < width) { /* open the interior child of largest area */
+        int best = -1;
+        double best_area = -1;
+        for (int k = 0; k < n; k++) {
+            const pc_bvh_node *c = &bin[slots[k]];
+            if (rd_bvh_node_count(c) != 0 || rtb_bvh_box_empty(c)) continue;
+            double a = area(c);
+            if (a > best_area) best = k, best_area = a;
+        }
+        if (best < 0) break;
+        uint32_t c = rd_bvh_node_first(&bin[slots[best]]);
+        slots[best] = c;
+        slots[n++] = c + 1;
+    }
+    return n;
+}
+
 /* The wide node of binary node b (interior, a leaf or empty) at wide depth level. */
 static uint32_t collapse_at(rtb_wide *w, const pc_bvh_node *bin, uint32_t b, uint32_t level)
 {
     uint32_t at = alloc_node(w);
     uint32_t slots[RTB_WIDE];
-    int n = 0;
-    if (box_empty(&bin[b])) return at; /* an empty mesh: every slot unused */
-    if (rd_bvh_node_count(&bin[b]) != 0) {
-        slots[n++] = b; /* a leaf root: one leaf slot */
-    } else {
-        uint32_t first = rd_bvh_node_first(&bin[b]);
-        slots[n++] = first;
-        slots[n++] = first + 1;
-        while (n < RTB_WIDE) { /* open the interior child of largest area */
-            int best = -1;
-            double best_area = -1;
-            for (int k = 0; k < n; k++) {
-                const pc_bvh_node *c = &bin[slots[k]];
-                if (rd_bvh_node_count(c) != 0 || box_empty(c)) continue;
-                double a = area(c);
-                if (a > best_area) best = k, best_area = a;
-            }
-            if (best < 0) break;
-            uint32_t c = rd_bvh_node_first(&bin[slots[best]]);
-            slots[best] = c;
-            slots[n++] = c + 1;
-        }
-    }
+    int n = rtb_bvh_open(bin, b, RTB_WIDE, slots);
     emit(w, bin, at, slots, n, level);
     return at;
 }
@@ -115,7 +121,7 @@ void rtb_wide_destroy(rtb_wide *w)
     *w = (rtb_wide){0};
 }
 
-uint32_t rtb_wide_stack_need(uint32_t depth)
+uint32_t rtb_wide_stack_need(uint32_t width, uint32_t depth)
 {
-    return 2 * ((RTB_WIDE - 1) * (depth + 1) + RTB_WIDE) + RD_BVH_MAX_LEAF;
+    return 2 * ((width - 1) * (depth + 1) + width) + RD_BVH_MAX_LEAF;
 }

@@ -30,10 +30,20 @@ typedef struct rtb_wide {
 uint32_t rtb_wide_collapse(rtb_wide *w, const pc_bvh_node *bin, uint32_t root);
 void rtb_wide_destroy(rtb_wide *w); /* idempotent */
 
-/* Stack entries rtb_trace_wide.comp can need when no tree is deeper than depth wide levels: a
- * node pops itself and pushes at most RTB_WIDE children, one of which is popped next, so each
- * level of the TLAS and of one BLAS leaves at most RTB_WIDE - 1 siblings pending below the
- * deepest node's RTB_WIDE children, plus a TLAS leaf's waiting instances. */
-uint32_t rtb_wide_stack_need(uint32_t depth);
+/* Stack entries a wide tracer of nodes with up to width children (rtb_trace_wide.comp: 4,
+ * rtb_trace_cwide.comp: 8) can need when no tree is deeper than depth wide levels: a node pops
+ * itself and pushes at most width children, one of which is popped next, so each level of the
+ * TLAS and of one BLAS leaves at most width - 1 siblings pending below the deepest node's width
+ * children, plus a TLAS leaf's waiting instances. */
+uint32_t rtb_wide_stack_need(uint32_t width, uint32_t depth);
+
+/* The greedy choice both collapses share (rtb_wide_collapse, rtb_cwide_collapse): the binary
+ * nodes that become the children of the wide node of binary node bin[b], at most width (>= 2)
+ * of them, written to slots; returns their count. 0 for a node with an empty box, 1 (b itself)
+ * for a leaf, else b's children with the interior child of largest surface area opened until
+ * there are width or only leaves are left. Slots may include children with empty boxes, which
+ * the caller leaves unused (rtb_bvh_box_empty). */
+int rtb_bvh_open(const pc_bvh_node *bin, uint32_t b, int width, uint32_t *slots);
+bool rtb_bvh_box_empty(const pc_bvh_node *n);
 
 #endif

@@ -14,10 +14,13 @@
  * T_TOL relative; more than MISMATCH_MAX disagreeing is an error (exit status 1).
  * Without VK_KHR ray tracing (lavapipe) it says "unsupported: <reason>", still measures ours,
  * and exits 0.
- * Wide: the same BVHs collapsed to 4-wide nodes on the CPU (bvh_wide.c, rt_wide.c) and traced
- * by tests/bench/shaders/rtb_trace_wide.comp over the same triangles and instances: a
- * measurement of whether wider nodes would pay in the product (ratio wide/ours > 1). Its hits
- * are compared with ours the same way, on every device; the node memory of both is printed. */
+ * Wide and cwide: the same BVHs collapsed on the CPU (rt_wide.c) to 4-wide nodes (bvh_wide.c,
+ * traced by tests/bench/shaders/rtb_trace_wide.comp) and to compressed 8-wide nodes after
+ * Ylitie, Karras, Laine, HPG 2017 (bvh_cwide.c, 80-byte nodes with 8-bit child boxes, traced by
+ * rtb_trace_cwide.comp), over the same triangles and instances: measurements of whether wider
+ * or compressed nodes would pay in the product (ratios wide/ours and cwide/ours > 1). Their
+ * hits are compared with ours the same way, on every device; the node memory of all three is
+ * printed. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -28,10 +31,12 @@
 #include "renderer/world.h"
 #include "rt_driver.h"
 #include "rt_wide.h"
+#include "rtb_cwide_types.h"
 #include "server/cli.h"
 /* after stdint.h: the generated headers declare uint32_t arrays */
 #include "bench/rtb_rays_comp.spv.h"
 #include "bench/rtb_trace_comp.spv.h"
+#include "bench/rtb_trace_cwide_comp.spv.h"
 #include "bench/rtb_trace_wide_comp.spv.h"
 
 #define REPEATS 9          /* timed traces per ray set (median reported) */
@@ -51,8 +56,8 @@ typedef struct options {
 
 typedef struct bench {
     rd_vk *vk;
-    rd_pipeline gen, trace, trace_wide;
-    rd_buffer globals, rays, hits_ours, hits_driver, hits_wide;
+    rd_pipeline gen, trace, trace_wide, trace_cwide;
+    rd_buffer globals, rays, hits_ours, hits_driver, hits_wide, hits_cwide;
     rd_timer timer;
     rtb_driver *driver; /* NULL when unsupported */
     rtb_wide_gpu *wide;
@@ -69,8 +74,9 @@ static double now_s(void)
 static void usage(void)
 {
     printf("usage: probecast_rtbench SCENE [OPTIONS]\n\n"
-           "Traces the same rays through our BVH (shaders/trace.glsl) and the driver's\n"
-           "VK_KHR ray tracer; prints times, Grays/s and their ratio.\n"
+           "Traces the same rays through our BVH (shaders/trace.glsl), the driver's\n"
+           "VK_KHR ray tracer and our BVHs collapsed to 4-wide (wide) and compressed\n"
+           "8-wide (cwide) nodes; prints times, Grays/s and ratios to ours.\n"
            "SCENE: a .gltf/.glb file or builtin:NAME[:ARG] (builtin:spheres:N,\n"
            "builtin:interior:M, ...), loaded as probecast render loads it.\n\n"
            "  --size WxH        primary rays of the scene's default camera (default 1920x1080)\n"
@@ -155,22 +161,27 @@ static void grid(uint32_t n, uint32_t *gx, uint32_t *gy)
     *gy = *gx ? (groups + *gx - 1) / *gx : 0;
 }
 
-typedef enum tracer { TRACER_OURS, TRACER_DRIVER, TRACER_WIDE } tracer;
+typedef enum tracer { TRACER_OURS, TRACER_DRIVER, TRACER_WIDE, TRACER_CWIDE } tracer;
 
 static void record(bench *b, rd_cmd *c, tracer which, uint32_t n)
 {
     if (which == TRACER_DRIVER) {
         rtb_driver_record_trace(b->driver, c, b->rays.address, b->hits_driver.address, n);
     } else {
-        bool wide = which == TRACER_WIDE;
+        const rd_pipeline *p = &b->trace;
+        uint64_t hits = b->hits_ours.address, refs = 0;
+        if (which == TRACER_WIDE)
+            p = &b->trace_wide, hits = b->hits_wide.address, refs = b->wide->refs.address;
+        if (which == TRACER_CWIDE)
+            p = &b->trace_cwide, hits = b->hits_cwide.address, refs = b->wide->cwide.refs.address;
         uint32_t gx, gy;
         grid(n, &gx, &gy);
         pc_push push = {.globals = b->globals.address,
                         .buf0 = b->rays.address,
-                        .buf1 = wide ? b->hits_wide.address : b->hits_ours.address,
-                        .buf2 = wide ? b->wide->refs.address : 0,
+                        .buf1 = hits,
+                        .buf2 = refs,
                         .params = {n, 0, gx * PC_WG_1D, 0}};
-        rd_cmd_dispatch(c, wide ? &b->trace_wide : &b->trace, &push, gx, gy, 1);
+        rd_cmd_dispatch(c, p, &push, gx, gy, 1);
     }
     rtb_barrier_all(c);
 }
@@ -235,6 +246,7 @@ typedef struct row {
     uint32_t rays;
     double ours_ms, driver_ms, agree, hit_frac;
     double wide_ms, wide_agree; /* wide_agree: fraction of rays where wide matches ours */
+    double cwide_ms, cwide_agree;
 } row;
 
 /* Fraction of n rays whose hits agree: both miss, or both hit within T_TOL relative. */
@@ -248,7 +260,7 @@ static double agreement(const float *a, const float *d, uint32_t n)
     return n ? (double)same / n : 1;
 }
 
-/* Traces the ray buffer with every tracer and compares the driver's and wide's hits with ours. */
+/* Traces the ray buffer with every tracer and compares the others' hits with ours. */
 static rd_vk_result run_set(bench *b, uint32_t n, row *out, char *err, size_t errlen)
 {
     out->rays = n;
@@ -256,6 +268,7 @@ static rd_vk_result run_set(bench *b, uint32_t n, row *out, char *err, size_t er
     if (res == RD_VK_OK && b->driver)
         res = time_trace(b, TRACER_DRIVER, n, &out->driver_ms, err, errlen);
     if (res == RD_VK_OK) res = time_trace(b, TRACER_WIDE, n, &out->wide_ms, err, errlen);
+    if (res == RD_VK_OK) res = time_trace(b, TRACER_CWIDE, n, &out->cwide_ms, err, errlen);
     if (res != RD_VK_OK) return res;
     float *a = malloc((size_t)n * sizeof(float)), *d = malloc((size_t)n * sizeof(float));
     if (!a || !d) abort();
@@ -272,6 +285,10 @@ static rd_vk_result run_set(bench *b, uint32_t n, row *out, char *err, size_t er
         res = rd_buffer_download(b->vk, &b->hits_wide, 0, d, (VkDeviceSize)n * 4, err, errlen);
         if (res == RD_VK_OK) out->wide_agree = agreement(a, d, n);
     }
+    if (res == RD_VK_OK) {
+        res = rd_buffer_download(b->vk, &b->hits_cwide, 0, d, (VkDeviceSize)n * 4, err, errlen);
+        if (res == RD_VK_OK) out->cwide_agree = agreement(a, d, n);
+    }
     free(a);
     free(d);
     return res;
@@ -282,25 +299,29 @@ static double grays(uint32_t rays, double ms)
     return ms > 0 ? rays / (ms * 1e6) : 0;
 }
 
-/* wide / ours speed: above 1, the 4-wide nodes trace faster (0 without timestamps). */
-static double wide_ratio(const row *r)
+/* Speed of a tracer that took ms against ours: above 1 it traces faster (0 without
+ * timestamps). wide/ours for the 4-wide nodes, cwide/ours for the compressed 8-wide nodes. */
+static double speedup(const row *r, double ms)
 {
-    return r->wide_ms > 0 ? r->ours_ms / r->wide_ms : 0;
+    return ms > 0 ? r->ours_ms / ms : 0;
 }
 
 static void print_row(FILE *f, bool csv, const char *scene, uint64_t tris, const row *r,
                       const rtb_driver *driver, const rtb_wide_gpu *wide)
 {
     double og = grays(r->rays, r->ours_ms), wg = grays(r->rays, r->wide_ms);
+    double cg = grays(r->rays, r->cwide_ms);
     double dg = driver ? grays(r->rays, r->driver_ms) : 0;
     if (csv) {
-        fprintf(
-            f,
-            "%s,%llu,%s,%u,%.4f,%.4f,%.4f,%.4f,%.4f,%.6f,%.4f,%u,%.4f,%.4f,%.4f,%.6f,%llu,%llu\n",
-            scene, (unsigned long long)tris, r->set, r->rays, r->ours_ms, driver ? r->driver_ms : 0,
-            og, dg, dg > 0 ? og / dg : 0, driver ? r->agree : 0, r->hit_frac,
-            driver ? driver->launch_width : 0, r->wide_ms, wg, wide_ratio(r), r->wide_agree,
-            (unsigned long long)wide->binary_node_bytes, (unsigned long long)wide->node_bytes);
+        fprintf(f,
+                "%s,%llu,%s,%u,%.4f,%.4f,%.4f,%.4f,%.4f,%.6f,%.4f,%u,%.4f,%.4f,%.4f,%.6f,%llu,%llu,"
+                "%.4f,%.4f,%.4f,%.6f,%llu\n",
+                scene, (unsigned long long)tris, r->set, r->rays, r->ours_ms,
+                driver ? r->driver_ms : 0, og, dg, dg > 0 ? og / dg : 0, driver ? r->agree : 0,
+                r->hit_frac, driver ? driver->launch_width : 0, r->wide_ms, wg,
+                speedup(r, r->wide_ms), r->wide_agree, (unsigned long long)wide->binary_node_bytes,
+                (unsigned long long)wide->node_bytes, r->cwide_ms, cg, speedup(r, r->cwide_ms),
+                r->cwide_agree, (unsigned long long)wide->cwide.node_bytes);
         return;
     }
     if (driver)
@@ -311,13 +332,16 @@ static void print_row(FILE *f, bool csv, const char *scene, uint64_t tris, const
         fprintf(f, "%-24s %10llu  %-22s %9u %9.3f %9s %8.3f %8s %7s %9s %5.1f%%", scene,
                 (unsigned long long)tris, r->set, r->rays, r->ours_ms, "-", og, "-", "-", "-",
                 100 * r->hit_frac);
-    fprintf(f, "  %9.3f %8.3f %7.3f %8.4f%%\n", r->wide_ms, wg, wide_ratio(r), 100 * r->wide_agree);
+    fprintf(f, "  %9.3f %8.3f %7.3f %8.4f%%  %9.3f %8.3f %7.3f %8.4f%%\n", r->wide_ms, wg,
+            speedup(r, r->wide_ms), 100 * r->wide_agree, r->cwide_ms, cg, speedup(r, r->cwide_ms),
+            100 * r->cwide_agree);
 }
 
 static const char *CSV_HEADER = "scene,triangles,ray_set,rays,ours_ms,driver_ms,ours_grays,"
                                 "driver_grays,ratio,agree,hit_fraction,driver_launch_width,"
                                 "wide_ms,wide_grays,wide_ratio,wide_agree,ours_node_bytes,"
-                                "wide_node_bytes\n";
+                                "wide_node_bytes,cwide_ms,cwide_grays,cwide_ratio,cwide_agree,"
+                                "cwide_node_bytes\n";
 
 /* Creates the device with VK_KHR ray tracing when it has it; *driver says which. */
 static rd_vk_result create_device(rd_vk *vk, const options *o, bool *driver, char *err,
@@ -389,6 +413,14 @@ int main(int argc, char **argv)
                    (double)wide.binary_node_bytes / (1024.0 * 1024.0),
                    (double)wide.node_bytes / (1024.0 * 1024.0),
                    wide.binary_node_bytes ? (double)wide.node_bytes / wide.binary_node_bytes : 0);
+        if (res == RD_VK_OK)
+            printf("cwide: compressed 8-wide collapse %.1f ms (CPU), %u nodes of %zu bytes, %u "
+                   "leaf entries of 4 bytes, %u levels; node memory %.2f MiB (%.2fx ours)\n",
+                   wide.cwide.collapse_ms, wide.cwide.node_count, sizeof(rtb_cwide_node),
+                   wide.cwide.leaf_count, wide.cwide.depth,
+                   (double)wide.cwide.node_bytes / (1024.0 * 1024.0),
+                   wide.binary_node_bytes ? (double)wide.cwide.node_bytes / wide.binary_node_bytes
+                                          : 0);
     }
     if (res == RD_VK_OK)
         res = rd_pipeline_create(&vk, &b.gen, "rtb_rays", pc_spv_rtb_rays_comp,
@@ -400,6 +432,10 @@ int main(int argc, char **argv)
         res =
             rd_pipeline_create(&vk, &b.trace_wide, "rtb_trace_wide", pc_spv_rtb_trace_wide_comp,
                                sizeof pc_spv_rtb_trace_wide_comp, sizeof(pc_push), err, sizeof err);
+    if (res == RD_VK_OK)
+        res = rd_pipeline_create(&vk, &b.trace_cwide, "rtb_trace_cwide",
+                                 pc_spv_rtb_trace_cwide_comp, sizeof pc_spv_rtb_trace_cwide_comp,
+                                 sizeof(pc_push), err, sizeof err);
     if (res == RD_VK_OK) res = rd_timer_create(&vk, &b.timer, err, sizeof err);
     if (res == RD_VK_OK)
         res = rd_buffer_create(&vk, &b.globals, sizeof(pc_globals), RD_MEMORY_UPLOAD, err,
@@ -413,6 +449,8 @@ int main(int argc, char **argv)
             rd_buffer_create(&vk, &b.hits_driver, max_rays * 4, RD_MEMORY_DEVICE, err, sizeof err);
     if (res == RD_VK_OK)
         res = rd_buffer_create(&vk, &b.hits_wide, max_rays * 4, RD_MEMORY_DEVICE, err, sizeof err);
+    if (res == RD_VK_OK)
+        res = rd_buffer_create(&vk, &b.hits_cwide, max_rays * 4, RD_MEMORY_DEVICE, err, sizeof err);
     if (res == RD_VK_OK) res = rd_world_create(&vk, &world, err, sizeof err);
     if (res == RD_VK_OK) rd_world_set_scene(&world, &gs);
 
@@ -455,25 +493,37 @@ int main(int argc, char **argv)
     }
 
     if (res == RD_VK_OK) {
-        printf("\n%-24s %10s  %-22s %9s %9s %9s %8s %8s %7s %9s %6s  %9s %8s %7s %9s\n", "scene",
-               "triangles", "ray set", "rays", "ours ms", "driver ms", "ours", "driver", "ratio",
-               "agree", "hit", "wide ms", "wide", "wide/", "wide");
-        printf("%-24s %10s  %-22s %9s %9s %9s %8s %8s %7s %9s %6s  %9s %8s %7s %9s\n", "", "", "",
-               "", "", "", "Grays/s", "Grays/s", "", "", "", "", "Grays/s", "ours", "agree");
+        printf("\n%-24s %10s  %-22s %9s %9s %9s %8s %8s %7s %9s %6s  %9s %8s %7s %9s  %9s %8s "
+               "%7s %9s\n",
+               "scene", "triangles", "ray set", "rays", "ours ms", "driver ms", "ours", "driver",
+               "ratio", "agree", "hit", "wide ms", "wide", "wide/", "wide", "cwide ms", "cwide",
+               "cwide/", "cwide");
+        printf("%-24s %10s  %-22s %9s %9s %9s %8s %8s %7s %9s %6s  %9s %8s %7s %9s  %9s %8s %7s "
+               "%9s\n",
+               "", "", "", "", "", "", "Grays/s", "Grays/s", "", "", "", "", "Grays/s", "ours",
+               "agree", "", "Grays/s", "ours", "agree");
         for (unsigned i = 0; i < nrows; i++)
             print_row(stdout, false, o.scene, scene.tri_total, &rows[i], b.driver, &wide);
-        printf("\nnode bytes: ours %llu, wide %llu\n", (unsigned long long)wide.binary_node_bytes,
-               (unsigned long long)wide.node_bytes);
-        for (unsigned i = 0; i < nrows; i++)
-            printf("wide pays on %s: %s (wide/ours %.3f)\n", rows[i].set,
-                   wide_ratio(&rows[i]) > 1 ? "yes" : "no", wide_ratio(&rows[i]));
+        printf("\nnode bytes: ours %llu, wide %llu, cwide %llu\n",
+               (unsigned long long)wide.binary_node_bytes, (unsigned long long)wide.node_bytes,
+               (unsigned long long)wide.cwide.node_bytes);
         for (unsigned i = 0; i < nrows; i++) {
-            if (1 - rows[i].wide_agree > MISMATCH_MAX) {
-                fprintf(stderr,
-                        "probecast_rtbench: error: %s: %.4f%% of wide hits disagree with ours "
-                        "(over %.2f%%)\n",
-                        rows[i].set, 100 * (1 - rows[i].wide_agree), 100 * MISMATCH_MAX);
-                status = 1;
+            double w = speedup(&rows[i], rows[i].wide_ms), c = speedup(&rows[i], rows[i].cwide_ms);
+            printf("wide pays on %s: %s (wide/ours %.3f)\n", rows[i].set, w > 1 ? "yes" : "no", w);
+            printf("cwide pays on %s: %s (cwide/ours %.3f)\n", rows[i].set, c > 1 ? "yes" : "no",
+                   c);
+        }
+        for (unsigned i = 0; i < nrows; i++) {
+            const char *name[2] = {"wide", "cwide"};
+            double agree[2] = {rows[i].wide_agree, rows[i].cwide_agree};
+            for (int k = 0; k < 2; k++) {
+                if (1 - agree[k] > MISMATCH_MAX) {
+                    fprintf(stderr,
+                            "probecast_rtbench: error: %s: %.4f%% of %s hits disagree with ours "
+                            "(over %.2f%%)\n",
+                            rows[i].set, 100 * (1 - agree[k]), name[k], 100 * MISMATCH_MAX);
+                    status = 1;
+                }
             }
         }
         for (unsigned i = 0; i < nrows && b.driver; i++) {
@@ -510,12 +560,14 @@ int main(int argc, char **argv)
         status = 1;
     }
     rd_world_destroy(&world);
+    rd_buffer_destroy(&vk, &b.hits_cwide);
     rd_buffer_destroy(&vk, &b.hits_wide);
     rd_buffer_destroy(&vk, &b.hits_driver);
     rd_buffer_destroy(&vk, &b.hits_ours);
     rd_buffer_destroy(&vk, &b.rays);
     rd_buffer_destroy(&vk, &b.globals);
     rd_timer_destroy(&vk, &b.timer);
+    rd_pipeline_destroy(&vk, &b.trace_cwide);
     rd_pipeline_destroy(&vk, &b.trace_wide);
     rd_pipeline_destroy(&vk, &b.trace);
     rd_pipeline_destroy(&vk, &b.gen);

@@ -13,7 +13,8 @@
 
 #define RTB_WIDE 4
 #define RTB_WIDE_EMPTY 0xffffffffu
-/* Traversal stack entries of rtb_trace_wide.comp; rtb_wide_stack_need must not exceed it. */
+/* Traversal stack entries of rtb_trace_wide.comp; rtb_wide_stack_need(RTB_WIDE, depth) must
+ * not exceed it. */
 #define RTB_WIDE_STACK 192
 
 PC_STRUCT(rtb_wide_node)

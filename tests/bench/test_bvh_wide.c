@@ -196,7 +196,7 @@ static void test_small_trees(void)
     rd_bvh_destroy(&bvh);
     rtb_wide_destroy(&w);
     free(pos);
-    CHECK(rtb_wide_stack_need(0) <= RTB_WIDE_STACK);
+    CHECK(rtb_wide_stack_need(RTB_WIDE, 0) <= RTB_WIDE_STACK);
 }
 
 int main(void)
