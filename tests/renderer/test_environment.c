@@ -57,9 +57,35 @@ static void put(buf *b, const void *p, size_t n)
     b->n += n;
 }
 
-/* A .hdr of w x h test texels; rle: new-style run-length scanlines (runs of equal bytes are
- * written as runs, others as literals). */
+/* Texels of many magnitudes and full mantissas, whose 2x2 sums round: a reduction that adds
+ * in another order than rd_env_image_limit gives other floats. */
+static uint32_t noise(uint32_t x, uint32_t y, uint32_t c)
+{
+    uint32_t h = x * 0x9e3779b1u ^ y * 0x85ebca77u ^ c * 0xc2b2ae3du;
+    h ^= h >> 15;
+    h *= 0x2c1b3c6du;
+    h ^= h >> 12;
+    return h;
+}
+
+static void noisy_texel(unsigned x, unsigned y, float c[3])
+{
+    for (uint32_t i = 0; i < 3; i++) {
+        uint32_t h = noise(x, y, i);
+        c[i] = ldexpf(1.0f + (float)(h & 0xffffff) / 16777216.0f, (int)(h >> 24) % 16 - 8);
+    }
+}
+
+/* A .hdr of w x h texels (texel() unless given); rle: new-style run-length scanlines (runs of
+ * equal bytes are written as runs, others as literals). */
+static buf make_hdr_of(unsigned w, unsigned h, bool rle, void (*tex)(unsigned, unsigned, float[3]));
+
 static buf make_hdr(unsigned w, unsigned h, bool rle)
+{
+    return make_hdr_of(w, h, rle, texel);
+}
+
+static buf make_hdr_of(unsigned w, unsigned h, bool rle, void (*tex)(unsigned, unsigned, float[3]))
 {
     buf b = {0};
     char head[128];
@@ -71,7 +97,7 @@ static buf make_hdr(unsigned w, unsigned h, bool rle)
     for (unsigned y = 0; y < h; y++) {
         for (unsigned x = 0; x < w; x++) {
             float c[3];
-            texel(x, y, c);
+            tex(x, y, c);
             to_rgbe(c, line + x * 4);
         }
         if (!rle) {
@@ -575,9 +601,9 @@ static void check_striped(const uint8_t *file, size_t n, uint32_t max_width, uin
 
 static void test_striped_reduction(void)
 {
-    /* .hdr, flat and run-length, reduced to 16: exact halvings, odd widths and heights (an odd
-     * last row or column of a level is dropped), taller than wide (halved for its height), too
-     * flat to halve twice, nothing to reduce */
+    /* .hdr of noisy texels, flat and run-length, reduced to 16: exact halvings, odd widths and
+     * heights (an odd last row or column of a level is dropped), taller than wide (halved for its
+     * height), too flat to halve twice, nothing to reduce */
     const struct {
         unsigned w, h, rw, rh;
     } hdr[] = {{64, 32, 16, 8}, {75, 37, 9, 4},  {37, 90, 4, 11}, {100, 3, 50, 1},
@@ -586,14 +612,19 @@ static void test_striped_reduction(void)
         for (int rle = 0; rle < 2; rle++) {
             char what[64];
             snprintf(what, sizeof what, "hdr %ux%u %s", hdr[i].w, hdr[i].h, rle ? "rle" : "flat");
-            buf b = make_hdr(hdr[i].w, hdr[i].h, rle && hdr[i].w >= 8);
+            buf b = make_hdr_of(hdr[i].w, hdr[i].h, rle && hdr[i].w >= 8, noisy_texel);
             check_striped(b.d, b.n, 16, hdr[i].rw, hdr[i].rh, what);
             free(b.d);
         }
 
     /* .exr: scanline chunks of 1, 16 and 32 lines and tiles (odd sizes, partial tiles), with
-     * display windows that crop the data window and leave black borders */
-    float *px = exr_pixels(75, 61, 3);
+     * display windows that crop the data window and leave black borders; FLOAT keeps the noisy
+     * texels' full mantissas */
+    float *px = malloc(75 * 61 * 3 * sizeof *px);
+    if (!px) abort();
+    for (unsigned y = 0; y < 61; y++)
+        for (unsigned x = 0; x < 75; x++)
+            noisy_texel(x, y, px + (y * 75 + x) * 3);
     const struct {
         const char *what;
         pc_exr_desc d;
