@@ -27,13 +27,15 @@
 #define RD_ENV_IMAGE_MAX_WIDTH 4096u
 /* The largest image side a file may declare (.hdr resolution line, .exr windows), and the most
  * its texels may take as three floats each at the declared size. Nothing that large is allocated
- * any more; the limit stays (with its old value and message, so that no file read before is
- * refused now) because it bounds the decoding work an upload can ask for: 179 million texels. */
+ * any more; the limit stays (with its old value and message, so that it refuses no file it did
+ * not refuse before) because it bounds the decoding work an upload can ask for: 179 million
+ * texels. */
 #define RD_ENV_MAX_DIM 32768u
 #define RD_ENV_MAX_BYTES ((uint64_t)2 << 30)
 /* The most one stripe may take decoded (three floats a texel): an .exr chunk's colour planes and
- * the full-width rows it covers (a block of scanlines, or a row of tiles). Scanline files up to
- * 16384 wide always fit (256-line chunks); only tiles far larger than usual are refused. */
+ * the full-width rows it covers (a block of scanlines, or a row of tiles). New with the striped
+ * reading: every scanline file up to 21845 wide fits (the longest chunks, DWAB's, have 256
+ * lines), so only unusually large tiles, or 256-line chunks wider than that, are refused. */
 #define RD_ENV_MAX_STRIPE_BYTES ((uint64_t)64 << 20)
 /* The most OpenEXRCore may unpack of one chunk (all its channels, before conversion). */
 #define RD_ENV_MAX_CHUNK_BYTES ((uint64_t)128 << 20)

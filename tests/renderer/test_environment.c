@@ -473,6 +473,16 @@ static void test_exr_reader(void)
         {"one pixel wide",
          "out of range",
          {.width = 1, .height = 2, .pixels = px, .type = EXR_PIXEL_HALF}},
+        /* a row of 256-high tiles across a 32768-wide display window: 96 MiB decoded */
+        {"a row of tiles over RD_ENV_MAX_STRIPE_BYTES",
+         "smaller tiles",
+         {.width = 2,
+          .height = 256,
+          .tile = 256,
+          .pixels = px,
+          .type = EXR_PIXEL_HALF,
+          .display_width = 32768,
+          .display_height = 256}},
     };
     for (size_t i = 0; i < sizeof refused / sizeof *refused; i++) {
         size_t n = 0;
