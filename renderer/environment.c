@@ -1,6 +1,7 @@
 /* environment.c: environment models, format detection, the Radiance .hdr reader and the SH9
  * irradiance (the OpenEXR reader is environment_exr.c). */
 #include "environment.h"
+#include "environment_reduce.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -32,13 +33,14 @@ const char *rd_env_format_extension(rd_env_format f)
     }
 }
 
-bool rd_env_image_parse(const uint8_t *d, size_t len, rd_env_image *out, char *err, size_t errlen)
+bool rd_env_image_parse(const uint8_t *d, size_t len, rd_env_read_desc *desc, rd_env_image *out,
+                        char *err, size_t errlen)
 {
     switch (rd_env_image_format(d, len)) {
     case RD_ENV_FORMAT_HDR:
-        return rd_env_image_parse_hdr(d, len, out, err, errlen);
+        return rd_env_image_parse_hdr(d, len, desc, out, err, errlen);
     case RD_ENV_FORMAT_EXR:
-        return rd_env_image_parse_exr(d, len, out, err, errlen);
+        return rd_env_image_parse_exr(d, len, desc, out, err, errlen);
     default:
         memset(out, 0, sizeof *out);
         snprintf(err, errlen,
@@ -119,10 +121,11 @@ static bool read_rle_line(const uint8_t *d, size_t len, size_t *pos, uint32_t wi
     return true;
 }
 
-bool rd_env_image_parse_hdr(const uint8_t *d, size_t len, rd_env_image *out, char *err,
-                            size_t errlen)
+bool rd_env_image_parse_hdr(const uint8_t *d, size_t len, rd_env_read_desc *desc, rd_env_image *out,
+                            char *err, size_t errlen)
 {
     memset(out, 0, sizeof *out);
+    if (desc) desc->peak_bytes = 0;
     char line[512];
     size_t pos = 0;
     if (!next_line(d, len, &pos, line, sizeof line) || strncmp(line, "#?", 2) != 0) {
@@ -157,11 +160,14 @@ bool rd_env_image_parse_hdr(const uint8_t *d, size_t len, rd_env_image *out, cha
         snprintf(err, errlen, "the HDR file is too short for %ux%u pixels", w, h);
         return false;
     }
-    uint8_t *rgbe = malloc((size_t)w * 4);
-    float *rgb = malloc((size_t)w * h * 3 * sizeof *rgb);
-    if (!rgbe || !rgb) abort();
-    for (unsigned y = 0; y < h; y++) {
-        bool ok;
+    /* one scanline (RGBE, then floats) at a time into the reduction */
+    rd_env_mem mem = {0};
+    rd_env_reducer red;
+    rd_env_reducer_init(&red, w, h, desc ? desc->max_width : 0, &mem, out);
+    uint8_t *rgbe = rd_env_mem_alloc(&mem, (size_t)w * 4, false);
+    float *row = rd_env_mem_alloc(&mem, (size_t)w * 3 * sizeof *row, false);
+    bool ok = true;
+    for (unsigned y = 0; ok && y < h; y++) {
         if (w >= 8 && w <= 0x7fff && len - pos >= 4 && d[pos] == 2 && d[pos + 1] == 2 &&
             !(d[pos + 2] & 0x80)) {
             if (((unsigned)d[pos + 2] << 8 | d[pos + 3]) != w) {
@@ -188,24 +194,23 @@ bool rd_env_image_parse_hdr(const uint8_t *d, size_t len, rd_env_image *out, cha
                 snprintf(err, errlen, "the HDR file ends in scanline %u of %u", y, h);
             }
         }
-        if (!ok) {
-            free(rgbe);
-            free(rgb);
-            return false;
-        }
+        if (!ok) break;
         for (unsigned x = 0; x < w; x++)
-            rgbe_to_float(rgbe + x * 4, rgb + ((size_t)y * w + x) * 3);
+            rgbe_to_float(rgbe + x * 4, row + (size_t)x * 3);
+        rd_env_reducer_push(&red, row);
     }
-    free(rgbe);
-    out->width = w;
-    out->height = h;
-    out->rgb = rgb;
-    return true;
+    rd_env_mem_free(&mem, rgbe);
+    rd_env_mem_free(&mem, row);
+    rd_env_reducer_dispose(&red);
+    if (desc) desc->peak_bytes = mem.peak;
+    if (!ok) rd_env_image_free(out);
+    return ok;
 }
 
 void rd_env_image_limit(rd_env_image *img, uint32_t max_width)
 {
-    while (img->width > max_width && img->width >= 2 && img->height >= 2) {
+    while ((img->width > max_width || img->height > max_width) && img->width >= 2 &&
+           img->height >= 2) {
         uint32_t w = img->width / 2, h = img->height / 2;
         float *n = malloc((size_t)w * h * 3 * sizeof *n);
         if (!n) abort();

@@ -1,7 +1,9 @@
 /* environment_exr.c: the OpenEXR reader of environment images, through OpenEXRCore (the C API
  * of OpenEXR 3) reading the uploaded bytes in memory. Each chunk (a block of scanlines or a
- * tile) is decoded to float planes of its own and copied into the image with explicit bounds,
- * so nothing the file declares can write outside the image. */
+ * tile) is decoded to float planes of its own and copied with explicit bounds into a stripe of
+ * full-width display rows (the block's rows, or a row of tiles), so nothing the file declares
+ * can write outside it; each finished stripe goes row by row into the reduction
+ * (environment_reduce.h). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -10,6 +12,21 @@
 #include <openexr.h>
 
 #include "environment.h"
+#include "environment_reduce.h"
+
+/* OpenEXRCore's allocations, counted into the reading thread's decode (its hooks take no user
+ * pointer). */
+static _Thread_local rd_env_mem *exr_mem;
+
+static void *exr_alloc(size_t bytes)
+{
+    return rd_env_mem_alloc(exr_mem, bytes, false);
+}
+
+static void exr_free(void *p)
+{
+    rd_env_mem_free(exr_mem, p);
+}
 
 /* The uploaded bytes as an OpenEXR stream, and the library's first error message. */
 typedef struct exr_source {
@@ -109,21 +126,68 @@ static bool choose_channels(const exr_attr_chlist_t *chl, exr_layout *lay, char 
     return true;
 }
 
-/* The reading of one part into an image the size of its display window. */
+/* The reading of one part, the size of its display window, into the reduction. */
 typedef struct exr_reader {
     exr_context_t ctxt;
     exr_source *src;
     exr_layout lay;
     exr_attr_box2i_t display;
-    rd_env_image *img;
+    uint32_t width, height; /* of the display window */
+    rd_env_mem *mem;
+    rd_env_reducer red;
     exr_decode_pipeline_t dec;
     bool dec_ready;
     float *planes; /* scratch: three planes of the chunk */
     size_t planes_cap;
+    float *stripe; /* full-width display rows: those of one block of scanlines or row of tiles */
+    size_t stripe_cap;
+    int64_t stripe_y; /* the file row of the stripe's first row */
+    uint32_t stripe_rows;
+    float *black; /* one row of zeros: display rows the data window misses */
 } exr_reader;
 
+/* Makes the stripe rows [y, y + rows) of the file (zeroed: black where no chunk lands); false
+ * with a sentence in err when they would take more than RD_ENV_MAX_STRIPE_BYTES. */
+static bool stripe_begin(exr_reader *r, int64_t y, uint64_t rows, const char *what, char *err,
+                         size_t errlen)
+{
+    uint64_t n = rows * r->width * 3;
+    if (n * sizeof(float) > RD_ENV_MAX_STRIPE_BYTES) {
+        snprintf(err, errlen,
+                 "the EXR file's %s spans %llu rows of %u pixels, more than %llu MiB decoded; "
+                 "save it with smaller tiles or chunks",
+                 what, (unsigned long long)rows, r->width,
+                 (unsigned long long)(RD_ENV_MAX_STRIPE_BYTES >> 20));
+        return false;
+    }
+    if (n > r->stripe_cap) {
+        rd_env_mem_free(r->mem, r->stripe);
+        r->stripe_cap = (size_t)n;
+        r->stripe = rd_env_mem_alloc(r->mem, r->stripe_cap * sizeof *r->stripe, false);
+    }
+    if (n) memset(r->stripe, 0, (size_t)n * sizeof *r->stripe);
+    r->stripe_y = y;
+    r->stripe_rows = (uint32_t)rows;
+    return true;
+}
+
+/* Pushes the display rows before the stripe (black: the data window misses them) and the
+ * stripe's rows inside the display window; rows already pushed are not pushed again. */
+static void stripe_end(exr_reader *r)
+{
+    int64_t first = r->stripe_y - r->display.min.y;
+    for (int64_t i = 0; i < r->stripe_rows; i++) {
+        int64_t iy = first + i;
+        if (iy < 0 || iy >= (int64_t)r->height) continue;
+        while ((int64_t)r->red.rows < iy) /* black rows before the stripe */
+            rd_env_reducer_push(&r->red, r->black);
+        if ((int64_t)r->red.rows == iy)
+            rd_env_reducer_push(&r->red, r->stripe + (size_t)i * r->width * 3);
+    }
+}
+
 /* Decodes one chunk whose top-left pixel is (x0, y0) in the file's pixel space and copies the
- * part of it inside the display window. */
+ * part of it inside the display window's columns and the stripe's rows. */
 static bool read_chunk(exr_reader *r, const exr_chunk_info_t *ci, int64_t x0, int64_t y0,
                        const char *what, char *err, size_t errlen)
 {
@@ -136,12 +200,22 @@ static bool read_chunk(exr_reader *r, const exr_chunk_info_t *ci, int64_t x0, in
                  ci->height);
         return false;
     }
+    if (cw * ch * 3 * sizeof(float) > RD_ENV_MAX_STRIPE_BYTES ||
+        ci->unpacked_size > RD_ENV_MAX_CHUNK_BYTES) {
+        snprintf(err, errlen,
+                 "the EXR file's %s (%dx%d pixels, %llu MiB unpacked) is too large to decode "
+                 "(at most %llu MiB of colour or %llu MiB unpacked); save it with smaller tiles "
+                 "or chunks",
+                 what, ci->width, ci->height, (unsigned long long)(ci->unpacked_size >> 20),
+                 (unsigned long long)(RD_ENV_MAX_STRIPE_BYTES >> 20),
+                 (unsigned long long)(RD_ENV_MAX_CHUNK_BYTES >> 20));
+        return false;
+    }
     size_t pixels = (size_t)(cw * ch);
     if (pixels * 3 > r->planes_cap) {
-        free(r->planes);
+        rd_env_mem_free(r->mem, r->planes);
         r->planes_cap = pixels * 3;
-        r->planes = malloc(r->planes_cap * sizeof *r->planes);
-        if (!r->planes) abort();
+        r->planes = rd_env_mem_alloc(r->mem, r->planes_cap * sizeof *r->planes, false);
     }
     if (!r->dec_ready) {
         rv = exr_decoding_initialize(r->ctxt, 0, ci, &r->dec);
@@ -182,14 +256,13 @@ static bool read_chunk(exr_reader *r, const exr_chunk_info_t *ci, int64_t x0, in
     if (rv == EXR_ERR_SUCCESS) rv = exr_decoding_run(r->ctxt, 0, &r->dec);
     if (rv != EXR_ERR_SUCCESS) return fail_lib(r->src, rv, what, err, errlen);
 
-    rd_env_image *img = r->img;
     for (uint64_t y = 0; y < ch; y++) {
-        int64_t iy = y0 + (int64_t)y - r->display.min.y;
-        if (iy < 0 || iy >= (int64_t)img->height) continue;
+        int64_t sy = y0 + (int64_t)y - r->stripe_y;
+        if (sy < 0 || sy >= (int64_t)r->stripe_rows) continue;
         for (uint64_t x = 0; x < cw; x++) {
             int64_t ix = x0 + (int64_t)x - r->display.min.x;
-            if (ix < 0 || ix >= (int64_t)img->width) continue;
-            float *t = img->rgb + ((size_t)iy * img->width + (size_t)ix) * 3;
+            if (ix < 0 || ix >= (int64_t)r->width) continue;
+            float *t = r->stripe + ((size_t)sy * r->width + (size_t)ix) * 3;
             for (int c = 0; c < 3; c++) {
                 float v = r->planes[(size_t)plane_of[c] * pixels + y * cw + x];
                 t[c] = v > 0.0f && isfinite(v) ? v : 0.0f; /* NaN, infinities, negatives */
@@ -210,7 +283,11 @@ static bool read_scanlines(exr_reader *r, const exr_attr_box2i_t *dw, char *err,
         exr_chunk_info_t ci;
         rv = exr_read_scanline_chunk_info(r->ctxt, 0, (int)y, &ci);
         if (rv != EXR_ERR_SUCCESS) return fail_lib(r->src, rv, what, err, errlen);
-        if (!read_chunk(r, &ci, dw->min.x, ci.start_y, what, err, errlen)) return false;
+        if (!stripe_begin(r, ci.start_y, ci.height > 0 ? (uint64_t)ci.height : 0, what, err,
+                          errlen) ||
+            !read_chunk(r, &ci, dw->min.x, ci.start_y, what, err, errlen))
+            return false;
+        stripe_end(r);
     }
     return true;
 }
@@ -228,22 +305,30 @@ static bool read_tiles(exr_reader *r, const exr_attr_box2i_t *dw, char *err, siz
         return fail_lib(r->src, rv, "tile layout", err, errlen);
     uint32_t nx = (uint32_t)(((uint64_t)lw + tw - 1) / tw);
     uint32_t ny = (uint32_t)(((uint64_t)lh + th - 1) / th);
-    for (uint32_t ty = 0; ty < ny; ty++)
+    for (uint32_t ty = 0; ty < ny; ty++) {
+        char what[48];
+        snprintf(what, sizeof what, "tile row %u", ty);
+        int64_t y0 = dw->min.y + (int64_t)ty * th;
+        uint64_t rows =
+            (uint64_t)lh - (uint64_t)ty * th < th ? (uint64_t)lh - (uint64_t)ty * th : th;
+        if (!stripe_begin(r, y0, rows, what, err, errlen)) return false;
         for (uint32_t tx = 0; tx < nx; tx++) {
-            char what[48];
             snprintf(what, sizeof what, "tile %u,%u", tx, ty);
             exr_chunk_info_t ci;
             rv = exr_read_tile_chunk_info(r->ctxt, 0, (int)tx, (int)ty, 0, 0, &ci);
             if (rv != EXR_ERR_SUCCESS) return fail_lib(r->src, rv, what, err, errlen);
-            if (!read_chunk(r, &ci, dw->min.x + (int64_t)tx * tw, dw->min.y + (int64_t)ty * th,
-                            what, err, errlen))
+            if (!read_chunk(r, &ci, dw->min.x + (int64_t)tx * tw, y0, what, err, errlen))
                 return false;
         }
+        stripe_end(r);
+    }
     return true;
 }
 
-/* Checks what the header declares, then reads the pixels of part 0. */
-static bool read_part(exr_reader *r, char *err, size_t errlen)
+/* Checks what the header declares, then reads the pixels of part 0 into img, reduced under
+ * max_width. */
+static bool read_part(exr_reader *r, uint32_t max_width, rd_env_image *img, char *err,
+                      size_t errlen)
 {
     int parts = 0;
     exr_storage_t storage;
@@ -278,18 +363,22 @@ static bool read_part(exr_reader *r, char *err, size_t errlen)
                  (long long)dw_w, (long long)dw_h, RD_ENV_MAX_DIM);
         return false;
     }
-    r->img->width = (uint32_t)w;
-    r->img->height = (uint32_t)h;
-    r->img->rgb = calloc((size_t)w * (size_t)h * 3, sizeof *r->img->rgb);
-    if (!r->img->rgb) abort();
-    return storage == EXR_STORAGE_TILED ? read_tiles(r, &dw, err, errlen)
-                                        : read_scanlines(r, &dw, err, errlen);
+    r->width = (uint32_t)w;
+    r->height = (uint32_t)h;
+    rd_env_reducer_init(&r->red, r->width, r->height, max_width, r->mem, img);
+    r->black = rd_env_mem_alloc(r->mem, (size_t)r->width * 3 * sizeof *r->black, true);
+    bool ok = storage == EXR_STORAGE_TILED ? read_tiles(r, &dw, err, errlen)
+                                           : read_scanlines(r, &dw, err, errlen);
+    while (ok && r->red.rows < r->height) /* black rows below the data window */
+        rd_env_reducer_push(&r->red, r->black);
+    return ok;
 }
 
-bool rd_env_image_parse_exr(const uint8_t *data, size_t len, rd_env_image *out, char *err,
-                            size_t errlen)
+bool rd_env_image_parse_exr(const uint8_t *data, size_t len, rd_env_read_desc *desc,
+                            rd_env_image *out, char *err, size_t errlen)
 {
     memset(out, 0, sizeof *out);
+    if (desc) desc->peak_bytes = 0;
     if (rd_env_image_format(data, len) != RD_ENV_FORMAT_EXR) {
         snprintf(err, errlen, "not an OpenEXR file (it must begin with the bytes 76 2f 31 01)");
         return false;
@@ -304,13 +393,22 @@ bool rd_env_image_parse_exr(const uint8_t *data, size_t len, rd_env_image *out, 
     init.max_tile_width = init.max_tile_height = (int)RD_ENV_MAX_DIM;
     /* a damaged chunk table is an error, not a search through the file for chunks */
     init.flags = EXR_CONTEXT_FLAG_DISABLE_CHUNK_RECONSTRUCTION;
-    exr_reader r = {.src = &src, .img = out};
+    rd_env_mem mem = {0};
+    init.alloc_fn = exr_alloc;
+    init.free_fn = exr_free;
+    exr_mem = &mem;
+    exr_reader r = {.src = &src, .mem = &mem};
     exr_result_t rv = exr_start_read(&r.ctxt, "upload.exr", &init);
-    bool ok = rv == EXR_ERR_SUCCESS ? read_part(&r, err, errlen)
+    bool ok = rv == EXR_ERR_SUCCESS ? read_part(&r, desc ? desc->max_width : 0, out, err, errlen)
                                     : fail_lib(&src, rv, "header", err, errlen);
     if (r.dec_ready) exr_decoding_destroy(r.ctxt, &r.dec);
     if (r.ctxt) exr_finish(&r.ctxt);
-    free(r.planes);
+    exr_mem = NULL;
+    rd_env_mem_free(&mem, r.planes);
+    rd_env_mem_free(&mem, r.stripe);
+    rd_env_mem_free(&mem, r.black);
+    rd_env_reducer_dispose(&r.red);
+    if (desc) desc->peak_bytes = mem.peak;
     if (!ok) rd_env_image_free(out);
     return ok;
 }

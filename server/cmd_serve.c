@@ -480,9 +480,8 @@ int cli_serve(int argc, char **argv)
         rd_env_image *img = calloc(1, sizeof *img);
         if (!img) abort();
         char env_err[256];
-        if (rd_env_image_parse(saved.environment, saved.environment_size, img, env_err,
+        if (rd_env_image_parse(saved.environment, saved.environment_size, NULL, img, env_err,
                                sizeof env_err)) {
-            rd_env_image_limit(img, RD_ENV_IMAGE_MAX_WIDTH);
             srv_cmd *c = srv_cmd_new(SRV_CMD_SET_ENVIRONMENT);
             c->env_image = img;
             srv_render_post(loop, c); /* takes c */

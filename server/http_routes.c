@@ -196,8 +196,8 @@ enum MHD_Result srv_http_handle_upload(srv_http *h, struct MHD_Connection *conn,
 }
 
 /* PUT /v1/environment: a Radiance .hdr or an OpenEXR .exr (told apart by its first bytes),
- * parsed and reduced here (never on the render thread), becomes the environment (sky_mode
- * image); DELETE drops it. */
+ * parsed and reduced here as it is decoded (never on the render thread), becomes the environment
+ * (sky_mode image); DELETE drops it. */
 enum MHD_Result srv_http_handle_environment(srv_http *h, struct MHD_Connection *conn, request *rq)
 {
     srv_cmd *c = srv_cmd_new(SRV_CMD_SET_ENVIRONMENT);
@@ -205,13 +205,12 @@ enum MHD_Result srv_http_handle_environment(srv_http *h, struct MHD_Connection *
         char err[256] = "";
         rd_env_image *img = calloc(1, sizeof *img);
         if (!img) abort();
-        if (!rd_env_image_parse(rq->data, rq->len, img, err, sizeof err)) {
+        if (!rd_env_image_parse(rq->data, rq->len, NULL, img, err, sizeof err)) {
             free(img);
             srv_cmd_unref(c);
             srv_info("http", "environment upload of %zu bytes rejected: %s", rq->len, err);
             return srv_http_respond_error(h, conn, rq, 422, SRV_ERR_INVALID_IMAGE, "%s", err);
         }
-        rd_env_image_limit(img, RD_ENV_IMAGE_MAX_WIDTH);
         c->env_image = img;
     }
     srv_render_call(h->cfg.loop, c, SCENE_TIMEOUT_MS);
