@@ -234,7 +234,9 @@ bool wide_trace(pc_scene_refs scene, rtb_cwide_refs w, vec3 org, vec3 dir, float
     uvec2 g = cwide_root_group(w.info.x, x); /* the current group */
 
     for (;;) {
-        if ((g.y & 0xff00u) == 0u) { /* the group is done: the next one */
+        /* The group is done: the next one, visited in this same iteration (an iteration that
+         * only pops leaves its lanes idle while the warp's others visit nodes). */
+        if ((g.y & 0xff00u) == 0u) {
             if (in_blas && cwide_sp == blas_base) { /* and the instance: back to the world ray */
                 in_blas = false;
                 o = org;
@@ -245,27 +247,27 @@ bool wide_trace(pc_scene_refs scene, rtb_cwide_refs w, vec3 org, vec3 dir, float
             if (cwide_sp == 0) break;
             cwide_sp--;
             g = cwide_stack[cwide_sp];
-            if (g.y != WIDE_ENTRY_INSTANCE) continue;
-
-            /* Enter an instance: the ray goes to object space through world_to_object. */
-            uint inst = TraceIndex(scene.tlas_index).i[g.x];
-            g = uvec2(0u);
-            pc_instance in_ = TraceInstances(scene.instances).i[inst];
-            vec4 wo = vec4(org, 1.0);
-            vec3 oo = vec3(dot(in_.world_to_object[0], wo), dot(in_.world_to_object[1], wo),
-                           dot(in_.world_to_object[2], wo));
-            vec3 d = vec3(dot(in_.world_to_object[0].xyz, dir),
-                          dot(in_.world_to_object[1].xyz, dir),
-                          dot(in_.world_to_object[2].xyz, dir));
-            if (any(isnan(oo)) || any(isinf(oo)) || any(isnan(d)) || any(isinf(d))) continue;
-            o = oo;
-            trace_setup_box(d, inv, neg);
-            trace_setup_shear(d, kx, ky, kz, S);
-            x = cwide_octant_inv(neg);
-            in_blas = true;
-            blas_base = cwide_sp;
-            g = cwide_root_group(WideUints(w.mesh_root).i[in_.info.y], x);
-            continue;
+            if (g.y == WIDE_ENTRY_INSTANCE) {
+                /* Enter an instance: the ray goes to object space through world_to_object. */
+                uint inst = TraceIndex(scene.tlas_index).i[g.x];
+                g = uvec2(0u);
+                pc_instance in_ = TraceInstances(scene.instances).i[inst];
+                vec4 wo = vec4(org, 1.0);
+                vec3 oo = vec3(dot(in_.world_to_object[0], wo), dot(in_.world_to_object[1], wo),
+                               dot(in_.world_to_object[2], wo));
+                vec3 d = vec3(dot(in_.world_to_object[0].xyz, dir),
+                              dot(in_.world_to_object[1].xyz, dir),
+                              dot(in_.world_to_object[2].xyz, dir));
+                if (any(isnan(oo)) || any(isinf(oo)) || any(isnan(d)) || any(isinf(d)))
+                    continue;
+                o = oo;
+                trace_setup_box(d, inv, neg);
+                trace_setup_shear(d, kx, ky, kz, S);
+                x = cwide_octant_inv(neg);
+                in_blas = true;
+                blas_base = cwide_sp;
+                g = cwide_root_group(WideUints(w.mesh_root).i[in_.info.y], x);
+            }
         }
 
         /* The group's next child: the highest hit bit, its index the base plus the interior
