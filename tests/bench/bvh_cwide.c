@@ -120,17 +120,18 @@ int rtb_cwide_slots(const pc_bvh_node *bin, uint32_t b, uint32_t slots[RTB_CWIDE
         slots[s] = RTB_CWIDE_NONE;
     /* greedy: the cheapest (child, slot) pair of free ones first, ties to the lower child and
      * slot; this leaves no child and slot that both have a cheaper partner in each other */
+    double cost[RTB_CWIDE][RTB_CWIDE];
+    for (int i = 0; i < used; i++)
+        for (int s = 0; s < RTB_CWIDE; s++)
+            cost[i][s] = rtb_cwide_slot_cost(lo, hi, &bin[kids[i]], s);
     bool placed[RTB_CWIDE] = {false};
     for (int round = 0; round < used; round++) {
         int bi = -1, bs = -1;
-        double best = INFINITY;
         for (int i = 0; i < used; i++) {
             if (placed[i]) continue;
-            for (int s = 0; s < RTB_CWIDE; s++) {
-                if (slots[s] != RTB_CWIDE_NONE) continue;
-                double cost = rtb_cwide_slot_cost(lo, hi, &bin[kids[i]], s);
-                if (bi < 0 || cost < best) bi = i, bs = s, best = cost;
-            }
+            for (int s = 0; s < RTB_CWIDE; s++)
+                if (slots[s] == RTB_CWIDE_NONE && (bi < 0 || cost[i][s] < cost[bi][bs]))
+                    bi = i, bs = s;
         }
         placed[bi] = true;
         slots[bs] = kids[bi];
