@@ -90,23 +90,67 @@ static const float *hi3(const pc_bvh_node *n)
     return &n->bmax.x;
 }
 
-/* Fills the already allocated node `at` from binary node b at compressed depth level: its
- * interior children are allocated next to each other, then filled depth first. */
-static void fill(rtb_cwide *w, const pc_bvh_node *bin, uint32_t at, uint32_t b, uint32_t level)
+double rtb_cwide_slot_cost(const float lo[3], const float hi[3], const pc_bvh_node *c, int slot)
 {
-    if (level > w->depth) w->depth = level;
-    uint32_t slots[RTB_CWIDE], meta[RTB_CWIDE] = {0};
-    int n = rtb_bvh_open(bin, b, RTB_CWIDE, slots);
-    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    uint32_t interior = 0, leaves = 0;
+    double cost = 0;
+    for (int a = 0; a < 3; a++) {
+        double d = ((double)lo3(c)[a] + hi3(c)[a]) - ((double)lo[a] + hi[a]);
+        cost += (slot >> a) & 1 ? -d : d;
+    }
+    return cost;
+}
+
+int rtb_cwide_slots(const pc_bvh_node *bin, uint32_t b, uint32_t slots[RTB_CWIDE], float lo[3],
+                    float hi[3])
+{
+    uint32_t kids[RTB_CWIDE];
+    int n = rtb_bvh_open(bin, b, RTB_CWIDE, kids), used = 0;
+    for (int a = 0; a < 3; a++)
+        lo[a] = INFINITY, hi[a] = -INFINITY;
     for (int k = 0; k < n; k++) {
-        const pc_bvh_node *c = &bin[slots[k]];
-        if (rtb_bvh_box_empty(c)) continue; /* never hit: an unused slot */
+        const pc_bvh_node *c = &bin[kids[k]];
+        if (rtb_bvh_box_empty(c)) continue; /* never hit: left out */
+        kids[used++] = kids[k];
         for (int a = 0; a < 3; a++) {
             lo[a] = fminf(lo[a], lo3(c)[a]);
             hi[a] = fmaxf(hi[a], hi3(c)[a]);
         }
-        uint32_t count = rd_bvh_node_count(c);
+    }
+    for (int s = 0; s < RTB_CWIDE; s++)
+        slots[s] = RTB_CWIDE_NONE;
+    /* greedy: the cheapest (child, slot) pair of free ones first, ties to the lower child and
+     * slot; this leaves no child and slot that both have a cheaper partner in each other */
+    double cost[RTB_CWIDE][RTB_CWIDE];
+    for (int i = 0; i < used; i++)
+        for (int s = 0; s < RTB_CWIDE; s++)
+            cost[i][s] = rtb_cwide_slot_cost(lo, hi, &bin[kids[i]], s);
+    bool placed[RTB_CWIDE] = {false};
+    for (int round = 0; round < used; round++) {
+        int bi = -1, bs = -1;
+        for (int i = 0; i < used; i++) {
+            if (placed[i]) continue;
+            for (int s = 0; s < RTB_CWIDE; s++)
+                if (slots[s] == RTB_CWIDE_NONE && (bi < 0 || cost[i][s] < cost[bi][bs]))
+                    bi = i, bs = s;
+        }
+        placed[bi] = true;
+        slots[bs] = kids[bi];
+    }
+    return used;
+}
+
+/* Fills the already allocated node `at` from binary node b at compressed depth level: its
+ * interior children are allocated next to each other in slot order, then filled depth first. */
+static void fill(rtb_cwide *w, const pc_bvh_node *bin, uint32_t at, uint32_t b, uint32_t level)
+{
+    if (level > w->depth) w->depth = level;
+    uint32_t slots[RTB_CWIDE], meta[RTB_CWIDE] = {0};
+    float lo[3], hi[3];
+    rtb_cwide_slots(bin, b, slots, lo, hi);
+    uint32_t interior = 0, leaves = 0;
+    for (int k = 0; k < RTB_CWIDE; k++) { /* ranks in slot order, as the group traversal needs */
+        if (slots[k] == RTB_CWIDE_NONE) continue;
+        uint32_t count = rd_bvh_node_count(&bin[slots[k]]);
         meta[k] = count == 0 ? RTB_CWIDE_INTERIOR | interior++ : count << 3 | leaves++;
     }
     uint32_t child_base = w->node_count, leaf_base = w->leaf_count;
@@ -130,7 +174,7 @@ static void fill(rtb_cwide *w, const pc_bvh_node *bin, uint32_t at, uint32_t b, 
     pc_uvec4 *q[3] = {&d.q_x, &d.q_y, &d.q_z};
     for (int k = 0; k < RTB_CWIDE; k++) {
         int word = k >> 2, byte = k & 3;
-        if (k >= n || meta[k] == 0) {
+        if (meta[k] == 0) {
             for (int a = 0; a < 3; a++) {
                 set_byte(q[a], word, byte, 255);
                 set_byte(q[a], 2 + word, byte, 0);
@@ -147,7 +191,7 @@ static void fill(rtb_cwide *w, const pc_bvh_node *bin, uint32_t at, uint32_t b, 
         }
     }
     w->nodes[at] = d;
-    for (int k = 0; k < n; k++)
+    for (int k = 0; k < RTB_CWIDE; k++)
         if (meta[k] & RTB_CWIDE_INTERIOR)
             fill(w, bin, child_base + (meta[k] & 7), slots[k], level + 1);
 }

@@ -5,6 +5,13 @@
  * indexes the same triangle and instance-index arrays. Child boxes are quantised to 8 bits per
  * plane relative to the node's own box, rounded outwards (Ylitie, Karras, Laine, HPG 2017,
  * sec. 3.1). Children with an empty box become unused slots, as in the 4-wide collapse.
+ *
+ * Slots follow the ray octants (their sec. 3.2 and 4.3; rtb_cwide_slots): slot s, its bits the
+ * signs of a direction (bit a set: negative on axis a), should hold the child met first by rays
+ * of that octant, i.e. the child whose centroid lies farthest back along the diagonal d_s =
+ * (+-1, +-1, +-1) of the octant, seen from the node's centre. A ray of octant o then visits
+ * slots in increasing s ^ o: rtb_trace_cwide.comp's group traversal takes the highest set bit
+ * of a hit mask whose slot s sits at bit s ^ (7 - o), with no sort.
  */
 #ifndef RTB_BVH_CWIDE_H
 #define RTB_BVH_CWIDE_H
@@ -25,6 +32,20 @@ typedef struct rtb_cwide {
 
 /* Appends the collapse of the binary tree rooted at bin[root] (indices absolute into bin) to
  * w and returns its compressed root index. Aborts when out of memory. */
+#define RTB_CWIDE_NONE 0xffffffffu /* an unused slot in rtb_cwide_slots */
+
+/* The cost of child c in slot s of a node whose children span [lo, hi]: dot(centroid(c) -
+ * centre, d_s), doubled, in double. Smaller is earlier for rays of octant s. */
+double rtb_cwide_slot_cost(const float lo[3], const float hi[3], const pc_bvh_node *c, int slot);
+
+/* The children of the compressed node made from bin[b] by slot: the binary node index, or
+ * RTB_CWIDE_NONE. The children are rtb_bvh_open's with non-empty boxes (their count is returned;
+ * [lo, hi] gets the union of their boxes), placed greedily, cheapest (child, slot) pair of the
+ * rtb_cwide_slot_cost table first, so that no child and slot would both be cheaper together
+ * than with what they got (a stable assignment). */
+int rtb_cwide_slots(const pc_bvh_node *bin, uint32_t b, uint32_t slots[RTB_CWIDE], float lo[3],
+                    float hi[3]);
+
 uint32_t rtb_cwide_collapse(rtb_cwide *w, const pc_bvh_node *bin, uint32_t root);
 void rtb_cwide_destroy(rtb_cwide *w); /* idempotent */
 

@@ -18,9 +18,11 @@
  * traced by tests/bench/shaders/rtb_trace_wide.comp) and to compressed 8-wide nodes after
  * Ylitie, Karras, Laine, HPG 2017 (bvh_cwide.c, 80-byte nodes with 8-bit child boxes, traced by
  * rtb_trace_cwide.comp), over the same triangles and instances: measurements of whether wider
- * or compressed nodes would pay in the product (ratios wide/ours and cwide/ours > 1). Their
- * hits are compared with ours the same way, on every device; the node memory of all three is
- * printed. */
+ * or compressed nodes would pay in the product (ratios wide/ours and cwide/ours > 1). The
+ * compressed nodes are traced twice: cwide sorts each node's hit children by distance and
+ * pushes them one by one, cwide2 walks node groups in ray-octant order with no sort (the
+ * paper's algorithm 1; rtb_trace_cwide.comp with RTB_CWIDE_GROUPS). Their hits are compared
+ * with ours the same way, on every device; the node memory of all three is printed. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -36,6 +38,7 @@
 /* after stdint.h: the generated headers declare uint32_t arrays */
 #include "bench/rtb_rays_comp.spv.h"
 #include "bench/rtb_trace_comp.spv.h"
+#include "bench/rtb_trace_cwide2_comp.spv.h"
 #include "bench/rtb_trace_cwide_comp.spv.h"
 #include "bench/rtb_trace_wide_comp.spv.h"
 
@@ -56,8 +59,8 @@ typedef struct options {
 
 typedef struct bench {
     rd_vk *vk;
-    rd_pipeline gen, trace, trace_wide, trace_cwide;
-    rd_buffer globals, rays, hits_ours, hits_driver, hits_wide, hits_cwide;
+    rd_pipeline gen, trace, trace_wide, trace_cwide, trace_cwide2;
+    rd_buffer globals, rays, hits_ours, hits_driver, hits_wide, hits_cwide, hits_cwide2;
     rd_timer timer;
     rtb_driver *driver; /* NULL when unsupported */
     rtb_wide_gpu *wide;
@@ -76,7 +79,8 @@ static void usage(void)
     printf("usage: probecast_rtbench SCENE [OPTIONS]\n\n"
            "Traces the same rays through our BVH (shaders/trace.glsl), the driver's\n"
            "VK_KHR ray tracer and our BVHs collapsed to 4-wide (wide) and compressed\n"
-           "8-wide (cwide) nodes; prints times, Grays/s and ratios to ours.\n"
+           "8-wide nodes (cwide: sorted children, cwide2: octant-ordered node\n"
+           "groups); prints times, Grays/s and ratios to ours.\n"
            "SCENE: a .gltf/.glb file or builtin:NAME[:ARG] (builtin:spheres:N,\n"
            "builtin:interior:M, ...), loaded as probecast render loads it.\n\n"
            "  --size WxH        primary rays of the scene's default camera (default 1920x1080)\n"
@@ -161,7 +165,7 @@ static void grid(uint32_t n, uint32_t *gx, uint32_t *gy)
     *gy = *gx ? (groups + *gx - 1) / *gx : 0;
 }
 
-typedef enum tracer { TRACER_OURS, TRACER_DRIVER, TRACER_WIDE, TRACER_CWIDE } tracer;
+typedef enum tracer { TRACER_OURS, TRACER_DRIVER, TRACER_WIDE, TRACER_CWIDE, TRACER_CWIDE2 } tracer;
 
 static void record(bench *b, rd_cmd *c, tracer which, uint32_t n)
 {
@@ -174,6 +178,8 @@ static void record(bench *b, rd_cmd *c, tracer which, uint32_t n)
             p = &b->trace_wide, hits = b->hits_wide.address, refs = b->wide->refs.address;
         if (which == TRACER_CWIDE)
             p = &b->trace_cwide, hits = b->hits_cwide.address, refs = b->wide->cwide.refs.address;
+        if (which == TRACER_CWIDE2)
+            p = &b->trace_cwide2, hits = b->hits_cwide2.address, refs = b->wide->cwide.refs.address;
         uint32_t gx, gy;
         grid(n, &gx, &gy);
         pc_push push = {.globals = b->globals.address,
@@ -247,6 +253,7 @@ typedef struct row {
     double ours_ms, driver_ms, agree, hit_frac;
     double wide_ms, wide_agree; /* wide_agree: fraction of rays where wide matches ours */
     double cwide_ms, cwide_agree;
+    double cwide2_ms, cwide2_agree;
 } row;
 
 /* Fraction of n rays whose hits agree: both miss, or both hit within T_TOL relative. */
@@ -269,6 +276,7 @@ static rd_vk_result run_set(bench *b, uint32_t n, row *out, char *err, size_t er
         res = time_trace(b, TRACER_DRIVER, n, &out->driver_ms, err, errlen);
     if (res == RD_VK_OK) res = time_trace(b, TRACER_WIDE, n, &out->wide_ms, err, errlen);
     if (res == RD_VK_OK) res = time_trace(b, TRACER_CWIDE, n, &out->cwide_ms, err, errlen);
+    if (res == RD_VK_OK) res = time_trace(b, TRACER_CWIDE2, n, &out->cwide2_ms, err, errlen);
     if (res != RD_VK_OK) return res;
     float *a = malloc((size_t)n * sizeof(float)), *d = malloc((size_t)n * sizeof(float));
     if (!a || !d) abort();
@@ -289,6 +297,10 @@ static rd_vk_result run_set(bench *b, uint32_t n, row *out, char *err, size_t er
         res = rd_buffer_download(b->vk, &b->hits_cwide, 0, d, (VkDeviceSize)n * 4, err, errlen);
         if (res == RD_VK_OK) out->cwide_agree = agreement(a, d, n);
     }
+    if (res == RD_VK_OK) {
+        res = rd_buffer_download(b->vk, &b->hits_cwide2, 0, d, (VkDeviceSize)n * 4, err, errlen);
+        if (res == RD_VK_OK) out->cwide2_agree = agreement(a, d, n);
+    }
     free(a);
     free(d);
     return res;
@@ -300,7 +312,8 @@ static double grays(uint32_t rays, double ms)
 }
 
 /* Speed of a tracer that took ms against ours: above 1 it traces faster (0 without
- * timestamps). wide/ours for the 4-wide nodes, cwide/ours for the compressed 8-wide nodes. */
+ * timestamps). wide/ours for the 4-wide nodes, cwide/ours and cwide2/ours for the compressed
+ * 8-wide nodes. */
 static double speedup(const row *r, double ms)
 {
     return ms > 0 ? r->ours_ms / ms : 0;
@@ -310,18 +323,19 @@ static void print_row(FILE *f, bool csv, const char *scene, uint64_t tris, const
                       const rtb_driver *driver, const rtb_wide_gpu *wide)
 {
     double og = grays(r->rays, r->ours_ms), wg = grays(r->rays, r->wide_ms);
-    double cg = grays(r->rays, r->cwide_ms);
+    double cg = grays(r->rays, r->cwide_ms), c2g = grays(r->rays, r->cwide2_ms);
     double dg = driver ? grays(r->rays, r->driver_ms) : 0;
     if (csv) {
         fprintf(f,
                 "%s,%llu,%s,%u,%.4f,%.4f,%.4f,%.4f,%.4f,%.6f,%.4f,%u,%.4f,%.4f,%.4f,%.6f,%llu,%llu,"
-                "%.4f,%.4f,%.4f,%.6f,%llu\n",
+                "%.4f,%.4f,%.4f,%.6f,%llu,%.4f,%.4f,%.4f,%.6f\n",
                 scene, (unsigned long long)tris, r->set, r->rays, r->ours_ms,
                 driver ? r->driver_ms : 0, og, dg, dg > 0 ? og / dg : 0, driver ? r->agree : 0,
                 r->hit_frac, driver ? driver->launch_width : 0, r->wide_ms, wg,
                 speedup(r, r->wide_ms), r->wide_agree, (unsigned long long)wide->binary_node_bytes,
                 (unsigned long long)wide->node_bytes, r->cwide_ms, cg, speedup(r, r->cwide_ms),
-                r->cwide_agree, (unsigned long long)wide->cwide.node_bytes);
+                r->cwide_agree, (unsigned long long)wide->cwide.node_bytes, r->cwide2_ms, c2g,
+                speedup(r, r->cwide2_ms), r->cwide2_agree);
         return;
     }
     if (driver)
@@ -332,16 +346,19 @@ static void print_row(FILE *f, bool csv, const char *scene, uint64_t tris, const
         fprintf(f, "%-24s %10llu  %-22s %9u %9.3f %9s %8.3f %8s %7s %9s %5.1f%%", scene,
                 (unsigned long long)tris, r->set, r->rays, r->ours_ms, "-", og, "-", "-", "-",
                 100 * r->hit_frac);
-    fprintf(f, "  %9.3f %8.3f %7.3f %8.4f%%  %9.3f %8.3f %7.3f %8.4f%%\n", r->wide_ms, wg,
-            speedup(r, r->wide_ms), 100 * r->wide_agree, r->cwide_ms, cg, speedup(r, r->cwide_ms),
-            100 * r->cwide_agree);
+    fprintf(f,
+            "  %9.3f %8.3f %7.3f %8.4f%%  %9.3f %8.3f %7.3f %8.4f%%  %9.3f %8.3f %7.3f %8.4f%%\n",
+            r->wide_ms, wg, speedup(r, r->wide_ms), 100 * r->wide_agree, r->cwide_ms, cg,
+            speedup(r, r->cwide_ms), 100 * r->cwide_agree, r->cwide2_ms, c2g,
+            speedup(r, r->cwide2_ms), 100 * r->cwide2_agree);
 }
 
 static const char *CSV_HEADER = "scene,triangles,ray_set,rays,ours_ms,driver_ms,ours_grays,"
                                 "driver_grays,ratio,agree,hit_fraction,driver_launch_width,"
                                 "wide_ms,wide_grays,wide_ratio,wide_agree,ours_node_bytes,"
                                 "wide_node_bytes,cwide_ms,cwide_grays,cwide_ratio,cwide_agree,"
-                                "cwide_node_bytes\n";
+                                "cwide_node_bytes,cwide2_ms,cwide2_grays,cwide2_ratio,"
+                                "cwide2_agree\n";
 
 /* Creates the device with VK_KHR ray tracing when it has it; *driver says which. */
 static rd_vk_result create_device(rd_vk *vk, const options *o, bool *driver, char *err,
@@ -436,6 +453,10 @@ int main(int argc, char **argv)
         res = rd_pipeline_create(&vk, &b.trace_cwide, "rtb_trace_cwide",
                                  pc_spv_rtb_trace_cwide_comp, sizeof pc_spv_rtb_trace_cwide_comp,
                                  sizeof(pc_push), err, sizeof err);
+    if (res == RD_VK_OK)
+        res = rd_pipeline_create(&vk, &b.trace_cwide2, "rtb_trace_cwide2",
+                                 pc_spv_rtb_trace_cwide2_comp, sizeof pc_spv_rtb_trace_cwide2_comp,
+                                 sizeof(pc_push), err, sizeof err);
     if (res == RD_VK_OK) res = rd_timer_create(&vk, &b.timer, err, sizeof err);
     if (res == RD_VK_OK)
         res = rd_buffer_create(&vk, &b.globals, sizeof(pc_globals), RD_MEMORY_UPLOAD, err,
@@ -451,6 +472,9 @@ int main(int argc, char **argv)
         res = rd_buffer_create(&vk, &b.hits_wide, max_rays * 4, RD_MEMORY_DEVICE, err, sizeof err);
     if (res == RD_VK_OK)
         res = rd_buffer_create(&vk, &b.hits_cwide, max_rays * 4, RD_MEMORY_DEVICE, err, sizeof err);
+    if (res == RD_VK_OK)
+        res =
+            rd_buffer_create(&vk, &b.hits_cwide2, max_rays * 4, RD_MEMORY_DEVICE, err, sizeof err);
     if (res == RD_VK_OK) res = rd_world_create(&vk, &world, err, sizeof err);
     if (res == RD_VK_OK) rd_world_set_scene(&world, &gs);
 
@@ -494,14 +518,14 @@ int main(int argc, char **argv)
 
     if (res == RD_VK_OK) {
         printf("\n%-24s %10s  %-22s %9s %9s %9s %8s %8s %7s %9s %6s  %9s %8s %7s %9s  %9s %8s "
-               "%7s %9s\n",
+               "%7s %9s  %9s %8s %7s %9s\n",
                "scene", "triangles", "ray set", "rays", "ours ms", "driver ms", "ours", "driver",
                "ratio", "agree", "hit", "wide ms", "wide", "wide/", "wide", "cwide ms", "cwide",
-               "cwide/", "cwide");
+               "cwide/", "cwide", "cwide2 ms", "cwide2", "cwide2/", "cwide2");
         printf("%-24s %10s  %-22s %9s %9s %9s %8s %8s %7s %9s %6s  %9s %8s %7s %9s  %9s %8s %7s "
-               "%9s\n",
+               "%9s  %9s %8s %7s %9s\n",
                "", "", "", "", "", "", "Grays/s", "Grays/s", "", "", "", "", "Grays/s", "ours",
-               "agree", "", "Grays/s", "ours", "agree");
+               "agree", "", "Grays/s", "ours", "agree", "", "Grays/s", "ours", "agree");
         for (unsigned i = 0; i < nrows; i++)
             print_row(stdout, false, o.scene, scene.tri_total, &rows[i], b.driver, &wide);
         printf("\nnode bytes: ours %llu, wide %llu, cwide %llu\n",
@@ -509,14 +533,17 @@ int main(int argc, char **argv)
                (unsigned long long)wide.cwide.node_bytes);
         for (unsigned i = 0; i < nrows; i++) {
             double w = speedup(&rows[i], rows[i].wide_ms), c = speedup(&rows[i], rows[i].cwide_ms);
+            double c2 = speedup(&rows[i], rows[i].cwide2_ms);
             printf("wide pays on %s: %s (wide/ours %.3f)\n", rows[i].set, w > 1 ? "yes" : "no", w);
             printf("cwide pays on %s: %s (cwide/ours %.3f)\n", rows[i].set, c > 1 ? "yes" : "no",
                    c);
+            printf("cwide2 pays on %s: %s (cwide2/ours %.3f)\n", rows[i].set, c2 > 1 ? "yes" : "no",
+                   c2);
         }
         for (unsigned i = 0; i < nrows; i++) {
-            const char *name[2] = {"wide", "cwide"};
-            double agree[2] = {rows[i].wide_agree, rows[i].cwide_agree};
-            for (int k = 0; k < 2; k++) {
+            const char *name[3] = {"wide", "cwide", "cwide2"};
+            double agree[3] = {rows[i].wide_agree, rows[i].cwide_agree, rows[i].cwide2_agree};
+            for (int k = 0; k < 3; k++) {
                 if (1 - agree[k] > MISMATCH_MAX) {
                     fprintf(stderr,
                             "probecast_rtbench: error: %s: %.4f%% of %s hits disagree with ours "
@@ -560,6 +587,7 @@ int main(int argc, char **argv)
         status = 1;
     }
     rd_world_destroy(&world);
+    rd_buffer_destroy(&vk, &b.hits_cwide2);
     rd_buffer_destroy(&vk, &b.hits_cwide);
     rd_buffer_destroy(&vk, &b.hits_wide);
     rd_buffer_destroy(&vk, &b.hits_driver);
@@ -567,6 +595,7 @@ int main(int argc, char **argv)
     rd_buffer_destroy(&vk, &b.rays);
     rd_buffer_destroy(&vk, &b.globals);
     rd_timer_destroy(&vk, &b.timer);
+    rd_pipeline_destroy(&vk, &b.trace_cwide2);
     rd_pipeline_destroy(&vk, &b.trace_cwide);
     rd_pipeline_destroy(&vk, &b.trace_wide);
     rd_pipeline_destroy(&vk, &b.trace);

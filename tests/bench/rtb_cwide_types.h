@@ -18,7 +18,11 @@
  *     as node memory); its count sits in the child's meta byte;
  *   - the meta byte gives the child's rank directly instead of the paper's slot index and
  *     imask, so the node has a spare byte.
- * Interior children are stored contiguously from child_base, in slot order (as in the paper).
+ * Interior children are stored contiguously from child_base, in slot order (as in the paper),
+ * and leaf entries from leaf_base in slot order too: a child's rank is the number of children
+ * of its kind in lower slots, which the group traversal (rtb_trace_cwide.comp with
+ * RTB_CWIDE_GROUPS) computes with a population count instead of reading the meta byte.
+ * Slots are ordered by ray octant (bvh_cwide.h).
  *
  * Words, as uvec4/vec4 for std430 (bytes little-endian, byte k = bits 8k..8k+7):
  *   origin.xyz  p (float); origin.w uint bits: byte a (a = 0, 1, 2 for x, y, z) = the biased
@@ -40,7 +44,9 @@
 #define RTB_CWIDE 8
 #define RTB_CWIDE_INTERIOR 0x80u
 /* Traversal stack entries of rtb_trace_cwide.comp; rtb_wide_stack_need(RTB_CWIDE, depth) must
- * not exceed it (depth 15 or less). */
+ * not exceed it (depth 15 or less). The group traversal needs less: a group per level of the
+ * TLAS and of one BLAS and the instances of one TLAS node's leaves, 2 (depth + 1) +
+ * RTB_CWIDE * RD_BVH_MAX_LEAF = 96 entries at depth 15. */
 #define RTB_CWIDE_STACK 256
 
 PC_STRUCT(rtb_cwide_node)

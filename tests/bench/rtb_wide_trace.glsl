@@ -17,6 +17,8 @@
  *                    ones with wide_push, farthest first, as (child node, 0) or (leaf, count);
  *   wide_leaf_first  the first primitive of a leaf entry (x, count) it pushed;
  *   wide_mesh_root   the wide root of a mesh's BLAS.
+ * An includer that defines WIDE_OWN_TRACE brings its own wide_trace (same contract) instead of
+ * the loop below and defines none of the three.
  */
 #ifndef RTB_WIDE_TRACE_GLSL
 #define RTB_WIDE_TRACE_GLSL
@@ -35,6 +37,11 @@ bool trace_alpha_pass(pc_scene_refs scene, uint tri, float u, float v) { return 
 
 #define WIDE_ENTRY_INSTANCE 0xfffffffeu /* stack entry count of a waiting instance */
 #define WIDE_INF uintBitsToFloat(0x7f800000u)
+
+#ifdef WIDE_OWN_TRACE
+bool wide_trace(pc_scene_refs scene, WIDE_REFS w, vec3 org, vec3 dir, float tmin, float tmax,
+                out float t_hit);
+#else
 
 void wide_visit(WIDE_REFS w, uint node, vec3 o, vec3 inv, bvec3 neg, float tmin, float t_cull);
 uint wide_leaf_first(WIDE_REFS w, uint x);
@@ -148,6 +155,8 @@ bool wide_trace(pc_scene_refs scene, WIDE_REFS w, vec3 org, vec3 dir, float tmin
     t_hit = t_best;
     return found;
 }
+
+#endif /* WIDE_OWN_TRACE */
 
 void main()
 {

@@ -4,7 +4,11 @@
  * tracer decodes it and in double, contains the child's exact binary box and is the tightest
  * such box of its grid; every primitive of a hittable leaf reachable exactly once, every node
  * and leaf entry used once; the depth, and the stack a nearest-first traversal uses, within
- * rtb_wide_stack_need; closest hits over the compressed tree equal to rd_bvh_closest_triangle's.
+ * rtb_wide_stack_need; closest hits over the compressed tree equal to rd_bvh_closest_triangle's,
+ * walked nearest first (cwide) and as node groups in octant order (cwide2). The slot order the
+ * group traversal relies on: the slots hold exactly the node's non-empty children, a child's
+ * rank (its node or leaf entry) is the count of its kind in lower slots, and no child and slot
+ * would both be cheaper together (rtb_cwide_slot_cost) than with what they got.
  * Seeded, so a failure reproduces. */
 #include "renderer/bvh.h"
 #include "tests/bench/bvh_cwide.h"
@@ -77,7 +81,56 @@ typedef struct walk {
     uint32_t prim_count;
     uint32_t *seen_prim, *seen_node, *seen_leaf;
     uint32_t bad_box, loose_box, bad_scale, bad_ref, bad_index, max_level;
+    uint32_t bad_slots, bad_rank, unstable;
 } walk;
+
+/* The slot order of node d, made from binary node b whose children by slot are slots: every
+ * non-empty child of rtb_bvh_open once, ranks in slot order, a stable assignment. */
+static void check_slots(walk *c, const rtb_cwide_node *d, uint32_t b, const uint32_t *slots)
+{
+    uint32_t kids[RTB_CWIDE];
+    int n = rtb_bvh_open(c->bin, b, RTB_CWIDE, kids), want = 0, have = 0;
+    for (int i = 0; i < n; i++) {
+        if (rtb_bvh_box_empty(&c->bin[kids[i]])) continue;
+        want++;
+        int found = 0;
+        for (int k = 0; k < RTB_CWIDE; k++)
+            found += slots[k] == kids[i];
+        if (found != 1) c->bad_slots++;
+    }
+    for (int k = 0; k < RTB_CWIDE; k++)
+        have += slots[k] != RTB_CWIDE_NONE;
+    if (have != want) c->bad_slots++;
+
+    uint32_t below[2] = {0, 0}; /* leaves, interior children in lower slots */
+    for (int k = 0; k < RTB_CWIDE; k++) {
+        uint32_t meta = byte_of(&d->refs, 2 + (k >> 2), k & 3);
+        if (meta == 0) continue;
+        int inner = (meta & RTB_CWIDE_INTERIOR) != 0;
+        if ((meta & 7) != below[inner]++) c->bad_rank++;
+    }
+
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int k = 0; k < RTB_CWIDE; k++) {
+        if (slots[k] == RTB_CWIDE_NONE) continue;
+        for (int a = 0; a < 3; a++) {
+            lo[a] = fminf(lo[a], (&c->bin[slots[k]].bmin.x)[a]);
+            hi[a] = fmaxf(hi[a], (&c->bin[slots[k]].bmax.x)[a]);
+        }
+    }
+    for (int k = 0; k < RTB_CWIDE; k++) { /* child in k against every other slot j */
+        if (slots[k] == RTB_CWIDE_NONE) continue;
+        const pc_bvh_node *ck = &c->bin[slots[k]];
+        double mine = rtb_cwide_slot_cost(lo, hi, ck, k);
+        for (int j = 0; j < RTB_CWIDE; j++) {
+            double there = rtb_cwide_slot_cost(lo, hi, ck, j);
+            double holder = slots[j] == RTB_CWIDE_NONE
+                                ? INFINITY
+                                : rtb_cwide_slot_cost(lo, hi, &c->bin[slots[j]], j);
+            if (there < mine && there < holder) c->unstable++;
+        }
+    }
+}
 
 static bool box_in(const float *lo, const float *hi, const float *ilo, const float *ihi)
 {
@@ -97,13 +150,15 @@ static void check_node(walk *c, uint32_t n, uint32_t b, uint32_t level)
     if (level > c->max_level) c->max_level = level;
     const rtb_cwide_node *d = &c->w->nodes[n];
     uint32_t slots[RTB_CWIDE];
-    int ns = rtb_bvh_open(c->bin, b, RTB_CWIDE, slots);
+    float ulo[3], uhi[3];
+    rtb_cwide_slots(c->bin, b, slots, ulo, uhi);
+    check_slots(c, d, b, slots);
     float nlo[3] = {INFINITY, INFINITY, INFINITY}, nhi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (int k = 0; k < RTB_CWIDE; k++) {
         float lo[3], hi[3];
         uint32_t child, count;
         bool used = rtb_cwide_child(c->w, d, k, lo, hi, &child, &count);
-        bool expect = k < ns && !rtb_bvh_box_empty(&c->bin[slots[k]]);
+        bool expect = slots[k] != RTB_CWIDE_NONE;
         if (used != expect) c->bad_ref++;
         if (!used || !expect) continue;
         const pc_bvh_node *e = &c->bin[slots[k]];
@@ -223,6 +278,101 @@ static float cwide_closest(const rtb_cwide *w, const float *pos, const uint32_t 
     return tmax;
 }
 
+/* The slab test of cwide_closest on child k of node n: entry distance *t0, or false. */
+static bool child_hit(const rtb_cwide *w, const rtb_cwide_node *n, int k, const float o[3],
+                      const float d[3], float tmax, double *t0, uint32_t *child, uint32_t *count)
+{
+    float lo[3], hi[3];
+    if (!rtb_cwide_child(w, n, k, lo, hi, child, count)) return false;
+    double ta0 = 0, ta1 = tmax;
+    for (int a = 0; a < 3; a++) {
+        double inv = 1.0 / d[a];
+        double ta = (lo[a] - 1e-4 - o[a]) * inv, tb = (hi[a] + 1e-4 - o[a]) * inv;
+        if (ta > tb) {
+            double s = ta;
+            ta = tb;
+            tb = s;
+        }
+        ta0 = ta > ta0 ? ta : ta0;
+        ta1 = tb < ta1 ? tb : ta1;
+    }
+    *t0 = ta0;
+    return ta0 <= ta1;
+}
+
+static int msb(uint32_t x)
+{
+    int b = 31;
+    while (!(x >> b))
+        b--;
+    return b;
+}
+
+static int popcount(uint32_t x)
+{
+    int n = 0;
+    for (; x; x &= x - 1)
+        n++;
+    return n;
+}
+
+/* Closest hit as rtb_trace_cwide.comp's group traversal walks it (one level): entries
+ * (child_base, hits << 8 | imask), hits in octant order (slot s at bit s ^ (7 - octant)), the
+ * next child the highest bit and its node index the base plus the interior slots below it
+ * (which is what the slot order must make right: a wrong rank visits the wrong node and loses
+ * hits); a node's hit leaves intersected at once. *max_sp: the most groups the stack held. */
+static float cwide_groups_closest(const rtb_cwide *w, const float *pos, const uint32_t *prim_index,
+                                  uint32_t root, const float o[3], const float d[3],
+                                  uint32_t *max_sp)
+{
+    uint32_t x = (d[0] < 0 ? 0u : 1u) | (d[1] < 0 ? 0u : 2u) | (d[2] < 0 ? 0u : 4u);
+    uint32_t stack[1024][2], sp = 0;
+    uint32_t gx = root, gy = (1u << (8 + x)) | 1u;
+    float tmax = INFINITY;
+    for (;;) {
+        if ((gy & 0xff00u) == 0) {
+            if (sp == 0) break;
+            sp--;
+            gx = stack[sp][0], gy = stack[sp][1];
+            continue;
+        }
+        int bit = msb(gy);
+        gy &= ~(1u << bit);
+        uint32_t slot = ((uint32_t)bit - 8) ^ x;
+        uint32_t node = gx + (uint32_t)popcount(gy & ((1u << slot) - 1));
+        if ((gy & 0xff00u) && sp < 1024) {
+            stack[sp][0] = gx, stack[sp][1] = gy;
+            sp++;
+            if (sp > *max_sp) *max_sp = sp;
+        }
+        const rtb_cwide_node *n = &w->nodes[node];
+        uint32_t ihits = 0, lhits = 0, imask = 0, first[RTB_CWIDE], cnt[RTB_CWIDE];
+        for (int k = 0; k < RTB_CWIDE; k++) {
+            uint32_t meta = byte_of(&n->refs, 2 + (k >> 2), k & 3);
+            if (meta & RTB_CWIDE_INTERIOR) imask |= 1u << k;
+            double t0;
+            if (!child_hit(w, n, k, o, d, tmax, &t0, &first[k], &cnt[k])) continue;
+            if (cnt[k] == 0)
+                ihits |= 1u << (k ^ x);
+            else
+                lhits |= 1u << (k ^ x);
+        }
+        gx = n->refs.x, gy = ihits << 8 | imask;
+        while (lhits) {
+            int b = msb(lhits);
+            lhits &= ~(1u << b);
+            uint32_t k = (uint32_t)b ^ x;
+            for (uint32_t i = first[k]; i < first[k] + cnt[k]; i++) {
+                const float *t = &pos[(size_t)prim_index[i] * 9];
+                float th, u, v;
+                bool back;
+                if (rd_ray_triangle(o, d, t, t + 3, t + 6, 0, tmax, &th, &u, &v, &back)) tmax = th;
+            }
+        }
+    }
+    return tmax;
+}
+
 /* Collapses bvh (over count primitives with boxes pmin/pmax; triangles pos when not NULL) and
  * checks it. */
 static void check_tree(const rd_bvh *bvh, const float *pmin, const float *pmax, uint32_t count,
@@ -253,6 +403,9 @@ static void check_tree(const rd_bvh *bvh, const float *pmin, const float *pmax, 
            c.bad_scale);
     CHECKF(c.bad_ref == 0 && c.bad_index == 0, "%u bad references, %u bad indices", c.bad_ref,
            c.bad_index);
+    CHECKF(c.bad_slots == 0 && c.bad_rank == 0 && c.unstable == 0,
+           "slot order: %u bad child sets, %u ranks out of slot order, %u unstable pairs",
+           c.bad_slots, c.bad_rank, c.unstable);
     uint32_t once = 0, never = 0, twice = 0;
     for (uint32_t i = 0; i < bvh->prim_count; i++) {
         once += c.seen_prim[i] == 1;
@@ -278,7 +431,7 @@ static void check_tree(const rd_bvh *bvh, const float *pmin, const float *pmax, 
     CHECK(rtb_wide_stack_need(RTB_CWIDE, w.depth) <= RTB_CWIDE_STACK);
 
     if (pos) {
-        uint32_t rays = 2000, same = 0, max_sp = 0;
+        uint32_t rays = 2000, same = 0, same_groups = 0, max_sp = 0, max_groups = 0;
         for (uint32_t r = 0; r < rays; r++) {
             /* from inside and around the scene's box, towards random points in it; the first
              * ray the cage's spine */
@@ -293,8 +446,13 @@ static void check_tree(const rd_bvh *bvh, const float *pmin, const float *pmax, 
             int64_t hit = rd_bvh_closest_triangle(bvh, pos, o, d, 0, INFINITY, &tb);
             float tw = cwide_closest(&w, pos, bvh->prim_index, root, o, d, &max_sp);
             same += hit < 0 ? tw == INFINITY : tw == tb;
+            float tg = cwide_groups_closest(&w, pos, bvh->prim_index, root, o, d, &max_groups);
+            same_groups += hit < 0 ? tg == INFINITY : tg == tb;
         }
         CHECKF(same == rays, "%u of %u rays agree", same, rays);
+        CHECKF(same_groups == rays, "groups: %u of %u rays agree", same_groups, rays);
+        /* a group per level at most, within RTB_CWIDE_STACK's bound for groups */
+        CHECKF(max_groups <= w.depth + 1, "%u groups at depth %u", max_groups, w.depth);
         /* one level's share of the two-level bound */
         CHECKF(2 * max_sp + RD_BVH_MAX_LEAF <= rtb_wide_stack_need(RTB_CWIDE, w.depth),
                "stack held %u entries at depth %u", max_sp, w.depth);
