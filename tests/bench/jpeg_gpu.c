@@ -259,6 +259,7 @@ void jpeg_gpu_destroy(jpeg_gpu *g)
     pthread_mutex_destroy(&g->lock);
     rd_vk_wait_idle(g->vk);
     rd_timer_destroy(g->vk, &g->timer);
+    rd_buffer_destroy(g->vk, &g->frame_host);
     rd_buffer_destroy(g->vk, &g->quant);
     rd_buffer_destroy(g->vk, &g->coefs_host);
     rd_buffer_destroy(g->vk, &g->coefs);
@@ -337,6 +338,27 @@ rd_vk_result jpeg_gpu_transform(jpeg_gpu *g, jpeg_gpu_times *times, char *err, s
         times->copy_ms = g->timer.valid ? g->timer.ms[2] : 0;
         times->wall_ms = srv_mono_ms() - t0;
     }
+    return r;
+}
+
+rd_vk_result jpeg_gpu_time_frame_copy(jpeg_gpu *g, jpeg_gpu_times *times, char *err, size_t errlen)
+{
+    double t0 = srv_mono_ms();
+    VkDeviceSize bytes = (VkDeviceSize)g->width * g->height * 4;
+    rd_vk_result r = ensure(g->vk, &g->frame_host, bytes, RD_MEMORY_READBACK, err, errlen);
+    rd_cmd cmd;
+    if (r == RD_VK_OK) r = rd_cmd_begin(g->vk, &cmd, err, errlen);
+    if (r != RD_VK_OK) return r;
+    rd_timer_begin(&cmd, &g->timer);
+    VkBufferCopy region = {.size = bytes};
+    vkCmdCopyBuffer(cmd.cb, g->frame.buffer, g->frame_host.buffer, 1, &region);
+    rd_cmd_barrier(&cmd);
+    rd_timer_mark(&cmd, &g->timer, "copy");
+    r = rd_cmd_submit_wait(g->vk, &cmd, err, errlen);
+    if (r == RD_VK_OK) r = rd_timer_resolve(g->vk, &g->timer, err, errlen);
+    times->dct_ms = 0;
+    times->copy_ms = g->timer.valid ? g->timer.ms[1] : 0;
+    times->wall_ms = srv_mono_ms() - t0;
     return r;
 }
 

@@ -39,6 +39,7 @@ typedef struct jpeg_gpu {
     rd_buffer coefs;      /* device local: the quantised coefficients */
     rd_buffer coefs_host; /* RD_MEMORY_READBACK: their copy, read by the entropy coders */
     rd_buffer quant;      /* RD_MEMORY_UPLOAD: luma and chroma tables, 64 uints each */
+    rd_buffer frame_host; /* RD_MEMORY_READBACK: the frame, for jpeg_gpu_time_frame_copy */
     rd_timer timer;
     unsigned width, height, quality;
     unsigned mcu_cols, mcu_rows;
@@ -78,6 +79,10 @@ rd_vk_result jpeg_gpu_set_frame(jpeg_gpu *g, const uint8_t *rgba, unsigned width
 /* Runs the compute pass and the copy on the frame, waits: the coefficients are then in
  * g->coefs_host. times may be NULL. */
 rd_vk_result jpeg_gpu_transform(jpeg_gpu *g, jpeg_gpu_times *times, char *err, size_t errlen);
+
+/* For comparison, what the CPU encoders' input costs instead: the frame copied to host-visible
+ * memory as the renderer's readback does (renderer/readback.c). times->dct_ms is 0. */
+rd_vk_result jpeg_gpu_time_frame_copy(jpeg_gpu *g, jpeg_gpu_times *times, char *err, size_t errlen);
 
 /* Entropy-codes the coefficients as one baseline JPEG (no restart markers) on this thread
  * into out. false on a libjpeg error (message in err). */
