@@ -19,6 +19,8 @@
  * 4:2:0, DCT and quantisation in a compute pass, the coefficients copied to host memory, then
  * entropy-coded by libjpeg on the CPU, whole on one thread or striped over n threads and joined.
  * The frame is uploaded once per size, untimed (the renderer's frame already lies on the GPU).
+ * Every thread count has two rows: coefs "copy" (the pass writes device memory, then a copy to
+ * host memory) and "direct" (the pass writes host-visible memory over the bus, no copy).
  * Columns, medians: dct_ms and copy_ms: GPU timestamps around the pass and the copy;
  * gpu_wall_ms: record, submit and wait on the host; rgba_copy_ms and rgba_wall_ms: the same for
  * copying the RGBA frame to host memory instead, as the renderer does for the CPU encoders (so
@@ -527,14 +529,15 @@ static void gpu_table(const char *device, const char *csv, const char *machine, 
     printf("# GPU path on %s%s: DCT and quantisation on the GPU, entropy coding on n CPU "
            "threads\n",
            vk.device_name, vk.timestamp_period_ns > 0 ? "" : " (no timestamps)");
-    printf("%-10s %7s %7s %7s %7s %11s %12s %12s %10s %9s %12s %9s %10s %8s %7s %11s %11s %14s\n",
-           "size", "threads", "stripes", "dct_ms", "copy_ms", "gpu_wall_ms", "rgba_copy_ms",
-           "rgba_wall_ms", "entropy_ms", "total_ms", "total_p10_ms", "single_ms", "bytes", "ratio",
-           "speedup", "psnr_src_db", "psnr_ref_db", "single_psnr_db");
+    printf("%-10s %7s %7s %6s %7s %7s %11s %12s %12s %10s %9s %12s %9s %10s %8s %7s %11s %11s "
+           "%14s\n",
+           "size", "threads", "stripes", "coefs", "dct_ms", "copy_ms", "gpu_wall_ms",
+           "rgba_copy_ms", "rgba_wall_ms", "entropy_ms", "total_ms", "total_p10_ms", "single_ms",
+           "bytes", "ratio", "speedup", "psnr_src_db", "psnr_ref_db", "single_psnr_db");
     FILE *out = csv ? fopen(csv, "w") : NULL;
     if (csv && !out) fprintf(stderr, "cannot write %s\n", csv);
     if (out)
-        fprintf(out, "machine,device,width,height,quality,threads,stripes,dct_ms,copy_ms,"
+        fprintf(out, "machine,device,width,height,quality,threads,stripes,coefs,dct_ms,copy_ms,"
                      "gpu_wall_ms,rgba_copy_ms,rgba_wall_ms,entropy_ms,total_ms,total_p10_ms,"
                      "single_ms,bytes,single_bytes,"
                      "ratio,speedup,psnr_src_db,psnr_ref_db,single_psnr_db\n");
@@ -545,31 +548,34 @@ static void gpu_table(const char *device, const char *csv, const char *machine, 
             fprintf(stderr, "GPU path: %s\n", err);
             exit(1);
         }
-        for (unsigned t = 0; t < thread_count; t++) {
-            unsigned n = threads[t];
+        for (unsigned t = 0; t < 2 * thread_count; t++) {
+            unsigned n = threads[t / 2];
+            g.direct = t % 2; /* the coefficients copied, or written straight to host memory */
             if (n < 1 || (long)n > cores || n > JPEG_GPU_MAX_THREADS) continue;
             gpu_row rw;
             measure_gpu(&g, rgba, n, runs, &rw);
             double ratio = (double)rw.bytes / (double)rw.single_bytes;
             char sz[32];
             snprintf(sz, sizeof sz, "%ux%u", w, h);
-            printf("%-10s %7u %7u %7.3f %7.3f %11.3f %12.3f %12.3f %10.3f %9.3f %12.3f %9.3f %10zu "
+            printf("%-10s %7u %7u %6s %7.3f %7.3f %11.3f %12.3f %12.3f %10.3f %9.3f %12.3f %9.3f "
+                   "%10zu "
                    "%8.4f %7.2f %11.2f %11.2f %14.2f\n",
-                   sz, n, rw.stripes, rw.dct_ms, rw.copy_ms, rw.wall_ms, rw.rgba_copy_ms,
-                   rw.rgba_wall_ms, rw.entropy_ms, rw.total_ms, rw.total_p10_ms, rw.single_ms,
-                   rw.bytes, ratio, rw.single_ms / rw.total_ms, rw.psnr_src, rw.psnr_ref,
-                   rw.psnr_single);
+                   sz, n, rw.stripes, g.direct ? "direct" : "copy", rw.dct_ms, rw.copy_ms,
+                   rw.wall_ms, rw.rgba_copy_ms, rw.rgba_wall_ms, rw.entropy_ms, rw.total_ms,
+                   rw.total_p10_ms, rw.single_ms, rw.bytes, ratio, rw.single_ms / rw.total_ms,
+                   rw.psnr_src, rw.psnr_ref, rw.psnr_single);
             fflush(stdout);
             if (out)
-                fprintf(out,
-                        "\"%s\",\"%s\",%u,%u,%u,%u,%u,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,"
-                        "%zu,%zu,"
-                        "%.4f,%.3f,%.3f,%.3f,%.3f\n",
-                        machine, vk.device_name, w, h, quality, n, rw.stripes, rw.dct_ms,
-                        rw.copy_ms, rw.wall_ms, rw.rgba_copy_ms, rw.rgba_wall_ms, rw.entropy_ms,
-                        rw.total_ms, rw.total_p10_ms, rw.single_ms, rw.bytes, rw.single_bytes,
-                        ratio, rw.single_ms / rw.total_ms, rw.psnr_src, rw.psnr_ref,
-                        rw.psnr_single);
+                fprintf(
+                    out,
+                    "\"%s\",\"%s\",%u,%u,%u,%u,%u,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,"
+                    "%zu,%zu,"
+                    "%.4f,%.3f,%.3f,%.3f,%.3f\n",
+                    machine, vk.device_name, w, h, quality, n, rw.stripes,
+                    g.direct ? "direct" : "copy", rw.dct_ms, rw.copy_ms, rw.wall_ms,
+                    rw.rgba_copy_ms, rw.rgba_wall_ms, rw.entropy_ms, rw.total_ms, rw.total_p10_ms,
+                    rw.single_ms, rw.bytes, rw.single_bytes, ratio, rw.single_ms / rw.total_ms,
+                    rw.psnr_src, rw.psnr_ref, rw.psnr_single);
         }
         free(rgba);
     }

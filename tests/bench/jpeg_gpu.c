@@ -313,16 +313,21 @@ rd_vk_result jpeg_gpu_transform(jpeg_gpu *g, jpeg_gpu_times *times, char *err, s
     if (r != RD_VK_OK) return r;
     rd_timer_begin(&cmd, &g->timer);
     pc_push push = {.buf0 = g->frame.address,
-                    .buf1 = g->coefs.address,
+                    .buf1 = g->direct ? g->coefs_host.address : g->coefs.address,
                     .buf2 = g->quant.address,
                     .params = {g->width, g->height, g->mcu_cols, g->mcu_rows}};
     rd_cmd_dispatch(&cmd, &g->pipeline, &push, g->mcu_cols, g->mcu_rows, 1);
-    rd_timer_mark(&cmd, &g->timer, "dct");
-    rd_cmd_barrier(&cmd);
-    VkBufferCopy region = {.size = (VkDeviceSize)g->mcu_cols * g->mcu_rows * 6 * sizeof(JBLOCK)};
-    vkCmdCopyBuffer(cmd.cb, g->coefs.buffer, g->coefs_host.buffer, 1, &region);
-    rd_cmd_barrier(&cmd); /* the copy's writes become visible to the host */
-    rd_timer_mark(&cmd, &g->timer, "copy");
+    rd_timer_mark(&cmd, &g->timer, "dct"); /* its barrier: the pass's writes, host-visible */
+    if (!g->direct) {
+        rd_cmd_barrier(&cmd);
+        VkBufferCopy region = {.size =
+                                   (VkDeviceSize)g->mcu_cols * g->mcu_rows * 6 * sizeof(JBLOCK)};
+        vkCmdCopyBuffer(cmd.cb, g->coefs.buffer, g->coefs_host.buffer, 1, &region);
+        rd_cmd_barrier(&cmd); /* the copy's writes become visible to the host */
+        rd_timer_mark(&cmd, &g->timer, "copy");
+    } else {
+        rd_cmd_barrier(&cmd); /* also without timestamps */
+    }
     r = rd_cmd_submit_wait(g->vk, &cmd, err, errlen);
     if (r == RD_VK_OK) r = rd_timer_resolve(g->vk, &g->timer, err, errlen);
     if (r == RD_VK_OK && !(g->coefs_host.memory_flags & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT)) {
@@ -335,7 +340,7 @@ rd_vk_result jpeg_gpu_transform(jpeg_gpu *g, jpeg_gpu_times *times, char *err, s
     }
     if (times) {
         times->dct_ms = g->timer.valid ? g->timer.ms[1] : 0;
-        times->copy_ms = g->timer.valid ? g->timer.ms[2] : 0;
+        times->copy_ms = g->timer.valid && !g->direct ? g->timer.ms[2] : 0;
         times->wall_ms = srv_mono_ms() - t0;
     }
     return r;

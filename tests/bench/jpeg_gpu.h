@@ -4,9 +4,10 @@
  * tests/bench/shaders/jpeg_dct.comp converts an RGBA8 frame (the renderer's view buffer layout)
  * to YCbCr, averages chroma 2x2, transforms and quantises every 8x8 block with the tables
  * libjpeg itself computes for the quality (jpeg_set_quality); the coefficients are copied to a
- * host-visible buffer; libjpeg's transcoding API (jpeg_write_coefficients, standard Huffman
- * tables) entropy-codes them on the CPU, whole on one thread or in stripes of MCU rows on
- * several threads, joined with restart markers by server/jpeg_striped.c's srv_jpeg_join.
+ * host-visible buffer (or the pass writes that buffer itself: jpeg_gpu.direct); libjpeg's
+ * transcoding API (jpeg_write_coefficients, standard Huffman tables) entropy-codes them on the
+ * CPU, whole on one thread or in stripes of MCU rows on several threads, joined with restart
+ * markers by server/jpeg_striped.c's srv_jpeg_join.
  *
  * Coefficient layout (GPU buffer = host copy = libjpeg's coefficient arrays): three planes of
  * 8x8 blocks (64 int16, natural order), rows of blocks top to bottom: Y with 2 * mcu_cols x
@@ -42,6 +43,7 @@ typedef struct jpeg_gpu {
     rd_buffer frame_host; /* RD_MEMORY_READBACK: the frame, for jpeg_gpu_time_frame_copy */
     rd_timer timer;
     unsigned width, height, quality;
+    bool direct; /* the pass writes coefs_host itself over the bus (no coefs, no copy) */
     unsigned mcu_cols, mcu_rows;
 
     /* entropy threads: coders[0] is the caller's; threads 1.. wait for a job */
@@ -76,8 +78,8 @@ void jpeg_gpu_destroy(jpeg_gpu *g);
  * of `quality` (1-100), growing the buffers as needed. */
 rd_vk_result jpeg_gpu_set_frame(jpeg_gpu *g, const uint8_t *rgba, unsigned width, unsigned height,
                                 unsigned quality, char *err, size_t errlen);
-/* Runs the compute pass and the copy on the frame, waits: the coefficients are then in
- * g->coefs_host. times may be NULL. */
+/* Runs the compute pass and the copy on the frame (or the pass alone, writing host memory, when
+ * g->direct), waits: the coefficients are then in g->coefs_host. times may be NULL. */
 rd_vk_result jpeg_gpu_transform(jpeg_gpu *g, jpeg_gpu_times *times, char *err, size_t errlen);
 
 /* For comparison, what the CPU encoders' input costs instead: the frame copied to host-visible
