@@ -1,0 +1,103 @@
+/* jpeg_gpu.h: a baseline 4:2:0 JPEG whose lossy half runs on the GPU, for probecast_jpegbench
+ * (issue 14: GPU JPEG against the striped CPU encoder). A benchmark path, not the daemon's.
+ *
+ * tests/bench/shaders/jpeg_dct.comp converts an RGBA8 frame (the renderer's view buffer layout)
+ * to YCbCr, averages chroma 2x2, transforms and quantises every 8x8 block with the tables
+ * libjpeg itself computes for the quality (jpeg_set_quality); the coefficients are copied to a
+ * host-visible buffer (or the pass writes that buffer itself: jpeg_gpu.direct); libjpeg's
+ * transcoding API (jpeg_write_coefficients, standard Huffman tables) entropy-codes them on the
+ * CPU, whole on one thread or in stripes of MCU rows on several threads, joined with restart
+ * markers by server/jpeg_striped.c's srv_jpeg_join.
+ *
+ * Coefficient layout (GPU buffer = host copy = libjpeg's coefficient arrays): three planes of
+ * 8x8 blocks (64 int16, natural order), rows of blocks top to bottom: Y with 2 * mcu_cols x
+ * 2 * mcu_rows blocks, then Cb and Cr with mcu_cols x mcu_rows each. The encoder points
+ * libjpeg's block rows straight at the host copy (no copy of the coefficients on the CPU).
+ *
+ * Use: jpeg_gpu_create, jpeg_gpu_set_frame (uploads; the renderer would have it on the GPU),
+ * then per frame jpeg_gpu_transform and jpeg_gpu_entropy or jpeg_gpu_entropy_striped.
+ * One thread drives a jpeg_gpu; it owns its Vulkan objects and entropy threads.
+ */
+#ifndef JPEG_GPU_H
+#define JPEG_GPU_H
+
+#include <pthread.h>
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "renderer/vk_buffer.h"
+#include "renderer/vk_compute.h"
+#include "server/jpeg_striped.h"
+
+#define JPEG_GPU_MAX_THREADS 64
+
+typedef struct jpeg_gpu_coder jpeg_gpu_coder; /* one libjpeg compressor (one per thread) */
+
+typedef struct jpeg_gpu {
+    rd_vk *vk;
+    rd_pipeline pipeline;
+    rd_buffer frame;      /* device local: width * height RGBA8 pixels */
+    rd_buffer coefs;      /* device local: the quantised coefficients */
+    rd_buffer coefs_host; /* RD_MEMORY_READBACK: their copy, read by the entropy coders */
+    rd_buffer quant;      /* RD_MEMORY_UPLOAD: luma and chroma tables, 64 uints each */
+    rd_buffer frame_host; /* RD_MEMORY_READBACK: the frame, for jpeg_gpu_time_frame_copy */
+    rd_timer timer;
+    unsigned width, height, quality;
+    bool direct; /* the pass writes coefs_host itself over the bus (no coefs, no copy) */
+    unsigned mcu_cols, mcu_rows;
+
+    /* entropy threads: coders[0] is the caller's; threads 1.. wait for a job */
+    jpeg_gpu_coder *coders[JPEG_GPU_MAX_THREADS];
+    pthread_t threads[JPEG_GPU_MAX_THREADS];
+    unsigned thread_count; /* started threads + 1 */
+    pthread_mutex_t lock;
+    pthread_cond_t wake, done;
+    uint64_t job;         /* generation: a new value starts a job */
+    unsigned job_threads; /* threads taking part in the current job */
+    unsigned job_pending; /* workers still encoding the current job */
+    bool quit;
+    const srv_jpeg_plan *plan; /* the current job */
+    srv_jpeg_buf *stripes;
+    int job_failed;
+} jpeg_gpu;
+
+/* Timings of jpeg_gpu_transform, from GPU timestamps (0 when the device has none) and the
+ * host clock. */
+typedef struct jpeg_gpu_times {
+    double dct_ms;  /* the compute pass */
+    double copy_ms; /* the copy of the coefficients to host-visible memory */
+    double wall_ms; /* record, submit and wait, on the host */
+} jpeg_gpu_times;
+
+/* Creates the pipeline and the coder of the calling thread on vk (which must outlive g). */
+rd_vk_result jpeg_gpu_create(jpeg_gpu *g, rd_vk *vk, char *err, size_t errlen);
+/* Stops the threads, frees everything; idempotent. */
+void jpeg_gpu_destroy(jpeg_gpu *g);
+
+/* Uploads width x height RGBA8 pixels (tight rows, top row first) and the quantisation tables
+ * of `quality` (1-100), growing the buffers as needed. */
+rd_vk_result jpeg_gpu_set_frame(jpeg_gpu *g, const uint8_t *rgba, unsigned width, unsigned height,
+                                unsigned quality, char *err, size_t errlen);
+/* Runs the compute pass and the copy on the frame (or the pass alone, writing host memory, when
+ * g->direct), waits: the coefficients are then in g->coefs_host. times may be NULL. */
+rd_vk_result jpeg_gpu_transform(jpeg_gpu *g, jpeg_gpu_times *times, char *err, size_t errlen);
+
+/* For comparison, what the CPU encoders' input costs instead: the frame copied to host-visible
+ * memory as the renderer's readback does (renderer/readback.c). times->dct_ms is 0. */
+rd_vk_result jpeg_gpu_time_frame_copy(jpeg_gpu *g, jpeg_gpu_times *times, char *err, size_t errlen);
+
+/* Entropy-codes the coefficients as one baseline JPEG (no restart markers) on this thread
+ * into out. false on a libjpeg error (message in err). */
+bool jpeg_gpu_entropy(jpeg_gpu *g, srv_jpeg_buf *out, char *err, size_t errlen);
+/* The same in stripes: threads (1..JPEG_GPU_MAX_THREADS, started on first use and kept) encode
+ * the plan's stripes (srv_jpeg_plan_make for the frame), each with a restart interval of one
+ * stripe, into stripes[] (plan->stripe_count buffers), and this thread joins them into out:
+ * the bytes of one encode with that restart interval. */
+bool jpeg_gpu_entropy_striped(jpeg_gpu *g, unsigned threads, const srv_jpeg_plan *plan,
+                              srv_jpeg_buf *stripes, srv_jpeg_buf *out, char *err, size_t errlen);
+
+/* The quantisation tables libjpeg uses for quality (jpeg_set_quality, baseline), natural order:
+ * tables[0] luma, tables[1] chroma. */
+void jpeg_gpu_quant_tables(unsigned quality, unsigned tables[2][64]);
+
+#endif
