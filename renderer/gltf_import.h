@@ -194,6 +194,56 @@ rd_gltf_result rd_gltf_light(rd_scene *s, size_t index, const rd_gltf_light_para
 rd_gltf_result rd_gltf_perspective(size_t index, double yfov, double znear, double aspect,
                                    rd_camera *c, char *err, size_t errlen);
 
+/* ---- external files (gltf_uri.c) ------------------------------------------------------------ */
+
+/* Where external URIs may be opened from. */
+typedef struct rd_gltf_files {
+    bool allowed; /* false: loading from memory without a base folder */
+    char *base;   /* folder that external URIs resolve against */
+    char *prefix; /* base with exactly one trailing '/' */
+    size_t prefix_len;
+    char last_refusal[256]; /* why the last path was refused ("" : none yet) */
+} rd_gltf_files;
+
+/* base_dir NULL: no file may be opened; "" means ".". dispose frees what init allocated. */
+void rd_gltf_files_init(rd_gltf_files *f, const char *base_dir);
+void rd_gltf_files_dispose(rd_gltf_files *f);
+/* Why the decoded relative URI rel (len bytes, rel[len] == '\0') may not be opened, or NULL
+ * when it may. */
+const char *rd_gltf_uri_refusal(const rd_gltf_files *f, const char *rel, size_t len);
+/* tinygltf's file callbacks get JoinPath(base, uri): true when path is the prefix followed by
+ * a URI that may be opened (*rel: where that URI starts); else records why in last_refusal. */
+bool rd_gltf_files_check_path(rd_gltf_files *f, const char *path, size_t len, size_t *rel);
+/* tinygltf's FileExists: check_path passes and path names a regular file. */
+bool rd_gltf_files_exists(rd_gltf_files *f, const char *path, size_t len);
+/* prefix + rel, malloc'd (the caller frees). */
+char *rd_gltf_files_join(const rd_gltf_files *f, const char *rel, size_t len);
+/* strerror text of e. */
+void rd_gltf_errno_text(int e, char *out, size_t outlen);
+
+typedef enum rd_gltf_read_status {
+    RD_GLTF_READ_OK = 0,
+    RD_GLTF_READ_FAILED,    /* why says what went wrong */
+    RD_GLTF_READ_TOO_LARGE, /* larger than max_size (why says how large) */
+    RD_GLTF_READ_NO_MEMORY  /* alloc returned NULL */
+} rd_gltf_read_status;
+
+/* Reads the whole regular file at path (never a FIFO or a device) into alloc(user, size),
+ * which returns size bytes owned by the caller (NULL: out of memory, unless size is 0). */
+rd_gltf_read_status rd_gltf_read_file(const char *path, uint64_t max_size,
+                                      unsigned char *(*alloc)(void *user, size_t size), void *user,
+                                      char *why, size_t whylen);
+
+/* ---- images (gltf_image.c) ---------------------------------------------------------------------
+ */
+
+/* Decodes a PNG or JPEG image to w x h 8-bit RGBA pixels (malloc'd; the caller frees) and adds
+ * their size to *decoded_bytes, or returns NULL with *code and why saying what is wrong (too
+ * large, alone or with the images decoded before, or not decodable). */
+unsigned char *rd_gltf_decode_image(uint64_t *decoded_bytes, const unsigned char *bytes,
+                                    size_t size, int *w, int *h, rd_gltf_result *code, char *why,
+                                    size_t whylen);
+
 /* Writes one message to err (errlen > 0) and returns code. */
 rd_gltf_result rd_gltf_fail(char *err, size_t errlen, rd_gltf_result code, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));

@@ -40,15 +40,8 @@
 #pragma GCC diagnostic ignored "-Wimplicit-fallthrough"
 #pragma GCC diagnostic ignored "-Wtype-limits"
 #pragma GCC diagnostic ignored "-Wunused-but-set-variable"
-#define STB_IMAGE_IMPLEMENTATION
-#define STB_IMAGE_STATIC
-#define STBI_ONLY_PNG
-#define STBI_ONLY_JPEG
-#define STBI_NO_STDIO
-#define STBI_MAX_DIMENSIONS 16384
-#include <stb/stb_image.h>
 #define TINYGLTF_IMPLEMENTATION
-#define TINYGLTF_NO_STB_IMAGE       /* our callback decodes (decode_image below) */
+#define TINYGLTF_NO_STB_IMAGE       /* our callback decodes (gltf_image.c) */
 #define TINYGLTF_NO_STB_IMAGE_WRITE /* we never write glTF */
 #define TINYGLTF_NO_EXTERNAL_IMAGE  /* external images are read by us, under our rules */
 #define TINYGLTF_NO_FS              /* no default host file access: only our callbacks */
@@ -67,9 +60,6 @@ using njson = nlohmann::json;
 using tinygltf::Model;
 
 const uint64_t kDefaultMaxTriangles = 50000000ull;
-const int kMaxImageDim = 16384;
-const uint64_t kMaxImagePixels = 1ull << 26;     /* 256 MiB as RGBA8 */
-const uint64_t kMaxDecodedBytes = 2ull << 30;    /* all images together */
 const uint64_t kMaxExternalFile = 0xffffffffull; /* tinygltf sizes are 32-bit */
 const uint64_t kMaxAnimationFloats = 1ull << 26; /* 256 MiB of animation keys and values */
 const char *const kSupportedExtensions[] = {"KHR_lights_punctual",
@@ -112,15 +102,12 @@ std::string fmt(const char *f, ...)
     throw e;
 }
 
-/* "mesh 3" or "mesh 3 'Cube'" (names shortened; control bytes are cleaned at the end). */
-/* A file's string made safe for a message: at most `max` bytes, control and non-ASCII bytes
- * (which could break a JSON reply or a terminal) replaced with '?'. */
+/* A file's string made safe for a message (rd_gltf_clean). */
 std::string clean(const std::string &s, size_t max = 64)
 {
-    std::string r = s.size() > max ? s.substr(0, max - 3) + "..." : s;
-    for (char &ch : r)
-        if ((unsigned char)ch < 0x20 || (unsigned char)ch >= 0x7f) ch = '?';
-    return r;
+    char buf[128];
+    rd_gltf_clean(s.data(), s.size(), max, buf);
+    return buf;
 }
 
 /* "mesh 3" or "mesh 3 'Cube'". */
@@ -130,106 +117,41 @@ std::string label(const char *kind, size_t index, const std::string &name)
     return fmt("%s %zu '%s'", kind, index, clean(name).c_str());
 }
 
-std::string errno_text(int e)
-{
-    char buf[256];
-    return strerror_r(e, buf, sizeof buf); /* GNU variant returns the text */
-}
+/* ---- files (rules in gltf_uri.c) -------------------------------------------------------- */
 
-/* ---- files ------------------------------------------------------------------------------ */
-
-struct FileRules {
-    bool allowed = false; /* false: loading from memory without a base folder */
-    std::string base;     /* folder that external URIs resolve against */
-    std::string prefix;   /* base with exactly one trailing '/' */
-    std::string last_refusal;
+/* rd_gltf_read_file's allocator for a std::vector (out of memory is rethrown as bad_alloc). */
+struct VectorSink {
+    std::vector<unsigned char> *v;
+    bool no_memory;
 };
 
-/* Why a decoded relative URI may not be opened, or "" when it may. */
-std::string uri_refusal(const FileRules &rules, const std::string &rel)
+unsigned char *vector_alloc(void *user, size_t size)
 {
-    if (!rules.allowed)
-        return "a file uploaded alone cannot refer to other files: upload a .glb, or a .gltf "
-               "whose buffers and images are embedded as data: URIs";
-    if (rel.empty()) return "the URI is empty";
-    if (rel.find('\0') != std::string::npos) return "the URI contains a NUL character";
-    if (rel.compare(0, 5, "data:") == 0)
-        return "only base64 data: URIs of a known media type are supported";
-    if (rel[0] == '/') return "absolute paths are not allowed";
-    if (rel.find("://") != std::string::npos) return "only relative file paths are allowed";
-    size_t start = 0;
-    for (;;) {
-        size_t end = rel.find('/', start);
-        if (rel.compare(start, end == std::string::npos ? std::string::npos : end - start, "..") ==
-            0)
-            return "the URI leaves the asset folder (it contains '..')";
-        if (end == std::string::npos) break;
-        start = end + 1;
+    VectorSink *s = static_cast<VectorSink *>(user);
+    try {
+        s->v->resize(size);
+    } catch (const std::bad_alloc &) {
+        s->no_memory = true;
+        return nullptr;
     }
-    return "";
+    return s->v->data();
 }
 
-/* Reads a whole regular file (never a FIFO or device). */
-bool read_file(const std::string &path, uint64_t max_size, std::vector<unsigned char> *out,
-               std::string *why, bool *too_large)
+rd_gltf_read_status read_file(const char *path, uint64_t max_size, std::vector<unsigned char> *out,
+                              std::string *why)
 {
-    *too_large = false;
-    int fd = open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK);
-    if (fd < 0) {
-        *why = errno_text(errno);
-        return false;
-    }
-    struct stat st;
-    bool ok = false;
-    if (fstat(fd, &st) != 0) {
-        *why = errno_text(errno);
-    } else if (!S_ISREG(st.st_mode)) {
-        *why = "it is not a regular file";
-    } else if ((uint64_t)st.st_size > max_size) {
-        *why = fmt("it is too large (%lld bytes)", (long long)st.st_size);
-        *too_large = true;
-    } else {
-        out->resize((size_t)st.st_size);
-        size_t done = 0;
-        while (done < out->size()) {
-            ssize_t n = read(fd, out->data() + done, out->size() - done);
-            if (n < 0 && errno == EINTR) continue;
-            if (n <= 0) {
-                *why = n < 0 ? errno_text(errno) : "it shrank while being read";
-                break;
-            }
-            done += (size_t)n;
-        }
-        ok = done == out->size();
-    }
-    close(fd);
-    return ok;
-}
-
-/* tinygltf passes JoinPath(base, uri) (and "./uri" as a fallback): accept only paths made from
- * our base folder and a URI that passes uri_refusal(). */
-bool rules_check_path(FileRules *rules, const std::string &path, std::string *rel)
-{
-    if (!rules->allowed || path.compare(0, rules->prefix.size(), rules->prefix) != 0) {
-        if (rules->last_refusal.empty()) rules->last_refusal = uri_refusal(*rules, path);
-        return false;
-    }
-    *rel = path.substr(rules->prefix.size());
-    std::string why = uri_refusal(*rules, *rel);
-    if (!why.empty()) {
-        rules->last_refusal = why;
-        return false;
-    }
-    return true;
+    VectorSink sink{out, false};
+    char buf[256] = "";
+    rd_gltf_read_status st =
+        rd_gltf_read_file(path, max_size, vector_alloc, &sink, buf, sizeof buf);
+    if (st == RD_GLTF_READ_NO_MEMORY) throw std::bad_alloc();
+    *why = buf;
+    return st;
 }
 
 bool fs_file_exists(const std::string &path, void *user)
 {
-    FileRules *rules = static_cast<FileRules *>(user);
-    std::string rel;
-    if (!rules_check_path(rules, path, &rel)) return false;
-    struct stat st;
-    return stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+    return rd_gltf_files_exists(static_cast<rd_gltf_files *>(user), path.c_str(), path.size());
 }
 
 std::string fs_expand(const std::string &path, void *)
@@ -239,16 +161,16 @@ std::string fs_expand(const std::string &path, void *)
 
 bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::string &path, void *user)
 {
-    FileRules *rules = static_cast<FileRules *>(user);
-    std::string rel, why;
-    bool too_large;
-    if (!rules_check_path(rules, path, &rel)) {
-        *err = rules->last_refusal;
+    rd_gltf_files *files = static_cast<rd_gltf_files *>(user);
+    size_t rel;
+    if (!rd_gltf_files_check_path(files, path.c_str(), path.size(), &rel)) {
+        *err = files->last_refusal;
         return false;
     }
-    if (!read_file(path, kMaxExternalFile, out, &why, &too_large)) {
+    std::string why;
+    if (read_file(path.c_str(), kMaxExternalFile, out, &why) != RD_GLTF_READ_OK) {
         *err = why;
-        rules->last_refusal = why;
+        snprintf(files->last_refusal, sizeof files->last_refusal, "%s", why.c_str());
         return false;
     }
     return true;
@@ -260,7 +182,7 @@ bool fs_write(std::string *err, const std::string &, const std::vector<unsigned 
     return false;
 }
 
-/* ---- images ----------------------------------------------------------------------------- */
+/* ---- images (decoded in gltf_image.c) --------------------------------------------------- */
 
 struct ImageFailure {
     rd_gltf_result code;
@@ -268,50 +190,39 @@ struct ImageFailure {
 };
 
 struct LoadContext {
-    FileRules rules;
+    rd_gltf_files files;
     std::map<int, ImageFailure> image_failures; /* decode failures, by image index */
     uint64_t decoded_bytes = 0;
+    explicit LoadContext(const char *base_dir)
+    {
+        rd_gltf_files_init(&files, base_dir);
+    }
+    ~LoadContext()
+    {
+        rd_gltf_files_dispose(&files);
+    }
+    LoadContext(const LoadContext &) = delete;
+    LoadContext &operator=(const LoadContext &) = delete;
 };
 
-/* PNG or JPEG (any channel count, 8 or 16 bit) -> 8-bit RGBA. */
+/* PNG or JPEG -> 8-bit RGBA into *rgba (rd_gltf_decode_image). */
 bool decode_image(LoadContext *ctx, const unsigned char *bytes, size_t size,
                   std::vector<unsigned char> *rgba, int *w, int *h, ImageFailure *f)
 {
-    int comp = 0;
-    f->code = RD_GLTF_ERR_INVALID;
-    if (size == 0 || size > (size_t)INT_MAX) {
-        f->why = size ? "its data is too large" : "its data is empty";
+    char why[256];
+    unsigned char *px =
+        rd_gltf_decode_image(&ctx->decoded_bytes, bytes, size, w, h, &f->code, why, sizeof why);
+    if (!px) {
+        f->why = why;
         return false;
     }
-    if (!stbi_info_from_memory(bytes, (int)size, w, h, &comp)) {
-        const char *r = stbi_failure_reason();
-        f->why = fmt("it is not a PNG or JPEG image stb_image can read (%s)", r ? r : "unknown");
-        return false;
+    try {
+        rgba->assign(px, px + (size_t)*w * (size_t)*h * 4);
+    } catch (...) {
+        free(px);
+        throw;
     }
-    if (*w < 1 || *h < 1 || *w > kMaxImageDim || *h > kMaxImageDim ||
-        (uint64_t)*w * (uint64_t)*h > kMaxImagePixels) {
-        f->code = RD_GLTF_ERR_TOO_LARGE;
-        f->why = fmt("its size %dx%d exceeds the limit", *w, *h);
-        return false;
-    }
-    uint64_t bytes_out = (uint64_t)*w * (uint64_t)*h * 4;
-    if (ctx->decoded_bytes + bytes_out > kMaxDecodedBytes) {
-        f->code = RD_GLTF_ERR_TOO_LARGE;
-        f->why = fmt("all decoded images together would exceed %llu MiB",
-                     (unsigned long long)(kMaxDecodedBytes >> 20));
-        return false;
-    }
-    int w2 = 0, h2 = 0;
-    unsigned char *px = stbi_load_from_memory(bytes, (int)size, &w2, &h2, &comp, 4);
-    if (!px || w2 != *w || h2 != *h) {
-        const char *r = stbi_failure_reason();
-        f->why = fmt("it could not be decoded (%s)", r ? r : "unknown");
-        stbi_image_free(px);
-        return false;
-    }
-    rgba->assign(px, px + bytes_out);
-    stbi_image_free(px);
-    ctx->decoded_bytes += bytes_out;
+    free(px);
     return true;
 }
 
@@ -321,7 +232,7 @@ bool image_callback(tinygltf::Image *image, const int index, std::string *, std:
                     const unsigned char *bytes, int size, void *user)
 {
     LoadContext *ctx = static_cast<LoadContext *>(user);
-    ImageFailure f;
+    ImageFailure f{RD_GLTF_ERR_INVALID, ""};
     int w = 0, h = 0;
     image->image.clear();
     if (size < 0 ||
@@ -476,10 +387,12 @@ void prescan(const rd_gltf_container &c, LoadContext *ctx)
             fail(RD_GLTF_ERR_UNSUPPORTED,
                  "buffer %zu has a data URI that is not base64 of a known media type", i);
         std::string rel = tinygltf::dlib::urldecode(uri);
-        std::string why = uri_refusal(ctx->rules, rel);
+        const char *refusal = rd_gltf_uri_refusal(&ctx->files, rel.c_str(), rel.size());
+        std::string why = refusal ? refusal : "";
         struct stat st;
-        if (why.empty() && stat((ctx->rules.prefix + rel).c_str(), &st) != 0)
-            why = errno_text(errno);
+        char ebuf[256];
+        if (why.empty() && stat((ctx->files.prefix + rel).c_str(), &st) != 0)
+            why = (rd_gltf_errno_text(errno, ebuf, sizeof ebuf), ebuf);
         else if (why.empty() && !S_ISREG(st.st_mode))
             why = "it is not a regular file";
         if (!why.empty())
@@ -836,13 +749,15 @@ int32_t Converter::texture(int index, int tex_coord, size_t material, const char
         if (img.uri.compare(0, 5, "data:") == 0)
             fail(RD_GLTF_ERR_UNSUPPORTED, "%s has a data URI that is not base64 PNG or JPEG data",
                  what.c_str());
-        std::string rel = tinygltf::dlib::urldecode(img.uri), why = uri_refusal(ctx_->rules, rel);
+        std::string rel = tinygltf::dlib::urldecode(img.uri);
+        const char *refusal = rd_gltf_uri_refusal(&ctx_->files, rel.c_str(), rel.size());
+        std::string why = refusal ? refusal : "";
         std::vector<unsigned char> file;
-        bool too_large = false;
-        if (why.empty() &&
-            !read_file(ctx_->rules.prefix + rel, kMaxExternalFile, &file, &why, &too_large))
-            fail(too_large ? RD_GLTF_ERR_TOO_LARGE : RD_GLTF_ERR_IO, "%s could not be loaded: %s",
-                 what.c_str(), why.c_str());
+        rd_gltf_read_status st = RD_GLTF_READ_OK;
+        if (why.empty() && (st = read_file((ctx_->files.prefix + rel).c_str(), kMaxExternalFile,
+                                           &file, &why)) != RD_GLTF_READ_OK)
+            fail(st == RD_GLTF_READ_TOO_LARGE ? RD_GLTF_ERR_TOO_LARGE : RD_GLTF_ERR_IO,
+                 "%s could not be loaded: %s", what.c_str(), why.c_str());
         if (!why.empty())
             fail(RD_GLTF_ERR_IO, "%s could not be loaded: %s", what.c_str(), why.c_str());
         ImageFailure f;
@@ -1315,20 +1230,14 @@ void load(const unsigned char *data, size_t size, const char *base_dir, const rd
           rd_scene *out)
 {
     if (size > 0xffffffffull) fail(RD_GLTF_ERR_TOO_LARGE, "the file is larger than 4 GiB");
-    LoadContext ctx;
-    if (base_dir) {
-        ctx.rules.allowed = true;
-        ctx.rules.base = base_dir[0] ? base_dir : ".";
-        ctx.rules.prefix = ctx.rules.base;
-        if (ctx.rules.prefix.back() != '/') ctx.rules.prefix += '/';
-    }
+    LoadContext ctx(base_dir);
     rd_gltf_container c;
     char cerr[256];
     check(rd_gltf_parse_container(data, size, &c, cerr, sizeof cerr), cerr);
     prescan(c, &ctx);
 
     tinygltf::TinyGLTF gltf;
-    tinygltf::FsCallbacks fs = {&fs_file_exists, &fs_expand, &fs_read, &fs_write, &ctx.rules};
+    tinygltf::FsCallbacks fs = {&fs_file_exists, &fs_expand, &fs_read, &fs_write, &ctx.files};
     gltf.SetFsCallbacks(fs);
     gltf.SetImageLoader(&image_callback, &ctx);
     Model model;
@@ -1336,14 +1245,14 @@ void load(const unsigned char *data, size_t size, const char *base_dir, const rd
     bool ok;
     if (c.glb)
         ok = gltf.LoadBinaryFromMemory(&model, &terr, &twarn, data, (unsigned int)size,
-                                       ctx.rules.base);
+                                       ctx.files.base ? ctx.files.base : "");
     else
         ok = gltf.LoadASCIIFromString(&model, &terr, &twarn, c.json, (unsigned int)c.json_size,
-                                      ctx.rules.base);
+                                      ctx.files.base ? ctx.files.base : "");
     if (!ok) {
-        if (!ctx.rules.last_refusal.empty())
+        if (ctx.files.last_refusal[0])
             fail(RD_GLTF_ERR_IO, "an external file could not be loaded: %s (%s)",
-                 ctx.rules.last_refusal.c_str(), first_line(terr).c_str());
+                 ctx.files.last_refusal, first_line(terr).c_str());
         fail(RD_GLTF_ERR_INVALID, "the glTF file is invalid: %s", first_line(terr).c_str());
     }
     uint64_t max_tris = opt && opt->max_triangles ? opt->max_triangles : kDefaultMaxTriangles;
@@ -1423,10 +1332,10 @@ extern "C" rd_gltf_result rd_gltf_load_file(const char *path, const rd_gltf_opti
         if (!path || !path[0]) fail(RD_GLTF_ERR_IO, "no file name was given");
         std::vector<unsigned char> data;
         std::string why;
-        bool too_large = false;
-        if (!read_file(path, 0xffffffffull, &data, &why, &too_large))
-            fail(too_large ? RD_GLTF_ERR_TOO_LARGE : RD_GLTF_ERR_IO, "'%s' could not be read: %s",
-                 path, why.c_str());
+        rd_gltf_read_status st = read_file(path, 0xffffffffull, &data, &why);
+        if (st != RD_GLTF_READ_OK)
+            fail(st == RD_GLTF_READ_TOO_LARGE ? RD_GLTF_ERR_TOO_LARGE : RD_GLTF_ERR_IO,
+                 "'%s' could not be read: %s", path, why.c_str());
         std::string p = path, base;
         size_t slash = p.find_last_of('/');
         base = slash == std::string::npos ? "." : slash == 0 ? "/" : p.substr(0, slash);
