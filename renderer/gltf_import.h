@@ -34,7 +34,14 @@ enum {
 };
 enum { RD_GLTF_MODE_TRIANGLES = 4, RD_GLTF_MODE_TRIANGLE_STRIP = 5, RD_GLTF_MODE_TRIANGLE_FAN = 6 };
 
-enum { RD_GLTF_MAX_JSON_DEPTH = 100 };
+enum { RD_GLTF_MAX_JSON_DEPTH = 100, RD_GLTF_LABEL_MAX = 160 };
+
+/* A string of the document: len bytes at s, which is '\0'-terminated (the text itself may hold
+ * '\0' bytes). */
+typedef struct rd_gltf_str {
+    const char *s;
+    size_t len;
+} rd_gltf_str;
 
 /* ---- container (gltf_container.c) --------------------------------------------------------- */
 
@@ -142,6 +149,8 @@ void rd_gltf_material_warnings(rd_scene *s, size_t blend);
  * most max bytes (4 <= max <= 127), longer text shortened with "...", control and non-ASCII
  * bytes replaced with '?'; out is terminated. */
 void rd_gltf_clean(const char *s, size_t len, size_t max, char out[128]);
+/* "mesh 3", or "mesh 3 'Cube'" when the name is not empty (cleaned, at most 64 bytes). */
+void rd_gltf_label(const char *kind, size_t index, rd_gltf_str name, char out[RD_GLTF_LABEL_MAX]);
 /* d as a finite float, false when it is not finite or out of float range. */
 bool rd_gltf_to_float(double d, float *out);
 

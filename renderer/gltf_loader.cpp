@@ -14,15 +14,12 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <cfloat>
 #include <climits>
-#include <cmath>
 #include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream> /* tiny_gltf.h 2.7 needs it even with TINYGLTF_NO_FS */
-#include <initializer_list>
 #include <map>
 #include <new>
 #include <string>
@@ -48,10 +45,7 @@
 #include <tiny_gltf.h>
 #pragma GCC diagnostic pop
 
-extern "C" {
-#include "xform.h"
-}
-#include "gltf_import.h"
+#include "gltf_document.h"
 
 namespace
 {
@@ -61,9 +55,6 @@ using tinygltf::Model;
 
 const uint64_t kDefaultMaxTriangles = 50000000ull;
 const uint64_t kMaxExternalFile = 0xffffffffull; /* tinygltf sizes are 32-bit */
-const uint64_t kMaxAnimationFloats = 1ull << 26; /* 256 MiB of animation keys and values */
-const char *const kSupportedExtensions[] = {"KHR_lights_punctual",
-                                            "KHR_materials_emissive_strength"};
 
 struct LoadError {
     rd_gltf_result code;
@@ -81,16 +72,6 @@ std::string vfmt(const char *fmt, va_list ap)
     return s;
 }
 
-std::string fmt(const char *f, ...) __attribute__((format(printf, 1, 2)));
-std::string fmt(const char *f, ...)
-{
-    va_list ap;
-    va_start(ap, f);
-    std::string s = vfmt(f, ap);
-    va_end(ap);
-    return s;
-}
-
 [[noreturn]] void fail(rd_gltf_result code, const char *f, ...)
     __attribute__((format(printf, 2, 3)));
 [[noreturn]] void fail(rd_gltf_result code, const char *f, ...)
@@ -100,21 +81,6 @@ std::string fmt(const char *f, ...)
     LoadError e{code, vfmt(f, ap)};
     va_end(ap);
     throw e;
-}
-
-/* A file's string made safe for a message (rd_gltf_clean). */
-std::string clean(const std::string &s, size_t max = 64)
-{
-    char buf[128];
-    rd_gltf_clean(s.data(), s.size(), max, buf);
-    return buf;
-}
-
-/* "mesh 3" or "mesh 3 'Cube'". */
-std::string label(const char *kind, size_t index, const std::string &name)
-{
-    if (name.empty()) return fmt("%s %zu", kind, index);
-    return fmt("%s %zu '%s'", kind, index, clean(name).c_str());
 }
 
 /* ---- files (rules in gltf_uri.c) -------------------------------------------------------- */
@@ -291,13 +257,6 @@ long long data_uri_size(const std::string &uri)
     return (long long)(n / 4 * 3 + (n % 4 ? n % 4 - 1 : 0));
 }
 
-bool is_supported_extension(const std::string &name)
-{
-    for (const char *s : kSupportedExtensions)
-        if (name == s) return true;
-    return false;
-}
-
 /* Checks what tinygltf would use unchecked, with messages that name the culprit. */
 void prescan(const rd_gltf_container &c, LoadContext *ctx)
 {
@@ -337,7 +296,7 @@ void prescan(const rd_gltf_container &c, LoadContext *ctx)
             if (!e.is_string())
                 fail(RD_GLTF_ERR_INVALID, "extensionsRequired holds a value that is not a name");
             const std::string &name = e.get_ref<const std::string &>();
-            if (!is_supported_extension(name))
+            if (!rd_gltf_extension_supported(name.c_str(), name.size()))
                 fail(RD_GLTF_ERR_UNSUPPORTED,
                      "the file requires extension %.80s, which is not supported", name.c_str());
         }
@@ -433,29 +392,7 @@ void prescan(const rd_gltf_container &c, LoadContext *ctx)
     }
 }
 
-/* ---- accessors ---------------------------------------------------------------------- */
-
-const char *type_name(int type)
-{
-    switch (type) {
-    case TINYGLTF_TYPE_SCALAR:
-        return "SCALAR";
-    case TINYGLTF_TYPE_VEC2:
-        return "VEC2";
-    case TINYGLTF_TYPE_VEC3:
-        return "VEC3";
-    case TINYGLTF_TYPE_VEC4:
-        return "VEC4";
-    case TINYGLTF_TYPE_MAT2:
-        return "MAT2";
-    case TINYGLTF_TYPE_MAT3:
-        return "MAT3";
-    case TINYGLTF_TYPE_MAT4:
-        return "MAT4";
-    default:
-        return "unknown";
-    }
-}
+/* ---- the C view of tinygltf's model (gltf_document.h) ------------------------------------ */
 
 static_assert(TINYGLTF_COMPONENT_TYPE_BYTE == RD_GLTF_BYTE &&
                   TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE == RD_GLTF_UNSIGNED_BYTE &&
@@ -466,345 +403,59 @@ static_assert(TINYGLTF_COMPONENT_TYPE_BYTE == RD_GLTF_BYTE &&
               "gltf_import.h numbers component types as tinygltf does");
 static_assert(TINYGLTF_MODE_TRIANGLES == RD_GLTF_MODE_TRIANGLES &&
                   TINYGLTF_MODE_TRIANGLE_STRIP == RD_GLTF_MODE_TRIANGLE_STRIP &&
-                  TINYGLTF_MODE_TRIANGLE_FAN == RD_GLTF_MODE_TRIANGLE_FAN,
+                  TINYGLTF_MODE_TRIANGLE_FAN == RD_GLTF_MODE_TRIANGLE_FAN &&
+                  TINYGLTF_MODE_LINE_STRIP == RD_GLTF_MODE_LINE_STRIP,
               "gltf_import.h numbers primitive modes as tinygltf does");
+static_assert(TINYGLTF_TYPE_SCALAR == RD_GLTF_TYPE_SCALAR &&
+                  TINYGLTF_TYPE_VEC2 == RD_GLTF_TYPE_VEC2 &&
+                  TINYGLTF_TYPE_VEC3 == RD_GLTF_TYPE_VEC3 &&
+                  TINYGLTF_TYPE_VEC4 == RD_GLTF_TYPE_VEC4 &&
+                  TINYGLTF_TYPE_MAT2 == RD_GLTF_TYPE_MAT2 &&
+                  TINYGLTF_TYPE_MAT3 == RD_GLTF_TYPE_MAT3 &&
+                  TINYGLTF_TYPE_MAT4 == RD_GLTF_TYPE_MAT4,
+              "gltf_document.h numbers accessor types as tinygltf does");
+static_assert(TINYGLTF_TEXTURE_WRAP_REPEAT == RD_GLTF_WRAP_REPEAT &&
+                  TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE == RD_GLTF_WRAP_CLAMP &&
+                  TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT == RD_GLTF_WRAP_MIRROR &&
+                  TINYGLTF_TEXTURE_FILTER_NEAREST == RD_GLTF_FILTER_NEAREST,
+              "gltf_document.h numbers sampler values as tinygltf does");
 
-/* A validated accessor (gltf_import.h) and the sparse indices it points to. Moves keep the
- * pointer valid; copies are not allowed. */
-struct Accessor {
-    rd_gltf_accessor c;
-    std::vector<uint32_t> sparse_index;
-    Accessor()
-    {
-        memset(&c, 0, sizeof c), c.index = -1;
-    }
-    Accessor(Accessor &&) = default;
-    Accessor &operator=(Accessor &&) = default;
-    Accessor(const Accessor &) = delete;
-    Accessor &operator=(const Accessor &) = delete;
+rd_gltf_str str(const std::string &s)
+{
+    return {s.c_str(), s.size()};
+}
+
+const char *name_or_null(const std::string &s)
+{
+    return s.empty() ? nullptr : s.c_str();
+}
+
+/* The arrays an rd_gltf_document points to; strings and data borrow from the model. */
+struct Document {
+    rd_gltf_document d;
+    std::vector<rd_gltf_str> extensions_used, buffers;
+    std::vector<rd_gltf_doc_buffer_view> views;
+    std::vector<rd_gltf_doc_accessor> accessors;
+    std::vector<std::string> rels; /* decoded image URIs */
+    std::vector<rd_gltf_doc_image> images;
+    std::vector<rd_gltf_doc_texture> textures;
+    std::vector<rd_gltf_doc_sampler> samplers;
+    std::vector<std::vector<rd_gltf_str>> material_extensions;
+    std::vector<rd_gltf_doc_material> materials;
+    std::vector<std::vector<rd_gltf_doc_primitive>> primitives;
+    std::vector<rd_gltf_doc_mesh> meshes;
+    std::vector<rd_gltf_doc_node> nodes;
+    std::vector<rd_gltf_node_list> children, scenes;
+    std::vector<rd_gltf_doc_camera> cameras;
+    std::vector<rd_gltf_doc_light> lights;
+    std::vector<std::vector<rd_gltf_doc_channel>> channels;
+    std::vector<std::vector<rd_gltf_doc_anim_sampler>> anim_samplers;
+    std::vector<rd_gltf_doc_animation> animations;
 };
 
-/* Start of `bytes` bytes at `offset` inside buffer view `view`, or null when out of range. */
-const unsigned char *view_range(const Model &m, int view, uint64_t offset, uint64_t bytes,
-                                int accessor, const char *what)
+rd_gltf_texture_ref ref(const tinygltf::TextureInfo &t)
 {
-    if (view < 0 || (size_t)view >= m.bufferViews.size())
-        fail(RD_GLTF_ERR_INVALID,
-             "accessor %d (%s) refers to buffer view %d, but there are only %zu buffer views",
-             accessor, what, view, m.bufferViews.size());
-    const tinygltf::BufferView &bv = m.bufferViews[(size_t)view];
-    if (bv.buffer < 0 || (size_t)bv.buffer >= m.buffers.size())
-        fail(RD_GLTF_ERR_INVALID, "buffer view %d refers to buffer %d, which does not exist", view,
-             bv.buffer);
-    const std::vector<unsigned char> &data = m.buffers[(size_t)bv.buffer].data;
-    if (bv.byteOffset > data.size() || bv.byteLength > data.size() - bv.byteOffset)
-        fail(RD_GLTF_ERR_INVALID, "buffer view %d does not fit in buffer %d", view, bv.buffer);
-    if (offset > bv.byteLength || bytes > bv.byteLength - offset)
-        fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) reads past the end of buffer view %d", accessor,
-             what, view);
-    return data.data() + bv.byteOffset + offset;
-}
-
-/* Validates accessor `index` for use as `what` (type and allowed component types). */
-Accessor make_accessor(const Model &m, int index, const std::string &what_s, int type,
-                       std::initializer_list<int> ctypes)
-{
-    const char *what = what_s.c_str();
-    if (index < 0 || (size_t)index >= m.accessors.size())
-        fail(RD_GLTF_ERR_INVALID, "%s refers to accessor %d, but there are only %zu accessors",
-             what, index, m.accessors.size());
-    const tinygltf::Accessor &a = m.accessors[(size_t)index];
-    Accessor r;
-    rd_gltf_accessor &c = r.c;
-    c.index = index;
-    if (a.type != type)
-        fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has type %s, expected %s", index, what,
-             type_name(a.type), type_name(type));
-    if (std::find(ctypes.begin(), ctypes.end(), a.componentType) == ctypes.end())
-        fail(RD_GLTF_ERR_INVALID,
-             "accessor %d (%s) has component type %d, which is not allowed "
-             "here",
-             index, what, a.componentType);
-    if (a.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT && type != TINYGLTF_TYPE_SCALAR &&
-        !a.normalized)
-        fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) holds integers but is not normalized", index,
-             what);
-    if (a.count == 0) fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has count 0", index, what);
-    c.ctype = a.componentType;
-    c.ncomp = type == TINYGLTF_TYPE_SCALAR ? 1
-              : type == TINYGLTF_TYPE_VEC2 ? 2
-              : type == TINYGLTF_TYPE_VEC3 ? 3
-                                           : 4;
-    c.elem = rd_gltf_component_size(a.componentType) * (size_t)c.ncomp;
-    c.count = a.count;
-    c.normalized = a.normalized;
-    if (a.bufferView < -1)
-        fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has buffer view %d", index, what, a.bufferView);
-    if (a.bufferView >= 0) {
-        const tinygltf::BufferView *bv = (size_t)a.bufferView < m.bufferViews.size()
-                                             ? &m.bufferViews[(size_t)a.bufferView]
-                                             : nullptr;
-        c.stride = bv && bv->byteStride ? bv->byteStride : c.elem;
-        if (c.stride < c.elem)
-            fail(RD_GLTF_ERR_INVALID,
-                 "buffer view %d has byteStride %zu, smaller than the %zu-byte elements of "
-                 "accessor %d",
-                 a.bufferView, c.stride, c.elem, index);
-        uint64_t span;
-        if (__builtin_mul_overflow((uint64_t)c.stride, (uint64_t)(c.count - 1), &span) ||
-            __builtin_add_overflow(span, (uint64_t)c.elem, &span))
-            fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) reads past the end of buffer view %d",
-                 index, what, a.bufferView);
-        c.data = view_range(m, a.bufferView, a.byteOffset, span, index, what);
-    }
-    if (a.sparse.isSparse) {
-        size_t n = a.sparse.count > 0 ? (size_t)a.sparse.count : 0;
-        if (n == 0 || n > c.count)
-            fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has an invalid sparse count %d", index,
-                 what, a.sparse.count);
-        int ict = a.sparse.indices.componentType;
-        if (ict != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
-            ict != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
-            ict != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
-            fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has sparse indices of component type %d",
-                 index, what, ict);
-        if (a.sparse.indices.byteOffset < 0 || a.sparse.values.byteOffset < 0)
-            fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has a negative sparse byteOffset", index,
-                 what);
-        size_t isz = rd_gltf_component_size(ict);
-        const unsigned char *ip =
-            view_range(m, a.sparse.indices.bufferView, (uint64_t)a.sparse.indices.byteOffset,
-                       (uint64_t)n * isz, index, what);
-        c.sparse_values =
-            view_range(m, a.sparse.values.bufferView, (uint64_t)a.sparse.values.byteOffset,
-                       (uint64_t)n * c.elem, index, what);
-        r.sparse_index.resize(n);
-        if (!rd_gltf_read_sparse_indices(ip, ict, n, c.count, r.sparse_index.data()))
-            fail(RD_GLTF_ERR_INVALID,
-                 "the sparse indices of accessor %d (%s) are out of range or not increasing", index,
-                 what);
-        c.sparse_index = r.sparse_index.data();
-        c.sparse_count = n;
-    }
-    return r;
-}
-
-void read_floats(const Accessor &a, size_t i, float *out)
-{
-    rd_gltf_read_floats(&a.c, i, out);
-}
-
-/* ---- conversion --------------------------------------------------------------------- */
-
-struct Primitive {
-    int mode = TINYGLTF_MODE_TRIANGLES;
-    Accessor pos, nrm, uv, tan, idx;
-    bool has_nrm = false, has_uv = false, has_tan = false, has_idx = false;
-    uint64_t tris = 0;
-    uint32_t material = 0;
-};
-
-class Converter
-{
-  public:
-    Converter(const Model &m, LoadContext *ctx, uint64_t max_tris, rd_scene *out)
-        : m_(m), ctx_(ctx), max_tris_(max_tris), s_(out)
-    {
-    }
-    void run();
-
-  private:
-    void hierarchy();
-    void materials();
-    int32_t texture(int index, int tex_coord, size_t material, const char *slot);
-    void meshes();
-    std::vector<Primitive> plan_mesh(size_t mesh);
-    void fill_mesh(size_t mesh, const std::vector<Primitive> &prims, rd_mesh *out);
-    void node_transform(size_t index, rd_node *n);
-    void lights_and_cameras();
-    void animations();
-    void anim_sampler(const std::string &where, const tinygltf::AnimationSampler &gs, bool rotation,
-                      rd_anim_sampler *out, std::vector<float> *times, std::vector<float> *values);
-    void warnings();
-
-    const Model &m_;
-    LoadContext *ctx_;
-    uint64_t max_tris_;
-    rd_scene *s_;
-    std::vector<int> parent_;        /* glTF parent of each glTF node */
-    std::vector<size_t> order_;      /* reachable glTF nodes, parents first */
-    std::vector<int32_t> node_map_;  /* glTF node -> rd node (-1: not in the scene) */
-    std::vector<int32_t> mesh_map_;  /* glTF mesh -> rd mesh (-1: unused or empty) */
-    std::map<int, int32_t> tex_map_; /* glTF texture -> rd texture */
-    uint64_t anim_floats_ = 0;       /* animation times and values kept so far */
-};
-
-void Converter::run()
-{
-    warnings();
-    hierarchy();
-    materials();
-    meshes();
-    node_map_.assign(m_.nodes.size(), -1);
-    for (size_t gi : order_) {
-        const tinygltf::Node &gn = m_.nodes[gi];
-        rd_node n;
-        memset(&n, 0, sizeof n);
-        n.name = gn.name.empty() ? nullptr : const_cast<char *>(gn.name.c_str());
-        n.parent = parent_[gi] >= 0 ? node_map_[(size_t)parent_[gi]] : -1;
-        n.mesh = gn.mesh >= 0 ? mesh_map_[(size_t)gn.mesh] : -1;
-        node_transform(gi, &n);
-        node_map_[gi] = (int32_t)rd_scene_add_node(s_, &n);
-    }
-    lights_and_cameras();
-    animations();
-    char err[256];
-    if (!rd_scene_update(s_, err, sizeof err)) fail(RD_GLTF_ERR_INVALID, "%s", err);
-}
-
-void Converter::warnings()
-{
-    for (const std::string &e : m_.extensionsUsed) {
-        if (e.empty() || is_supported_extension(e)) continue;
-        bool on_material = false; /* then materials() warns, saying how many use it */
-        for (const tinygltf::Material &g : m_.materials)
-            on_material = on_material || g.extensions.count(e) != 0;
-        if (!on_material)
-            rd_scene_warn(s_, "extension %s is not supported and was ignored",
-                          clean(e, 80).c_str());
-    }
-    if (!m_.skins.empty())
-        rd_scene_warn(s_,
-                      "the file has %zu skin(s); skinning is not supported, skinned meshes "
-                      "are drawn unskinned",
-                      m_.skins.size());
-}
-
-/* The hierarchy and the reachable nodes' order (gltf_nodes.c). */
-void Converter::hierarchy()
-{
-    size_t count = m_.nodes.size();
-    std::vector<rd_gltf_node_list> children(count), scenes(m_.scenes.size());
-    for (size_t i = 0; i < count; i++)
-        children[i] = {m_.nodes[i].children.data(), m_.nodes[i].children.size()};
-    for (size_t i = 0; i < scenes.size(); i++)
-        scenes[i] = {m_.scenes[i].nodes.data(), m_.scenes[i].nodes.size()};
-    parent_.assign(count, -1);
-    order_.assign(count, 0);
-    size_t reached = 0;
-    char err[256];
-    check(rd_gltf_hierarchy(count, children.data(), scenes.size(), scenes.data(), m_.defaultScene,
-                            parent_.data(), order_.data(), &reached, err, sizeof err),
-          err);
-    order_.resize(reached);
-}
-
-void Converter::node_transform(size_t index, rd_node *n)
-{
-    const tinygltf::Node &g = m_.nodes[index];
-    rd_gltf_transform t = {g.matrix.data(),   g.translation.data(), g.rotation.data(),
-                           g.scale.data(),    g.matrix.size(),      g.translation.size(),
-                           g.rotation.size(), g.scale.size()};
-    char err[256];
-    check(rd_gltf_node_transform(index, &t, n, err, sizeof err), err);
-}
-
-int32_t Converter::texture(int index, int tex_coord, size_t material, const char *slot)
-{
-    if (index < 0) return -1;
-    if ((size_t)index >= m_.textures.size())
-        fail(RD_GLTF_ERR_INVALID,
-             "material %zu refers to texture %d, but there are only %zu "
-             "textures",
-             material, index, m_.textures.size());
-    if (tex_coord != 0) {
-        rd_scene_warn(s_,
-                      "material %zu reads its %s texture with TEXCOORD_%d; only TEXCOORD_0 "
-                      "is supported, so the texture is ignored",
-                      material, slot, tex_coord);
-        return -1;
-    }
-    auto found = tex_map_.find(index);
-    if (found != tex_map_.end()) return found->second;
-
-    const tinygltf::Texture &t = m_.textures[(size_t)index];
-    if (t.source < 0 || (size_t)t.source >= m_.images.size())
-        fail(RD_GLTF_ERR_INVALID, "texture %d refers to image %d, but there are only %zu images",
-             index, t.source, m_.images.size());
-    const tinygltf::Image &img = m_.images[(size_t)t.source];
-    std::string what = label("image", (size_t)t.source, img.name);
-    if (img.name.empty() && !img.uri.empty() && img.uri.compare(0, 5, "data:") != 0)
-        what = label("image", (size_t)t.source, img.uri);
-
-    std::vector<unsigned char> external;
-    const std::vector<unsigned char> *rgba = &img.image;
-    int w = img.width, h = img.height;
-    auto failed = ctx_->image_failures.find(t.source);
-    if (failed != ctx_->image_failures.end())
-        fail(failed->second.code, "%s could not be decoded: %s", what.c_str(),
-             failed->second.why.c_str());
-    if (img.image.empty()) {
-        if (img.uri.empty()) fail(RD_GLTF_ERR_INVALID, "%s has no data", what.c_str());
-        /* an external file (tinygltf keeps only its URI) */
-        if (img.uri.compare(0, 5, "data:") == 0)
-            fail(RD_GLTF_ERR_UNSUPPORTED, "%s has a data URI that is not base64 PNG or JPEG data",
-                 what.c_str());
-        std::string rel = tinygltf::dlib::urldecode(img.uri);
-        const char *refusal = rd_gltf_uri_refusal(&ctx_->files, rel.c_str(), rel.size());
-        std::string why = refusal ? refusal : "";
-        std::vector<unsigned char> file;
-        rd_gltf_read_status st = RD_GLTF_READ_OK;
-        if (why.empty() && (st = read_file((ctx_->files.prefix + rel).c_str(), kMaxExternalFile,
-                                           &file, &why)) != RD_GLTF_READ_OK)
-            fail(st == RD_GLTF_READ_TOO_LARGE ? RD_GLTF_ERR_TOO_LARGE : RD_GLTF_ERR_IO,
-                 "%s could not be loaded: %s", what.c_str(), why.c_str());
-        if (!why.empty())
-            fail(RD_GLTF_ERR_IO, "%s could not be loaded: %s", what.c_str(), why.c_str());
-        ImageFailure f;
-        if (!decode_image(ctx_, file.data(), file.size(), &external, &w, &h, &f))
-            fail(f.code, "%s could not be decoded: %s", what.c_str(), f.why.c_str());
-        rgba = &external;
-    }
-    if (w < 1 || h < 1 || rgba->size() != (size_t)w * (size_t)h * 4)
-        fail(RD_GLTF_ERR_INVALID, "%s has inconsistent decoded data", what.c_str());
-
-    rd_texture rt;
-    memset(&rt, 0, sizeof rt);
-    rt.width = (uint32_t)w;
-    rt.height = (uint32_t)h;
-    rt.wrap_s = rt.wrap_t = RD_WRAP_REPEAT;
-    if (t.sampler >= 0) {
-        if ((size_t)t.sampler >= m_.samplers.size())
-            fail(RD_GLTF_ERR_INVALID,
-                 "texture %d refers to sampler %d, but there are only %zu samplers", index,
-                 t.sampler, m_.samplers.size());
-        const tinygltf::Sampler &smp = m_.samplers[(size_t)t.sampler];
-        auto wrap = [&](int mode) -> uint32_t {
-            switch (mode) {
-            case TINYGLTF_TEXTURE_WRAP_REPEAT:
-                return RD_WRAP_REPEAT;
-            case TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE:
-                return RD_WRAP_CLAMP;
-            case TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT:
-                return RD_WRAP_MIRROR;
-            default:
-                fail(RD_GLTF_ERR_INVALID, "sampler %d has an invalid wrap mode %d", t.sampler,
-                     mode);
-            }
-        };
-        rt.wrap_s = wrap(smp.wrapS);
-        rt.wrap_t = wrap(smp.wrapT);
-        rt.nearest = smp.magFilter == TINYGLTF_TEXTURE_FILTER_NEAREST;
-    }
-    rt.rgba = static_cast<uint8_t *>(malloc(rgba->size()));
-    if (!rt.rgba) {
-        fprintf(stderr, "probecast: out of memory (%zu bytes)\n", rgba->size());
-        abort();
-    }
-    memcpy(rt.rgba, rgba->data(), rgba->size());
-    int32_t out = (int32_t)rd_scene_add_texture(s_, &rt);
-    tex_map_[index] = out;
-    return out;
+    return {t.index, t.texCoord};
 }
 
 /* A material's factors for gltf_materials.c. */
@@ -835,367 +486,157 @@ rd_gltf_material_factors factors(const tinygltf::Material &g)
     return f;
 }
 
-/* Materials: factors in gltf_materials.c, textures here (texture() reads and decodes them),
- * in the order the checks always ran. */
-void Converter::materials()
+/* Copies what the conversion reads out of m (no checks: gltf_convert.c does them). */
+void make_document(const Model &m, const LoadContext &ctx, Document *doc)
 {
-    size_t blend = 0;
-    std::map<std::string, size_t> unsupported; /* material extension -> materials using it */
-    char err[256];
-    for (size_t i = 0; i < m_.materials.size(); i++) {
-        const tinygltf::Material &g = m_.materials[i];
-        const tinygltf::PbrMetallicRoughness &pbr = g.pbrMetallicRoughness;
-        rd_material mt;
-        memset(&mt, 0, sizeof mt);
-        mt.name = g.name.empty() ? nullptr : const_cast<char *>(g.name.c_str());
-        rd_gltf_material_factors f = factors(g);
-        check(rd_gltf_material_colors(s_, i, &f, &mt, err, sizeof err), err);
-        mt.base_color_texture =
-            texture(pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord, i, "base colour");
-        mt.emissive_texture =
-            texture(g.emissiveTexture.index, g.emissiveTexture.texCoord, i, "emissive");
-        check(rd_gltf_material_pbr(i, &f, &mt, err, sizeof err), err);
-        mt.metallic_roughness_texture =
-            texture(pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord, i,
-                    "metallic-roughness");
-        mt.normal_texture = texture(g.normalTexture.index, g.normalTexture.texCoord, i, "normal");
-        mt.occlusion_texture =
-            texture(g.occlusionTexture.index, g.occlusionTexture.texCoord, i, "occlusion");
-        if (mt.alpha_mode == RD_ALPHA_BLEND) blend++;
+    for (const std::string &e : m.extensionsUsed)
+        doc->extensions_used.push_back(str(e));
+    for (const tinygltf::Buffer &b : m.buffers)
+        doc->buffers.push_back({reinterpret_cast<const char *>(b.data.data()), b.data.size()});
+    for (const tinygltf::BufferView &v : m.bufferViews)
+        doc->views.push_back({v.buffer, v.byteOffset, v.byteLength, v.byteStride});
+    for (const tinygltf::Accessor &a : m.accessors)
+        doc->accessors.push_back({a.bufferView, a.byteOffset, a.normalized, a.componentType, a.type,
+                                  a.count, a.sparse.isSparse, a.sparse.count,
+                                  a.sparse.indices.bufferView, a.sparse.indices.byteOffset,
+                                  a.sparse.indices.componentType, a.sparse.values.bufferView,
+                                  a.sparse.values.byteOffset});
+    for (const tinygltf::Image &img : m.images)
+        doc->rels.push_back(tinygltf::dlib::urldecode(img.uri));
+    for (size_t i = 0; i < m.images.size(); i++) {
+        const tinygltf::Image &img = m.images[i];
+        rd_gltf_doc_image di;
+        memset(&di, 0, sizeof di);
+        di.name = str(img.name);
+        di.uri = str(img.uri);
+        di.rel = str(doc->rels[i]);
+        di.rgba = img.image.data();
+        di.rgba_size = img.image.size();
+        di.width = img.width;
+        di.height = img.height;
+        auto failed = ctx.image_failures.find((int)i);
+        if (failed != ctx.image_failures.end()) {
+            di.failed = true;
+            di.failure = failed->second.code;
+            di.why = failed->second.why.c_str();
+        }
+        doc->images.push_back(di);
+    }
+    for (const tinygltf::Texture &t : m.textures)
+        doc->textures.push_back({t.source, t.sampler});
+    for (const tinygltf::Sampler &s : m.samplers)
+        doc->samplers.push_back({s.wrapS, s.wrapT, s.magFilter});
+    doc->material_extensions.resize(m.materials.size());
+    for (size_t i = 0; i < m.materials.size(); i++) {
+        const tinygltf::Material &g = m.materials[i];
         for (const auto &e : g.extensions)
-            if (!is_supported_extension(e.first)) unsupported[clean(e.first, 80)]++;
-        rd_scene_add_material(s_, &mt); /* index 1 + i: materials[0] is the default */
+            doc->material_extensions[i].push_back(str(e.first));
+        const tinygltf::PbrMetallicRoughness &pbr = g.pbrMetallicRoughness;
+        doc->materials.push_back({name_or_null(g.name),
+                                  factors(g),
+                                  ref(pbr.baseColorTexture),
+                                  ref(g.emissiveTexture),
+                                  ref(pbr.metallicRoughnessTexture),
+                                  {g.normalTexture.index, g.normalTexture.texCoord},
+                                  {g.occlusionTexture.index, g.occlusionTexture.texCoord},
+                                  doc->material_extensions[i].data(),
+                                  doc->material_extensions[i].size()});
     }
-    rd_gltf_material_warnings(s_, blend);
-    for (const auto &u : unsupported)
-        rd_scene_warn(s_,
-                      "material extension %s (on %zu material(s)) is not supported; those "
-                      "materials are drawn with the core metallic-roughness model",
-                      u.first.c_str(), u.second);
-}
-
-/* Validates a mesh's primitives and counts its triangles without reading vertex data. */
-std::vector<Primitive> Converter::plan_mesh(size_t mesh)
-{
-    const tinygltf::Mesh &gm = m_.meshes[mesh];
-    std::vector<Primitive> out;
-    bool morph = false;
-    for (size_t p = 0; p < gm.primitives.size(); p++) {
-        const tinygltf::Primitive &gp = gm.primitives[p];
-        std::string where = fmt("mesh %zu primitive %zu", mesh, p);
-        Primitive pr;
-        pr.mode = gp.mode < 0 ? TINYGLTF_MODE_TRIANGLES : gp.mode;
-        morph = morph || !gp.targets.empty();
-        if (pr.mode >= TINYGLTF_MODE_POINTS && pr.mode <= TINYGLTF_MODE_LINE_STRIP) {
-            rd_scene_warn(s_,
-                          "%s draws points or lines (mode %d), which are not supported; it "
-                          "is skipped",
-                          where.c_str(), pr.mode);
-            continue;
+    doc->primitives.resize(m.meshes.size());
+    for (size_t i = 0; i < m.meshes.size(); i++) {
+        for (const tinygltf::Primitive &gp : m.meshes[i].primitives) {
+            rd_gltf_doc_primitive p;
+            memset(&p, 0, sizeof p);
+            p.mode = gp.mode;
+            p.indices = gp.indices;
+            p.material = gp.material;
+            p.has_targets = !gp.targets.empty();
+            auto attr = [&](const char *name, bool *has, int *index) {
+                auto it = gp.attributes.find(name);
+                *has = it != gp.attributes.end();
+                *index = *has ? it->second : -1;
+            };
+            attr("POSITION", &p.has_pos, &p.pos);
+            attr("NORMAL", &p.has_nrm, &p.nrm);
+            attr("TEXCOORD_0", &p.has_uv, &p.uv);
+            attr("TANGENT", &p.has_tan, &p.tan);
+            doc->primitives[i].push_back(p);
         }
-        if (pr.mode > TINYGLTF_MODE_TRIANGLE_FAN)
-            fail(RD_GLTF_ERR_INVALID, "%s has an invalid mode %d", where.c_str(), pr.mode);
-        auto pos = gp.attributes.find("POSITION");
-        if (pos == gp.attributes.end())
-            fail(RD_GLTF_ERR_INVALID, "%s has no POSITION attribute", where.c_str());
-        pr.pos = make_accessor(m_, pos->second, "POSITION of " + where, TINYGLTF_TYPE_VEC3,
-                               {TINYGLTF_COMPONENT_TYPE_FLOAT});
-        auto nrm = gp.attributes.find("NORMAL");
-        if (nrm != gp.attributes.end()) {
-            pr.nrm = make_accessor(m_, nrm->second, "NORMAL of " + where, TINYGLTF_TYPE_VEC3,
-                                   {TINYGLTF_COMPONENT_TYPE_FLOAT});
-            pr.has_nrm = true;
-        }
-        auto uv = gp.attributes.find("TEXCOORD_0");
-        if (uv != gp.attributes.end()) {
-            pr.uv =
-                make_accessor(m_, uv->second, "TEXCOORD_0 of " + where, TINYGLTF_TYPE_VEC2,
-                              {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
-                               TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT});
-            pr.has_uv = true;
-        }
-        auto tan = gp.attributes.find("TANGENT");
-        if (tan != gp.attributes.end()) {
-            pr.tan = make_accessor(m_, tan->second, "TANGENT of " + where, TINYGLTF_TYPE_VEC4,
-                                   {TINYGLTF_COMPONENT_TYPE_FLOAT});
-            pr.has_tan = true;
-        }
-        if ((pr.has_nrm && pr.nrm.c.count != pr.pos.c.count) ||
-            (pr.has_uv && pr.uv.c.count != pr.pos.c.count) ||
-            (pr.has_tan && pr.tan.c.count != pr.pos.c.count))
-            fail(RD_GLTF_ERR_INVALID, "the attributes of %s have different vertex counts",
-                 where.c_str());
-        size_t n = pr.pos.c.count;
-        if (gp.indices >= 0) {
-            pr.idx = make_accessor(m_, gp.indices, "indices of " + where, TINYGLTF_TYPE_SCALAR,
-                                   {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
-                                    TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
-                                    TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT});
-            pr.has_idx = true;
-            n = pr.idx.c.count;
-        }
-        if (pr.mode == TINYGLTF_MODE_TRIANGLES) {
-            pr.tris = n / 3;
-            if (n % 3 != 0)
-                rd_scene_warn(s_,
-                              "%s has %zu vertices, not a multiple of 3; the last %zu are "
-                              "ignored",
-                              where.c_str(), n, n % 3);
-        } else {
-            pr.tris = n >= 3 ? n - 2 : 0;
-        }
-        if (gp.material >= 0 && (size_t)gp.material >= m_.materials.size())
-            fail(RD_GLTF_ERR_INVALID, "%s refers to material %d, but there are only %zu materials",
-                 where.c_str(), gp.material, m_.materials.size());
-        pr.material = gp.material >= 0 ? (uint32_t)gp.material + 1 : 0;
-        if (pr.tris > 0) out.push_back(std::move(pr));
+        doc->meshes.push_back(
+            {str(m.meshes[i].name), doc->primitives[i].data(), doc->primitives[i].size()});
     }
-    if (morph)
-        rd_scene_warn(s_, "%s has morph targets, which are not supported; its base shape is used",
-                      label("mesh", mesh, gm.name).c_str());
-    return out;
-}
-
-void Converter::fill_mesh(size_t mesh, const std::vector<Primitive> &prims, rd_mesh *out)
-{
-    std::vector<rd_gltf_primitive> c(prims.size());
-    for (size_t p = 0; p < prims.size(); p++) {
-        const Primitive &pr = prims[p];
-        c[p] =
-            rd_gltf_primitive{pr.mode,    pr.pos.c,  pr.nrm.c,   pr.uv.c,    pr.tan.c, pr.idx.c,
-                              pr.has_nrm, pr.has_uv, pr.has_tan, pr.has_idx, pr.tris,  pr.material};
-    }
-    char err[256];
-    check(rd_gltf_fill_mesh(mesh, c.data(), c.size(), out, err, sizeof err), err);
-}
-
-void Converter::meshes()
-{
-    std::vector<uint8_t> used(m_.meshes.size(), 0);
-    for (size_t gi : order_) {
-        int mesh = m_.nodes[gi].mesh;
-        if (mesh < -1 || (mesh >= 0 && (size_t)mesh >= m_.meshes.size()))
-            fail(RD_GLTF_ERR_INVALID, "node %zu refers to mesh %d, but there are only %zu meshes",
-                 gi, mesh, m_.meshes.size());
-        if (mesh >= 0) used[(size_t)mesh] = 1;
-    }
-    std::vector<std::vector<Primitive>> plans(m_.meshes.size());
-    uint64_t total = 0;
-    for (size_t i = 0; i < m_.meshes.size(); i++) {
-        if (!used[i]) continue;
-        plans[i] = plan_mesh(i);
-        uint64_t tris = 0;
-        for (const Primitive &p : plans[i])
-            tris += p.tris;
-        if (tris > UINT32_MAX)
-            fail(RD_GLTF_ERR_TOO_LARGE, "mesh %zu has %llu triangles, more than a mesh can hold", i,
-                 (unsigned long long)tris);
-        total += tris;
-        if (total > max_tris_)
-            fail(RD_GLTF_ERR_TOO_LARGE,
-                 "the scene has more than %llu triangles (the limit), counting meshes up to "
-                 "mesh %zu",
-                 (unsigned long long)max_tris_, i);
-    }
-    mesh_map_.assign(m_.meshes.size(), -1);
-    for (size_t i = 0; i < m_.meshes.size(); i++) {
-        uint64_t tris = 0;
-        for (const Primitive &p : plans[i])
-            tris += p.tris;
-        if (tris == 0) continue; /* unused, or nothing but points and lines */
-        const std::string &name = m_.meshes[i].name;
-        uint32_t idx = rd_scene_add_mesh(s_, name.empty() ? nullptr : name.c_str(), (uint32_t)tris);
-        fill_mesh(i, plans[i], &s_->meshes[idx]);
-        mesh_map_[i] = (int32_t)idx;
-    }
-}
-
-void Converter::lights_and_cameras()
-{
-    std::vector<uint8_t> ortho_warned(m_.cameras.size(), 0);
-    for (size_t gi : order_) {
-        const tinygltf::Node &gn = m_.nodes[gi];
-        int32_t node = node_map_[gi];
-        if (gn.camera >= 0 || gn.camera < -1) {
-            if (gn.camera < 0 || (size_t)gn.camera >= m_.cameras.size())
-                fail(RD_GLTF_ERR_INVALID,
-                     "node %zu refers to camera %d, but there are only %zu cameras", gi, gn.camera,
-                     m_.cameras.size());
-            size_t ci = (size_t)gn.camera;
-            const tinygltf::Camera &gc = m_.cameras[ci];
-            if (gc.type != "perspective") {
-                if (!ortho_warned[ci])
-                    rd_scene_warn(s_, "%s is %s, which is not supported; it is ignored",
-                                  label("camera", ci, gc.name).c_str(), clean(gc.type, 16).c_str());
-                ortho_warned[ci] = 1;
-            } else {
-                rd_camera c;
-                memset(&c, 0, sizeof c);
-                c.name = gc.name.empty() ? nullptr : const_cast<char *>(gc.name.c_str());
-                const tinygltf::PerspectiveCamera &p = gc.perspective;
-                char err[256];
-                check(rd_gltf_perspective(ci, p.yfov, p.znear, p.aspectRatio, &c, err, sizeof err),
-                      err);
-                c.node = node;
-                rd_scene_add_camera(s_, &c);
-            }
+    for (const tinygltf::Node &g : m.nodes) {
+        rd_gltf_doc_node n;
+        memset(&n, 0, sizeof n);
+        n.name = str(g.name);
+        n.mesh = g.mesh;
+        n.camera = g.camera;
+        auto ext = g.extensions.find("KHR_lights_punctual");
+        n.has_light = ext != g.extensions.end();
+        if (n.has_light) {
+            const tinygltf::Value &li = ext->second.Get("light");
+            n.light_is_int = li.IsInt();
+            n.light = li.IsInt() ? li.GetNumberAsInt() : 0;
         }
-        auto ext = gn.extensions.find("KHR_lights_punctual");
-        if (ext == gn.extensions.end()) continue;
-        const tinygltf::Value &li = ext->second.Get("light");
-        if (!li.IsInt() || li.GetNumberAsInt() < 0 ||
-            (size_t)li.GetNumberAsInt() >= m_.lights.size())
-            fail(RD_GLTF_ERR_INVALID,
-                 "node %zu refers to a KHR_lights_punctual light that does "
-                 "not exist (there are %zu lights)",
-                 gi, m_.lights.size());
-        size_t index = (size_t)li.GetNumberAsInt();
-        const tinygltf::Light &gl = m_.lights[index];
-        rd_light l;
-        memset(&l, 0, sizeof l);
-        l.name = gl.name.empty() ? nullptr : const_cast<char *>(gl.name.c_str());
-        rd_gltf_light_params lp = {gl.type.data(),         gl.type.size(),        gl.color.data(),
-                                   gl.color.size(),        gl.intensity,          gl.range,
-                                   gl.spot.innerConeAngle, gl.spot.outerConeAngle};
-        bool ignored;
-        char err[256];
-        check(rd_gltf_light(s_, index, &lp, &l, &ignored, err, sizeof err), err);
-        if (ignored) continue;
-        l.node = node;
-        rd_scene_add_light(s_, &l);
+        n.transform = {g.matrix.data(), g.translation.data(), g.rotation.data(), g.scale.data(),
+                       g.matrix.size(), g.translation.size(), g.rotation.size(), g.scale.size()};
+        doc->nodes.push_back(n);
+        doc->children.push_back({g.children.data(), g.children.size()});
     }
-}
-
-/* Validates an animation sampler for a translation/scale (VEC3 float) or rotation (VEC4 float
- * or normalized integers) channel and reads its keys (glTF 2.0 section 3.11). */
-void Converter::anim_sampler(const std::string &where, const tinygltf::AnimationSampler &gs,
-                             bool rotation, rd_anim_sampler *out, std::vector<float> *times,
-                             std::vector<float> *values)
-{
-    const std::string &ip = gs.interpolation;
-    out->interpolation = ip == "LINEAR"        ? (uint32_t)RD_INTERP_LINEAR
-                         : ip == "STEP"        ? (uint32_t)RD_INTERP_STEP
-                         : ip == "CUBICSPLINE" ? (uint32_t)RD_INTERP_CUBICSPLINE
-                                               : UINT32_MAX;
-    if (out->interpolation == UINT32_MAX)
-        fail(RD_GLTF_ERR_INVALID, "%s has an unknown interpolation '%s'", where.c_str(),
-             clean(ip, 32).c_str());
-    Accessor in = make_accessor(m_, gs.input, "input of " + where, TINYGLTF_TYPE_SCALAR,
-                                {TINYGLTF_COMPONENT_TYPE_FLOAT});
-    Accessor val =
-        rotation
-            ? make_accessor(m_, gs.output, "output of " + where, TINYGLTF_TYPE_VEC4,
-                            {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_BYTE,
-                             TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_SHORT,
-                             TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT})
-            : make_accessor(m_, gs.output, "output of " + where, TINYGLTF_TYPE_VEC3,
-                            {TINYGLTF_COMPONENT_TYPE_FLOAT});
-    size_t keys = in.c.count, per_key = out->interpolation == RD_INTERP_CUBICSPLINE ? 3 : 1;
-    if (val.c.count / per_key != keys || val.c.count % per_key != 0)
-        fail(RD_GLTF_ERR_INVALID, "%s has %zu output values for %zu input times (%s needs %zu)",
-             where.c_str(), val.c.count, keys, ip.c_str(), keys * per_key);
-    out->components = rotation ? 4 : 3;
-    if (val.c.count <= kMaxAnimationFloats) anim_floats_ += keys + val.c.count * out->components;
-    if (val.c.count > kMaxAnimationFloats || anim_floats_ > kMaxAnimationFloats)
-        fail(RD_GLTF_ERR_TOO_LARGE,
-             "the animations hold more than %llu keys and values (the limit)",
-             (unsigned long long)kMaxAnimationFloats);
-    out->key_count = (uint32_t)keys;
-    times->resize(keys);
-    values->resize(val.c.count * out->components);
-    char err[512];
-    check(rd_gltf_read_keys(where.c_str(), &in.c, &val.c, out->components, times->data(),
-                            values->data(), err, sizeof err),
-          err);
-}
-
-/* Node animations (glTF 2.0 section 3.11). Channels that animate morph weights or an
- * extension's target are skipped with one warning; so are nodes outside the scene shown. */
-void Converter::animations()
-{
-    size_t skipped_weights = 0, skipped_other = 0;
-    for (size_t ai = 0; ai < m_.animations.size(); ai++) {
-        const tinygltf::Animation &ga = m_.animations[ai];
-        std::string an = label("animation", ai, ga.name);
-        std::map<std::pair<int, uint32_t>, size_t> targets; /* (node, path) -> channel */
-        std::map<std::pair<int, uint32_t>, uint32_t> kept;  /* (sampler, path) -> rd sampler */
-        std::vector<rd_anim_sampler> samplers;
-        std::vector<std::vector<float>> times, values;
-        std::vector<rd_anim_channel> channels;
-        std::vector<uint8_t> used(ga.samplers.size(), 0); /* by any channel, even skipped */
-        for (size_t ci = 0; ci < ga.channels.size(); ci++) {
-            const tinygltf::AnimationChannel &gc = ga.channels[ci];
-            std::string where = fmt("%s channel %zu", an.c_str(), ci);
-            const std::string &path = gc.target_path;
-            int node = gc.target_node;
-            if (gc.sampler < 0 || (size_t)gc.sampler >= ga.samplers.size())
-                fail(RD_GLTF_ERR_INVALID, "%s refers to sampler %d, but %s has only %zu samplers",
-                     where.c_str(), gc.sampler, an.c_str(), ga.samplers.size());
-            if (node < -1 || (node >= 0 && (size_t)node >= m_.nodes.size()))
-                fail(RD_GLTF_ERR_INVALID, "%s targets node %d, but there are only %zu nodes",
-                     where.c_str(), node, m_.nodes.size());
-            used[(size_t)gc.sampler] = 1;
-            uint32_t p = path == "translation" ? (uint32_t)RD_ANIM_TRANSLATION
-                         : path == "rotation"  ? (uint32_t)RD_ANIM_ROTATION
-                         : path == "scale"     ? (uint32_t)RD_ANIM_SCALE
-                                               : UINT32_MAX;
-            if (path.empty()) fail(RD_GLTF_ERR_INVALID, "%s has no target path", where.c_str());
-            skipped_weights += p == UINT32_MAX && path == "weights";
-            skipped_other += p == UINT32_MAX && path != "weights";
-            if (p == UINT32_MAX || node < 0) continue; /* no node: ignored, as the spec says */
-            if (!m_.nodes[(size_t)node].matrix.empty())
-                fail(RD_GLTF_ERR_INVALID,
-                     "%s animates node %d, which has a matrix; glTF allows animating only "
-                     "nodes given by translation, rotation and scale",
-                     where.c_str(), node);
-            auto dup = targets.emplace(std::make_pair(node, p), ci);
-            if (!dup.second)
-                fail(RD_GLTF_ERR_INVALID, "%s animates the %s of node %d, as channel %zu does",
-                     where.c_str(), path.c_str(), node, dup.first->second);
-            if (node_map_[(size_t)node] < 0) continue; /* not in the scene shown */
-            auto k = kept.emplace(std::make_pair(gc.sampler, p), (uint32_t)samplers.size());
-            if (k.second) {
-                samplers.emplace_back();
-                times.emplace_back();
-                values.emplace_back();
-                anim_sampler(fmt("%s sampler %d", an.c_str(), gc.sampler),
-                             ga.samplers[(size_t)gc.sampler], p == RD_ANIM_ROTATION,
-                             &samplers.back(), &times.back(), &values.back());
-            }
-            channels.push_back({(uint32_t)node_map_[(size_t)node], p, k.first->second});
-        }
-        if (channels.empty()) continue;
-        for (size_t i = 0; i < samplers.size(); i++) {
-            samplers[i].times = times[i].data();
-            samplers[i].values = values[i].data();
-        }
-        rd_animation a;
-        memset(&a, 0, sizeof a);
-        /* the loop spans every channel's keys, skipped ones too (as viewers that play them) */
-        for (size_t si = 0; si < ga.samplers.size(); si++) {
-            if (!used[si]) continue;
-            Accessor in = make_accessor(m_, ga.samplers[si].input,
-                                        fmt("input of %s sampler %zu", an.c_str(), si),
-                                        TINYGLTF_TYPE_SCALAR, {TINYGLTF_COMPONENT_TYPE_FLOAT});
-            float last;
-            read_floats(in, in.c.count - 1, &last);
-            if (std::isfinite(last) && last > a.duration) a.duration = last;
-        }
-        a.name = ga.name.empty() ? nullptr : const_cast<char *>(ga.name.c_str());
-        a.samplers = samplers.data();
-        a.sampler_count = (uint32_t)samplers.size();
-        a.channels = channels.data();
-        a.channel_count = (uint32_t)channels.size();
-        rd_scene_add_animation(s_, &a);
+    for (const tinygltf::Scene &s : m.scenes)
+        doc->scenes.push_back({s.nodes.data(), s.nodes.size()});
+    for (const tinygltf::Camera &c : m.cameras)
+        doc->cameras.push_back({str(c.name), str(c.type), c.perspective.yfov, c.perspective.znear,
+                                c.perspective.aspectRatio});
+    for (const tinygltf::Light &l : m.lights)
+        doc->lights.push_back(
+            {name_or_null(l.name),
+             {l.type.data(), l.type.size(), l.color.data(), l.color.size(), l.intensity, l.range,
+              l.spot.innerConeAngle, l.spot.outerConeAngle}});
+    doc->channels.resize(m.animations.size());
+    doc->anim_samplers.resize(m.animations.size());
+    for (size_t i = 0; i < m.animations.size(); i++) {
+        const tinygltf::Animation &a = m.animations[i];
+        for (const tinygltf::AnimationChannel &c : a.channels)
+            doc->channels[i].push_back({c.sampler, c.target_node, str(c.target_path)});
+        for (const tinygltf::AnimationSampler &s : a.samplers)
+            doc->anim_samplers[i].push_back({s.input, s.output, str(s.interpolation)});
+        doc->animations.push_back({str(a.name), doc->channels[i].data(), doc->channels[i].size(),
+                                   doc->anim_samplers[i].data(), doc->anim_samplers[i].size()});
     }
-    if (skipped_weights)
-        rd_scene_warn(s_,
-                      "%zu animation channel(s) animate morph target weights, which are not "
-                      "supported; they are ignored",
-                      skipped_weights);
-    if (skipped_other)
-        rd_scene_warn(s_, "%zu animation channel(s) have an unknown target path; they are ignored",
-                      skipped_other);
+    rd_gltf_document &d = doc->d;
+    memset(&d, 0, sizeof d);
+    d.extensions_used = doc->extensions_used.data();
+    d.extensions_used_count = doc->extensions_used.size();
+    d.skin_count = m.skins.size();
+    d.default_scene = m.defaultScene;
+    d.buffers = doc->buffers.data();
+    d.buffer_count = doc->buffers.size();
+    d.views = doc->views.data();
+    d.view_count = doc->views.size();
+    d.accessors = doc->accessors.data();
+    d.accessor_count = doc->accessors.size();
+    d.images = doc->images.data();
+    d.image_count = doc->images.size();
+    d.textures = doc->textures.data();
+    d.texture_count = doc->textures.size();
+    d.samplers = doc->samplers.data();
+    d.sampler_count = doc->samplers.size();
+    d.materials = doc->materials.data();
+    d.material_count = doc->materials.size();
+    d.meshes = doc->meshes.data();
+    d.mesh_count = doc->meshes.size();
+    d.nodes = doc->nodes.data();
+    d.children = doc->children.data();
+    d.node_count = doc->nodes.size();
+    d.scenes = doc->scenes.data();
+    d.scene_count = doc->scenes.size();
+    d.cameras = doc->cameras.data();
+    d.camera_count = doc->cameras.size();
+    d.lights = doc->lights.data();
+    d.light_count = doc->lights.size();
+    d.animations = doc->animations.data();
+    d.animation_count = doc->animations.size();
 }
 
 /* One readable line, no control or non-ASCII bytes (messages may end up in JSON or logs). */
@@ -1256,7 +697,11 @@ void load(const unsigned char *data, size_t size, const char *base_dir, const rd
         fail(RD_GLTF_ERR_INVALID, "the glTF file is invalid: %s", first_line(terr).c_str());
     }
     uint64_t max_tris = opt && opt->max_triangles ? opt->max_triangles : kDefaultMaxTriangles;
-    Converter(model, &ctx, max_tris, out).run();
+    Document doc;
+    make_document(model, ctx, &doc);
+    char err[1024];
+    check(rd_gltf_convert(&doc.d, &ctx.files, &ctx.decoded_bytes, max_tris, out, err, sizeof err),
+          err);
 }
 
 rd_gltf_result guarded(const unsigned char *data, size_t size, const char *base_dir,
