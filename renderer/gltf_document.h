@@ -157,6 +157,56 @@ typedef struct rd_gltf_document {
     size_t animation_count;
 } rd_gltf_document;
 
+/* ---- the JSON pre-scan (gltf_prescan.c) ------------------------------------------------------ */
+
+/* A member that should be an unsigned integer. */
+typedef struct rd_gltf_scan_uint {
+    bool present, is_uint;
+    uint64_t value;
+} rd_gltf_scan_uint;
+
+typedef struct rd_gltf_scan_buffer {
+    bool is_object;
+    rd_gltf_scan_uint byte_length;
+    bool has_uri; /* uri is present and a string: */
+    rd_gltf_str uri;
+    long long data_size; /* bytes its data: URI decodes to (as tinygltf decodes); -1: not one */
+    rd_gltf_str rel;     /* not a data: URI: uri percent-decoded */
+} rd_gltf_scan_buffer;
+
+typedef struct rd_gltf_scan_view {
+    bool is_object;
+    rd_gltf_scan_uint buffer, byte_offset, byte_length;
+} rd_gltf_scan_view;
+
+typedef struct rd_gltf_scan_image {
+    bool is_object, has_view;
+    rd_gltf_scan_uint view; /* bufferView */
+} rd_gltf_scan_image;
+
+/* What the pre-scan reads of the JSON (an object) before tinygltf parses it. */
+typedef struct rd_gltf_scan {
+    bool has_version; /* asset is an object holding a string version: */
+    rd_gltf_str version;
+    bool has_required, required_is_array; /* extensionsRequired */
+    const rd_gltf_str *required;          /* s NULL: not a string */
+    size_t required_count;
+    bool not_array[3]; /* buffers, bufferViews, images present but not arrays */
+    const rd_gltf_scan_buffer *buffers;
+    size_t buffer_count;
+    const rd_gltf_scan_view *views;
+    size_t view_count;
+    const rd_gltf_scan_image *images;
+    size_t image_count;
+} rd_gltf_scan;
+
+/* Checks, in this order, the asset version, extensionsRequired, that buffers, bufferViews and
+ * images are arrays, each buffer's byteLength against its data (data: URI, GLB BIN chunk of c
+ * or external file under files), each view's range inside its buffer and each image's view
+ * (at most 2 GiB, which tinygltf hands to the image callback as an int). */
+rd_gltf_result rd_gltf_prescan(const rd_gltf_scan *s, const rd_gltf_container *c,
+                               const rd_gltf_files *files, char *err, size_t errlen);
+
 /* The extensions the importer implements (KHR_lights_punctual, KHR_materials_emissive_strength):
  * a file may require them, and they draw no "not supported" warning. */
 bool rd_gltf_extension_supported(const char *name, size_t len);

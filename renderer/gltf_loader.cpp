@@ -214,7 +214,7 @@ bool image_callback(tinygltf::Image *image, const int index, std::string *, std:
     return true;
 }
 
-/* ---- container and JSON pre-scan ---------------------------------------------------- */
+/* ---- container and JSON pre-scan (checks in gltf_prescan.c) ------------------------------ */
 
 /* Throws the C side's failure (gltf_import.h) as the loader's. */
 void check(rd_gltf_result r, const char *err)
@@ -222,24 +222,15 @@ void check(rd_gltf_result r, const char *err)
     if (r != RD_GLTF_OK) throw LoadError{r, err};
 }
 
-bool json_uint(const njson &o, const char *key, uint64_t *out, bool required)
+rd_gltf_scan_uint scan_uint(const njson &o, const char *key)
 {
+    rd_gltf_scan_uint u = {false, false, 0};
     auto it = o.find(key);
-    if (it == o.end()) return !required;
-    if (!it->is_number_unsigned()) return false;
-    *out = it->get<uint64_t>();
-    return true;
-}
-
-/* Index-valued member that must lie in [0, count). */
-bool json_index(const njson &o, const char *key, size_t count, size_t *out)
-{
-    auto it = o.find(key);
-    if (it == o.end() || !it->is_number_unsigned()) return false;
-    uint64_t v = it->get<uint64_t>();
-    if (v >= count) return false;
-    *out = (size_t)v;
-    return true;
+    if (it == o.end()) return u;
+    u.present = true;
+    u.is_uint = it->is_number_unsigned();
+    if (u.is_uint) u.value = it->get<uint64_t>();
+    return u;
 }
 
 /* Bytes a tinygltf data URI decodes to (its base64 decoder stops at '=' or a foreign
@@ -257,8 +248,20 @@ long long data_uri_size(const std::string &uri)
     return (long long)(n / 4 * 3 + (n % 4 ? n % 4 - 1 : 0));
 }
 
-/* Checks what tinygltf would use unchecked, with messages that name the culprit. */
-void prescan(const rd_gltf_container &c, LoadContext *ctx)
+/* The members rd_gltf_prescan checks, read with tinygltf's own JSON parser (so both see the
+ * same values); strings borrow from doc. */
+struct Scan {
+    rd_gltf_scan s;
+    njson doc;
+    std::vector<rd_gltf_str> required;
+    std::vector<std::string> rels;
+    std::vector<rd_gltf_scan_buffer> buffers;
+    std::vector<rd_gltf_scan_view> views;
+    std::vector<rd_gltf_scan_image> images;
+};
+
+/* Parses the JSON (failing as tinygltf's parser says) and fills scan. */
+void scan_json(const rd_gltf_container &c, Scan *scan)
 {
     char err[256];
     check(rd_gltf_check_json_depth(c.json, c.json_size, err, sizeof err), err);
@@ -268,7 +271,7 @@ void prescan(const rd_gltf_container &c, LoadContext *ctx)
         return k == "asset" || k == "buffers" || k == "bufferViews" || k == "images" ||
                k == "extensionsRequired";
     };
-    njson doc;
+    njson &doc = scan->doc;
     try {
         doc = njson::parse(c.json, c.json + c.json_size, keep, true, false);
     } catch (const njson::exception &e) {
@@ -280,116 +283,87 @@ void prescan(const rd_gltf_container &c, LoadContext *ctx)
     }
     if (!doc.is_object()) fail(RD_GLTF_ERR_PARSE, "the glTF JSON is not an object");
 
+    rd_gltf_scan &s = scan->s;
+    memset(&s, 0, sizeof s);
     auto asset = doc.find("asset");
-    if (asset == doc.end() || !asset->is_object() || !asset->contains("version") ||
-        !(*asset)["version"].is_string())
-        fail(RD_GLTF_ERR_INVALID, "the file has no asset.version, so it is not a glTF file");
-    const std::string &version = (*asset)["version"].get_ref<const std::string &>();
-    if (version.compare(0, 2, "2.") != 0)
-        fail(RD_GLTF_ERR_UNSUPPORTED, "glTF version '%.16s' is not supported (only 2.x)",
-             version.c_str());
-
+    s.has_version = asset != doc.end() && asset->is_object() && asset->contains("version") &&
+                    (*asset)["version"].is_string();
+    if (s.has_version) {
+        const std::string &version = (*asset)["version"].get_ref<const std::string &>();
+        s.version = {version.c_str(), version.size()};
+    }
     auto req = doc.find("extensionsRequired");
-    if (req != doc.end()) {
-        if (!req->is_array()) fail(RD_GLTF_ERR_INVALID, "extensionsRequired is not an array");
+    s.has_required = req != doc.end();
+    s.required_is_array = s.has_required && req->is_array();
+    if (s.required_is_array)
         for (const njson &e : *req) {
-            if (!e.is_string())
-                fail(RD_GLTF_ERR_INVALID, "extensionsRequired holds a value that is not a name");
-            const std::string &name = e.get_ref<const std::string &>();
-            if (!rd_gltf_extension_supported(name.c_str(), name.size()))
-                fail(RD_GLTF_ERR_UNSUPPORTED,
-                     "the file requires extension %.80s, which is not supported", name.c_str());
+            const std::string *name = e.is_string() ? &e.get_ref<const std::string &>() : nullptr;
+            scan->required.push_back({name ? name->c_str() : nullptr, name ? name->size() : 0});
         }
-    }
-
     static const njson empty = njson::array();
-    auto member = [&](const char *key) -> const njson & {
-        auto it = doc.find(key);
-        if (it == doc.end()) return empty;
-        if (!it->is_array()) fail(RD_GLTF_ERR_INVALID, "%s is not an array", key);
-        return *it;
-    };
-    const njson &buffers = member("buffers");
-    const njson &views = member("bufferViews");
-    const njson &images = member("images");
-
-    std::vector<uint64_t> buffer_len;
-    for (size_t i = 0; i < buffers.size(); i++) {
-        const njson &b = buffers[i];
-        uint64_t len = 0;
-        if (!b.is_object() || !json_uint(b, "byteLength", &len, true) || len == 0)
-            fail(RD_GLTF_ERR_INVALID, "buffer %zu has no valid byteLength", i);
-        buffer_len.push_back(len);
-        auto uri_it = b.find("uri");
-        if (uri_it == b.end() || !uri_it->is_string()) {
-            if (!c.glb) fail(RD_GLTF_ERR_INVALID, "buffer %zu has no uri", i);
-            if (c.bin_size == 0)
-                fail(RD_GLTF_ERR_INVALID, "buffer %zu has no uri and the GLB file has no BIN chunk",
-                     i);
-            if (len > c.bin_size)
-                fail(RD_GLTF_ERR_INVALID,
-                     "buffer %zu needs %llu bytes but the GLB BIN chunk holds only %zu", i,
-                     (unsigned long long)len, c.bin_size);
-            continue;
+    const char *const keys[3] = {"buffers", "bufferViews", "images"};
+    const njson *members[3];
+    for (int m = 0; m < 3; m++) {
+        auto it = doc.find(keys[m]);
+        s.not_array[m] = it != doc.end() && !it->is_array();
+        members[m] = it != doc.end() && it->is_array() ? &*it : &empty;
+    }
+    scan->rels.reserve(members[0]->size());
+    for (const njson &b : *members[0]) {
+        rd_gltf_scan_buffer sb;
+        memset(&sb, 0, sizeof sb);
+        sb.is_object = b.is_object();
+        sb.data_size = -1;
+        auto uri = sb.is_object ? b.find("uri") : b.end();
+        if (sb.is_object) sb.byte_length = scan_uint(b, "byteLength");
+        sb.has_uri = sb.is_object && uri != b.end() && uri->is_string();
+        if (sb.has_uri) {
+            const std::string &u = uri->get_ref<const std::string &>();
+            sb.uri = {u.c_str(), u.size()};
+            sb.data_size = data_uri_size(u);
+            if (sb.data_size < 0) {
+                scan->rels.push_back(tinygltf::dlib::urldecode(u));
+                sb.rel = {scan->rels.back().c_str(), scan->rels.back().size()};
+            }
         }
-        const std::string &uri = uri_it->get_ref<const std::string &>();
-        long long n = data_uri_size(uri);
-        if (n >= 0) {
-            if ((uint64_t)n != len)
-                fail(RD_GLTF_ERR_INVALID,
-                     "buffer %zu: its data URI holds %lld bytes but byteLength is %llu", i, n,
-                     (unsigned long long)len);
-            continue;
+        scan->buffers.push_back(sb);
+    }
+    for (const njson &v : *members[1]) {
+        rd_gltf_scan_view sv;
+        memset(&sv, 0, sizeof sv);
+        sv.is_object = v.is_object();
+        if (sv.is_object) {
+            sv.buffer = scan_uint(v, "buffer");
+            sv.byte_offset = scan_uint(v, "byteOffset");
+            sv.byte_length = scan_uint(v, "byteLength");
         }
-        std::string shown = uri.size() > 64 ? uri.substr(0, 61) + "..." : uri;
-        if (uri.compare(0, 5, "data:") == 0)
-            fail(RD_GLTF_ERR_UNSUPPORTED,
-                 "buffer %zu has a data URI that is not base64 of a known media type", i);
-        std::string rel = tinygltf::dlib::urldecode(uri);
-        const char *refusal = rd_gltf_uri_refusal(&ctx->files, rel.c_str(), rel.size());
-        std::string why = refusal ? refusal : "";
-        struct stat st;
-        char ebuf[256];
-        if (why.empty() && stat((ctx->files.prefix + rel).c_str(), &st) != 0)
-            why = (rd_gltf_errno_text(errno, ebuf, sizeof ebuf), ebuf);
-        else if (why.empty() && !S_ISREG(st.st_mode))
-            why = "it is not a regular file";
-        if (!why.empty())
-            fail(RD_GLTF_ERR_IO, "buffer %zu '%s' could not be loaded: %s", i, shown.c_str(),
-                 why.c_str());
-        if ((uint64_t)st.st_size != len)
-            fail(RD_GLTF_ERR_INVALID, "buffer %zu '%s' has %lld bytes but byteLength is %llu", i,
-                 shown.c_str(), (long long)st.st_size, (unsigned long long)len);
+        scan->views.push_back(sv);
     }
+    for (const njson &im : *members[2]) {
+        rd_gltf_scan_image si;
+        memset(&si, 0, sizeof si);
+        si.is_object = im.is_object();
+        si.has_view = si.is_object && im.contains("bufferView");
+        if (si.has_view) si.view = scan_uint(im, "bufferView");
+        scan->images.push_back(si);
+    }
+    s.required = scan->required.data();
+    s.required_count = scan->required.size();
+    s.buffers = scan->buffers.data();
+    s.buffer_count = scan->buffers.size();
+    s.views = scan->views.data();
+    s.view_count = scan->views.size();
+    s.images = scan->images.data();
+    s.image_count = scan->images.size();
+}
 
-    std::vector<uint64_t> view_len;
-    for (size_t i = 0; i < views.size(); i++) {
-        const njson &v = views[i];
-        size_t b = 0;
-        uint64_t off = 0, len = 0;
-        if (!v.is_object() || !json_index(v, "buffer", buffers.size(), &b))
-            fail(RD_GLTF_ERR_INVALID, "buffer view %zu does not refer to an existing buffer", i);
-        if (!json_uint(v, "byteOffset", &off, false) || !json_uint(v, "byteLength", &len, true) ||
-            len == 0)
-            fail(RD_GLTF_ERR_INVALID, "buffer view %zu has an invalid byteOffset or byteLength", i);
-        if (off > buffer_len[b] || len > buffer_len[b] - off)
-            fail(RD_GLTF_ERR_INVALID,
-                 "buffer view %zu (offset %llu, length %llu) does not fit in buffer %zu (%llu "
-                 "bytes)",
-                 i, (unsigned long long)off, (unsigned long long)len, b,
-                 (unsigned long long)buffer_len[b]);
-        view_len.push_back(len);
-    }
-
-    for (size_t i = 0; i < images.size(); i++) {
-        const njson &im = images[i];
-        if (!im.is_object() || !im.contains("bufferView")) continue;
-        size_t v = 0;
-        if (!json_index(im, "bufferView", views.size(), &v))
-            fail(RD_GLTF_ERR_INVALID, "image %zu does not refer to an existing buffer view", i);
-        if (view_len[v] > (uint64_t)INT_MAX)
-            fail(RD_GLTF_ERR_TOO_LARGE, "image %zu is larger than 2 GiB", i);
-    }
+/* Checks what tinygltf would use unchecked, with messages that name the culprit. */
+void prescan(const rd_gltf_container &c, LoadContext *ctx)
+{
+    Scan scan;
+    scan_json(c, &scan);
+    char err[1024];
+    check(rd_gltf_prescan(&scan.s, &c, &ctx->files, err, sizeof err), err);
 }
 
 /* ---- the C view of tinygltf's model (gltf_document.h) ------------------------------------ */
