@@ -130,7 +130,7 @@ static rd_gltf_result materials(convert *cv)
     }
     if (r == RD_GLTF_OK) {
         rd_gltf_material_warnings(c->s, blend);
-        qsort(unsupported, unsupported_n, sizeof *unsupported, compare_names);
+        if (unsupported_n) qsort(unsupported, unsupported_n, sizeof *unsupported, compare_names);
         for (size_t i = 0, j; i < unsupported_n; i = j) {
             for (j = i + 1; j < unsupported_n && strcmp(unsupported[i], unsupported[j]) == 0;)
                 j++;

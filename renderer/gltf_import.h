@@ -243,6 +243,11 @@ rd_gltf_read_status rd_gltf_read_file(const char *path, uint64_t max_size,
                                       unsigned char *(*alloc)(void *user, size_t size), void *user,
                                       char *why, size_t whylen);
 
+/* The whole file at path into *data (malloc'd, *size bytes; NULL on failure). */
+rd_gltf_read_status rd_gltf_read_file_malloc(const char *path, uint64_t max_size,
+                                             unsigned char **data, size_t *size, char *why,
+                                             size_t whylen);
+
 /* ---- images (gltf_image.c) ---------------------------------------------------------------------
  */
 
@@ -252,6 +257,10 @@ rd_gltf_read_status rd_gltf_read_file(const char *path, uint64_t max_size,
 unsigned char *rd_gltf_decode_image(uint64_t *decoded_bytes, const unsigned char *bytes,
                                     size_t size, int *w, int *h, rd_gltf_result *code, char *why,
                                     size_t whylen);
+
+/* The loader's final message: len bytes of msg as one readable line in err (at most errlen - 1
+ * bytes, control and non-ASCII bytes replaced with '?'; messages may end up in JSON or logs). */
+void rd_gltf_write_text(const char *msg, size_t len, char *err, size_t errlen);
 
 /* Writes one message to err (errlen > 0) and returns code. */
 rd_gltf_result rd_gltf_fail(char *err, size_t errlen, rd_gltf_result code, const char *fmt, ...)

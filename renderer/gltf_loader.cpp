@@ -1,33 +1,31 @@
-/* gltf_loader.cpp: glTF 2.0 -> rd_scene through tinygltf (the project's only C++ file).
+/* gltf_loader.cpp: the glTF importer's one C++ file — the only code that sees tinygltf. It
+ * parses with tinygltf and copies what was parsed into plain C views; everything else is C.
  *
  * Untrusted input passes three gates:
- *   1. our own checks of the GLB container and a pre-scan of the JSON (nesting depth, asset
+ *   1. our own checks of the GLB container (gltf_container.c) and a pre-scan of the JSON:
+ *      parsed here with tinygltf's JSON parser, checked in gltf_prescan.c (nesting depth, asset
  *      version, extensionsRequired, buffers, buffer views and image buffer views), because
  *      tinygltf 2.7 trusts some of those values (image buffer views, the BIN chunk length);
  *   2. tinygltf parses the JSON and loads buffers through file callbacks that only open
- *      regular files below the base folder; images are decoded by our callback (PNG/JPEG via
- *      stb_image, always to 8-bit RGBA, with size limits);
- *   3. conversion validates every index, accessor range and value before reading a byte.
+ *      regular files below the base folder (gltf_uri.c); images are decoded by our callback
+ *      (gltf_image.c: PNG/JPEG via stb_image, always to 8-bit RGBA, with size limits);
+ *   3. the model is copied into an rd_gltf_document (gltf_document.h), which gltf_convert.c
+ *      turns into the scene, validating every index, accessor range and value before reading.
  * Errors unwind as a C++ exception (LoadError) caught at the C boundary with everything else.
  */
 #include "gltf_loader.h"
 
 #include <algorithm>
-#include <cerrno>
-#include <climits>
 #include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream> /* tiny_gltf.h 2.7 needs it even with TINYGLTF_NO_FS */
 #include <map>
+#include <memory>
 #include <new>
 #include <string>
 #include <vector>
-
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wunused-function"
@@ -85,7 +83,7 @@ std::string vfmt(const char *fmt, va_list ap)
 
 /* ---- files (rules in gltf_uri.c) -------------------------------------------------------- */
 
-/* rd_gltf_read_file's allocator for a std::vector (out of memory is rethrown as bad_alloc). */
+/* rd_gltf_read_file's allocator for tinygltf's vector. */
 struct VectorSink {
     std::vector<unsigned char> *v;
     bool no_memory;
@@ -101,18 +99,6 @@ unsigned char *vector_alloc(void *user, size_t size)
         return nullptr;
     }
     return s->v->data();
-}
-
-rd_gltf_read_status read_file(const char *path, uint64_t max_size, std::vector<unsigned char> *out,
-                              std::string *why)
-{
-    VectorSink sink{out, false};
-    char buf[256] = "";
-    rd_gltf_read_status st =
-        rd_gltf_read_file(path, max_size, vector_alloc, &sink, buf, sizeof buf);
-    if (st == RD_GLTF_READ_NO_MEMORY) throw std::bad_alloc();
-    *why = buf;
-    return st;
 }
 
 bool fs_file_exists(const std::string &path, void *user)
@@ -133,10 +119,14 @@ bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::strin
         *err = files->last_refusal;
         return false;
     }
-    std::string why;
-    if (read_file(path.c_str(), kMaxExternalFile, out, &why) != RD_GLTF_READ_OK) {
+    VectorSink sink{out, false};
+    char why[256] = "";
+    rd_gltf_read_status st =
+        rd_gltf_read_file(path.c_str(), kMaxExternalFile, vector_alloc, &sink, why, sizeof why);
+    if (st == RD_GLTF_READ_NO_MEMORY) throw std::bad_alloc();
+    if (st != RD_GLTF_READ_OK) {
         *err = why;
-        snprintf(files->last_refusal, sizeof files->last_refusal, "%s", why.c_str());
+        snprintf(files->last_refusal, sizeof files->last_refusal, "%s", why);
         return false;
     }
     return true;
@@ -171,41 +161,27 @@ struct LoadContext {
     LoadContext &operator=(const LoadContext &) = delete;
 };
 
-/* PNG or JPEG -> 8-bit RGBA into *rgba (rd_gltf_decode_image). */
-bool decode_image(LoadContext *ctx, const unsigned char *bytes, size_t size,
-                  std::vector<unsigned char> *rgba, int *w, int *h, ImageFailure *f)
-{
-    char why[256];
-    unsigned char *px =
-        rd_gltf_decode_image(&ctx->decoded_bytes, bytes, size, w, h, &f->code, why, sizeof why);
-    if (!px) {
-        f->why = why;
-        return false;
-    }
-    try {
-        rgba->assign(px, px + (size_t)*w * (size_t)*h * 4);
-    } catch (...) {
-        free(px);
-        throw;
-    }
-    free(px);
-    return true;
-}
-
-/* tinygltf image callback (data URIs and buffer views; ranges were checked in prescan).
- * Never fails the whole load: a broken image is an error only if a material uses it. */
+/* tinygltf image callback (data URIs and buffer views; ranges were checked in prescan): PNG or
+ * JPEG to 8-bit RGBA. Never fails the whole load: a broken image is an error only if a material
+ * uses it. */
 bool image_callback(tinygltf::Image *image, const int index, std::string *, std::string *, int, int,
                     const unsigned char *bytes, int size, void *user)
 {
     LoadContext *ctx = static_cast<LoadContext *>(user);
     ImageFailure f{RD_GLTF_ERR_INVALID, ""};
+    char why[256];
     int w = 0, h = 0;
     image->image.clear();
-    if (size < 0 ||
-        !decode_image(ctx, bytes, (size_t)(size < 0 ? 0 : size), &image->image, &w, &h, &f)) {
+    unsigned char *px = size < 0 ? nullptr
+                                 : rd_gltf_decode_image(&ctx->decoded_bytes, bytes, (size_t)size,
+                                                        &w, &h, &f.code, why, sizeof why);
+    if (!px) {
+        if (size >= 0) f.why = why;
         ctx->image_failures[index] = f;
         return true;
     }
+    std::unique_ptr<unsigned char, decltype(&free)> owned(px, &free);
+    image->image.assign(px, px + (size_t)w * (size_t)h * 4);
     image->width = w;
     image->height = h;
     image->component = 4;
@@ -427,6 +403,12 @@ struct Document {
     std::vector<rd_gltf_doc_animation> animations;
 };
 
+template <class T> void set(const T **p, size_t *n, const std::vector<T> &v)
+{
+    *p = v.data();
+    *n = v.size();
+}
+
 rd_gltf_texture_ref ref(const tinygltf::TextureInfo &t)
 {
     return {t.index, t.texCoord};
@@ -580,49 +562,23 @@ void make_document(const Model &m, const LoadContext &ctx, Document *doc)
     }
     rd_gltf_document &d = doc->d;
     memset(&d, 0, sizeof d);
-    d.extensions_used = doc->extensions_used.data();
-    d.extensions_used_count = doc->extensions_used.size();
     d.skin_count = m.skins.size();
     d.default_scene = m.defaultScene;
-    d.buffers = doc->buffers.data();
-    d.buffer_count = doc->buffers.size();
-    d.views = doc->views.data();
-    d.view_count = doc->views.size();
-    d.accessors = doc->accessors.data();
-    d.accessor_count = doc->accessors.size();
-    d.images = doc->images.data();
-    d.image_count = doc->images.size();
-    d.textures = doc->textures.data();
-    d.texture_count = doc->textures.size();
-    d.samplers = doc->samplers.data();
-    d.sampler_count = doc->samplers.size();
-    d.materials = doc->materials.data();
-    d.material_count = doc->materials.size();
-    d.meshes = doc->meshes.data();
-    d.mesh_count = doc->meshes.size();
-    d.nodes = doc->nodes.data();
-    d.children = doc->children.data();
-    d.node_count = doc->nodes.size();
-    d.scenes = doc->scenes.data();
-    d.scene_count = doc->scenes.size();
-    d.cameras = doc->cameras.data();
-    d.camera_count = doc->cameras.size();
-    d.lights = doc->lights.data();
-    d.light_count = doc->lights.size();
-    d.animations = doc->animations.data();
-    d.animation_count = doc->animations.size();
-}
-
-/* One readable line, no control or non-ASCII bytes (messages may end up in JSON or logs). */
-void write_message(const std::string &msg, char *err, size_t errlen)
-{
-    if (!err || errlen == 0) return;
-    size_t n = std::min(msg.size(), errlen - 1);
-    for (size_t i = 0; i < n; i++) {
-        unsigned char ch = (unsigned char)msg[i];
-        err[i] = (ch < 0x20 || ch >= 0x7f) ? '?' : (char)ch;
-    }
-    err[n] = '\0';
+    set(&d.extensions_used, &d.extensions_used_count, doc->extensions_used);
+    set(&d.buffers, &d.buffer_count, doc->buffers);
+    set(&d.views, &d.view_count, doc->views);
+    set(&d.accessors, &d.accessor_count, doc->accessors);
+    set(&d.images, &d.image_count, doc->images);
+    set(&d.textures, &d.texture_count, doc->textures);
+    set(&d.samplers, &d.sampler_count, doc->samplers);
+    set(&d.materials, &d.material_count, doc->materials);
+    set(&d.meshes, &d.mesh_count, doc->meshes);
+    set(&d.children, &d.node_count, doc->children);
+    set(&d.nodes, &d.node_count, doc->nodes);
+    set(&d.scenes, &d.scene_count, doc->scenes);
+    set(&d.cameras, &d.camera_count, doc->cameras);
+    set(&d.lights, &d.light_count, doc->lights);
+    set(&d.animations, &d.animation_count, doc->animations);
 }
 
 /* tinygltf's error text: its first non-empty line, shortened. */
@@ -700,73 +656,20 @@ rd_gltf_result guarded(const unsigned char *data, size_t size, const char *base_
         msg = "the glTF file is invalid (unexpected error)";
     }
     if (code != RD_GLTF_OK) rd_scene_destroy(out);
-    write_message(msg, err, errlen);
+    rd_gltf_write_text(msg.data(), msg.size(), err, errlen);
     return code;
 }
 
 } // namespace
-
-extern "C" const char *rd_gltf_strerror(rd_gltf_result r)
-{
-    switch (r) {
-    case RD_GLTF_OK:
-        return "ok";
-    case RD_GLTF_ERR_IO:
-        return "io error";
-    case RD_GLTF_ERR_PARSE:
-        return "parse error";
-    case RD_GLTF_ERR_INVALID:
-        return "invalid glTF";
-    case RD_GLTF_ERR_UNSUPPORTED:
-        return "unsupported glTF feature";
-    case RD_GLTF_ERR_TOO_LARGE:
-        return "too large";
-    }
-    return "unknown error";
-}
 
 extern "C" rd_gltf_result rd_gltf_load_memory(const void *data, size_t size, const char *base_dir,
                                               const rd_gltf_options *opt, rd_scene *out, char *err,
                                               size_t errlen)
 {
     if (!out) {
-        write_message("no output scene was given", err, errlen);
+        rd_gltf_write_text("no output scene was given", 25, err, errlen);
         return RD_GLTF_ERR_INVALID;
     }
     rd_scene_init(out);
     return guarded(static_cast<const unsigned char *>(data), size, base_dir, opt, out, err, errlen);
-}
-
-extern "C" rd_gltf_result rd_gltf_load_file(const char *path, const rd_gltf_options *opt,
-                                            rd_scene *out, char *err, size_t errlen)
-{
-    if (!out) {
-        write_message("no output scene was given", err, errlen);
-        return RD_GLTF_ERR_INVALID;
-    }
-    rd_scene_init(out);
-    rd_gltf_result code;
-    std::string msg;
-    try {
-        if (!path || !path[0]) fail(RD_GLTF_ERR_IO, "no file name was given");
-        std::vector<unsigned char> data;
-        std::string why;
-        rd_gltf_read_status st = read_file(path, 0xffffffffull, &data, &why);
-        if (st != RD_GLTF_READ_OK)
-            fail(st == RD_GLTF_READ_TOO_LARGE ? RD_GLTF_ERR_TOO_LARGE : RD_GLTF_ERR_IO,
-                 "'%s' could not be read: %s", path, why.c_str());
-        std::string p = path, base;
-        size_t slash = p.find_last_of('/');
-        base = slash == std::string::npos ? "." : slash == 0 ? "/" : p.substr(0, slash);
-        return guarded(data.data(), data.size(), base.c_str(), opt, out, err, errlen);
-    } catch (const LoadError &e) {
-        code = e.code;
-        msg = e.msg;
-    } catch (...) {
-        code = RD_GLTF_ERR_TOO_LARGE;
-        msg = "the file needs more memory than is available";
-    }
-    rd_scene_destroy(out);
-    write_message(msg, err, errlen);
-    return code;
 }

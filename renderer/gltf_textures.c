@@ -9,19 +9,6 @@
 
 static const uint64_t kMaxExternalFile = 0xffffffffull; /* tinygltf sizes are 32-bit */
 
-typedef struct file_bytes {
-    unsigned char *data;
-    size_t size;
-} file_bytes;
-
-static unsigned char *malloc_alloc(void *user, size_t size)
-{
-    file_bytes *f = user;
-    f->size = size;
-    f->data = malloc(size ? size : 1);
-    return f->data;
-}
-
 /* wrapS/wrapT of sampler `sampler` to RD_WRAP_*. */
 static rd_gltf_result wrap(rd_gltf_conv *c, int sampler, int mode, uint32_t *out)
 {
@@ -55,13 +42,13 @@ static rd_gltf_result read_external(rd_gltf_conv *c, const rd_gltf_doc_image *im
         return rd_gltf_fail(c->err, c->errlen, RD_GLTF_ERR_IO, "%s could not be loaded: %s", what,
                             refusal);
     char why[256] = "";
-    file_bytes file = {NULL, 0};
+    unsigned char *file;
+    size_t size;
     char *path = rd_gltf_files_join(c->files, img->rel.s, img->rel.len);
     rd_gltf_read_status st =
-        rd_gltf_read_file(path, kMaxExternalFile, malloc_alloc, &file, why, sizeof why);
+        rd_gltf_read_file_malloc(path, kMaxExternalFile, &file, &size, why, sizeof why);
     free(path);
     if (st != RD_GLTF_READ_OK) {
-        free(file.data);
         if (st == RD_GLTF_READ_NO_MEMORY)
             return rd_gltf_fail(c->err, c->errlen, RD_GLTF_ERR_TOO_LARGE,
                                 "the file needs more memory than is available");
@@ -70,9 +57,8 @@ static rd_gltf_result read_external(rd_gltf_conv *c, const rd_gltf_doc_image *im
                             "%s could not be loaded: %s", what, why);
     }
     rd_gltf_result code;
-    *rgba =
-        rd_gltf_decode_image(c->decoded_bytes, file.data, file.size, w, h, &code, why, sizeof why);
-    free(file.data);
+    *rgba = rd_gltf_decode_image(c->decoded_bytes, file, size, w, h, &code, why, sizeof why);
+    free(file);
     if (!*rgba)
         return rd_gltf_fail(c->err, c->errlen, code, "%s could not be decoded: %s", what, why);
     return RD_GLTF_OK;

@@ -1,10 +1,12 @@
-/* gltf_uri.c: which external files a glTF file may name, and reading them (see gltf_import.h).
- * A URI is opened only when it is relative, stays below the base folder and names a regular
- * file; loading from memory without a base folder opens nothing. */
+/* gltf_uri.c: which external files a glTF file may name, and reading them (see gltf_import.h);
+ * rd_gltf_load_file (gltf_loader.h), which reads the file and loads it from memory with its
+ * folder as the base. A URI is opened only when it is relative, stays below the base folder
+ * and names a regular file; loading from memory without a base folder opens nothing. */
 #include "gltf_import.h"
 
 #include <errno.h>
 #include <fcntl.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -143,4 +145,89 @@ rd_gltf_read_status rd_gltf_read_file(const char *path, uint64_t max_size,
     }
     close(fd);
     return status;
+}
+
+typedef struct file_bytes {
+    unsigned char *data;
+    size_t size;
+} file_bytes;
+
+static unsigned char *malloc_alloc(void *user, size_t size)
+{
+    file_bytes *f = user;
+    f->size = size;
+    f->data = malloc(size ? size : 1);
+    return f->data;
+}
+
+rd_gltf_read_status rd_gltf_read_file_malloc(const char *path, uint64_t max_size,
+                                             unsigned char **data, size_t *size, char *why,
+                                             size_t whylen)
+{
+    file_bytes f = {NULL, 0};
+    rd_gltf_read_status st = rd_gltf_read_file(path, max_size, malloc_alloc, &f, why, whylen);
+    if (st != RD_GLTF_READ_OK) {
+        free(f.data);
+        f.data = NULL;
+    }
+    *data = f.data;
+    *size = f.size;
+    return st;
+}
+
+/* Fails before loading: out is left destroyed (zeroed) and err holds the message. */
+static rd_gltf_result refuse(rd_scene *out, char *err, size_t errlen, rd_gltf_result code,
+                             const char *fmt, ...) __attribute__((format(printf, 5, 6)));
+static rd_gltf_result refuse(rd_scene *out, char *err, size_t errlen, rd_gltf_result code,
+                             const char *fmt, ...)
+{
+    rd_scene_init(out);
+    rd_scene_destroy(out);
+    va_list ap;
+    va_start(ap, fmt);
+    char *msg = NULL;
+    int n = vasprintf(&msg, fmt, ap);
+    va_end(ap);
+    if (n < 0) {
+        fprintf(stderr, "probecast: out of memory (a message)\n");
+        abort();
+    }
+    rd_gltf_write_text(msg, (size_t)n, err, errlen);
+    free(msg);
+    return code;
+}
+
+rd_gltf_result rd_gltf_load_file(const char *path, const rd_gltf_options *opt, rd_scene *out,
+                                 char *err, size_t errlen)
+{
+    if (!out) {
+        rd_gltf_write_text("no output scene was given", 25, err, errlen);
+        return RD_GLTF_ERR_INVALID;
+    }
+    if (!path || !path[0])
+        return refuse(out, err, errlen, RD_GLTF_ERR_IO, "no file name was given");
+    unsigned char *data;
+    size_t size;
+    char why[256] = "";
+    rd_gltf_read_status st =
+        rd_gltf_read_file_malloc(path, 0xffffffffull, &data, &size, why, sizeof why);
+    if (st == RD_GLTF_READ_NO_MEMORY)
+        return refuse(out, err, errlen, RD_GLTF_ERR_TOO_LARGE,
+                      "the file needs more memory than is available");
+    if (st != RD_GLTF_READ_OK)
+        return refuse(out, err, errlen,
+                      st == RD_GLTF_READ_TOO_LARGE ? RD_GLTF_ERR_TOO_LARGE : RD_GLTF_ERR_IO,
+                      "'%s' could not be read: %s", path, why);
+    const char *slash = strrchr(path, '/');
+    char *base = slash == NULL   ? strdup(".")
+                 : slash == path ? strdup("/")
+                                 : strndup(path, (size_t)(slash - path));
+    if (!base) {
+        fprintf(stderr, "probecast: out of memory (a path)\n");
+        abort();
+    }
+    rd_gltf_result r = rd_gltf_load_memory(data, size, base, opt, out, err, errlen);
+    free(base);
+    free(data);
+    return r;
 }
