@@ -1,9 +1,10 @@
-/* gltf_import.h: the C side of the glTF importer — everything that works on plain bytes and
- * arrays rather than on tinygltf's document: the GLB container, the JSON nesting pre-check,
- * reading accessor elements, a primitive's triangles and an animation sampler's keys.
- * gltf_loader.cpp (the one C++ file, which owns tinygltf) validates the document's indices,
- * resolves accessors to rd_gltf_accessor and calls these. Internal to the importer; the public
- * API is gltf_loader.h.
+/* gltf_import.h: the C side of the glTF importer's building blocks — everything that works on
+ * plain bytes and arrays: the GLB container and the loader's messages, the JSON nesting
+ * pre-check, external files, image decoding, reading accessor elements, a primitive's
+ * triangles, material factors, nodes, lights and an animation sampler's keys. gltf_convert.c
+ * walks the parsed document (gltf_document.h) and calls these; gltf_loader.cpp (the one C++
+ * file, which owns tinygltf) calls the container, file and image parts from tinygltf's
+ * callbacks. Internal to the importer; the public API is gltf_loader.h.
  *
  * Errors: functions that can fail return an rd_gltf_result and write one sentence to err
  * (errlen > 0), the message the loader reports unchanged.

@@ -1,5 +1,5 @@
 /* gltf_materials.c: glTF 2.0 metallic-roughness material factors to rd_material (see
- * gltf_import.h; textures are resolved by gltf_loader.cpp). */
+ * gltf_import.h; textures are resolved by gltf_textures.c), and the labels messages use. */
 #include "gltf_import.h"
 
 #include <float.h>
