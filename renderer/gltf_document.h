@@ -44,7 +44,7 @@ typedef struct rd_gltf_doc_accessor {
 
 typedef struct rd_gltf_doc_image {
     rd_gltf_str name, uri;
-    rd_gltf_str rel;           /* uri percent-decoded */
+    rd_gltf_str rel;           /* uri percent-decoded (empty for a data: URI) */
     const unsigned char *rgba; /* decoded while parsing (rgba_size bytes), or NULL */
     size_t rgba_size;
     int width, height;

@@ -386,7 +386,7 @@ struct Document {
     std::vector<rd_gltf_str> extensions_used, buffers;
     std::vector<rd_gltf_doc_buffer_view> views;
     std::vector<rd_gltf_doc_accessor> accessors;
-    std::vector<std::string> rels; /* decoded image URIs */
+    std::vector<std::string> rels; /* decoded image URIs (not data: URIs) */
     std::vector<rd_gltf_doc_image> images;
     std::vector<rd_gltf_doc_texture> textures;
     std::vector<rd_gltf_doc_sampler> samplers;
@@ -457,8 +457,10 @@ void make_document(const Model &m, const LoadContext &ctx, Document *doc)
                                   a.sparse.indices.bufferView, a.sparse.indices.byteOffset,
                                   a.sparse.indices.componentType, a.sparse.values.bufferView,
                                   a.sparse.values.byteOffset});
-    for (const tinygltf::Image &img : m.images)
-        doc->rels.push_back(tinygltf::dlib::urldecode(img.uri));
+    for (const tinygltf::Image &img : m.images) /* data: URIs are never opened as files */
+        doc->rels.push_back(img.uri.compare(0, 5, "data:") == 0
+                                ? std::string()
+                                : tinygltf::dlib::urldecode(img.uri));
     for (size_t i = 0; i < m.images.size(); i++) {
         const tinygltf::Image &img = m.images[i];
         rd_gltf_doc_image di;
