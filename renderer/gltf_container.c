@@ -1,4 +1,5 @@
-/* gltf_container.c: the GLB container and the JSON nesting pre-check (see gltf_import.h). */
+/* gltf_container.c: the GLB container and the JSON nesting pre-check (see gltf_import.h); the
+ * importer's messages (rd_gltf_fail, rd_gltf_write_text, rd_gltf_strerror). */
 #include "gltf_import.h"
 
 #include <stdarg.h>
@@ -14,6 +15,36 @@ rd_gltf_result rd_gltf_fail(char *err, size_t errlen, rd_gltf_result code, const
         va_end(ap);
     }
     return code;
+}
+
+void rd_gltf_write_text(const char *msg, size_t len, char *err, size_t errlen)
+{
+    if (!err || errlen == 0) return;
+    size_t n = len < errlen - 1 ? len : errlen - 1;
+    for (size_t i = 0; i < n; i++) {
+        unsigned char ch = (unsigned char)msg[i];
+        err[i] = (ch < 0x20 || ch >= 0x7f) ? '?' : (char)ch;
+    }
+    err[n] = '\0';
+}
+
+const char *rd_gltf_strerror(rd_gltf_result r)
+{
+    switch (r) {
+    case RD_GLTF_OK:
+        return "ok";
+    case RD_GLTF_ERR_IO:
+        return "io error";
+    case RD_GLTF_ERR_PARSE:
+        return "parse error";
+    case RD_GLTF_ERR_INVALID:
+        return "invalid glTF";
+    case RD_GLTF_ERR_UNSUPPORTED:
+        return "unsupported glTF feature";
+    case RD_GLTF_ERR_TOO_LARGE:
+        return "too large";
+    }
+    return "unknown error";
 }
 
 #define fail rd_gltf_fail

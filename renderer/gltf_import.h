@@ -1,9 +1,10 @@
-/* gltf_import.h: the C side of the glTF importer — everything that works on plain bytes and
- * arrays rather than on tinygltf's document: the GLB container, the JSON nesting pre-check,
- * reading accessor elements, a primitive's triangles and an animation sampler's keys.
- * gltf_loader.cpp (the one C++ file, which owns tinygltf) validates the document's indices,
- * resolves accessors to rd_gltf_accessor and calls these. Internal to the importer; the public
- * API is gltf_loader.h.
+/* gltf_import.h: the C side of the glTF importer's building blocks — everything that works on
+ * plain bytes and arrays: the GLB container and the loader's messages, the JSON nesting
+ * pre-check, external files, image decoding, reading accessor elements, a primitive's
+ * triangles, material factors, nodes, lights and an animation sampler's keys. gltf_convert.c
+ * walks the parsed document (gltf_document.h) and calls these; gltf_loader.cpp (the one C++
+ * file, which owns tinygltf) calls the container, file and image parts from tinygltf's
+ * callbacks. Internal to the importer; the public API is gltf_loader.h.
  *
  * Errors: functions that can fail return an rd_gltf_result and write one sentence to err
  * (errlen > 0), the message the loader reports unchanged.
@@ -34,7 +35,14 @@ enum {
 };
 enum { RD_GLTF_MODE_TRIANGLES = 4, RD_GLTF_MODE_TRIANGLE_STRIP = 5, RD_GLTF_MODE_TRIANGLE_FAN = 6 };
 
-enum { RD_GLTF_MAX_JSON_DEPTH = 100 };
+enum { RD_GLTF_MAX_JSON_DEPTH = 100, RD_GLTF_LABEL_MAX = 160 };
+
+/* A string of the document: len bytes at s, which is '\0'-terminated (the text itself may hold
+ * '\0' bytes). */
+typedef struct rd_gltf_str {
+    const char *s;
+    size_t len;
+} rd_gltf_str;
 
 /* ---- container (gltf_container.c) --------------------------------------------------------- */
 
@@ -142,6 +150,8 @@ void rd_gltf_material_warnings(rd_scene *s, size_t blend);
  * most max bytes (4 <= max <= 127), longer text shortened with "...", control and non-ASCII
  * bytes replaced with '?'; out is terminated. */
 void rd_gltf_clean(const char *s, size_t len, size_t max, char out[128]);
+/* "mesh 3", or "mesh 3 'Cube'" when the name is not empty (cleaned, at most 64 bytes). */
+void rd_gltf_label(const char *kind, size_t index, rd_gltf_str name, char out[RD_GLTF_LABEL_MAX]);
 /* d as a finite float, false when it is not finite or out of float range. */
 bool rd_gltf_to_float(double d, float *out);
 
@@ -193,6 +203,65 @@ rd_gltf_result rd_gltf_light(rd_scene *s, size_t index, const rd_gltf_light_para
  * into c. */
 rd_gltf_result rd_gltf_perspective(size_t index, double yfov, double znear, double aspect,
                                    rd_camera *c, char *err, size_t errlen);
+
+/* ---- external files (gltf_uri.c) ------------------------------------------------------------ */
+
+/* Where external URIs may be opened from. */
+typedef struct rd_gltf_files {
+    bool allowed; /* false: loading from memory without a base folder */
+    char *base;   /* folder that external URIs resolve against */
+    char *prefix; /* base with exactly one trailing '/' */
+    size_t prefix_len;
+    char last_refusal[256]; /* why the last path was refused ("" : none yet) */
+} rd_gltf_files;
+
+/* base_dir NULL: no file may be opened; "" means ".". dispose frees what init allocated. */
+void rd_gltf_files_init(rd_gltf_files *f, const char *base_dir);
+void rd_gltf_files_dispose(rd_gltf_files *f);
+/* Why the decoded relative URI rel (len bytes, rel[len] == '\0') may not be opened, or NULL
+ * when it may. */
+const char *rd_gltf_uri_refusal(const rd_gltf_files *f, const char *rel, size_t len);
+/* tinygltf's file callbacks get JoinPath(base, uri): true when path is the prefix followed by
+ * a URI that may be opened (*rel: where that URI starts); else records why in last_refusal. */
+bool rd_gltf_files_check_path(rd_gltf_files *f, const char *path, size_t len, size_t *rel);
+/* tinygltf's FileExists: check_path passes and path names a regular file. */
+bool rd_gltf_files_exists(rd_gltf_files *f, const char *path, size_t len);
+/* prefix + rel, malloc'd (the caller frees). */
+char *rd_gltf_files_join(const rd_gltf_files *f, const char *rel, size_t len);
+/* strerror text of e. */
+void rd_gltf_errno_text(int e, char *out, size_t outlen);
+
+typedef enum rd_gltf_read_status {
+    RD_GLTF_READ_OK = 0,
+    RD_GLTF_READ_FAILED,    /* why says what went wrong */
+    RD_GLTF_READ_TOO_LARGE, /* larger than max_size (why says how large) */
+    RD_GLTF_READ_NO_MEMORY  /* alloc returned NULL */
+} rd_gltf_read_status;
+
+/* Reads the whole regular file at path (never a FIFO or a device) into alloc(user, size),
+ * which returns size bytes owned by the caller (NULL: out of memory, unless size is 0). */
+rd_gltf_read_status rd_gltf_read_file(const char *path, uint64_t max_size,
+                                      unsigned char *(*alloc)(void *user, size_t size), void *user,
+                                      char *why, size_t whylen);
+
+/* The whole file at path into *data (malloc'd, *size bytes; NULL on failure). */
+rd_gltf_read_status rd_gltf_read_file_malloc(const char *path, uint64_t max_size,
+                                             unsigned char **data, size_t *size, char *why,
+                                             size_t whylen);
+
+/* ---- images (gltf_image.c) ---------------------------------------------------------------------
+ */
+
+/* Decodes a PNG or JPEG image to w x h 8-bit RGBA pixels (malloc'd; the caller frees) and adds
+ * their size to *decoded_bytes, or returns NULL with *code and why saying what is wrong (too
+ * large, alone or with the images decoded before, or not decodable). */
+unsigned char *rd_gltf_decode_image(uint64_t *decoded_bytes, const unsigned char *bytes,
+                                    size_t size, int *w, int *h, rd_gltf_result *code, char *why,
+                                    size_t whylen);
+
+/* The loader's final message: len bytes of msg as one readable line in err (at most errlen - 1
+ * bytes, control and non-ASCII bytes replaced with '?'; messages may end up in JSON or logs). */
+void rd_gltf_write_text(const char *msg, size_t len, char *err, size_t errlen);
 
 /* Writes one message to err (errlen > 0) and returns code. */
 rd_gltf_result rd_gltf_fail(char *err, size_t errlen, rd_gltf_result code, const char *fmt, ...)

@@ -1,36 +1,31 @@
-/* gltf_loader.cpp: glTF 2.0 -> rd_scene through tinygltf (the project's only C++ file).
+/* gltf_loader.cpp: the glTF importer's one C++ file — the only code that sees tinygltf. It
+ * parses with tinygltf and copies what was parsed into plain C views; everything else is C.
  *
  * Untrusted input passes three gates:
- *   1. our own checks of the GLB container and a pre-scan of the JSON (nesting depth, asset
+ *   1. our own checks of the GLB container (gltf_container.c) and a pre-scan of the JSON:
+ *      parsed here with tinygltf's JSON parser, checked in gltf_prescan.c (nesting depth, asset
  *      version, extensionsRequired, buffers, buffer views and image buffer views), because
  *      tinygltf 2.7 trusts some of those values (image buffer views, the BIN chunk length);
  *   2. tinygltf parses the JSON and loads buffers through file callbacks that only open
- *      regular files below the base folder; images are decoded by our callback (PNG/JPEG via
- *      stb_image, always to 8-bit RGBA, with size limits);
- *   3. conversion validates every index, accessor range and value before reading a byte.
+ *      regular files below the base folder (gltf_uri.c); images are decoded by our callback
+ *      (gltf_image.c: PNG/JPEG via stb_image, always to 8-bit RGBA, with size limits);
+ *   3. the model is copied into an rd_gltf_document (gltf_document.h), which gltf_convert.c
+ *      turns into the scene, validating every index, accessor range and value before reading.
  * Errors unwind as a C++ exception (LoadError) caught at the C boundary with everything else.
  */
 #include "gltf_loader.h"
 
 #include <algorithm>
-#include <cerrno>
-#include <cfloat>
-#include <climits>
-#include <cmath>
 #include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream> /* tiny_gltf.h 2.7 needs it even with TINYGLTF_NO_FS */
-#include <initializer_list>
 #include <map>
+#include <memory>
 #include <new>
 #include <string>
 #include <vector>
-
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wunused-function"
@@ -40,25 +35,15 @@
 #pragma GCC diagnostic ignored "-Wimplicit-fallthrough"
 #pragma GCC diagnostic ignored "-Wtype-limits"
 #pragma GCC diagnostic ignored "-Wunused-but-set-variable"
-#define STB_IMAGE_IMPLEMENTATION
-#define STB_IMAGE_STATIC
-#define STBI_ONLY_PNG
-#define STBI_ONLY_JPEG
-#define STBI_NO_STDIO
-#define STBI_MAX_DIMENSIONS 16384
-#include <stb/stb_image.h>
 #define TINYGLTF_IMPLEMENTATION
-#define TINYGLTF_NO_STB_IMAGE       /* our callback decodes (decode_image below) */
+#define TINYGLTF_NO_STB_IMAGE       /* our callback decodes (gltf_image.c) */
 #define TINYGLTF_NO_STB_IMAGE_WRITE /* we never write glTF */
 #define TINYGLTF_NO_EXTERNAL_IMAGE  /* external images are read by us, under our rules */
 #define TINYGLTF_NO_FS              /* no default host file access: only our callbacks */
 #include <tiny_gltf.h>
 #pragma GCC diagnostic pop
 
-extern "C" {
-#include "xform.h"
-}
-#include "gltf_import.h"
+#include "gltf_document.h"
 
 namespace
 {
@@ -67,13 +52,7 @@ using njson = nlohmann::json;
 using tinygltf::Model;
 
 const uint64_t kDefaultMaxTriangles = 50000000ull;
-const int kMaxImageDim = 16384;
-const uint64_t kMaxImagePixels = 1ull << 26;     /* 256 MiB as RGBA8 */
-const uint64_t kMaxDecodedBytes = 2ull << 30;    /* all images together */
 const uint64_t kMaxExternalFile = 0xffffffffull; /* tinygltf sizes are 32-bit */
-const uint64_t kMaxAnimationFloats = 1ull << 26; /* 256 MiB of animation keys and values */
-const char *const kSupportedExtensions[] = {"KHR_lights_punctual",
-                                            "KHR_materials_emissive_strength"};
 
 struct LoadError {
     rd_gltf_result code;
@@ -91,16 +70,6 @@ std::string vfmt(const char *fmt, va_list ap)
     return s;
 }
 
-std::string fmt(const char *f, ...) __attribute__((format(printf, 1, 2)));
-std::string fmt(const char *f, ...)
-{
-    va_list ap;
-    va_start(ap, f);
-    std::string s = vfmt(f, ap);
-    va_end(ap);
-    return s;
-}
-
 [[noreturn]] void fail(rd_gltf_result code, const char *f, ...)
     __attribute__((format(printf, 2, 3)));
 [[noreturn]] void fail(rd_gltf_result code, const char *f, ...)
@@ -112,124 +81,29 @@ std::string fmt(const char *f, ...)
     throw e;
 }
 
-/* "mesh 3" or "mesh 3 'Cube'" (names shortened; control bytes are cleaned at the end). */
-/* A file's string made safe for a message: at most `max` bytes, control and non-ASCII bytes
- * (which could break a JSON reply or a terminal) replaced with '?'. */
-std::string clean(const std::string &s, size_t max = 64)
-{
-    std::string r = s.size() > max ? s.substr(0, max - 3) + "..." : s;
-    for (char &ch : r)
-        if ((unsigned char)ch < 0x20 || (unsigned char)ch >= 0x7f) ch = '?';
-    return r;
-}
+/* ---- files (rules in gltf_uri.c) -------------------------------------------------------- */
 
-/* "mesh 3" or "mesh 3 'Cube'". */
-std::string label(const char *kind, size_t index, const std::string &name)
-{
-    if (name.empty()) return fmt("%s %zu", kind, index);
-    return fmt("%s %zu '%s'", kind, index, clean(name).c_str());
-}
-
-std::string errno_text(int e)
-{
-    char buf[256];
-    return strerror_r(e, buf, sizeof buf); /* GNU variant returns the text */
-}
-
-/* ---- files ------------------------------------------------------------------------------ */
-
-struct FileRules {
-    bool allowed = false; /* false: loading from memory without a base folder */
-    std::string base;     /* folder that external URIs resolve against */
-    std::string prefix;   /* base with exactly one trailing '/' */
-    std::string last_refusal;
+/* rd_gltf_read_file's allocator for tinygltf's vector. */
+struct VectorSink {
+    std::vector<unsigned char> *v;
+    bool no_memory;
 };
 
-/* Why a decoded relative URI may not be opened, or "" when it may. */
-std::string uri_refusal(const FileRules &rules, const std::string &rel)
+unsigned char *vector_alloc(void *user, size_t size)
 {
-    if (!rules.allowed)
-        return "a file uploaded alone cannot refer to other files: upload a .glb, or a .gltf "
-               "whose buffers and images are embedded as data: URIs";
-    if (rel.empty()) return "the URI is empty";
-    if (rel.find('\0') != std::string::npos) return "the URI contains a NUL character";
-    if (rel.compare(0, 5, "data:") == 0)
-        return "only base64 data: URIs of a known media type are supported";
-    if (rel[0] == '/') return "absolute paths are not allowed";
-    if (rel.find("://") != std::string::npos) return "only relative file paths are allowed";
-    size_t start = 0;
-    for (;;) {
-        size_t end = rel.find('/', start);
-        if (rel.compare(start, end == std::string::npos ? std::string::npos : end - start, "..") ==
-            0)
-            return "the URI leaves the asset folder (it contains '..')";
-        if (end == std::string::npos) break;
-        start = end + 1;
+    VectorSink *s = static_cast<VectorSink *>(user);
+    try {
+        s->v->resize(size);
+    } catch (const std::bad_alloc &) {
+        s->no_memory = true;
+        return nullptr;
     }
-    return "";
-}
-
-/* Reads a whole regular file (never a FIFO or device). */
-bool read_file(const std::string &path, uint64_t max_size, std::vector<unsigned char> *out,
-               std::string *why, bool *too_large)
-{
-    *too_large = false;
-    int fd = open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK);
-    if (fd < 0) {
-        *why = errno_text(errno);
-        return false;
-    }
-    struct stat st;
-    bool ok = false;
-    if (fstat(fd, &st) != 0) {
-        *why = errno_text(errno);
-    } else if (!S_ISREG(st.st_mode)) {
-        *why = "it is not a regular file";
-    } else if ((uint64_t)st.st_size > max_size) {
-        *why = fmt("it is too large (%lld bytes)", (long long)st.st_size);
-        *too_large = true;
-    } else {
-        out->resize((size_t)st.st_size);
-        size_t done = 0;
-        while (done < out->size()) {
-            ssize_t n = read(fd, out->data() + done, out->size() - done);
-            if (n < 0 && errno == EINTR) continue;
-            if (n <= 0) {
-                *why = n < 0 ? errno_text(errno) : "it shrank while being read";
-                break;
-            }
-            done += (size_t)n;
-        }
-        ok = done == out->size();
-    }
-    close(fd);
-    return ok;
-}
-
-/* tinygltf passes JoinPath(base, uri) (and "./uri" as a fallback): accept only paths made from
- * our base folder and a URI that passes uri_refusal(). */
-bool rules_check_path(FileRules *rules, const std::string &path, std::string *rel)
-{
-    if (!rules->allowed || path.compare(0, rules->prefix.size(), rules->prefix) != 0) {
-        if (rules->last_refusal.empty()) rules->last_refusal = uri_refusal(*rules, path);
-        return false;
-    }
-    *rel = path.substr(rules->prefix.size());
-    std::string why = uri_refusal(*rules, *rel);
-    if (!why.empty()) {
-        rules->last_refusal = why;
-        return false;
-    }
-    return true;
+    return s->v->data();
 }
 
 bool fs_file_exists(const std::string &path, void *user)
 {
-    FileRules *rules = static_cast<FileRules *>(user);
-    std::string rel;
-    if (!rules_check_path(rules, path, &rel)) return false;
-    struct stat st;
-    return stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+    return rd_gltf_files_exists(static_cast<rd_gltf_files *>(user), path.c_str(), path.size());
 }
 
 std::string fs_expand(const std::string &path, void *)
@@ -239,16 +113,20 @@ std::string fs_expand(const std::string &path, void *)
 
 bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::string &path, void *user)
 {
-    FileRules *rules = static_cast<FileRules *>(user);
-    std::string rel, why;
-    bool too_large;
-    if (!rules_check_path(rules, path, &rel)) {
-        *err = rules->last_refusal;
+    rd_gltf_files *files = static_cast<rd_gltf_files *>(user);
+    size_t rel;
+    if (!rd_gltf_files_check_path(files, path.c_str(), path.size(), &rel)) {
+        *err = files->last_refusal;
         return false;
     }
-    if (!read_file(path, kMaxExternalFile, out, &why, &too_large)) {
+    VectorSink sink{out, false};
+    char why[256] = "";
+    rd_gltf_read_status st =
+        rd_gltf_read_file(path.c_str(), kMaxExternalFile, vector_alloc, &sink, why, sizeof why);
+    if (st == RD_GLTF_READ_NO_MEMORY) throw std::bad_alloc();
+    if (st != RD_GLTF_READ_OK) {
         *err = why;
-        rules->last_refusal = why;
+        snprintf(files->last_refusal, sizeof files->last_refusal, "%s", why);
         return false;
     }
     return true;
@@ -260,7 +138,7 @@ bool fs_write(std::string *err, const std::string &, const std::vector<unsigned 
     return false;
 }
 
-/* ---- images ----------------------------------------------------------------------------- */
+/* ---- images (decoded in gltf_image.c) --------------------------------------------------- */
 
 struct ImageFailure {
     rd_gltf_result code;
@@ -268,67 +146,42 @@ struct ImageFailure {
 };
 
 struct LoadContext {
-    FileRules rules;
+    rd_gltf_files files;
     std::map<int, ImageFailure> image_failures; /* decode failures, by image index */
     uint64_t decoded_bytes = 0;
+    explicit LoadContext(const char *base_dir)
+    {
+        rd_gltf_files_init(&files, base_dir);
+    }
+    ~LoadContext()
+    {
+        rd_gltf_files_dispose(&files);
+    }
+    LoadContext(const LoadContext &) = delete;
+    LoadContext &operator=(const LoadContext &) = delete;
 };
 
-/* PNG or JPEG (any channel count, 8 or 16 bit) -> 8-bit RGBA. */
-bool decode_image(LoadContext *ctx, const unsigned char *bytes, size_t size,
-                  std::vector<unsigned char> *rgba, int *w, int *h, ImageFailure *f)
-{
-    int comp = 0;
-    f->code = RD_GLTF_ERR_INVALID;
-    if (size == 0 || size > (size_t)INT_MAX) {
-        f->why = size ? "its data is too large" : "its data is empty";
-        return false;
-    }
-    if (!stbi_info_from_memory(bytes, (int)size, w, h, &comp)) {
-        const char *r = stbi_failure_reason();
-        f->why = fmt("it is not a PNG or JPEG image stb_image can read (%s)", r ? r : "unknown");
-        return false;
-    }
-    if (*w < 1 || *h < 1 || *w > kMaxImageDim || *h > kMaxImageDim ||
-        (uint64_t)*w * (uint64_t)*h > kMaxImagePixels) {
-        f->code = RD_GLTF_ERR_TOO_LARGE;
-        f->why = fmt("its size %dx%d exceeds the limit", *w, *h);
-        return false;
-    }
-    uint64_t bytes_out = (uint64_t)*w * (uint64_t)*h * 4;
-    if (ctx->decoded_bytes + bytes_out > kMaxDecodedBytes) {
-        f->code = RD_GLTF_ERR_TOO_LARGE;
-        f->why = fmt("all decoded images together would exceed %llu MiB",
-                     (unsigned long long)(kMaxDecodedBytes >> 20));
-        return false;
-    }
-    int w2 = 0, h2 = 0;
-    unsigned char *px = stbi_load_from_memory(bytes, (int)size, &w2, &h2, &comp, 4);
-    if (!px || w2 != *w || h2 != *h) {
-        const char *r = stbi_failure_reason();
-        f->why = fmt("it could not be decoded (%s)", r ? r : "unknown");
-        stbi_image_free(px);
-        return false;
-    }
-    rgba->assign(px, px + bytes_out);
-    stbi_image_free(px);
-    ctx->decoded_bytes += bytes_out;
-    return true;
-}
-
-/* tinygltf image callback (data URIs and buffer views; ranges were checked in prescan).
- * Never fails the whole load: a broken image is an error only if a material uses it. */
+/* tinygltf image callback (data URIs and buffer views; ranges were checked in prescan): PNG or
+ * JPEG to 8-bit RGBA. Never fails the whole load: a broken image is an error only if a material
+ * uses it. */
 bool image_callback(tinygltf::Image *image, const int index, std::string *, std::string *, int, int,
                     const unsigned char *bytes, int size, void *user)
 {
     LoadContext *ctx = static_cast<LoadContext *>(user);
-    ImageFailure f;
+    ImageFailure f{RD_GLTF_ERR_INVALID, ""};
+    char why[256];
     int w = 0, h = 0;
     image->image.clear();
-    if (size < 0 ||
-        !decode_image(ctx, bytes, (size_t)(size < 0 ? 0 : size), &image->image, &w, &h, &f)) {
+    unsigned char *px = size < 0 ? nullptr
+                                 : rd_gltf_decode_image(&ctx->decoded_bytes, bytes, (size_t)size,
+                                                        &w, &h, &f.code, why, sizeof why);
+    if (!px) {
+        if (size >= 0) f.why = why;
         ctx->image_failures[index] = f;
         return true;
     }
+    std::unique_ptr<unsigned char, decltype(&free)> owned(px, &free);
+    image->image.assign(px, px + (size_t)w * (size_t)h * 4);
     image->width = w;
     image->height = h;
     image->component = 4;
@@ -337,7 +190,7 @@ bool image_callback(tinygltf::Image *image, const int index, std::string *, std:
     return true;
 }
 
-/* ---- container and JSON pre-scan ---------------------------------------------------- */
+/* ---- container and JSON pre-scan (checks in gltf_prescan.c) ------------------------------ */
 
 /* Throws the C side's failure (gltf_import.h) as the loader's. */
 void check(rd_gltf_result r, const char *err)
@@ -345,24 +198,15 @@ void check(rd_gltf_result r, const char *err)
     if (r != RD_GLTF_OK) throw LoadError{r, err};
 }
 
-bool json_uint(const njson &o, const char *key, uint64_t *out, bool required)
+rd_gltf_scan_uint scan_uint(const njson &o, const char *key)
 {
+    rd_gltf_scan_uint u = {false, false, 0};
     auto it = o.find(key);
-    if (it == o.end()) return !required;
-    if (!it->is_number_unsigned()) return false;
-    *out = it->get<uint64_t>();
-    return true;
-}
-
-/* Index-valued member that must lie in [0, count). */
-bool json_index(const njson &o, const char *key, size_t count, size_t *out)
-{
-    auto it = o.find(key);
-    if (it == o.end() || !it->is_number_unsigned()) return false;
-    uint64_t v = it->get<uint64_t>();
-    if (v >= count) return false;
-    *out = (size_t)v;
-    return true;
+    if (it == o.end()) return u;
+    u.present = true;
+    u.is_uint = it->is_number_unsigned();
+    if (u.is_uint) u.value = it->get<uint64_t>();
+    return u;
 }
 
 /* Bytes a tinygltf data URI decodes to (its base64 decoder stops at '=' or a foreign
@@ -380,15 +224,20 @@ long long data_uri_size(const std::string &uri)
     return (long long)(n / 4 * 3 + (n % 4 ? n % 4 - 1 : 0));
 }
 
-bool is_supported_extension(const std::string &name)
-{
-    for (const char *s : kSupportedExtensions)
-        if (name == s) return true;
-    return false;
-}
+/* The members rd_gltf_prescan checks, read with tinygltf's own JSON parser (so both see the
+ * same values); strings borrow from doc. */
+struct Scan {
+    rd_gltf_scan s;
+    njson doc;
+    std::vector<rd_gltf_str> required;
+    std::vector<std::string> rels;
+    std::vector<rd_gltf_scan_buffer> buffers;
+    std::vector<rd_gltf_scan_view> views;
+    std::vector<rd_gltf_scan_image> images;
+};
 
-/* Checks what tinygltf would use unchecked, with messages that name the culprit. */
-void prescan(const rd_gltf_container &c, LoadContext *ctx)
+/* Parses the JSON (failing as tinygltf's parser says) and fills scan. */
+void scan_json(const rd_gltf_container &c, Scan *scan)
 {
     char err[256];
     check(rd_gltf_check_json_depth(c.json, c.json_size, err, sizeof err), err);
@@ -398,7 +247,7 @@ void prescan(const rd_gltf_container &c, LoadContext *ctx)
         return k == "asset" || k == "buffers" || k == "bufferViews" || k == "images" ||
                k == "extensionsRequired";
     };
-    njson doc;
+    njson &doc = scan->doc;
     try {
         doc = njson::parse(c.json, c.json + c.json_size, keep, true, false);
     } catch (const njson::exception &e) {
@@ -410,139 +259,90 @@ void prescan(const rd_gltf_container &c, LoadContext *ctx)
     }
     if (!doc.is_object()) fail(RD_GLTF_ERR_PARSE, "the glTF JSON is not an object");
 
+    rd_gltf_scan &s = scan->s;
+    memset(&s, 0, sizeof s);
     auto asset = doc.find("asset");
-    if (asset == doc.end() || !asset->is_object() || !asset->contains("version") ||
-        !(*asset)["version"].is_string())
-        fail(RD_GLTF_ERR_INVALID, "the file has no asset.version, so it is not a glTF file");
-    const std::string &version = (*asset)["version"].get_ref<const std::string &>();
-    if (version.compare(0, 2, "2.") != 0)
-        fail(RD_GLTF_ERR_UNSUPPORTED, "glTF version '%.16s' is not supported (only 2.x)",
-             version.c_str());
-
+    s.has_version = asset != doc.end() && asset->is_object() && asset->contains("version") &&
+                    (*asset)["version"].is_string();
+    if (s.has_version) {
+        const std::string &version = (*asset)["version"].get_ref<const std::string &>();
+        s.version = {version.c_str(), version.size()};
+    }
     auto req = doc.find("extensionsRequired");
-    if (req != doc.end()) {
-        if (!req->is_array()) fail(RD_GLTF_ERR_INVALID, "extensionsRequired is not an array");
+    s.has_required = req != doc.end();
+    s.required_is_array = s.has_required && req->is_array();
+    if (s.required_is_array)
         for (const njson &e : *req) {
-            if (!e.is_string())
-                fail(RD_GLTF_ERR_INVALID, "extensionsRequired holds a value that is not a name");
-            const std::string &name = e.get_ref<const std::string &>();
-            if (!is_supported_extension(name))
-                fail(RD_GLTF_ERR_UNSUPPORTED,
-                     "the file requires extension %.80s, which is not supported", name.c_str());
+            const std::string *name = e.is_string() ? &e.get_ref<const std::string &>() : nullptr;
+            scan->required.push_back({name ? name->c_str() : nullptr, name ? name->size() : 0});
         }
-    }
-
     static const njson empty = njson::array();
-    auto member = [&](const char *key) -> const njson & {
-        auto it = doc.find(key);
-        if (it == doc.end()) return empty;
-        if (!it->is_array()) fail(RD_GLTF_ERR_INVALID, "%s is not an array", key);
-        return *it;
-    };
-    const njson &buffers = member("buffers");
-    const njson &views = member("bufferViews");
-    const njson &images = member("images");
-
-    std::vector<uint64_t> buffer_len;
-    for (size_t i = 0; i < buffers.size(); i++) {
-        const njson &b = buffers[i];
-        uint64_t len = 0;
-        if (!b.is_object() || !json_uint(b, "byteLength", &len, true) || len == 0)
-            fail(RD_GLTF_ERR_INVALID, "buffer %zu has no valid byteLength", i);
-        buffer_len.push_back(len);
-        auto uri_it = b.find("uri");
-        if (uri_it == b.end() || !uri_it->is_string()) {
-            if (!c.glb) fail(RD_GLTF_ERR_INVALID, "buffer %zu has no uri", i);
-            if (c.bin_size == 0)
-                fail(RD_GLTF_ERR_INVALID, "buffer %zu has no uri and the GLB file has no BIN chunk",
-                     i);
-            if (len > c.bin_size)
-                fail(RD_GLTF_ERR_INVALID,
-                     "buffer %zu needs %llu bytes but the GLB BIN chunk holds only %zu", i,
-                     (unsigned long long)len, c.bin_size);
-            continue;
+    const char *const keys[3] = {"buffers", "bufferViews", "images"};
+    const njson *members[3];
+    for (int m = 0; m < 3; m++) {
+        auto it = doc.find(keys[m]);
+        s.not_array[m] = it != doc.end() && !it->is_array();
+        members[m] = it != doc.end() && it->is_array() ? &*it : &empty;
+    }
+    scan->rels.reserve(members[0]->size());
+    for (const njson &b : *members[0]) {
+        rd_gltf_scan_buffer sb;
+        memset(&sb, 0, sizeof sb);
+        sb.is_object = b.is_object();
+        sb.data_size = -1;
+        auto uri = sb.is_object ? b.find("uri") : b.end();
+        if (sb.is_object) sb.byte_length = scan_uint(b, "byteLength");
+        sb.has_uri = sb.is_object && uri != b.end() && uri->is_string();
+        if (sb.has_uri) {
+            const std::string &u = uri->get_ref<const std::string &>();
+            sb.uri = {u.c_str(), u.size()};
+            sb.data_size = data_uri_size(u);
+            if (sb.data_size < 0) {
+                scan->rels.push_back(tinygltf::dlib::urldecode(u));
+                sb.rel = {scan->rels.back().c_str(), scan->rels.back().size()};
+            }
         }
-        const std::string &uri = uri_it->get_ref<const std::string &>();
-        long long n = data_uri_size(uri);
-        if (n >= 0) {
-            if ((uint64_t)n != len)
-                fail(RD_GLTF_ERR_INVALID,
-                     "buffer %zu: its data URI holds %lld bytes but byteLength is %llu", i, n,
-                     (unsigned long long)len);
-            continue;
+        scan->buffers.push_back(sb);
+    }
+    for (const njson &v : *members[1]) {
+        rd_gltf_scan_view sv;
+        memset(&sv, 0, sizeof sv);
+        sv.is_object = v.is_object();
+        if (sv.is_object) {
+            sv.buffer = scan_uint(v, "buffer");
+            sv.byte_offset = scan_uint(v, "byteOffset");
+            sv.byte_length = scan_uint(v, "byteLength");
         }
-        std::string shown = uri.size() > 64 ? uri.substr(0, 61) + "..." : uri;
-        if (uri.compare(0, 5, "data:") == 0)
-            fail(RD_GLTF_ERR_UNSUPPORTED,
-                 "buffer %zu has a data URI that is not base64 of a known media type", i);
-        std::string rel = tinygltf::dlib::urldecode(uri);
-        std::string why = uri_refusal(ctx->rules, rel);
-        struct stat st;
-        if (why.empty() && stat((ctx->rules.prefix + rel).c_str(), &st) != 0)
-            why = errno_text(errno);
-        else if (why.empty() && !S_ISREG(st.st_mode))
-            why = "it is not a regular file";
-        if (!why.empty())
-            fail(RD_GLTF_ERR_IO, "buffer %zu '%s' could not be loaded: %s", i, shown.c_str(),
-                 why.c_str());
-        if ((uint64_t)st.st_size != len)
-            fail(RD_GLTF_ERR_INVALID, "buffer %zu '%s' has %lld bytes but byteLength is %llu", i,
-                 shown.c_str(), (long long)st.st_size, (unsigned long long)len);
+        scan->views.push_back(sv);
     }
-
-    std::vector<uint64_t> view_len;
-    for (size_t i = 0; i < views.size(); i++) {
-        const njson &v = views[i];
-        size_t b = 0;
-        uint64_t off = 0, len = 0;
-        if (!v.is_object() || !json_index(v, "buffer", buffers.size(), &b))
-            fail(RD_GLTF_ERR_INVALID, "buffer view %zu does not refer to an existing buffer", i);
-        if (!json_uint(v, "byteOffset", &off, false) || !json_uint(v, "byteLength", &len, true) ||
-            len == 0)
-            fail(RD_GLTF_ERR_INVALID, "buffer view %zu has an invalid byteOffset or byteLength", i);
-        if (off > buffer_len[b] || len > buffer_len[b] - off)
-            fail(RD_GLTF_ERR_INVALID,
-                 "buffer view %zu (offset %llu, length %llu) does not fit in buffer %zu (%llu "
-                 "bytes)",
-                 i, (unsigned long long)off, (unsigned long long)len, b,
-                 (unsigned long long)buffer_len[b]);
-        view_len.push_back(len);
+    for (const njson &im : *members[2]) {
+        rd_gltf_scan_image si;
+        memset(&si, 0, sizeof si);
+        si.is_object = im.is_object();
+        si.has_view = si.is_object && im.contains("bufferView");
+        if (si.has_view) si.view = scan_uint(im, "bufferView");
+        scan->images.push_back(si);
     }
-
-    for (size_t i = 0; i < images.size(); i++) {
-        const njson &im = images[i];
-        if (!im.is_object() || !im.contains("bufferView")) continue;
-        size_t v = 0;
-        if (!json_index(im, "bufferView", views.size(), &v))
-            fail(RD_GLTF_ERR_INVALID, "image %zu does not refer to an existing buffer view", i);
-        if (view_len[v] > (uint64_t)INT_MAX)
-            fail(RD_GLTF_ERR_TOO_LARGE, "image %zu is larger than 2 GiB", i);
-    }
+    s.required = scan->required.data();
+    s.required_count = scan->required.size();
+    s.buffers = scan->buffers.data();
+    s.buffer_count = scan->buffers.size();
+    s.views = scan->views.data();
+    s.view_count = scan->views.size();
+    s.images = scan->images.data();
+    s.image_count = scan->images.size();
 }
 
-/* ---- accessors ---------------------------------------------------------------------- */
-
-const char *type_name(int type)
+/* Checks what tinygltf would use unchecked, with messages that name the culprit. */
+void prescan(const rd_gltf_container &c, LoadContext *ctx)
 {
-    switch (type) {
-    case TINYGLTF_TYPE_SCALAR:
-        return "SCALAR";
-    case TINYGLTF_TYPE_VEC2:
-        return "VEC2";
-    case TINYGLTF_TYPE_VEC3:
-        return "VEC3";
-    case TINYGLTF_TYPE_VEC4:
-        return "VEC4";
-    case TINYGLTF_TYPE_MAT2:
-        return "MAT2";
-    case TINYGLTF_TYPE_MAT3:
-        return "MAT3";
-    case TINYGLTF_TYPE_MAT4:
-        return "MAT4";
-    default:
-        return "unknown";
-    }
+    Scan scan;
+    scan_json(c, &scan);
+    char err[1024];
+    check(rd_gltf_prescan(&scan.s, &c, &ctx->files, err, sizeof err), err);
 }
+
+/* ---- the C view of tinygltf's model (gltf_document.h) ------------------------------------ */
 
 static_assert(TINYGLTF_COMPONENT_TYPE_BYTE == RD_GLTF_BYTE &&
                   TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE == RD_GLTF_UNSIGNED_BYTE &&
@@ -553,343 +353,65 @@ static_assert(TINYGLTF_COMPONENT_TYPE_BYTE == RD_GLTF_BYTE &&
               "gltf_import.h numbers component types as tinygltf does");
 static_assert(TINYGLTF_MODE_TRIANGLES == RD_GLTF_MODE_TRIANGLES &&
                   TINYGLTF_MODE_TRIANGLE_STRIP == RD_GLTF_MODE_TRIANGLE_STRIP &&
-                  TINYGLTF_MODE_TRIANGLE_FAN == RD_GLTF_MODE_TRIANGLE_FAN,
+                  TINYGLTF_MODE_TRIANGLE_FAN == RD_GLTF_MODE_TRIANGLE_FAN &&
+                  TINYGLTF_MODE_LINE_STRIP == RD_GLTF_MODE_LINE_STRIP,
               "gltf_import.h numbers primitive modes as tinygltf does");
+static_assert(TINYGLTF_TYPE_SCALAR == RD_GLTF_TYPE_SCALAR &&
+                  TINYGLTF_TYPE_VEC2 == RD_GLTF_TYPE_VEC2 &&
+                  TINYGLTF_TYPE_VEC3 == RD_GLTF_TYPE_VEC3 &&
+                  TINYGLTF_TYPE_VEC4 == RD_GLTF_TYPE_VEC4 &&
+                  TINYGLTF_TYPE_MAT2 == RD_GLTF_TYPE_MAT2 &&
+                  TINYGLTF_TYPE_MAT3 == RD_GLTF_TYPE_MAT3 &&
+                  TINYGLTF_TYPE_MAT4 == RD_GLTF_TYPE_MAT4,
+              "gltf_document.h numbers accessor types as tinygltf does");
+static_assert(TINYGLTF_TEXTURE_WRAP_REPEAT == RD_GLTF_WRAP_REPEAT &&
+                  TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE == RD_GLTF_WRAP_CLAMP &&
+                  TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT == RD_GLTF_WRAP_MIRROR &&
+                  TINYGLTF_TEXTURE_FILTER_NEAREST == RD_GLTF_FILTER_NEAREST,
+              "gltf_document.h numbers sampler values as tinygltf does");
 
-/* A validated accessor (gltf_import.h) and the sparse indices it points to. Moves keep the
- * pointer valid; copies are not allowed. */
-struct Accessor {
-    rd_gltf_accessor c;
-    std::vector<uint32_t> sparse_index;
-    Accessor()
-    {
-        memset(&c, 0, sizeof c), c.index = -1;
-    }
-    Accessor(Accessor &&) = default;
-    Accessor &operator=(Accessor &&) = default;
-    Accessor(const Accessor &) = delete;
-    Accessor &operator=(const Accessor &) = delete;
+rd_gltf_str str(const std::string &s)
+{
+    return {s.c_str(), s.size()};
+}
+
+const char *name_or_null(const std::string &s)
+{
+    return s.empty() ? nullptr : s.c_str();
+}
+
+/* The arrays an rd_gltf_document points to; strings and data borrow from the model. */
+struct Document {
+    rd_gltf_document d;
+    std::vector<rd_gltf_str> extensions_used, buffers;
+    std::vector<rd_gltf_doc_buffer_view> views;
+    std::vector<rd_gltf_doc_accessor> accessors;
+    std::vector<std::string> rels; /* decoded image URIs (not data: URIs) */
+    std::vector<rd_gltf_doc_image> images;
+    std::vector<rd_gltf_doc_texture> textures;
+    std::vector<rd_gltf_doc_sampler> samplers;
+    std::vector<std::vector<rd_gltf_str>> material_extensions;
+    std::vector<rd_gltf_doc_material> materials;
+    std::vector<std::vector<rd_gltf_doc_primitive>> primitives;
+    std::vector<rd_gltf_doc_mesh> meshes;
+    std::vector<rd_gltf_doc_node> nodes;
+    std::vector<rd_gltf_node_list> children, scenes;
+    std::vector<rd_gltf_doc_camera> cameras;
+    std::vector<rd_gltf_doc_light> lights;
+    std::vector<std::vector<rd_gltf_doc_channel>> channels;
+    std::vector<std::vector<rd_gltf_doc_anim_sampler>> anim_samplers;
+    std::vector<rd_gltf_doc_animation> animations;
 };
 
-/* Start of `bytes` bytes at `offset` inside buffer view `view`, or null when out of range. */
-const unsigned char *view_range(const Model &m, int view, uint64_t offset, uint64_t bytes,
-                                int accessor, const char *what)
+template <class T> void set(const T **p, size_t *n, const std::vector<T> &v)
 {
-    if (view < 0 || (size_t)view >= m.bufferViews.size())
-        fail(RD_GLTF_ERR_INVALID,
-             "accessor %d (%s) refers to buffer view %d, but there are only %zu buffer views",
-             accessor, what, view, m.bufferViews.size());
-    const tinygltf::BufferView &bv = m.bufferViews[(size_t)view];
-    if (bv.buffer < 0 || (size_t)bv.buffer >= m.buffers.size())
-        fail(RD_GLTF_ERR_INVALID, "buffer view %d refers to buffer %d, which does not exist", view,
-             bv.buffer);
-    const std::vector<unsigned char> &data = m.buffers[(size_t)bv.buffer].data;
-    if (bv.byteOffset > data.size() || bv.byteLength > data.size() - bv.byteOffset)
-        fail(RD_GLTF_ERR_INVALID, "buffer view %d does not fit in buffer %d", view, bv.buffer);
-    if (offset > bv.byteLength || bytes > bv.byteLength - offset)
-        fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) reads past the end of buffer view %d", accessor,
-             what, view);
-    return data.data() + bv.byteOffset + offset;
+    *p = v.data();
+    *n = v.size();
 }
 
-/* Validates accessor `index` for use as `what` (type and allowed component types). */
-Accessor make_accessor(const Model &m, int index, const std::string &what_s, int type,
-                       std::initializer_list<int> ctypes)
+rd_gltf_texture_ref ref(const tinygltf::TextureInfo &t)
 {
-    const char *what = what_s.c_str();
-    if (index < 0 || (size_t)index >= m.accessors.size())
-        fail(RD_GLTF_ERR_INVALID, "%s refers to accessor %d, but there are only %zu accessors",
-             what, index, m.accessors.size());
-    const tinygltf::Accessor &a = m.accessors[(size_t)index];
-    Accessor r;
-    rd_gltf_accessor &c = r.c;
-    c.index = index;
-    if (a.type != type)
-        fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has type %s, expected %s", index, what,
-             type_name(a.type), type_name(type));
-    if (std::find(ctypes.begin(), ctypes.end(), a.componentType) == ctypes.end())
-        fail(RD_GLTF_ERR_INVALID,
-             "accessor %d (%s) has component type %d, which is not allowed "
-             "here",
-             index, what, a.componentType);
-    if (a.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT && type != TINYGLTF_TYPE_SCALAR &&
-        !a.normalized)
-        fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) holds integers but is not normalized", index,
-             what);
-    if (a.count == 0) fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has count 0", index, what);
-    c.ctype = a.componentType;
-    c.ncomp = type == TINYGLTF_TYPE_SCALAR ? 1
-              : type == TINYGLTF_TYPE_VEC2 ? 2
-              : type == TINYGLTF_TYPE_VEC3 ? 3
-                                           : 4;
-    c.elem = rd_gltf_component_size(a.componentType) * (size_t)c.ncomp;
-    c.count = a.count;
-    c.normalized = a.normalized;
-    if (a.bufferView < -1)
-        fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has buffer view %d", index, what, a.bufferView);
-    if (a.bufferView >= 0) {
-        const tinygltf::BufferView *bv = (size_t)a.bufferView < m.bufferViews.size()
-                                             ? &m.bufferViews[(size_t)a.bufferView]
-                                             : nullptr;
-        c.stride = bv && bv->byteStride ? bv->byteStride : c.elem;
-        if (c.stride < c.elem)
-            fail(RD_GLTF_ERR_INVALID,
-                 "buffer view %d has byteStride %zu, smaller than the %zu-byte elements of "
-                 "accessor %d",
-                 a.bufferView, c.stride, c.elem, index);
-        uint64_t span;
-        if (__builtin_mul_overflow((uint64_t)c.stride, (uint64_t)(c.count - 1), &span) ||
-            __builtin_add_overflow(span, (uint64_t)c.elem, &span))
-            fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) reads past the end of buffer view %d",
-                 index, what, a.bufferView);
-        c.data = view_range(m, a.bufferView, a.byteOffset, span, index, what);
-    }
-    if (a.sparse.isSparse) {
-        size_t n = a.sparse.count > 0 ? (size_t)a.sparse.count : 0;
-        if (n == 0 || n > c.count)
-            fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has an invalid sparse count %d", index,
-                 what, a.sparse.count);
-        int ict = a.sparse.indices.componentType;
-        if (ict != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
-            ict != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
-            ict != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
-            fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has sparse indices of component type %d",
-                 index, what, ict);
-        if (a.sparse.indices.byteOffset < 0 || a.sparse.values.byteOffset < 0)
-            fail(RD_GLTF_ERR_INVALID, "accessor %d (%s) has a negative sparse byteOffset", index,
-                 what);
-        size_t isz = rd_gltf_component_size(ict);
-        const unsigned char *ip =
-            view_range(m, a.sparse.indices.bufferView, (uint64_t)a.sparse.indices.byteOffset,
-                       (uint64_t)n * isz, index, what);
-        c.sparse_values =
-            view_range(m, a.sparse.values.bufferView, (uint64_t)a.sparse.values.byteOffset,
-                       (uint64_t)n * c.elem, index, what);
-        r.sparse_index.resize(n);
-        if (!rd_gltf_read_sparse_indices(ip, ict, n, c.count, r.sparse_index.data()))
-            fail(RD_GLTF_ERR_INVALID,
-                 "the sparse indices of accessor %d (%s) are out of range or not increasing", index,
-                 what);
-        c.sparse_index = r.sparse_index.data();
-        c.sparse_count = n;
-    }
-    return r;
-}
-
-void read_floats(const Accessor &a, size_t i, float *out)
-{
-    rd_gltf_read_floats(&a.c, i, out);
-}
-
-/* ---- conversion --------------------------------------------------------------------- */
-
-struct Primitive {
-    int mode = TINYGLTF_MODE_TRIANGLES;
-    Accessor pos, nrm, uv, tan, idx;
-    bool has_nrm = false, has_uv = false, has_tan = false, has_idx = false;
-    uint64_t tris = 0;
-    uint32_t material = 0;
-};
-
-class Converter
-{
-  public:
-    Converter(const Model &m, LoadContext *ctx, uint64_t max_tris, rd_scene *out)
-        : m_(m), ctx_(ctx), max_tris_(max_tris), s_(out)
-    {
-    }
-    void run();
-
-  private:
-    void hierarchy();
-    void materials();
-    int32_t texture(int index, int tex_coord, size_t material, const char *slot);
-    void meshes();
-    std::vector<Primitive> plan_mesh(size_t mesh);
-    void fill_mesh(size_t mesh, const std::vector<Primitive> &prims, rd_mesh *out);
-    void node_transform(size_t index, rd_node *n);
-    void lights_and_cameras();
-    void animations();
-    void anim_sampler(const std::string &where, const tinygltf::AnimationSampler &gs, bool rotation,
-                      rd_anim_sampler *out, std::vector<float> *times, std::vector<float> *values);
-    void warnings();
-
-    const Model &m_;
-    LoadContext *ctx_;
-    uint64_t max_tris_;
-    rd_scene *s_;
-    std::vector<int> parent_;        /* glTF parent of each glTF node */
-    std::vector<size_t> order_;      /* reachable glTF nodes, parents first */
-    std::vector<int32_t> node_map_;  /* glTF node -> rd node (-1: not in the scene) */
-    std::vector<int32_t> mesh_map_;  /* glTF mesh -> rd mesh (-1: unused or empty) */
-    std::map<int, int32_t> tex_map_; /* glTF texture -> rd texture */
-    uint64_t anim_floats_ = 0;       /* animation times and values kept so far */
-};
-
-void Converter::run()
-{
-    warnings();
-    hierarchy();
-    materials();
-    meshes();
-    node_map_.assign(m_.nodes.size(), -1);
-    for (size_t gi : order_) {
-        const tinygltf::Node &gn = m_.nodes[gi];
-        rd_node n;
-        memset(&n, 0, sizeof n);
-        n.name = gn.name.empty() ? nullptr : const_cast<char *>(gn.name.c_str());
-        n.parent = parent_[gi] >= 0 ? node_map_[(size_t)parent_[gi]] : -1;
-        n.mesh = gn.mesh >= 0 ? mesh_map_[(size_t)gn.mesh] : -1;
-        node_transform(gi, &n);
-        node_map_[gi] = (int32_t)rd_scene_add_node(s_, &n);
-    }
-    lights_and_cameras();
-    animations();
-    char err[256];
-    if (!rd_scene_update(s_, err, sizeof err)) fail(RD_GLTF_ERR_INVALID, "%s", err);
-}
-
-void Converter::warnings()
-{
-    for (const std::string &e : m_.extensionsUsed) {
-        if (e.empty() || is_supported_extension(e)) continue;
-        bool on_material = false; /* then materials() warns, saying how many use it */
-        for (const tinygltf::Material &g : m_.materials)
-            on_material = on_material || g.extensions.count(e) != 0;
-        if (!on_material)
-            rd_scene_warn(s_, "extension %s is not supported and was ignored",
-                          clean(e, 80).c_str());
-    }
-    if (!m_.skins.empty())
-        rd_scene_warn(s_,
-                      "the file has %zu skin(s); skinning is not supported, skinned meshes "
-                      "are drawn unskinned",
-                      m_.skins.size());
-}
-
-/* The hierarchy and the reachable nodes' order (gltf_nodes.c). */
-void Converter::hierarchy()
-{
-    size_t count = m_.nodes.size();
-    std::vector<rd_gltf_node_list> children(count), scenes(m_.scenes.size());
-    for (size_t i = 0; i < count; i++)
-        children[i] = {m_.nodes[i].children.data(), m_.nodes[i].children.size()};
-    for (size_t i = 0; i < scenes.size(); i++)
-        scenes[i] = {m_.scenes[i].nodes.data(), m_.scenes[i].nodes.size()};
-    parent_.assign(count, -1);
-    order_.assign(count, 0);
-    size_t reached = 0;
-    char err[256];
-    check(rd_gltf_hierarchy(count, children.data(), scenes.size(), scenes.data(), m_.defaultScene,
-                            parent_.data(), order_.data(), &reached, err, sizeof err),
-          err);
-    order_.resize(reached);
-}
-
-void Converter::node_transform(size_t index, rd_node *n)
-{
-    const tinygltf::Node &g = m_.nodes[index];
-    rd_gltf_transform t = {g.matrix.data(),   g.translation.data(), g.rotation.data(),
-                           g.scale.data(),    g.matrix.size(),      g.translation.size(),
-                           g.rotation.size(), g.scale.size()};
-    char err[256];
-    check(rd_gltf_node_transform(index, &t, n, err, sizeof err), err);
-}
-
-int32_t Converter::texture(int index, int tex_coord, size_t material, const char *slot)
-{
-    if (index < 0) return -1;
-    if ((size_t)index >= m_.textures.size())
-        fail(RD_GLTF_ERR_INVALID,
-             "material %zu refers to texture %d, but there are only %zu "
-             "textures",
-             material, index, m_.textures.size());
-    if (tex_coord != 0) {
-        rd_scene_warn(s_,
-                      "material %zu reads its %s texture with TEXCOORD_%d; only TEXCOORD_0 "
-                      "is supported, so the texture is ignored",
-                      material, slot, tex_coord);
-        return -1;
-    }
-    auto found = tex_map_.find(index);
-    if (found != tex_map_.end()) return found->second;
-
-    const tinygltf::Texture &t = m_.textures[(size_t)index];
-    if (t.source < 0 || (size_t)t.source >= m_.images.size())
-        fail(RD_GLTF_ERR_INVALID, "texture %d refers to image %d, but there are only %zu images",
-             index, t.source, m_.images.size());
-    const tinygltf::Image &img = m_.images[(size_t)t.source];
-    std::string what = label("image", (size_t)t.source, img.name);
-    if (img.name.empty() && !img.uri.empty() && img.uri.compare(0, 5, "data:") != 0)
-        what = label("image", (size_t)t.source, img.uri);
-
-    std::vector<unsigned char> external;
-    const std::vector<unsigned char> *rgba = &img.image;
-    int w = img.width, h = img.height;
-    auto failed = ctx_->image_failures.find(t.source);
-    if (failed != ctx_->image_failures.end())
-        fail(failed->second.code, "%s could not be decoded: %s", what.c_str(),
-             failed->second.why.c_str());
-    if (img.image.empty()) {
-        if (img.uri.empty()) fail(RD_GLTF_ERR_INVALID, "%s has no data", what.c_str());
-        /* an external file (tinygltf keeps only its URI) */
-        if (img.uri.compare(0, 5, "data:") == 0)
-            fail(RD_GLTF_ERR_UNSUPPORTED, "%s has a data URI that is not base64 PNG or JPEG data",
-                 what.c_str());
-        std::string rel = tinygltf::dlib::urldecode(img.uri), why = uri_refusal(ctx_->rules, rel);
-        std::vector<unsigned char> file;
-        bool too_large = false;
-        if (why.empty() &&
-            !read_file(ctx_->rules.prefix + rel, kMaxExternalFile, &file, &why, &too_large))
-            fail(too_large ? RD_GLTF_ERR_TOO_LARGE : RD_GLTF_ERR_IO, "%s could not be loaded: %s",
-                 what.c_str(), why.c_str());
-        if (!why.empty())
-            fail(RD_GLTF_ERR_IO, "%s could not be loaded: %s", what.c_str(), why.c_str());
-        ImageFailure f;
-        if (!decode_image(ctx_, file.data(), file.size(), &external, &w, &h, &f))
-            fail(f.code, "%s could not be decoded: %s", what.c_str(), f.why.c_str());
-        rgba = &external;
-    }
-    if (w < 1 || h < 1 || rgba->size() != (size_t)w * (size_t)h * 4)
-        fail(RD_GLTF_ERR_INVALID, "%s has inconsistent decoded data", what.c_str());
-
-    rd_texture rt;
-    memset(&rt, 0, sizeof rt);
-    rt.width = (uint32_t)w;
-    rt.height = (uint32_t)h;
-    rt.wrap_s = rt.wrap_t = RD_WRAP_REPEAT;
-    if (t.sampler >= 0) {
-        if ((size_t)t.sampler >= m_.samplers.size())
-            fail(RD_GLTF_ERR_INVALID,
-                 "texture %d refers to sampler %d, but there are only %zu samplers", index,
-                 t.sampler, m_.samplers.size());
-        const tinygltf::Sampler &smp = m_.samplers[(size_t)t.sampler];
-        auto wrap = [&](int mode) -> uint32_t {
-            switch (mode) {
-            case TINYGLTF_TEXTURE_WRAP_REPEAT:
-                return RD_WRAP_REPEAT;
-            case TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE:
-                return RD_WRAP_CLAMP;
-            case TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT:
-                return RD_WRAP_MIRROR;
-            default:
-                fail(RD_GLTF_ERR_INVALID, "sampler %d has an invalid wrap mode %d", t.sampler,
-                     mode);
-            }
-        };
-        rt.wrap_s = wrap(smp.wrapS);
-        rt.wrap_t = wrap(smp.wrapT);
-        rt.nearest = smp.magFilter == TINYGLTF_TEXTURE_FILTER_NEAREST;
-    }
-    rt.rgba = static_cast<uint8_t *>(malloc(rgba->size()));
-    if (!rt.rgba) {
-        fprintf(stderr, "probecast: out of memory (%zu bytes)\n", rgba->size());
-        abort();
-    }
-    memcpy(rt.rgba, rgba->data(), rgba->size());
-    int32_t out = (int32_t)rd_scene_add_texture(s_, &rt);
-    tex_map_[index] = out;
-    return out;
+    return {t.index, t.texCoord};
 }
 
 /* A material's factors for gltf_materials.c. */
@@ -920,379 +442,145 @@ rd_gltf_material_factors factors(const tinygltf::Material &g)
     return f;
 }
 
-/* Materials: factors in gltf_materials.c, textures here (texture() reads and decodes them),
- * in the order the checks always ran. */
-void Converter::materials()
+/* Copies what the conversion reads out of m (no checks: gltf_convert.c does them). */
+void make_document(const Model &m, const LoadContext &ctx, Document *doc)
 {
-    size_t blend = 0;
-    std::map<std::string, size_t> unsupported; /* material extension -> materials using it */
-    char err[256];
-    for (size_t i = 0; i < m_.materials.size(); i++) {
-        const tinygltf::Material &g = m_.materials[i];
-        const tinygltf::PbrMetallicRoughness &pbr = g.pbrMetallicRoughness;
-        rd_material mt;
-        memset(&mt, 0, sizeof mt);
-        mt.name = g.name.empty() ? nullptr : const_cast<char *>(g.name.c_str());
-        rd_gltf_material_factors f = factors(g);
-        check(rd_gltf_material_colors(s_, i, &f, &mt, err, sizeof err), err);
-        mt.base_color_texture =
-            texture(pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord, i, "base colour");
-        mt.emissive_texture =
-            texture(g.emissiveTexture.index, g.emissiveTexture.texCoord, i, "emissive");
-        check(rd_gltf_material_pbr(i, &f, &mt, err, sizeof err), err);
-        mt.metallic_roughness_texture =
-            texture(pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord, i,
-                    "metallic-roughness");
-        mt.normal_texture = texture(g.normalTexture.index, g.normalTexture.texCoord, i, "normal");
-        mt.occlusion_texture =
-            texture(g.occlusionTexture.index, g.occlusionTexture.texCoord, i, "occlusion");
-        if (mt.alpha_mode == RD_ALPHA_BLEND) blend++;
+    for (const std::string &e : m.extensionsUsed)
+        doc->extensions_used.push_back(str(e));
+    for (const tinygltf::Buffer &b : m.buffers)
+        doc->buffers.push_back({reinterpret_cast<const char *>(b.data.data()), b.data.size()});
+    for (const tinygltf::BufferView &v : m.bufferViews)
+        doc->views.push_back({v.buffer, v.byteOffset, v.byteLength, v.byteStride});
+    for (const tinygltf::Accessor &a : m.accessors)
+        doc->accessors.push_back({a.bufferView, a.byteOffset, a.normalized, a.componentType, a.type,
+                                  a.count, a.sparse.isSparse, a.sparse.count,
+                                  a.sparse.indices.bufferView, a.sparse.indices.byteOffset,
+                                  a.sparse.indices.componentType, a.sparse.values.bufferView,
+                                  a.sparse.values.byteOffset});
+    for (const tinygltf::Image &img : m.images) /* data: URIs are never opened as files */
+        doc->rels.push_back(img.uri.compare(0, 5, "data:") == 0
+                                ? std::string()
+                                : tinygltf::dlib::urldecode(img.uri));
+    for (size_t i = 0; i < m.images.size(); i++) {
+        const tinygltf::Image &img = m.images[i];
+        rd_gltf_doc_image di;
+        memset(&di, 0, sizeof di);
+        di.name = str(img.name);
+        di.uri = str(img.uri);
+        di.rel = str(doc->rels[i]);
+        di.rgba = img.image.data();
+        di.rgba_size = img.image.size();
+        di.width = img.width;
+        di.height = img.height;
+        auto failed = ctx.image_failures.find((int)i);
+        if (failed != ctx.image_failures.end()) {
+            di.failed = true;
+            di.failure = failed->second.code;
+            di.why = failed->second.why.c_str();
+        }
+        doc->images.push_back(di);
+    }
+    for (const tinygltf::Texture &t : m.textures)
+        doc->textures.push_back({t.source, t.sampler});
+    for (const tinygltf::Sampler &s : m.samplers)
+        doc->samplers.push_back({s.wrapS, s.wrapT, s.magFilter});
+    doc->material_extensions.resize(m.materials.size());
+    for (size_t i = 0; i < m.materials.size(); i++) {
+        const tinygltf::Material &g = m.materials[i];
         for (const auto &e : g.extensions)
-            if (!is_supported_extension(e.first)) unsupported[clean(e.first, 80)]++;
-        rd_scene_add_material(s_, &mt); /* index 1 + i: materials[0] is the default */
+            doc->material_extensions[i].push_back(str(e.first));
+        const tinygltf::PbrMetallicRoughness &pbr = g.pbrMetallicRoughness;
+        doc->materials.push_back({name_or_null(g.name),
+                                  factors(g),
+                                  ref(pbr.baseColorTexture),
+                                  ref(g.emissiveTexture),
+                                  ref(pbr.metallicRoughnessTexture),
+                                  {g.normalTexture.index, g.normalTexture.texCoord},
+                                  {g.occlusionTexture.index, g.occlusionTexture.texCoord},
+                                  doc->material_extensions[i].data(),
+                                  doc->material_extensions[i].size()});
     }
-    rd_gltf_material_warnings(s_, blend);
-    for (const auto &u : unsupported)
-        rd_scene_warn(s_,
-                      "material extension %s (on %zu material(s)) is not supported; those "
-                      "materials are drawn with the core metallic-roughness model",
-                      u.first.c_str(), u.second);
-}
-
-/* Validates a mesh's primitives and counts its triangles without reading vertex data. */
-std::vector<Primitive> Converter::plan_mesh(size_t mesh)
-{
-    const tinygltf::Mesh &gm = m_.meshes[mesh];
-    std::vector<Primitive> out;
-    bool morph = false;
-    for (size_t p = 0; p < gm.primitives.size(); p++) {
-        const tinygltf::Primitive &gp = gm.primitives[p];
-        std::string where = fmt("mesh %zu primitive %zu", mesh, p);
-        Primitive pr;
-        pr.mode = gp.mode < 0 ? TINYGLTF_MODE_TRIANGLES : gp.mode;
-        morph = morph || !gp.targets.empty();
-        if (pr.mode >= TINYGLTF_MODE_POINTS && pr.mode <= TINYGLTF_MODE_LINE_STRIP) {
-            rd_scene_warn(s_,
-                          "%s draws points or lines (mode %d), which are not supported; it "
-                          "is skipped",
-                          where.c_str(), pr.mode);
-            continue;
+    doc->primitives.resize(m.meshes.size());
+    for (size_t i = 0; i < m.meshes.size(); i++) {
+        for (const tinygltf::Primitive &gp : m.meshes[i].primitives) {
+            rd_gltf_doc_primitive p;
+            memset(&p, 0, sizeof p);
+            p.mode = gp.mode;
+            p.indices = gp.indices;
+            p.material = gp.material;
+            p.has_targets = !gp.targets.empty();
+            auto attr = [&](const char *name, bool *has, int *index) {
+                auto it = gp.attributes.find(name);
+                *has = it != gp.attributes.end();
+                *index = *has ? it->second : -1;
+            };
+            attr("POSITION", &p.has_pos, &p.pos);
+            attr("NORMAL", &p.has_nrm, &p.nrm);
+            attr("TEXCOORD_0", &p.has_uv, &p.uv);
+            attr("TANGENT", &p.has_tan, &p.tan);
+            doc->primitives[i].push_back(p);
         }
-        if (pr.mode > TINYGLTF_MODE_TRIANGLE_FAN)
-            fail(RD_GLTF_ERR_INVALID, "%s has an invalid mode %d", where.c_str(), pr.mode);
-        auto pos = gp.attributes.find("POSITION");
-        if (pos == gp.attributes.end())
-            fail(RD_GLTF_ERR_INVALID, "%s has no POSITION attribute", where.c_str());
-        pr.pos = make_accessor(m_, pos->second, "POSITION of " + where, TINYGLTF_TYPE_VEC3,
-                               {TINYGLTF_COMPONENT_TYPE_FLOAT});
-        auto nrm = gp.attributes.find("NORMAL");
-        if (nrm != gp.attributes.end()) {
-            pr.nrm = make_accessor(m_, nrm->second, "NORMAL of " + where, TINYGLTF_TYPE_VEC3,
-                                   {TINYGLTF_COMPONENT_TYPE_FLOAT});
-            pr.has_nrm = true;
-        }
-        auto uv = gp.attributes.find("TEXCOORD_0");
-        if (uv != gp.attributes.end()) {
-            pr.uv =
-                make_accessor(m_, uv->second, "TEXCOORD_0 of " + where, TINYGLTF_TYPE_VEC2,
-                              {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
-                               TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT});
-            pr.has_uv = true;
-        }
-        auto tan = gp.attributes.find("TANGENT");
-        if (tan != gp.attributes.end()) {
-            pr.tan = make_accessor(m_, tan->second, "TANGENT of " + where, TINYGLTF_TYPE_VEC4,
-                                   {TINYGLTF_COMPONENT_TYPE_FLOAT});
-            pr.has_tan = true;
-        }
-        if ((pr.has_nrm && pr.nrm.c.count != pr.pos.c.count) ||
-            (pr.has_uv && pr.uv.c.count != pr.pos.c.count) ||
-            (pr.has_tan && pr.tan.c.count != pr.pos.c.count))
-            fail(RD_GLTF_ERR_INVALID, "the attributes of %s have different vertex counts",
-                 where.c_str());
-        size_t n = pr.pos.c.count;
-        if (gp.indices >= 0) {
-            pr.idx = make_accessor(m_, gp.indices, "indices of " + where, TINYGLTF_TYPE_SCALAR,
-                                   {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
-                                    TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
-                                    TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT});
-            pr.has_idx = true;
-            n = pr.idx.c.count;
-        }
-        if (pr.mode == TINYGLTF_MODE_TRIANGLES) {
-            pr.tris = n / 3;
-            if (n % 3 != 0)
-                rd_scene_warn(s_,
-                              "%s has %zu vertices, not a multiple of 3; the last %zu are "
-                              "ignored",
-                              where.c_str(), n, n % 3);
-        } else {
-            pr.tris = n >= 3 ? n - 2 : 0;
-        }
-        if (gp.material >= 0 && (size_t)gp.material >= m_.materials.size())
-            fail(RD_GLTF_ERR_INVALID, "%s refers to material %d, but there are only %zu materials",
-                 where.c_str(), gp.material, m_.materials.size());
-        pr.material = gp.material >= 0 ? (uint32_t)gp.material + 1 : 0;
-        if (pr.tris > 0) out.push_back(std::move(pr));
+        doc->meshes.push_back(
+            {str(m.meshes[i].name), doc->primitives[i].data(), doc->primitives[i].size()});
     }
-    if (morph)
-        rd_scene_warn(s_, "%s has morph targets, which are not supported; its base shape is used",
-                      label("mesh", mesh, gm.name).c_str());
-    return out;
-}
-
-void Converter::fill_mesh(size_t mesh, const std::vector<Primitive> &prims, rd_mesh *out)
-{
-    std::vector<rd_gltf_primitive> c(prims.size());
-    for (size_t p = 0; p < prims.size(); p++) {
-        const Primitive &pr = prims[p];
-        c[p] =
-            rd_gltf_primitive{pr.mode,    pr.pos.c,  pr.nrm.c,   pr.uv.c,    pr.tan.c, pr.idx.c,
-                              pr.has_nrm, pr.has_uv, pr.has_tan, pr.has_idx, pr.tris,  pr.material};
-    }
-    char err[256];
-    check(rd_gltf_fill_mesh(mesh, c.data(), c.size(), out, err, sizeof err), err);
-}
-
-void Converter::meshes()
-{
-    std::vector<uint8_t> used(m_.meshes.size(), 0);
-    for (size_t gi : order_) {
-        int mesh = m_.nodes[gi].mesh;
-        if (mesh < -1 || (mesh >= 0 && (size_t)mesh >= m_.meshes.size()))
-            fail(RD_GLTF_ERR_INVALID, "node %zu refers to mesh %d, but there are only %zu meshes",
-                 gi, mesh, m_.meshes.size());
-        if (mesh >= 0) used[(size_t)mesh] = 1;
-    }
-    std::vector<std::vector<Primitive>> plans(m_.meshes.size());
-    uint64_t total = 0;
-    for (size_t i = 0; i < m_.meshes.size(); i++) {
-        if (!used[i]) continue;
-        plans[i] = plan_mesh(i);
-        uint64_t tris = 0;
-        for (const Primitive &p : plans[i])
-            tris += p.tris;
-        if (tris > UINT32_MAX)
-            fail(RD_GLTF_ERR_TOO_LARGE, "mesh %zu has %llu triangles, more than a mesh can hold", i,
-                 (unsigned long long)tris);
-        total += tris;
-        if (total > max_tris_)
-            fail(RD_GLTF_ERR_TOO_LARGE,
-                 "the scene has more than %llu triangles (the limit), counting meshes up to "
-                 "mesh %zu",
-                 (unsigned long long)max_tris_, i);
-    }
-    mesh_map_.assign(m_.meshes.size(), -1);
-    for (size_t i = 0; i < m_.meshes.size(); i++) {
-        uint64_t tris = 0;
-        for (const Primitive &p : plans[i])
-            tris += p.tris;
-        if (tris == 0) continue; /* unused, or nothing but points and lines */
-        const std::string &name = m_.meshes[i].name;
-        uint32_t idx = rd_scene_add_mesh(s_, name.empty() ? nullptr : name.c_str(), (uint32_t)tris);
-        fill_mesh(i, plans[i], &s_->meshes[idx]);
-        mesh_map_[i] = (int32_t)idx;
-    }
-}
-
-void Converter::lights_and_cameras()
-{
-    std::vector<uint8_t> ortho_warned(m_.cameras.size(), 0);
-    for (size_t gi : order_) {
-        const tinygltf::Node &gn = m_.nodes[gi];
-        int32_t node = node_map_[gi];
-        if (gn.camera >= 0 || gn.camera < -1) {
-            if (gn.camera < 0 || (size_t)gn.camera >= m_.cameras.size())
-                fail(RD_GLTF_ERR_INVALID,
-                     "node %zu refers to camera %d, but there are only %zu cameras", gi, gn.camera,
-                     m_.cameras.size());
-            size_t ci = (size_t)gn.camera;
-            const tinygltf::Camera &gc = m_.cameras[ci];
-            if (gc.type != "perspective") {
-                if (!ortho_warned[ci])
-                    rd_scene_warn(s_, "%s is %s, which is not supported; it is ignored",
-                                  label("camera", ci, gc.name).c_str(), clean(gc.type, 16).c_str());
-                ortho_warned[ci] = 1;
-            } else {
-                rd_camera c;
-                memset(&c, 0, sizeof c);
-                c.name = gc.name.empty() ? nullptr : const_cast<char *>(gc.name.c_str());
-                const tinygltf::PerspectiveCamera &p = gc.perspective;
-                char err[256];
-                check(rd_gltf_perspective(ci, p.yfov, p.znear, p.aspectRatio, &c, err, sizeof err),
-                      err);
-                c.node = node;
-                rd_scene_add_camera(s_, &c);
-            }
+    for (const tinygltf::Node &g : m.nodes) {
+        rd_gltf_doc_node n;
+        memset(&n, 0, sizeof n);
+        n.name = str(g.name);
+        n.mesh = g.mesh;
+        n.camera = g.camera;
+        auto ext = g.extensions.find("KHR_lights_punctual");
+        n.has_light = ext != g.extensions.end();
+        if (n.has_light) {
+            const tinygltf::Value &li = ext->second.Get("light");
+            n.light_is_int = li.IsInt();
+            n.light = li.IsInt() ? li.GetNumberAsInt() : 0;
         }
-        auto ext = gn.extensions.find("KHR_lights_punctual");
-        if (ext == gn.extensions.end()) continue;
-        const tinygltf::Value &li = ext->second.Get("light");
-        if (!li.IsInt() || li.GetNumberAsInt() < 0 ||
-            (size_t)li.GetNumberAsInt() >= m_.lights.size())
-            fail(RD_GLTF_ERR_INVALID,
-                 "node %zu refers to a KHR_lights_punctual light that does "
-                 "not exist (there are %zu lights)",
-                 gi, m_.lights.size());
-        size_t index = (size_t)li.GetNumberAsInt();
-        const tinygltf::Light &gl = m_.lights[index];
-        rd_light l;
-        memset(&l, 0, sizeof l);
-        l.name = gl.name.empty() ? nullptr : const_cast<char *>(gl.name.c_str());
-        rd_gltf_light_params lp = {gl.type.data(),         gl.type.size(),        gl.color.data(),
-                                   gl.color.size(),        gl.intensity,          gl.range,
-                                   gl.spot.innerConeAngle, gl.spot.outerConeAngle};
-        bool ignored;
-        char err[256];
-        check(rd_gltf_light(s_, index, &lp, &l, &ignored, err, sizeof err), err);
-        if (ignored) continue;
-        l.node = node;
-        rd_scene_add_light(s_, &l);
+        n.transform = {g.matrix.data(), g.translation.data(), g.rotation.data(), g.scale.data(),
+                       g.matrix.size(), g.translation.size(), g.rotation.size(), g.scale.size()};
+        doc->nodes.push_back(n);
+        doc->children.push_back({g.children.data(), g.children.size()});
     }
-}
-
-/* Validates an animation sampler for a translation/scale (VEC3 float) or rotation (VEC4 float
- * or normalized integers) channel and reads its keys (glTF 2.0 section 3.11). */
-void Converter::anim_sampler(const std::string &where, const tinygltf::AnimationSampler &gs,
-                             bool rotation, rd_anim_sampler *out, std::vector<float> *times,
-                             std::vector<float> *values)
-{
-    const std::string &ip = gs.interpolation;
-    out->interpolation = ip == "LINEAR"        ? (uint32_t)RD_INTERP_LINEAR
-                         : ip == "STEP"        ? (uint32_t)RD_INTERP_STEP
-                         : ip == "CUBICSPLINE" ? (uint32_t)RD_INTERP_CUBICSPLINE
-                                               : UINT32_MAX;
-    if (out->interpolation == UINT32_MAX)
-        fail(RD_GLTF_ERR_INVALID, "%s has an unknown interpolation '%s'", where.c_str(),
-             clean(ip, 32).c_str());
-    Accessor in = make_accessor(m_, gs.input, "input of " + where, TINYGLTF_TYPE_SCALAR,
-                                {TINYGLTF_COMPONENT_TYPE_FLOAT});
-    Accessor val =
-        rotation
-            ? make_accessor(m_, gs.output, "output of " + where, TINYGLTF_TYPE_VEC4,
-                            {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_BYTE,
-                             TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_SHORT,
-                             TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT})
-            : make_accessor(m_, gs.output, "output of " + where, TINYGLTF_TYPE_VEC3,
-                            {TINYGLTF_COMPONENT_TYPE_FLOAT});
-    size_t keys = in.c.count, per_key = out->interpolation == RD_INTERP_CUBICSPLINE ? 3 : 1;
-    if (val.c.count / per_key != keys || val.c.count % per_key != 0)
-        fail(RD_GLTF_ERR_INVALID, "%s has %zu output values for %zu input times (%s needs %zu)",
-             where.c_str(), val.c.count, keys, ip.c_str(), keys * per_key);
-    out->components = rotation ? 4 : 3;
-    if (val.c.count <= kMaxAnimationFloats) anim_floats_ += keys + val.c.count * out->components;
-    if (val.c.count > kMaxAnimationFloats || anim_floats_ > kMaxAnimationFloats)
-        fail(RD_GLTF_ERR_TOO_LARGE,
-             "the animations hold more than %llu keys and values (the limit)",
-             (unsigned long long)kMaxAnimationFloats);
-    out->key_count = (uint32_t)keys;
-    times->resize(keys);
-    values->resize(val.c.count * out->components);
-    char err[512];
-    check(rd_gltf_read_keys(where.c_str(), &in.c, &val.c, out->components, times->data(),
-                            values->data(), err, sizeof err),
-          err);
-}
-
-/* Node animations (glTF 2.0 section 3.11). Channels that animate morph weights or an
- * extension's target are skipped with one warning; so are nodes outside the scene shown. */
-void Converter::animations()
-{
-    size_t skipped_weights = 0, skipped_other = 0;
-    for (size_t ai = 0; ai < m_.animations.size(); ai++) {
-        const tinygltf::Animation &ga = m_.animations[ai];
-        std::string an = label("animation", ai, ga.name);
-        std::map<std::pair<int, uint32_t>, size_t> targets; /* (node, path) -> channel */
-        std::map<std::pair<int, uint32_t>, uint32_t> kept;  /* (sampler, path) -> rd sampler */
-        std::vector<rd_anim_sampler> samplers;
-        std::vector<std::vector<float>> times, values;
-        std::vector<rd_anim_channel> channels;
-        std::vector<uint8_t> used(ga.samplers.size(), 0); /* by any channel, even skipped */
-        for (size_t ci = 0; ci < ga.channels.size(); ci++) {
-            const tinygltf::AnimationChannel &gc = ga.channels[ci];
-            std::string where = fmt("%s channel %zu", an.c_str(), ci);
-            const std::string &path = gc.target_path;
-            int node = gc.target_node;
-            if (gc.sampler < 0 || (size_t)gc.sampler >= ga.samplers.size())
-                fail(RD_GLTF_ERR_INVALID, "%s refers to sampler %d, but %s has only %zu samplers",
-                     where.c_str(), gc.sampler, an.c_str(), ga.samplers.size());
-            if (node < -1 || (node >= 0 && (size_t)node >= m_.nodes.size()))
-                fail(RD_GLTF_ERR_INVALID, "%s targets node %d, but there are only %zu nodes",
-                     where.c_str(), node, m_.nodes.size());
-            used[(size_t)gc.sampler] = 1;
-            uint32_t p = path == "translation" ? (uint32_t)RD_ANIM_TRANSLATION
-                         : path == "rotation"  ? (uint32_t)RD_ANIM_ROTATION
-                         : path == "scale"     ? (uint32_t)RD_ANIM_SCALE
-                                               : UINT32_MAX;
-            if (path.empty()) fail(RD_GLTF_ERR_INVALID, "%s has no target path", where.c_str());
-            skipped_weights += p == UINT32_MAX && path == "weights";
-            skipped_other += p == UINT32_MAX && path != "weights";
-            if (p == UINT32_MAX || node < 0) continue; /* no node: ignored, as the spec says */
-            if (!m_.nodes[(size_t)node].matrix.empty())
-                fail(RD_GLTF_ERR_INVALID,
-                     "%s animates node %d, which has a matrix; glTF allows animating only "
-                     "nodes given by translation, rotation and scale",
-                     where.c_str(), node);
-            auto dup = targets.emplace(std::make_pair(node, p), ci);
-            if (!dup.second)
-                fail(RD_GLTF_ERR_INVALID, "%s animates the %s of node %d, as channel %zu does",
-                     where.c_str(), path.c_str(), node, dup.first->second);
-            if (node_map_[(size_t)node] < 0) continue; /* not in the scene shown */
-            auto k = kept.emplace(std::make_pair(gc.sampler, p), (uint32_t)samplers.size());
-            if (k.second) {
-                samplers.emplace_back();
-                times.emplace_back();
-                values.emplace_back();
-                anim_sampler(fmt("%s sampler %d", an.c_str(), gc.sampler),
-                             ga.samplers[(size_t)gc.sampler], p == RD_ANIM_ROTATION,
-                             &samplers.back(), &times.back(), &values.back());
-            }
-            channels.push_back({(uint32_t)node_map_[(size_t)node], p, k.first->second});
-        }
-        if (channels.empty()) continue;
-        for (size_t i = 0; i < samplers.size(); i++) {
-            samplers[i].times = times[i].data();
-            samplers[i].values = values[i].data();
-        }
-        rd_animation a;
-        memset(&a, 0, sizeof a);
-        /* the loop spans every channel's keys, skipped ones too (as viewers that play them) */
-        for (size_t si = 0; si < ga.samplers.size(); si++) {
-            if (!used[si]) continue;
-            Accessor in = make_accessor(m_, ga.samplers[si].input,
-                                        fmt("input of %s sampler %zu", an.c_str(), si),
-                                        TINYGLTF_TYPE_SCALAR, {TINYGLTF_COMPONENT_TYPE_FLOAT});
-            float last;
-            read_floats(in, in.c.count - 1, &last);
-            if (std::isfinite(last) && last > a.duration) a.duration = last;
-        }
-        a.name = ga.name.empty() ? nullptr : const_cast<char *>(ga.name.c_str());
-        a.samplers = samplers.data();
-        a.sampler_count = (uint32_t)samplers.size();
-        a.channels = channels.data();
-        a.channel_count = (uint32_t)channels.size();
-        rd_scene_add_animation(s_, &a);
+    for (const tinygltf::Scene &s : m.scenes)
+        doc->scenes.push_back({s.nodes.data(), s.nodes.size()});
+    for (const tinygltf::Camera &c : m.cameras)
+        doc->cameras.push_back({str(c.name), str(c.type), c.perspective.yfov, c.perspective.znear,
+                                c.perspective.aspectRatio});
+    for (const tinygltf::Light &l : m.lights)
+        doc->lights.push_back(
+            {name_or_null(l.name),
+             {l.type.data(), l.type.size(), l.color.data(), l.color.size(), l.intensity, l.range,
+              l.spot.innerConeAngle, l.spot.outerConeAngle}});
+    doc->channels.resize(m.animations.size());
+    doc->anim_samplers.resize(m.animations.size());
+    for (size_t i = 0; i < m.animations.size(); i++) {
+        const tinygltf::Animation &a = m.animations[i];
+        for (const tinygltf::AnimationChannel &c : a.channels)
+            doc->channels[i].push_back({c.sampler, c.target_node, str(c.target_path)});
+        for (const tinygltf::AnimationSampler &s : a.samplers)
+            doc->anim_samplers[i].push_back({s.input, s.output, str(s.interpolation)});
+        doc->animations.push_back({str(a.name), doc->channels[i].data(), doc->channels[i].size(),
+                                   doc->anim_samplers[i].data(), doc->anim_samplers[i].size()});
     }
-    if (skipped_weights)
-        rd_scene_warn(s_,
-                      "%zu animation channel(s) animate morph target weights, which are not "
-                      "supported; they are ignored",
-                      skipped_weights);
-    if (skipped_other)
-        rd_scene_warn(s_, "%zu animation channel(s) have an unknown target path; they are ignored",
-                      skipped_other);
-}
-
-/* One readable line, no control or non-ASCII bytes (messages may end up in JSON or logs). */
-void write_message(const std::string &msg, char *err, size_t errlen)
-{
-    if (!err || errlen == 0) return;
-    size_t n = std::min(msg.size(), errlen - 1);
-    for (size_t i = 0; i < n; i++) {
-        unsigned char ch = (unsigned char)msg[i];
-        err[i] = (ch < 0x20 || ch >= 0x7f) ? '?' : (char)ch;
-    }
-    err[n] = '\0';
+    rd_gltf_document &d = doc->d;
+    memset(&d, 0, sizeof d);
+    d.skin_count = m.skins.size();
+    d.default_scene = m.defaultScene;
+    set(&d.extensions_used, &d.extensions_used_count, doc->extensions_used);
+    set(&d.buffers, &d.buffer_count, doc->buffers);
+    set(&d.views, &d.view_count, doc->views);
+    set(&d.accessors, &d.accessor_count, doc->accessors);
+    set(&d.images, &d.image_count, doc->images);
+    set(&d.textures, &d.texture_count, doc->textures);
+    set(&d.samplers, &d.sampler_count, doc->samplers);
+    set(&d.materials, &d.material_count, doc->materials);
+    set(&d.meshes, &d.mesh_count, doc->meshes);
+    set(&d.children, &d.node_count, doc->children);
+    set(&d.nodes, &d.node_count, doc->nodes);
+    set(&d.scenes, &d.scene_count, doc->scenes);
+    set(&d.cameras, &d.camera_count, doc->cameras);
+    set(&d.lights, &d.light_count, doc->lights);
+    set(&d.animations, &d.animation_count, doc->animations);
 }
 
 /* tinygltf's error text: its first non-empty line, shortened. */
@@ -1315,20 +603,14 @@ void load(const unsigned char *data, size_t size, const char *base_dir, const rd
           rd_scene *out)
 {
     if (size > 0xffffffffull) fail(RD_GLTF_ERR_TOO_LARGE, "the file is larger than 4 GiB");
-    LoadContext ctx;
-    if (base_dir) {
-        ctx.rules.allowed = true;
-        ctx.rules.base = base_dir[0] ? base_dir : ".";
-        ctx.rules.prefix = ctx.rules.base;
-        if (ctx.rules.prefix.back() != '/') ctx.rules.prefix += '/';
-    }
+    LoadContext ctx(base_dir);
     rd_gltf_container c;
     char cerr[256];
     check(rd_gltf_parse_container(data, size, &c, cerr, sizeof cerr), cerr);
     prescan(c, &ctx);
 
     tinygltf::TinyGLTF gltf;
-    tinygltf::FsCallbacks fs = {&fs_file_exists, &fs_expand, &fs_read, &fs_write, &ctx.rules};
+    tinygltf::FsCallbacks fs = {&fs_file_exists, &fs_expand, &fs_read, &fs_write, &ctx.files};
     gltf.SetFsCallbacks(fs);
     gltf.SetImageLoader(&image_callback, &ctx);
     Model model;
@@ -1336,18 +618,22 @@ void load(const unsigned char *data, size_t size, const char *base_dir, const rd
     bool ok;
     if (c.glb)
         ok = gltf.LoadBinaryFromMemory(&model, &terr, &twarn, data, (unsigned int)size,
-                                       ctx.rules.base);
+                                       ctx.files.base ? ctx.files.base : "");
     else
         ok = gltf.LoadASCIIFromString(&model, &terr, &twarn, c.json, (unsigned int)c.json_size,
-                                      ctx.rules.base);
+                                      ctx.files.base ? ctx.files.base : "");
     if (!ok) {
-        if (!ctx.rules.last_refusal.empty())
+        if (ctx.files.last_refusal[0])
             fail(RD_GLTF_ERR_IO, "an external file could not be loaded: %s (%s)",
-                 ctx.rules.last_refusal.c_str(), first_line(terr).c_str());
+                 ctx.files.last_refusal, first_line(terr).c_str());
         fail(RD_GLTF_ERR_INVALID, "the glTF file is invalid: %s", first_line(terr).c_str());
     }
     uint64_t max_tris = opt && opt->max_triangles ? opt->max_triangles : kDefaultMaxTriangles;
-    Converter(model, &ctx, max_tris, out).run();
+    Document doc;
+    make_document(model, ctx, &doc);
+    char err[1024];
+    check(rd_gltf_convert(&doc.d, &ctx.files, &ctx.decoded_bytes, max_tris, out, err, sizeof err),
+          err);
 }
 
 rd_gltf_result guarded(const unsigned char *data, size_t size, const char *base_dir,
@@ -1372,73 +658,20 @@ rd_gltf_result guarded(const unsigned char *data, size_t size, const char *base_
         msg = "the glTF file is invalid (unexpected error)";
     }
     if (code != RD_GLTF_OK) rd_scene_destroy(out);
-    write_message(msg, err, errlen);
+    rd_gltf_write_text(msg.data(), msg.size(), err, errlen);
     return code;
 }
 
 } // namespace
-
-extern "C" const char *rd_gltf_strerror(rd_gltf_result r)
-{
-    switch (r) {
-    case RD_GLTF_OK:
-        return "ok";
-    case RD_GLTF_ERR_IO:
-        return "io error";
-    case RD_GLTF_ERR_PARSE:
-        return "parse error";
-    case RD_GLTF_ERR_INVALID:
-        return "invalid glTF";
-    case RD_GLTF_ERR_UNSUPPORTED:
-        return "unsupported glTF feature";
-    case RD_GLTF_ERR_TOO_LARGE:
-        return "too large";
-    }
-    return "unknown error";
-}
 
 extern "C" rd_gltf_result rd_gltf_load_memory(const void *data, size_t size, const char *base_dir,
                                               const rd_gltf_options *opt, rd_scene *out, char *err,
                                               size_t errlen)
 {
     if (!out) {
-        write_message("no output scene was given", err, errlen);
+        rd_gltf_write_text("no output scene was given", 25, err, errlen);
         return RD_GLTF_ERR_INVALID;
     }
     rd_scene_init(out);
     return guarded(static_cast<const unsigned char *>(data), size, base_dir, opt, out, err, errlen);
-}
-
-extern "C" rd_gltf_result rd_gltf_load_file(const char *path, const rd_gltf_options *opt,
-                                            rd_scene *out, char *err, size_t errlen)
-{
-    if (!out) {
-        write_message("no output scene was given", err, errlen);
-        return RD_GLTF_ERR_INVALID;
-    }
-    rd_scene_init(out);
-    rd_gltf_result code;
-    std::string msg;
-    try {
-        if (!path || !path[0]) fail(RD_GLTF_ERR_IO, "no file name was given");
-        std::vector<unsigned char> data;
-        std::string why;
-        bool too_large = false;
-        if (!read_file(path, 0xffffffffull, &data, &why, &too_large))
-            fail(too_large ? RD_GLTF_ERR_TOO_LARGE : RD_GLTF_ERR_IO, "'%s' could not be read: %s",
-                 path, why.c_str());
-        std::string p = path, base;
-        size_t slash = p.find_last_of('/');
-        base = slash == std::string::npos ? "." : slash == 0 ? "/" : p.substr(0, slash);
-        return guarded(data.data(), data.size(), base.c_str(), opt, out, err, errlen);
-    } catch (const LoadError &e) {
-        code = e.code;
-        msg = e.msg;
-    } catch (...) {
-        code = RD_GLTF_ERR_TOO_LARGE;
-        msg = "the file needs more memory than is available";
-    }
-    rd_scene_destroy(out);
-    write_message(msg, err, errlen);
-    return code;
 }

@@ -1,9 +1,10 @@
 /* gltf_materials.c: glTF 2.0 metallic-roughness material factors to rd_material (see
- * gltf_import.h; textures are resolved by gltf_loader.cpp). */
+ * gltf_import.h; textures are resolved by gltf_textures.c), and the labels messages use. */
 #include "gltf_import.h"
 
 #include <float.h>
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 bool rd_gltf_to_float(double d, float *out)
@@ -21,6 +22,17 @@ void rd_gltf_clean(const char *s, size_t len, size_t max, char out[128])
     out[n] = '\0';
     for (size_t i = 0; i < n; i++)
         if ((unsigned char)out[i] < 0x20 || (unsigned char)out[i] >= 0x7f) out[i] = '?';
+}
+
+void rd_gltf_label(const char *kind, size_t index, rd_gltf_str name, char out[RD_GLTF_LABEL_MAX])
+{
+    char clean[128];
+    if (name.len == 0) {
+        snprintf(out, RD_GLTF_LABEL_MAX, "%s %zu", kind, index);
+        return;
+    }
+    rd_gltf_clean(name.s, name.len, 64, clean);
+    snprintf(out, RD_GLTF_LABEL_MAX, "%s %zu '%s'", kind, index, clean);
 }
 
 /* As std::max and std::min (a signed zero stays as it is). */

@@ -1,4 +1,4 @@
-/* test_animation.c: glTF node animations, from the loader (renderer/gltf_loader.cpp) through
+/* test_animation.c: glTF node animations, from the loader (renderer/gltf_loader.h) through
  * sampling (renderer/animation_clip.c) to node world matrices, on files built here in memory
  * (JSON with a base64 buffer), plus broken files and hand-built degenerate clips. Expected
  * numbers are worked out by hand in the comments. */
