@@ -38,16 +38,6 @@ rd_gltf_result rd_gltf_read_keys(const char *where, const rd_gltf_accessor *in,
 
 static const uint64_t kMaxAnimationFloats = 1ull << 26; /* 256 MiB of animation keys and values */
 
-static void *alloc(size_t n, size_t size)
-{
-    void *p = calloc(n ? n : 1, size);
-    if (!p) {
-        fprintf(stderr, "probecast: out of memory (%zu x %zu bytes)\n", n, size);
-        abort();
-    }
-    return p;
-}
-
 static bool str_is(rd_gltf_str s, const char *lit)
 {
     return s.len == strlen(lit) && memcmp(s.s, lit, s.len) == 0;
@@ -106,8 +96,8 @@ static rd_gltf_result anim_sampler(rd_gltf_conv *c, const char *where,
     }
     if (r == RD_GLTF_OK) {
         out->key_count = (uint32_t)keys;
-        out->times = alloc(keys, sizeof(float));
-        out->values = alloc(val.count * out->components, sizeof(float));
+        out->times = rd_gltf_alloc(keys, sizeof(float));
+        out->values = rd_gltf_alloc(val.count * out->components, sizeof(float));
         r = rd_gltf_read_keys(where, &in, &val, out->components, out->times, out->values, err,
                               errlen);
     }
@@ -149,11 +139,11 @@ static rd_gltf_result animation(rd_gltf_conv *c, size_t ai, size_t *target, size
     char an[RD_GLTF_LABEL_MAX], where[RD_GLTF_LABEL_MAX + 32], sw[RD_GLTF_LABEL_MAX + 32];
     rd_gltf_label("animation", ai, ga->name, an);
     size_t ns = ga->sampler_count, nc = ga->channel_count, kept_n = 0, channel_n = 0;
-    uint32_t *kept = alloc(ns * 3, sizeof *kept);
-    uint8_t *used = alloc(ns, 1); /* by any channel, even skipped */
-    rd_anim_sampler *samplers = alloc(nc, sizeof *samplers);
-    rd_anim_channel *channels = alloc(nc, sizeof *channels);
-    size_t *touched = alloc(nc, sizeof *touched), touched_n = 0;
+    uint32_t *kept = rd_gltf_alloc(ns * 3, sizeof *kept);
+    uint8_t *used = rd_gltf_alloc(ns, 1); /* by any channel, even skipped */
+    rd_anim_sampler *samplers = rd_gltf_alloc(nc, sizeof *samplers);
+    rd_anim_channel *channels = rd_gltf_alloc(nc, sizeof *channels);
+    size_t *touched = rd_gltf_alloc(nc, sizeof *touched), touched_n = 0;
     memset(kept, 0xff, ns * 3 * sizeof *kept);
     rd_gltf_result r = RD_GLTF_OK;
     for (size_t ci = 0; ci < nc && r == RD_GLTF_OK; ci++) {
@@ -240,7 +230,7 @@ static rd_gltf_result animation(rd_gltf_conv *c, size_t ai, size_t *target, size
 rd_gltf_result rd_gltf_conv_animations(rd_gltf_conv *c)
 {
     size_t skipped_weights = 0, skipped_other = 0, n = c->doc->node_count * 3;
-    size_t *target = alloc(n, sizeof *target); /* (node, path) -> channel */
+    size_t *target = rd_gltf_alloc(n, sizeof *target); /* (node, path) -> channel */
     for (size_t i = 0; i < n; i++)
         target[i] = SIZE_MAX;
     rd_gltf_result r = RD_GLTF_OK;

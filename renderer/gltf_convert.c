@@ -21,16 +21,6 @@ bool rd_gltf_extension_supported(const char *name, size_t len)
     return false;
 }
 
-static void *alloc(size_t n, size_t size)
-{
-    void *p = calloc(n ? n : 1, size);
-    if (!p) {
-        fprintf(stderr, "probecast: out of memory (%zu x %zu bytes)\n", n, size);
-        abort();
-    }
-    return p;
-}
-
 static char *name_of(rd_gltf_str s)
 {
     return s.len ? (char *)s.s : NULL;
@@ -123,7 +113,7 @@ static rd_gltf_result materials(convert *cv)
                 }
                 unsupported = grown;
             }
-            unsupported[unsupported_n] = alloc(128, 1);
+            unsupported[unsupported_n] = rd_gltf_alloc(128, 1);
             rd_gltf_clean(x.s, x.len, 80, unsupported[unsupported_n++]);
         }
         rd_scene_add_material(c->s, &mt); /* index 1 + i: materials[0] is the default */
@@ -234,7 +224,7 @@ static rd_gltf_result plan_mesh(convert *cv, size_t mesh, plan *out)
 {
     const rd_gltf_doc_mesh *gm = &cv->c.doc->meshes[mesh];
     bool morph = false;
-    out->prims = alloc(gm->primitive_count, sizeof *out->prims);
+    out->prims = rd_gltf_alloc(gm->primitive_count, sizeof *out->prims);
     for (size_t p = 0; p < gm->primitive_count; p++) {
         const rd_gltf_doc_primitive *gp = &gm->primitives[p];
         char where[64];
@@ -271,7 +261,7 @@ static rd_gltf_result plan_mesh(convert *cv, size_t mesh, plan *out)
 static rd_gltf_result meshes(convert *cv, plan *plans)
 {
     const rd_gltf_document *d = cv->c.doc;
-    uint8_t *used = alloc(d->mesh_count, 1);
+    uint8_t *used = rd_gltf_alloc(d->mesh_count, 1);
     rd_gltf_result r = RD_GLTF_OK;
     for (size_t i = 0; i < cv->order_count && r == RD_GLTF_OK; i++) {
         size_t gi = cv->order[i];
@@ -384,7 +374,7 @@ static rd_gltf_result light(convert *cv, size_t gi)
 
 static rd_gltf_result lights_and_cameras(convert *cv)
 {
-    uint8_t *ortho_warned = alloc(cv->c.doc->camera_count, 1);
+    uint8_t *ortho_warned = rd_gltf_alloc(cv->c.doc->camera_count, 1);
     rd_gltf_result r = RD_GLTF_OK;
     for (size_t i = 0; i < cv->order_count && r == RD_GLTF_OK; i++) {
         const rd_gltf_doc_node *gn = &cv->c.doc->nodes[cv->order[i]];
@@ -404,12 +394,12 @@ rd_gltf_result rd_gltf_convert(const rd_gltf_document *doc, rd_gltf_files *files
     cv.c = (rd_gltf_conv){doc, files, decoded_bytes, s, NULL, NULL, 0, err, errlen};
     cv.max_tris = max_triangles;
     size_t nodes_n = doc->node_count;
-    cv.parent = alloc(nodes_n, sizeof *cv.parent);
-    cv.order = alloc(nodes_n, sizeof *cv.order);
-    cv.c.node_map = alloc(nodes_n, sizeof *cv.c.node_map);
-    cv.c.tex_map = alloc(doc->texture_count, sizeof *cv.c.tex_map);
-    cv.mesh_map = alloc(doc->mesh_count, sizeof *cv.mesh_map);
-    plan *plans = alloc(doc->mesh_count, sizeof *plans);
+    cv.parent = rd_gltf_alloc(nodes_n, sizeof *cv.parent);
+    cv.order = rd_gltf_alloc(nodes_n, sizeof *cv.order);
+    cv.c.node_map = rd_gltf_alloc(nodes_n, sizeof *cv.c.node_map);
+    cv.c.tex_map = rd_gltf_alloc(doc->texture_count, sizeof *cv.c.tex_map);
+    cv.mesh_map = rd_gltf_alloc(doc->mesh_count, sizeof *cv.mesh_map);
+    plan *plans = rd_gltf_alloc(doc->mesh_count, sizeof *plans);
     for (size_t i = 0; i < nodes_n; i++)
         cv.parent[i] = -1, cv.c.node_map[i] = -1;
     for (size_t i = 0; i < doc->texture_count; i++)

@@ -154,6 +154,9 @@ void rd_gltf_clean(const char *s, size_t len, size_t max, char out[128]);
 void rd_gltf_label(const char *kind, size_t index, rd_gltf_str name, char out[RD_GLTF_LABEL_MAX]);
 /* d as a finite float, false when it is not finite or out of float range. */
 bool rd_gltf_to_float(double d, float *out);
+/* calloc of n (at least 1) elements of size bytes; aborts when memory runs out (document-sized
+ * arrays: the importer's other limits keep them small). */
+void *rd_gltf_alloc(size_t n, size_t size);
 
 /* ---- nodes (gltf_nodes.c) ------------------------------------------------------------------ */
 

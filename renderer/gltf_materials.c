@@ -5,7 +5,18 @@
 #include <float.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+
+void *rd_gltf_alloc(size_t n, size_t size)
+{
+    void *p = calloc(n ? n : 1, size);
+    if (!p) {
+        fprintf(stderr, "probecast: out of memory (%zu x %zu bytes)\n", n, size);
+        abort();
+    }
+    return p;
+}
 
 bool rd_gltf_to_float(double d, float *out)
 {

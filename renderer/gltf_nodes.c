@@ -1,21 +1,10 @@
 /* gltf_nodes.c: the glTF node hierarchy and node transforms (see gltf_import.h). */
 #include "gltf_import.h"
 
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "xform.h"
-
-static void *alloc(size_t n, size_t size)
-{
-    void *p = calloc(n ? n : 1, size);
-    if (!p) {
-        fprintf(stderr, "probecast: out of memory (%zu x %zu bytes)\n", n, size);
-        abort();
-    }
-    return p;
-}
 
 /* Every child in range, each with one parent; then no parent chain returns to itself. */
 static rd_gltf_result link_parents(size_t count, const rd_gltf_node_list *children, int *parent,
@@ -40,8 +29,8 @@ static rd_gltf_result link_parents(size_t count, const rd_gltf_node_list *childr
         }
     }
     /* with single parents, a cycle is a parent chain that returns to itself */
-    uint8_t *state = alloc(count, 1);
-    size_t *chain = alloc(count, sizeof *chain);
+    uint8_t *state = rd_gltf_alloc(count, 1);
+    size_t *chain = rd_gltf_alloc(count, sizeof *chain);
     rd_gltf_result r = RD_GLTF_OK;
     for (size_t i = 0; i < count && r == RD_GLTF_OK; i++) {
         size_t len = 0;
@@ -98,15 +87,15 @@ rd_gltf_result rd_gltf_hierarchy(size_t count, const rd_gltf_node_list *children
                     parent[rt]);
         }
     } else {
-        all_roots = alloc(count, sizeof *all_roots);
+        all_roots = rd_gltf_alloc(count, sizeof *all_roots);
         for (size_t i = 0; i < count; i++)
             if (parent[i] < 0) all_roots[root_count++] = (int)i;
         roots = all_roots;
     }
     /* depth first, children in their listed order: each node is pushed once as a child, and
      * once per listing as a root */
-    uint8_t *seen = alloc(count, 1);
-    size_t *stack = alloc(count + root_count, sizeof *stack), top = 0;
+    uint8_t *seen = rd_gltf_alloc(count, 1);
+    size_t *stack = rd_gltf_alloc(count + root_count, sizeof *stack), top = 0;
     for (size_t k = root_count; k-- > 0;)
         stack[top++] = (size_t)roots[k];
     while (top) {
