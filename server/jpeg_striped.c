@@ -96,7 +96,7 @@ static void on_output_message(j_common_ptr cinfo)
     (void)cinfo; /* warnings (corrupt-data notes) concern decoders; never print to stderr */
 }
 
-static void buf_reserve(srv_jpeg_buf *b, size_t need)
+void srv_jpeg_buf_reserve(srv_jpeg_buf *b, size_t need)
 {
     if (b->cap >= need) return;
     size_t cap = b->cap ? b->cap : 4096;
@@ -120,7 +120,7 @@ static boolean dest_empty(j_compress_ptr cinfo)
 {
     srv_jpeg_encoder *e = cinfo->client_data;
     size_t used = e->out->cap;
-    buf_reserve(e->out, 2 * used);
+    srv_jpeg_buf_reserve(e->out, 2 * used);
     e->dest.next_output_byte = e->out->data + used;
     e->dest.free_in_buffer = e->out->cap - used;
     return TRUE;
@@ -170,7 +170,7 @@ srv_jpeg_result srv_jpeg_encode(srv_jpeg_encoder *e, const uint8_t *rgba, unsign
         quality < 1 || quality > 100 || restart_interval > 65535u || stride < (size_t)width * 4)
         return SRV_JPEG_ERR_ARGS;
     /* a first guess that fits most frames (JPEG at q90 is well under a byte a pixel) */
-    buf_reserve(out, (size_t)width * height / 2 + 2048);
+    srv_jpeg_buf_reserve(out, (size_t)width * height / 2 + 2048);
     out->size = 0;
     e->out = out;
 
@@ -203,6 +203,24 @@ srv_jpeg_result srv_jpeg_encode(srv_jpeg_encoder *e, const uint8_t *rgba, unsign
         jpeg_write_scanlines(c, rows, n);
     }
     jpeg_finish_compress(c);
+    e->out = NULL;
+    return SRV_JPEG_OK;
+}
+
+srv_jpeg_result srv_jpeg_encoder_run(srv_jpeg_encoder *e, srv_jpeg_buf *out, size_t reserve,
+                                     void (*feed)(struct jpeg_compress_struct *cinfo, void *user),
+                                     void *user)
+{
+    e->message[0] = '\0';
+    srv_jpeg_buf_reserve(out, reserve);
+    out->size = 0;
+    e->out = out;
+    if (setjmp(e->jmp)) {
+        jpeg_abort_compress(&e->cinfo);
+        e->out = NULL;
+        return SRV_JPEG_ERR_ENCODE;
+    }
+    feed(&e->cinfo, user);
     e->out = NULL;
     return SRV_JPEG_OK;
 }

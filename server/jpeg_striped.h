@@ -57,6 +57,8 @@ typedef struct srv_jpeg_buf {
 } srv_jpeg_buf;
 
 void srv_jpeg_buf_free(srv_jpeg_buf *b); /* frees data, zeroes b */
+/* Grows b's capacity to at least need bytes (doubling; aborts when out of memory). */
+void srv_jpeg_buf_reserve(srv_jpeg_buf *b, size_t need);
 
 /* A libjpeg compressor, reused from encode to encode. Not thread-safe: one per thread. */
 typedef struct srv_jpeg_encoder srv_jpeg_encoder;
@@ -73,6 +75,15 @@ const char *srv_jpeg_encoder_error(const srv_jpeg_encoder *e);
 srv_jpeg_result srv_jpeg_encode(srv_jpeg_encoder *e, const uint8_t *rgba, unsigned width,
                                 unsigned height, size_t stride, unsigned quality,
                                 unsigned restart_interval, srv_jpeg_buf *out);
+/* Runs feed(cinfo, user) with e's libjpeg compressor writing into out (grown as needed from
+ * `reserve` bytes, out->size set): feed sets the image up and drives libjpeg from
+ * jpeg_set_defaults to jpeg_finish_compress, for input other than RGBA rows (the GPU JPEG
+ * benchmark's coefficients, tests/bench/jpeg_gpu.c). A libjpeg error inside feed ends it and
+ * gives SRV_JPEG_ERR_ENCODE (srv_jpeg_encoder_error says which). */
+struct jpeg_compress_struct;
+srv_jpeg_result srv_jpeg_encoder_run(srv_jpeg_encoder *e, srv_jpeg_buf *out, size_t reserve,
+                                     void (*feed)(struct jpeg_compress_struct *cinfo, void *user),
+                                     void *user);
 /* Encodes stripe `index` of the plan; rgba is the whole image (plan->width * 4 bytes a row). */
 srv_jpeg_result srv_jpeg_encode_stripe(srv_jpeg_encoder *e, const srv_jpeg_plan *plan,
                                        const uint8_t *rgba, unsigned quality, unsigned index,

@@ -1,7 +1,6 @@
 /* jpeg_gpu.c: GPU DCT and quantisation, CPU entropy coding with libjpeg's transcoding API. */
 #include "jpeg_gpu.h"
 
-#include <setjmp.h>
 #include <stdio.h> /* jpeglib.h needs FILE and size_t first */
 #include <stdlib.h>
 #include <string.h>
@@ -33,118 +32,32 @@ void jpeg_gpu_quant_tables(unsigned quality, unsigned tables[2][64])
     jpeg_destroy_compress(&c);
 }
 
-/* ---- one entropy coder --------------------------------------------------------------------- */
-
-struct jpeg_gpu_coder {
-    struct jpeg_compress_struct cinfo;
-    struct jpeg_error_mgr jerr;
-    struct jpeg_destination_mgr dest;
-    jmp_buf jmp;
-    srv_jpeg_buf *out;
-    char message[JMSG_LENGTH_MAX];
-};
-
-static void on_error_exit(j_common_ptr cinfo)
-{
-    jpeg_gpu_coder *c = cinfo->client_data;
-    cinfo->err->format_message(cinfo, c->message);
-    longjmp(c->jmp, 1);
-}
-
-static void on_output_message(j_common_ptr cinfo)
-{
-    (void)cinfo;
-}
-
-static void buf_reserve(srv_jpeg_buf *b, size_t need)
-{
-    if (b->cap >= need) return;
-    size_t cap = b->cap ? b->cap : 4096;
-    while (cap < need)
-        cap *= 2;
-    uint8_t *p = realloc(b->data, cap);
-    if (!p) abort(); /* out of memory */
-    b->data = p;
-    b->cap = cap;
-}
-
-static void dest_init(j_compress_ptr cinfo)
-{
-    jpeg_gpu_coder *c = cinfo->client_data;
-    c->dest.next_output_byte = c->out->data;
-    c->dest.free_in_buffer = c->out->cap;
-}
-
-static boolean dest_empty(j_compress_ptr cinfo)
-{
-    jpeg_gpu_coder *c = cinfo->client_data;
-    size_t used = c->out->cap;
-    buf_reserve(c->out, 2 * used);
-    c->dest.next_output_byte = c->out->data + used;
-    c->dest.free_in_buffer = c->out->cap - used;
-    return TRUE;
-}
-
-static void dest_term(j_compress_ptr cinfo)
-{
-    jpeg_gpu_coder *c = cinfo->client_data;
-    c->out->size = c->out->cap - c->dest.free_in_buffer;
-}
-
-static jpeg_gpu_coder *coder_create(void)
-{
-    jpeg_gpu_coder *c = calloc(1, sizeof *c);
-    if (!c) abort();
-    c->cinfo.err = jpeg_std_error(&c->jerr);
-    c->jerr.error_exit = on_error_exit;
-    c->jerr.output_message = on_output_message;
-    c->cinfo.client_data = c;
-    if (setjmp(c->jmp)) abort(); /* jpeg_create_compress fails only when out of memory */
-    jpeg_create_compress(&c->cinfo);
-    c->dest.init_destination = dest_init;
-    c->dest.empty_output_buffer = dest_empty;
-    c->dest.term_destination = dest_term;
-    c->cinfo.dest = &c->dest;
-    return c;
-}
-
-static void coder_destroy(jpeg_gpu_coder *c)
-{
-    if (!c) return;
-    jpeg_destroy_compress(&c->cinfo);
-    free(c);
-}
-
 /* Entropy-codes image rows [y0, y0 + rows) (y0 a multiple of 16) of g's coefficients with the
  * given restart interval. libjpeg's coefficient arrays for the rows are requested and realised
  * as jpegtran's are, then their block-row pointers are pointed into the host copy of the GPU's
  * planes (whose layout is the arrays'): access_virt_barray of an array held in memory returns
  * the array's own row-pointer table, so jpeg_write_coefficients reads the GPU's blocks where
  * they lie. libjpeg writes dummy blocks past the image's last block column and row itself. */
-static bool encode_rows(jpeg_gpu_coder *c, const jpeg_gpu *g, unsigned y0, unsigned rows,
-                        unsigned restart, srv_jpeg_buf *out)
+typedef struct rows_job {
+    const jpeg_gpu *g;
+    unsigned y0, rows, restart;
+} rows_job;
+
+static void feed_rows(struct jpeg_compress_struct *ci, void *user)
 {
-    struct jpeg_compress_struct *ci = &c->cinfo;
-    c->message[0] = '\0';
-    buf_reserve(out, (size_t)g->width * rows / 2 + 2048);
-    out->size = 0;
-    c->out = out;
-    if (setjmp(c->jmp)) {
-        jpeg_abort_compress(ci);
-        c->out = NULL;
-        return false;
-    }
+    const rows_job *job = user;
+    const jpeg_gpu *g = job->g;
     ci->image_width = g->width;
-    ci->image_height = rows;
+    ci->image_height = job->rows;
     ci->input_components = 3;
     ci->in_color_space = JCS_RGB;
     jpeg_set_defaults(ci); /* YCbCr 4:2:0, JFIF, standard Huffman tables, no optimize_coding */
     jpeg_set_quality(ci, (int)g->quality, TRUE);
-    ci->restart_interval = restart;
+    ci->restart_interval = job->restart;
 
     const JBLOCK *all = g->coefs_host.mapped;
     size_t plane = (size_t)g->mcu_cols * g->mcu_rows; /* blocks in a chroma plane */
-    unsigned mcu_y0 = y0 / SRV_JPEG_MCU, mcu_n = (rows + SRV_JPEG_MCU - 1) / SRV_JPEG_MCU;
+    unsigned mcu_y0 = job->y0 / SRV_JPEG_MCU, mcu_n = (job->rows + SRV_JPEG_MCU - 1) / SRV_JPEG_MCU;
     jvirt_barray_ptr arrays[3];
     for (int k = 0; k < 3; k++) {
         unsigned s = k == 0 ? 2 : 1; /* blocks an MCU across and down */
@@ -162,8 +75,14 @@ static bool encode_rows(jpeg_gpu_coder *c, const jpeg_gpu *g, unsigned y0, unsig
     }
     jpeg_write_coefficients(ci, arrays);
     jpeg_finish_compress(ci);
-    c->out = NULL;
-    return true;
+}
+
+static bool encode_rows(srv_jpeg_encoder *c, const jpeg_gpu *g, unsigned y0, unsigned rows,
+                        unsigned restart, srv_jpeg_buf *out)
+{
+    rows_job job = {.g = g, .y0 = y0, .rows = rows, .restart = restart};
+    return srv_jpeg_encoder_run(c, out, (size_t)g->width * rows / 2 + 2048, feed_rows, &job) ==
+           SRV_JPEG_OK;
 }
 
 /* ---- entropy threads ----------------------------------------------------------------------- */
@@ -213,7 +132,7 @@ static void start_threads(jpeg_gpu *g, unsigned n)
 {
     while (g->thread_count < n) {
         unsigned i = g->thread_count;
-        g->coders[i] = coder_create();
+        g->coders[i] = srv_jpeg_encoder_create();
         worker_arg *a = malloc(sizeof *a);
         if (!a) abort();
         *a = (worker_arg){g, i, g->job};
@@ -231,7 +150,7 @@ rd_vk_result jpeg_gpu_create(jpeg_gpu *g, rd_vk *vk, char *err, size_t errlen)
     pthread_mutex_init(&g->lock, NULL);
     pthread_cond_init(&g->wake, NULL);
     pthread_cond_init(&g->done, NULL);
-    g->coders[0] = coder_create();
+    g->coders[0] = srv_jpeg_encoder_create();
     g->thread_count = 1;
     rd_vk_result r = rd_pipeline_create(vk, &g->pipeline, "jpeg_dct", pc_spv_jpeg_dct_comp,
                                         sizeof pc_spv_jpeg_dct_comp, sizeof(pc_push), err, errlen);
@@ -253,7 +172,7 @@ void jpeg_gpu_destroy(jpeg_gpu *g)
     for (unsigned i = 1; i < g->thread_count; i++)
         pthread_join(g->threads[i], NULL);
     for (unsigned i = 0; i < g->thread_count; i++)
-        coder_destroy(g->coders[i]);
+        srv_jpeg_encoder_destroy(g->coders[i]);
     pthread_cond_destroy(&g->done);
     pthread_cond_destroy(&g->wake);
     pthread_mutex_destroy(&g->lock);
@@ -372,7 +291,7 @@ rd_vk_result jpeg_gpu_time_frame_copy(jpeg_gpu *g, jpeg_gpu_times *times, char *
 bool jpeg_gpu_entropy(jpeg_gpu *g, srv_jpeg_buf *out, char *err, size_t errlen)
 {
     bool ok = encode_rows(g->coders[0], g, 0, g->height, 0, out);
-    if (!ok) snprintf(err, errlen, "libjpeg: %s", g->coders[0]->message);
+    if (!ok) snprintf(err, errlen, "libjpeg: %s", srv_jpeg_encoder_error(g->coders[0]));
     return ok;
 }
 
@@ -407,7 +326,7 @@ bool jpeg_gpu_entropy_striped(jpeg_gpu *g, unsigned threads, const srv_jpeg_plan
         return false;
     }
     size_t cap = srv_jpeg_join_bound(plan, stripes);
-    buf_reserve(out, cap);
+    srv_jpeg_buf_reserve(out, cap);
     srv_jpeg_result jr = srv_jpeg_join(plan, stripes, out->data, out->cap, &out->size);
     if (jr != SRV_JPEG_OK) snprintf(err, errlen, "join: %s", srv_jpeg_strerror(jr));
     return jr == SRV_JPEG_OK;

@@ -31,8 +31,6 @@
 
 #define JPEG_GPU_MAX_THREADS 64
 
-typedef struct jpeg_gpu_coder jpeg_gpu_coder; /* one libjpeg compressor (one per thread) */
-
 typedef struct jpeg_gpu {
     rd_vk *vk;
     rd_pipeline pipeline;
@@ -47,7 +45,7 @@ typedef struct jpeg_gpu {
     unsigned mcu_cols, mcu_rows;
 
     /* entropy threads: coders[0] is the caller's; threads 1.. wait for a job */
-    jpeg_gpu_coder *coders[JPEG_GPU_MAX_THREADS];
+    srv_jpeg_encoder *coders[JPEG_GPU_MAX_THREADS]; /* one libjpeg compressor per thread */
     pthread_t threads[JPEG_GPU_MAX_THREADS];
     unsigned thread_count; /* started threads + 1 */
     pthread_mutex_t lock;
