@@ -100,7 +100,8 @@ int main(void)
             if (total > 0 && d / total > worst) worst = d / total;
         }
         /* one shadow ray per choice, and none where no light reaches */
-        CHECK(mean[3] == (total > 0 ? (float)CHOICES : 0.0f));
+        CHECKF(mean[3] == (total > 0 ? (float)CHOICES : 0.0f), "ray %d: %g shadow rays, total %g",
+               i, mean[3], total);
     }
     printf("%d hits of %d rays, %d lit, %d partly shadowed; worst |mean - sum| / W = %.3g "
            "(bound %u / %d)\n",
