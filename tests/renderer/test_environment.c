@@ -2,36 +2,19 @@
  * (flat and run-length scanlines decode to the written values; broken files are refused with a
  * message, and random mutations never crash it), the OpenEXR reader (files written by
  * OpenEXRCore's writer decode to exactly the values written, broken ones are refused with a
- * message), the reduction as they decode (bit for bit a full decode reduced by
- * rd_env_image_limit, for odd sizes, tiles and windows; a 32768-wide file holds tens of MiB, not
- * the GiB of its declared size) and the SH9 irradiance (exact for uniform and gradient skies,
- * within 1-2% for images of the same functions). */
+ * message; test_environment_reduce.c checks their reduction while decoding) and the SH9 irradiance
+ * (exact for uniform and gradient skies, within 1-2% for images of the same functions). */
 #include <math.h>
 #include <stdio.h>
-#include <sys/resource.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "renderer/environment.h"
 #include "renderer/exr_writer.h"
+#include "renderer/hdr_writer.h"
 #include "test_util.h"
 
 #define PI_F 3.14159265358979323846f
-
-/* RGBE of a float colour (Ward's encoding). */
-static void to_rgbe(const float c[3], uint8_t out[4])
-{
-    float m = fmaxf(c[0], fmaxf(c[1], c[2]));
-    if (m < 1e-32f) {
-        memset(out, 0, 4);
-        return;
-    }
-    int e;
-    float f = frexpf(m, &e) * 256.0f / m;
-    for (int i = 0; i < 3; i++)
-        out[i] = (uint8_t)(c[i] * f);
-    out[3] = (uint8_t)(e + 128);
-}
 
 /* The test image's texel colour. */
 static void texel(unsigned x, unsigned y, float c[3])
@@ -41,102 +24,9 @@ static void texel(unsigned x, unsigned y, float c[3])
     c[2] = (x + y) % 3 == 0 ? 0.0f : 4.0f;
 }
 
-typedef struct buf {
-    uint8_t *d;
-    size_t n, cap;
-} buf;
-
-static void put(buf *b, const void *p, size_t n)
+static pc_bytes make_hdr(unsigned w, unsigned h, bool rle)
 {
-    if (b->n + n > b->cap) {
-        b->cap = (b->n + n) * 2;
-        b->d = realloc(b->d, b->cap);
-        if (!b->d) abort();
-    }
-    memcpy(b->d + b->n, p, n);
-    b->n += n;
-}
-
-/* Texels of many magnitudes and full mantissas, whose 2x2 sums round: a reduction that adds
- * in another order than rd_env_image_limit gives other floats. */
-static uint32_t noise(uint32_t x, uint32_t y, uint32_t c)
-{
-    uint32_t h = x * 0x9e3779b1u ^ y * 0x85ebca77u ^ c * 0xc2b2ae3du;
-    h ^= h >> 15;
-    h *= 0x2c1b3c6du;
-    h ^= h >> 12;
-    return h;
-}
-
-static void noisy_texel(unsigned x, unsigned y, float c[3])
-{
-    for (uint32_t i = 0; i < 3; i++) {
-        uint32_t h = noise(x, y, i);
-        c[i] = ldexpf(1.0f + (float)(h & 0xffffff) / 16777216.0f, (int)(h >> 24) % 16 - 8);
-    }
-}
-
-/* A .hdr of w x h texels (texel() unless given); rle: new-style run-length scanlines (runs of
- * equal bytes are written as runs, others as literals). */
-static buf make_hdr_of(unsigned w, unsigned h, bool rle, void (*tex)(unsigned, unsigned, float[3]));
-
-static buf make_hdr(unsigned w, unsigned h, bool rle)
-{
-    return make_hdr_of(w, h, rle, texel);
-}
-
-static buf make_hdr_of(unsigned w, unsigned h, bool rle, void (*tex)(unsigned, unsigned, float[3]))
-{
-    buf b = {0};
-    char head[128];
-    int k = snprintf(head, sizeof head,
-                     "#?RADIANCE\n# a comment\nFORMAT=32-bit_rle_rgbe\nEXPOSURE=1\n\n-Y %u +X %u\n",
-                     h, w);
-    put(&b, head, (size_t)k);
-    uint8_t *line = malloc((size_t)w * 4);
-    for (unsigned y = 0; y < h; y++) {
-        for (unsigned x = 0; x < w; x++) {
-            float c[3];
-            tex(x, y, c);
-            to_rgbe(c, line + x * 4);
-        }
-        if (!rle) {
-            put(&b, line, (size_t)w * 4);
-            continue;
-        }
-        uint8_t mark[4] = {2, 2, (uint8_t)(w >> 8), (uint8_t)(w & 255)};
-        put(&b, mark, 4);
-        for (int c = 0; c < 4; c++) {
-            unsigned x = 0;
-            while (x < w) {
-                unsigned run = 1;
-                while (x + run < w && run < 127 && line[(x + run) * 4 + c] == line[x * 4 + c])
-                    run++;
-                if (run >= 3) {
-                    uint8_t r[2] = {(uint8_t)(128 + run), line[x * 4 + c]};
-                    put(&b, r, 2);
-                    x += run;
-                } else {
-                    unsigned lit = 0;
-                    while (x + lit < w && lit < 128) {
-                        unsigned same = 1;
-                        while (x + lit + same < w && same < 3 &&
-                               line[(x + lit + same) * 4 + c] == line[(x + lit) * 4 + c])
-                            same++;
-                        if (same >= 3) break;
-                        lit++;
-                    }
-                    uint8_t n = (uint8_t)lit;
-                    put(&b, &n, 1);
-                    for (unsigned i = 0; i < lit; i++)
-                        put(&b, &line[(x + i) * 4 + c], 1);
-                    x += lit;
-                }
-            }
-        }
-    }
-    free(line);
-    return b;
+    return pc_hdr_write(w, h, rle, texel);
 }
 
 static bool close_rel(float a, float b, float rel)
@@ -166,21 +56,21 @@ static void test_hdr_reader(void)
     char err[256];
     rd_env_image img;
     for (int rle = 0; rle < 2; rle++) {
-        buf b = make_hdr(37, 5, rle);
+        pc_bytes b = make_hdr(37, 5, rle);
         CHECKF(rd_env_image_parse_hdr(b.d, b.n, NULL, &img, err, sizeof err), "%s", err);
         check_decoded(&img, 37, 5, rle ? "run-length" : "flat");
         rd_env_image_free(&img);
         free(b.d);
     }
     /* small images are always flat (width < 8) */
-    buf b = make_hdr(4, 3, false);
+    pc_bytes b = make_hdr(4, 3, false);
     CHECK(rd_env_image_parse_hdr(b.d, b.n, NULL, &img, err, sizeof err));
     check_decoded(&img, 4, 3, "narrow");
     rd_env_image_free(&img);
     free(b.d);
 
     /* broken files: refused with a message */
-    buf good = make_hdr(16, 4, true);
+    pc_bytes good = make_hdr(16, 4, true);
     struct {
         const char *what;
         const char *text; /* replaces the whole file when set */
@@ -206,7 +96,7 @@ static void test_hdr_reader(void)
         if (ok) rd_env_image_free(&img);
     }
     /* a run that overflows its scanline */
-    buf over = make_hdr(16, 1, true);
+    pc_bytes over = make_hdr(16, 1, true);
     size_t at = over.n - 1;
     while (at > 0 && over.d[at - 1] != 0x02)
         at--;
@@ -569,281 +459,6 @@ static void test_exr_reader(void)
     free(px);
 }
 
-/* ---- reduction while decoding -------------------------------------------------------------- */
-
-/* Reads file twice: at full size then rd_env_image_limit (the reference: the whole image in
- * memory), and reduced while decoding; both must agree bit for bit. */
-static void check_striped(const uint8_t *file, size_t n, uint32_t max_width, uint32_t want_w,
-                          uint32_t want_h, const char *what)
-{
-    char err[256] = "";
-    rd_env_image full, striped;
-    rd_env_read_desc fd = {.max_width = RD_ENV_MAX_DIM}, sd = {.max_width = max_width};
-    bool ok = rd_env_image_parse(file, n, &fd, &full, err, sizeof err);
-    CHECKF(ok, "%s: full decode: %s", what, err);
-    if (!ok) return;
-    ok = rd_env_image_parse(file, n, &sd, &striped, err, sizeof err);
-    CHECKF(ok, "%s: striped decode: %s", what, err);
-    if (!ok) {
-        rd_env_image_free(&full);
-        return;
-    }
-    bool reduces = full.width > max_width || full.height > max_width;
-    rd_env_image_limit(&full, max_width);
-    CHECKF(full.width == want_w && full.height == want_h, "%s: reference %ux%u, want %ux%u", what,
-           full.width, full.height, want_w, want_h);
-    CHECKF(striped.width == full.width && striped.height == full.height,
-           "%s: striped %ux%u, reference %ux%u", what, striped.width, striped.height, full.width,
-           full.height);
-    if (striped.width == full.width && striped.height == full.height) {
-        size_t count = (size_t)full.width * full.height * 3, bad = 0;
-        for (size_t i = 0; i < count; i++)
-            bad += memcmp(&striped.rgb[i], &full.rgb[i], sizeof(float)) != 0;
-        CHECKF(bad == 0, "%s: %zu of %zu floats differ from the reference", what, bad, count);
-    }
-    /* the reduced read never holds the full image (unless there is nothing to reduce) */
-    if (reduces)
-        CHECKF(sd.peak_bytes < fd.peak_bytes, "%s: peak %zu bytes reduced, %zu full", what,
-               sd.peak_bytes, fd.peak_bytes);
-    rd_env_image_free(&full);
-    rd_env_image_free(&striped);
-}
-
-static void test_striped_reduction(void)
-{
-    /* .hdr of noisy texels, flat and run-length, reduced to 16: exact halvings, odd widths and
-     * heights (an odd last row or column of a level is dropped), taller than wide (halved for its
-     * height), too flat to halve twice, nothing to reduce */
-    const struct {
-        unsigned w, h, rw, rh;
-    } hdr[] = {{64, 32, 16, 8}, {75, 37, 9, 4},  {37, 90, 4, 11}, {100, 3, 50, 1},
-               {15, 7, 15, 7},  {33, 17, 16, 8}, {9, 40, 2, 10},  {257, 130, 16, 8}};
-    for (size_t i = 0; i < sizeof hdr / sizeof *hdr; i++)
-        for (int rle = 0; rle < 2; rle++) {
-            char what[64];
-            snprintf(what, sizeof what, "hdr %ux%u %s", hdr[i].w, hdr[i].h, rle ? "rle" : "flat");
-            buf b = make_hdr_of(hdr[i].w, hdr[i].h, rle && hdr[i].w >= 8, noisy_texel);
-            check_striped(b.d, b.n, 16, hdr[i].rw, hdr[i].rh, what);
-            free(b.d);
-        }
-
-    /* .exr: scanline chunks of 1, 16 and 32 lines and tiles (odd sizes, partial tiles), with
-     * display windows that crop the data window and leave black borders; FLOAT keeps the noisy
-     * texels' full mantissas */
-    float *px = malloc(75 * 61 * 3 * sizeof *px);
-    if (!px) abort();
-    for (unsigned y = 0; y < 61; y++)
-        for (unsigned x = 0; x < 75; x++)
-            noisy_texel(x, y, px + (y * 75 + x) * 3);
-    const struct {
-        const char *what;
-        pc_exr_desc d;
-        unsigned rw, rh;
-    } exr[] = {
-        {"exr scanlines, none",
-         {.width = 75, .height = 61, .type = EXR_PIXEL_FLOAT, .compression = EXR_COMPRESSION_NONE},
-         9,
-         7},
-        {"exr scanlines, zip",
-         {.width = 75, .height = 61, .type = EXR_PIXEL_HALF, .compression = EXR_COMPRESSION_ZIP},
-         9,
-         7},
-        {"exr scanlines, piz",
-         {.width = 75, .height = 61, .type = EXR_PIXEL_FLOAT, .compression = EXR_COMPRESSION_PIZ},
-         9,
-         7},
-        {"exr tiles 8",
-         {.width = 75,
-          .height = 61,
-          .type = EXR_PIXEL_HALF,
-          .tile = 8,
-          .compression = EXR_COMPRESSION_ZIP},
-         9,
-         7},
-        {"exr tiles 5",
-         {.width = 75,
-          .height = 61,
-          .type = EXR_PIXEL_FLOAT,
-          .tile = 5,
-          .compression = EXR_COMPRESSION_NONE},
-         9,
-         7},
-        {"exr tall tiles 7",
-         {.width = 31,
-          .height = 61,
-          .type = EXR_PIXEL_HALF,
-          .tile = 7,
-          .compression = EXR_COMPRESSION_ZIPS},
-         7,
-         15},
-        {"exr scanlines in a larger display window",
-         {.width = 75,
-          .height = 61,
-          .x = 5,
-          .y = 3,
-          .display_width = 90,
-          .display_height = 77,
-          .type = EXR_PIXEL_HALF,
-          .compression = EXR_COMPRESSION_ZIP},
-         11,
-         9},
-        {"exr tiles in a larger display window",
-         {.width = 75,
-          .height = 61,
-          .x = 5,
-          .y = 9,
-          .display_width = 90,
-          .display_height = 77,
-          .type = EXR_PIXEL_HALF,
-          .tile = 6,
-          .compression = EXR_COMPRESSION_RLE},
-         11,
-         9},
-        {"exr scanlines cropped by the display window",
-         {.width = 75,
-          .height = 61,
-          .x = -4,
-          .y = -7,
-          .display_width = 66,
-          .display_height = 50,
-          .type = EXR_PIXEL_FLOAT,
-          .compression = EXR_COMPRESSION_ZIP},
-         16,
-         12},
-        {"exr tiles cropped by the display window",
-         {.width = 75,
-          .height = 61,
-          .x = -4,
-          .y = -7,
-          .display_width = 66,
-          .display_height = 50,
-          .type = EXR_PIXEL_HALF,
-          .tile = 8,
-          .compression = EXR_COMPRESSION_PIZ},
-         16,
-         12},
-    };
-    for (size_t i = 0; i < sizeof exr / sizeof *exr; i++) {
-        pc_exr_desc d = exr[i].d;
-        d.pixels = px;
-        size_t n = 0;
-        uint8_t *file = pc_exr_write(&d, &n);
-        CHECKF(file != NULL, "%s: the writer failed", exr[i].what);
-        if (!file) continue;
-        check_striped(file, n, 16, exr[i].rw, exr[i].rh, exr[i].what);
-        free(file);
-    }
-    free(px);
-}
-
-/* The process's peak resident set, bytes (Linux reports KiB). */
-static size_t peak_rss(void)
-{
-    struct rusage ru;
-    getrusage(RUSAGE_SELF, &ru);
-    return (size_t)ru.ru_maxrss * 1024;
-}
-
-/* A run-length .hdr of one colour: a few KiB a scanline whatever its width. */
-static buf make_constant_hdr(unsigned w, unsigned h, const uint8_t rgbe[4])
-{
-    buf b = {0};
-    char head[96];
-    int k =
-        snprintf(head, sizeof head, "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y %u +X %u\n", h, w);
-    put(&b, head, (size_t)k);
-    for (unsigned y = 0; y < h; y++) {
-        uint8_t mark[4] = {2, 2, (uint8_t)(w >> 8), (uint8_t)(w & 255)};
-        put(&b, mark, 4);
-        for (int c = 0; c < 4; c++)
-            for (unsigned x = 0; x < w;) {
-                unsigned run = w - x < 127 ? w - x : 127;
-                uint8_t r[2] = {(uint8_t)(128 + run), rgbe[c]};
-                put(&b, r, 2);
-                x += run;
-            }
-    }
-    return b;
-}
-
-/* The largest files a client may send hold tens of MiB while they are read, not the GiB their
- * texels would take at full size (which the readers once allocated before reducing). Counted
- * twice: by the readers' own tally (their buffers, the image, OpenEXRCore's allocations) and
- * by the growth of the process's peak RSS, which sees every allocation. Runs first, so that
- * the RSS peak is this test's (the smaller .exr first: the old reader's calloc'd image grew the
- * RSS by 112 MiB, only what it touched). */
-static void test_bounded_memory(void)
-{
-    char err[256] = "";
-    rd_env_image img;
-    /* .exr: a 16384 x 16 ZIP band in a 16384 x 2048 display window (the rest is black; 384
-     * MiB at full size), reduced to 4096 x 512 (24 MiB) */
-    float *px = exr_pixels(16384, 16, 3);
-    pc_exr_desc d = {.width = 16384,
-                     .height = 16,
-                     .y = 1000,
-                     .display_width = 16384,
-                     .display_height = 2048,
-                     .pixels = px,
-                     .type = EXR_PIXEL_HALF,
-                     .compression = EXR_COMPRESSION_ZIP};
-    size_t n = 0;
-    uint8_t *file = pc_exr_write(&d, &n);
-    free(px);
-    CHECK(file != NULL);
-    if (!file) return;
-    size_t rss0 = peak_rss();
-    rd_env_read_desc desc = {0};
-    bool ok = rd_env_image_parse(file, n, &desc, &img, err, sizeof err);
-    size_t rss1 = peak_rss();
-    CHECKF(ok, "exr: %s", err);
-    if (ok) {
-        size_t image = (size_t)img.width * img.height * 3 * sizeof(float);
-        CHECKF(img.width == 4096 && img.height == 512, "exr reduced to %ux%u", img.width,
-               img.height);
-        CHECKF(desc.peak_bytes >= image && desc.peak_bytes < image + ((size_t)16 << 20),
-               "exr peak %zu bytes for a %zu-byte image", desc.peak_bytes, image);
-        CHECKF(rss1 - rss0 < ((size_t)64 << 20), "exr: the peak RSS grew by %zu MiB",
-               (rss1 - rss0) >> 20);
-        printf("exr 16384x2048 (%zu KiB file, 384 MiB at full size): peak %zu KiB counted, peak "
-               "RSS +%zu MiB\n",
-               n >> 10, desc.peak_bytes >> 10, (rss1 - rss0) >> 20);
-        rd_env_image_free(&img);
-    }
-    free(file);
-
-    /* .hdr: 32767 x 5461 (run-length scanlines are at most 32767 wide), about the most texels
-     * RD_ENV_MAX_BYTES accepts (2 GiB as floats), one colour: an 11 MiB file; reduced to
-     * 4095 x 682 (33 MiB) */
-    const unsigned hw = 0x7fff, hh = (unsigned)(RD_ENV_MAX_BYTES / 12 / hw);
-    const uint8_t rgbe[4] = {128, 64, 32, 129}; /* 1, 0.5, 0.25 (+ half a step) */
-    buf b = make_constant_hdr(hw, hh, rgbe);
-    rss0 = peak_rss();
-    ok = rd_env_image_parse(b.d, b.n, &desc, &img, err, sizeof err);
-    rss1 = peak_rss();
-    CHECKF(ok, "hdr %ux%u: %s", hw, hh, err);
-    if (ok) {
-        size_t image = (size_t)img.width * img.height * 3 * sizeof(float);
-        CHECKF(img.width == hw / 8 && img.height == hh / 8, "hdr reduced to %ux%u", img.width,
-               img.height);
-        CHECKF(desc.peak_bytes >= image && desc.peak_bytes < image + ((size_t)4 << 20),
-               "hdr peak %zu bytes for a %zu-byte image", desc.peak_bytes, image);
-        CHECKF(rss1 - rss0 < ((size_t)256 << 20), "hdr: the peak RSS grew by %zu MiB",
-               (rss1 - rss0) >> 20);
-        float want[3] = {128.5f / 128, 64.5f / 128, 32.5f / 128};
-        bool same = true;
-        for (size_t i = 0; i < (size_t)img.width * img.height * 3; i++)
-            same = same && img.rgb[i] == want[i % 3];
-        CHECK(same);
-        printf("hdr %ux%u (%zu KiB file, %llu MiB at full size): peak %zu KiB counted, peak "
-               "RSS +%zu MiB\n",
-               hw, hh, b.n >> 10, (unsigned long long)((uint64_t)hw * hh * 12 >> 20),
-               desc.peak_bytes >> 10, (rss1 - rss0) >> 20);
-        rd_env_image_free(&img);
-    }
-    free(b.d);
-}
-
 static void test_irradiance(void)
 {
     const float normals[][3] = {
@@ -913,8 +528,6 @@ static void test_irradiance(void)
 
 int main(void)
 {
-    test_bounded_memory();
-    test_striped_reduction();
     test_hdr_reader();
     test_exr_reader();
     test_irradiance();
