@@ -161,6 +161,41 @@ const char *srv_jpeg_encoder_error(const srv_jpeg_encoder *e)
     return e->message;
 }
 
+typedef struct rgba_job {
+    const uint8_t *rgba;
+    unsigned width, height, quality, restart_interval;
+    size_t stride;
+} rgba_job;
+
+/* RGBA rows in, with tjCompress2's TJSAMP_420 | TJFLAG_FASTDCT settings. */
+static void feed_rgba(struct jpeg_compress_struct *c, void *user)
+{
+    const rgba_job *j = user;
+    c->image_width = j->width;
+    c->image_height = j->height;
+    c->input_components = 4;
+    c->in_color_space = JCS_EXT_RGBA;
+    jpeg_set_defaults(c); /* YCbCr, JFIF, standard Huffman tables, no optimize_coding */
+    jpeg_set_quality(c, (int)j->quality, TRUE);
+    /* what tjCompress2 picks for TJFLAG_FASTDCT (it switches to the accurate DCT from q96 on) */
+    c->dct_method = j->quality >= 96 ? JDCT_ISLOW : JDCT_IFAST;
+    c->comp_info[0].h_samp_factor = 2;
+    c->comp_info[0].v_samp_factor = 2;
+    for (int i = 1; i < 3; i++)
+        c->comp_info[i].h_samp_factor = c->comp_info[i].v_samp_factor = 1;
+    c->restart_interval = j->restart_interval;
+    jpeg_start_compress(c, TRUE);
+    while (c->next_scanline < c->image_height) {
+        JSAMPROW rows[32];
+        unsigned n = c->image_height - c->next_scanline;
+        if (n > 32) n = 32;
+        for (unsigned k = 0; k < n; k++)
+            rows[k] = (JSAMPROW)(j->rgba + (size_t)(c->next_scanline + k) * j->stride);
+        jpeg_write_scanlines(c, rows, n);
+    }
+    jpeg_finish_compress(c);
+}
+
 srv_jpeg_result srv_jpeg_encode(srv_jpeg_encoder *e, const uint8_t *rgba, unsigned width,
                                 unsigned height, size_t stride, unsigned quality,
                                 unsigned restart_interval, srv_jpeg_buf *out)
@@ -169,42 +204,14 @@ srv_jpeg_result srv_jpeg_encode(srv_jpeg_encoder *e, const uint8_t *rgba, unsign
     if (width == 0 || height == 0 || width > SRV_JPEG_MAX_SIDE || height > SRV_JPEG_MAX_SIDE ||
         quality < 1 || quality > 100 || restart_interval > 65535u || stride < (size_t)width * 4)
         return SRV_JPEG_ERR_ARGS;
+    rgba_job j = {.rgba = rgba,
+                  .width = width,
+                  .height = height,
+                  .quality = quality,
+                  .restart_interval = restart_interval,
+                  .stride = stride};
     /* a first guess that fits most frames (JPEG at q90 is well under a byte a pixel) */
-    srv_jpeg_buf_reserve(out, (size_t)width * height / 2 + 2048);
-    out->size = 0;
-    e->out = out;
-
-    struct jpeg_compress_struct *c = &e->cinfo;
-    if (setjmp(e->jmp)) {
-        jpeg_abort_compress(c);
-        e->out = NULL;
-        return SRV_JPEG_ERR_ENCODE;
-    }
-    c->image_width = width;
-    c->image_height = height;
-    c->input_components = 4;
-    c->in_color_space = JCS_EXT_RGBA;
-    jpeg_set_defaults(c); /* YCbCr, JFIF, standard Huffman tables, no optimize_coding */
-    jpeg_set_quality(c, (int)quality, TRUE);
-    /* what tjCompress2 picks for TJFLAG_FASTDCT (it switches to the accurate DCT from q96 on) */
-    c->dct_method = quality >= 96 ? JDCT_ISLOW : JDCT_IFAST;
-    c->comp_info[0].h_samp_factor = 2;
-    c->comp_info[0].v_samp_factor = 2;
-    for (int i = 1; i < 3; i++)
-        c->comp_info[i].h_samp_factor = c->comp_info[i].v_samp_factor = 1;
-    c->restart_interval = restart_interval;
-    jpeg_start_compress(c, TRUE);
-    while (c->next_scanline < c->image_height) {
-        JSAMPROW rows[32];
-        unsigned n = c->image_height - c->next_scanline;
-        if (n > 32) n = 32;
-        for (unsigned k = 0; k < n; k++)
-            rows[k] = (JSAMPROW)(rgba + (size_t)(c->next_scanline + k) * stride);
-        jpeg_write_scanlines(c, rows, n);
-    }
-    jpeg_finish_compress(c);
-    e->out = NULL;
-    return SRV_JPEG_OK;
+    return srv_jpeg_encoder_run(e, out, (size_t)width * height / 2 + 2048, feed_rgba, &j);
 }
 
 srv_jpeg_result srv_jpeg_encoder_run(srv_jpeg_encoder *e, srv_jpeg_buf *out, size_t reserve,
