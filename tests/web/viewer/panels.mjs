@@ -72,7 +72,7 @@ test('lights are added and deleted through the panel', { timeout: 30000 }, async
   assert.equal(await count(), n0);
 });
 
-test('the rendering panel switches GI mode and the probe view', { timeout: 30000 }, async () => {
+test('the rendering panel switches GI mode and the probe view', { timeout: 120000 }, async () => {
   await showPanel(page, 'panel-render');
   const pt = page.locator('#gi-modes button[data-value=pathtrace]');
   assert.equal(await pt.isDisabled(), false, 'the API offers gi_mode pathtrace');
