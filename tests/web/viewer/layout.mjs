@@ -156,6 +156,9 @@ test('dragging asks for half the pixels, then the full size; the quality menu sc
     await p.mouse.move(cx, cy);
     await p.mouse.down();
     for (let i = 1; i <= 20; i++) { await p.mouse.move(cx + i * 8, cy + i); await sleep(30); }
+    // hold the button until a frame of the reduced size arrives (a loaded machine may take
+    // longer than the drag to render one)
+    await p.waitForFunction((g) => window.__sizes.some((s) => s.w < g.width), granted, { timeout: 20000 });
     const tUp = await p.evaluate(() => performance.now());
     await p.mouse.up();
     await p.waitForFunction((k) => {
