@@ -77,6 +77,22 @@ static void move_both(viewer *a, viewer *b, int ms, int *seq)
     drain(b, 600, b->view);
 }
 
+/* Moves both cameras in rounds of 1.5 s until each view got at least n frames (at most four
+ * rounds: a loaded machine renders slower, and frame counts in one fixed window made this test
+ * fail under load); *a_n and *b_n get the frames, the result is the seconds moved. */
+static double move_until(viewer *a, viewer *b, unsigned n, int *seq, unsigned *a_n, unsigned *b_n)
+{
+    *a_n = *b_n = 0;
+    double moved = 0;
+    for (int k = 0; k < 4 && (*a_n < n || *b_n < n); k++) {
+        move_both(a, b, 1500, seq);
+        *a_n += a->frames;
+        *b_n += b->frames;
+        moved += 1.5;
+    }
+    return moved;
+}
+
 int main(void)
 {
     pc_daemon d = {0};
@@ -93,10 +109,13 @@ int main(void)
     int seq = 0;
 
     /* uncapped, both get about the same rate (the global cap or what lavapipe manages) */
-    move_both(&a, &b, 1500, &seq);
-    unsigned a_free = a.frames, b_free = b.frames;
-    printf("uncapped: A %u frames, B %u frames in 1.5 s\n", a_free, b_free);
-    CHECKF(a_free >= 12 && b_free >= 12, "uncapped: A %u, B %u frames", a_free, b_free);
+    unsigned a_free, b_free;
+    double moved = move_until(&a, &b, 12, &seq, &a_free, &b_free);
+    double rate = (a_free < b_free ? a_free : b_free) / moved; /* frames a second a view gets */
+    printf("uncapped: A %u frames, B %u frames in %.1f s (%.1f a second)\n", a_free, b_free, moved,
+           rate);
+    CHECKF(a_free >= 12 && b_free >= 12, "uncapped: A %u, B %u frames in %.1f s", a_free, b_free,
+           moved);
 
     /* A caps its view at JPEG quality 40 and 4 frames per second */
     send(&a, "{\"type\":\"quality\",\"jpeg\":40,\"max_fps\":4}");
@@ -113,8 +132,14 @@ int main(void)
     CHECKF(a.min_gap_us >= 200000, "A's frames %.0f ms apart at least (250 expected)",
            a.min_gap_us / 1000);
     CHECKF(a.q_max <= 40, "A's frames at quality 40 at most (got up to %u)", a.q_max);
-    CHECKF(b.frames >= 2 * a.frames && b.frames >= 20, "B is not capped: %u frames beside A's %u",
-           b.frames, a.frames);
+    /* B keeps the uncapped rate: twice A's where the machine renders 10 or more frames a second
+     * a view, at least A's where it renders fewer (a loaded machine may be near A's cap itself) */
+    if (rate >= 10)
+        CHECKF(b.frames >= 2 * a.frames && b.frames >= 20,
+               "B is not capped: %u frames beside A's %u", b.frames, a.frames);
+    else
+        CHECKF(b.frames >= a.frames, "B is not capped: %u frames beside A's %u (%.1f a second)",
+               b.frames, a.frames, rate);
     CHECKF(b.q_max > 40, "B's frames keep the server's qualities (up to %u)", b.q_max);
 
     /* C follows A and sets caps of its own: A's view keeps A's */
@@ -139,8 +164,12 @@ int main(void)
     drain(&a, 800, a.view);
     CHECKF(a.frames >= 1 && a.q_max > 40, "caps lifted: %u frames, quality up to %u", a.frames,
            a.q_max);
-    move_both(&a, &b, 1500, &seq);
-    CHECKF(a.frames >= 12, "caps lifted: A %u frames in 1.5 s", a.frames);
+    unsigned a_lifted, b_lifted;
+    moved = move_until(&a, &b, 12, &seq, &a_lifted, &b_lifted);
+    /* faster than the lifted 4 fps cap allows (its frames and stills come to under 5 a second),
+     * where the machine renders clearly faster than that */
+    CHECKF(a_lifted >= 12 && (a_lifted / moved > 6.0 || rate < 7.5),
+           "caps lifted: A %u frames in %.1f s (uncapped %.1f a second)", a_lifted, moved, rate);
 
     /* an invalid quality message closes the connection (1008) */
     send(&b, "{\"type\":\"quality\",\"jpeg\":0,\"max_fps\":null}");
