@@ -13,6 +13,7 @@
 #include "renderer/bvh.h"
 #include "tests/bench/bvh_cwide.h"
 #include "tests/bench/bvh_wide.h"
+#include "renderer/bvh_check.h"
 #include "test_util.h"
 
 #include <math.h>
@@ -222,6 +223,16 @@ typedef struct entry {
     double t;
 } entry;
 
+/* The slab test of the walks below on child k of node n: entry distance *t0, or false. */
+static bool child_hit(const rtb_cwide *w, const rtb_cwide_node *n, int k, const float o[3],
+                      const float d[3], float tmax, double *t0, uint32_t *child, uint32_t *count)
+{
+    float lo[3], hi[3];
+    if (!rtb_cwide_child(w, n, k, lo, hi, child, count)) return false;
+    const double dlo[3] = {lo[0], lo[1], lo[2]}, dhi[3] = {hi[0], hi[1], hi[2]};
+    return slab_enter(dlo, dhi, o, d, tmax, t0);
+}
+
 /* Closest hit over the compressed tree as rtb_trace_cwide.comp walks it (one level): a stack of
  * hit children pushed far to near, popped entries culled against the closest hit; a
  * double-precision slab test with a little slack on the decoded boxes (the boxes are under
@@ -248,22 +259,9 @@ static float cwide_closest(const rtb_cwide *w, const float *pos, const uint32_t 
         entry hits[RTB_CWIDE];
         int nh = 0;
         for (int k = 0; k < RTB_CWIDE; k++) {
-            float lo[3], hi[3];
             uint32_t child, count;
-            if (!rtb_cwide_child(w, &w->nodes[e.x], k, lo, hi, &child, &count)) continue;
-            double t0 = 0, t1 = tmax;
-            for (int a = 0; a < 3; a++) {
-                double inv = 1.0 / d[a];
-                double ta = (lo[a] - 1e-4 - o[a]) * inv, tb = (hi[a] + 1e-4 - o[a]) * inv;
-                if (ta > tb) {
-                    double s = ta;
-                    ta = tb;
-                    tb = s;
-                }
-                t0 = ta > t0 ? ta : t0;
-                t1 = tb < t1 ? tb : t1;
-            }
-            if (t0 > t1) continue;
+            double t0;
+            if (!child_hit(w, &w->nodes[e.x], k, o, d, tmax, &t0, &child, &count)) continue;
             int j = nh++; /* insertion, farthest first */
             while (j > 0 && hits[j - 1].t < t0) {
                 hits[j] = hits[j - 1];
@@ -276,28 +274,6 @@ static float cwide_closest(const rtb_cwide *w, const float *pos, const uint32_t 
         if (sp > *max_sp) *max_sp = sp;
     }
     return tmax;
-}
-
-/* The slab test of cwide_closest on child k of node n: entry distance *t0, or false. */
-static bool child_hit(const rtb_cwide *w, const rtb_cwide_node *n, int k, const float o[3],
-                      const float d[3], float tmax, double *t0, uint32_t *child, uint32_t *count)
-{
-    float lo[3], hi[3];
-    if (!rtb_cwide_child(w, n, k, lo, hi, child, count)) return false;
-    double ta0 = 0, ta1 = tmax;
-    for (int a = 0; a < 3; a++) {
-        double inv = 1.0 / d[a];
-        double ta = (lo[a] - 1e-4 - o[a]) * inv, tb = (hi[a] + 1e-4 - o[a]) * inv;
-        if (ta > tb) {
-            double s = ta;
-            ta = tb;
-            tb = s;
-        }
-        ta0 = ta > ta0 ? ta : ta0;
-        ta1 = tb < ta1 ? tb : ta1;
-    }
-    *t0 = ta0;
-    return ta0 <= ta1;
 }
 
 static int msb(uint32_t x)

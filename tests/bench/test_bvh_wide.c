@@ -4,6 +4,7 @@
  * the wide tree equal to rd_bvh_closest_triangle's. Seeded, so a failure reproduces. */
 #include "renderer/bvh.h"
 #include "tests/bench/bvh_wide.h"
+#include "renderer/bvh_check.h"
 #include "test_util.h"
 
 #include <math.h>
@@ -99,19 +100,8 @@ static float wide_closest(const walk *c, uint32_t n, const float o[3], const flo
         if (count == RTB_WIDE_EMPTY) continue;
         double lo[3] = {lane(&w->lo_x, k), lane(&w->lo_y, k), lane(&w->lo_z, k)};
         double hi[3] = {lane(&w->hi_x, k), lane(&w->hi_y, k), lane(&w->hi_z, k)};
-        double t0 = 0, t1 = tmax;
-        for (int a = 0; a < 3; a++) {
-            double inv = 1.0 / d[a];
-            double ta = (lo[a] - 1e-4 - o[a]) * inv, tb = (hi[a] + 1e-4 - o[a]) * inv;
-            if (ta > tb) {
-                double s = ta;
-                ta = tb;
-                tb = s;
-            }
-            t0 = ta > t0 ? ta : t0;
-            t1 = tb < t1 ? tb : t1;
-        }
-        if (t0 > t1) continue;
+        double t0;
+        if (!slab_enter(lo, hi, o, d, tmax, &t0)) continue;
         if (count == 0) {
             tmax = wide_closest(c, first, o, d, tmax);
             continue;

@@ -96,6 +96,28 @@ bool box_contains(const pc_bvh_node *outer, const float lo[3], const float hi[3]
            outer->bmax.x >= hi[0] && outer->bmax.y >= hi[1] && outer->bmax.z >= hi[2];
 }
 
+/* Double-precision slab test of the ray (o, d) over [0, tmax] against the box lo..hi grown by
+ * 1e-4 on every side (tests of wide node layouts check the boxes, not float arithmetic): the
+ * entry distance in *t0 and true where the ray enters. */
+bool slab_enter(const double lo[3], const double hi[3], const float o[3], const float d[3],
+                double tmax, double *t0)
+{
+    double t_in = 0, t_out = tmax;
+    for (int a = 0; a < 3; a++) {
+        double inv = 1.0 / d[a];
+        double ta = (lo[a] - 1e-4 - o[a]) * inv, tb = (hi[a] + 1e-4 - o[a]) * inv;
+        if (ta > tb) {
+            double s = ta;
+            ta = tb;
+            tb = s;
+        }
+        t_in = ta > t_in ? ta : t_in;
+        t_out = tb < t_out ? tb : t_out;
+    }
+    *t0 = t_in;
+    return t_in <= t_out;
+}
+
 /* Checks every structural promise of bvh.h for a BVH built over prim boxes lo/hi (NULL for
  * count 0); valid[i] says whether prim i has a finite box. Returns the number of problems. */
 int check_structure(const char *what, const rd_bvh *bvh, const float *lo, const float *hi,

@@ -19,6 +19,8 @@ int64_t brute_closest(const float *pos, uint32_t n, const float o[3], const floa
 bool tri_finite(const float *v);
 bool box_empty(const pc_bvh_node *n);
 bool box_contains(const pc_bvh_node *outer, const float lo[3], const float hi[3]);
+bool slab_enter(const double lo[3], const double hi[3], const float o[3], const float d[3],
+                double tmax, double *t0);
 int check_structure(const char *what, const rd_bvh *bvh, const float *lo, const float *hi,
                     const bool *valid, uint32_t count, uint32_t max_leaf);
 int check_triangles(const char *what, const rd_bvh *bvh, const float *pos, uint32_t n,
