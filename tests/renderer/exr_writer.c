@@ -174,3 +174,22 @@ uint8_t *pc_exr_write(const pc_exr_desc *d, size_t *size)
     *size = m.n;
     return m.d;
 }
+
+float pc_exr_test_texel(unsigned x, unsigned y, int c)
+{
+    return c == 0   ? 0.25f * (float)x + 0.125f
+           : c == 1 ? 2.0f + (float)y
+                    : 1.0f / (float)(1u << ((x + y) % 8));
+}
+
+float *pc_exr_test_pixels(unsigned w, unsigned h, int channels)
+{
+    float *p = malloc((size_t)w * h * (size_t)channels * sizeof *p);
+    if (!p) abort();
+    for (unsigned y = 0; y < h; y++)
+        for (unsigned x = 0; x < w; x++)
+            for (int c = 0; c < channels; c++)
+                p[((size_t)y * w + x) * (size_t)channels + (size_t)c] =
+                    c < 3 ? pc_exr_test_texel(x, y, c) : 7.0f;
+    return p;
+}

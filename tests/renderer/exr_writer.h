@@ -26,4 +26,10 @@ typedef struct pc_exr_desc {
  * HALF and UINT channels get the values converted (exactly, when they are representable). */
 uint8_t *pc_exr_write(const pc_exr_desc *d, size_t *size);
 
+/* The EXR test texel: quarters, small integers and powers of two, exact in HALF. */
+float pc_exr_test_texel(unsigned x, unsigned y, int c);
+/* w x h interleaved pixels of `channels` channels (the test texel for the first three, 7 after);
+ * malloc'd, aborts when out of memory. */
+float *pc_exr_test_pixels(unsigned w, unsigned h, int channels);
+
 #endif

@@ -127,27 +127,6 @@ static void test_hdr_reader(void)
 
 /* ---- OpenEXR ------------------------------------------------------------------------------- */
 
-/* The EXR test texel: quarters, small integers and powers of two, exact in HALF. */
-static float exr_texel(unsigned x, unsigned y, int c)
-{
-    return c == 0   ? 0.25f * (float)x + 0.125f
-           : c == 1 ? 2.0f + (float)y
-                    : 1.0f / (float)(1u << ((x + y) % 8));
-}
-
-/* w x h interleaved pixels of channels channels (exr_texel for the first three, 7 after). */
-static float *exr_pixels(unsigned w, unsigned h, int channels)
-{
-    float *p = malloc((size_t)w * h * (size_t)channels * sizeof *p);
-    if (!p) abort();
-    for (unsigned y = 0; y < h; y++)
-        for (unsigned x = 0; x < w; x++)
-            for (int c = 0; c < channels; c++)
-                p[((size_t)y * w + x) * (size_t)channels + (size_t)c] =
-                    c < 3 ? exr_texel(x, y, c) : 7.0f;
-    return p;
-}
-
 /* Every texel of img equals the test texel of (x - ox, y - oy) inside the w x h data, else 0;
  * grey: all channels hold channel 0. */
 static unsigned exr_mismatches(const rd_env_image *img, unsigned w, unsigned h, int ox, int oy,
@@ -159,7 +138,8 @@ static unsigned exr_mismatches(const rd_env_image *img, unsigned w, unsigned h, 
             int dx = (int)x - ox, dy = (int)y - oy;
             bool in = dx >= 0 && dy >= 0 && dx < (int)w && dy < (int)h;
             for (int c = 0; c < 3; c++) {
-                float want = in ? exr_texel((unsigned)dx, (unsigned)dy, grey ? 0 : c) : 0.0f;
+                float want =
+                    in ? pc_exr_test_texel((unsigned)dx, (unsigned)dy, grey ? 0 : c) : 0.0f;
                 bad += img->rgb[((size_t)y * img->width + x) * 3 + (size_t)c] != want;
             }
         }
@@ -191,7 +171,7 @@ static void test_exr_reader(void)
     const char *const comp_names[] = {"none", "rle", "zips", "zip", "piz"};
     /* scanlines, HALF and FLOAT, each lossless compression; 37 x 40 spans several chunks of
      * every kind (1, 16 and 32 lines) */
-    float *px = exr_pixels(37, 40, 3);
+    float *px = pc_exr_test_pixels(37, 40, 3);
     for (int t = 0; t < 2; t++)
         for (size_t k = 0; k < sizeof comps / sizeof *comps; k++) {
             char what[64];
@@ -223,7 +203,7 @@ static void test_exr_reader(void)
     }
     /* UINT channels */
     pc_exr_desc u = {.width = 9, .height = 3, .pixels = px, .type = EXR_PIXEL_UINT};
-    float *ints = exr_pixels(9, 3, 3);
+    float *ints = pc_exr_test_pixels(9, 3, 3);
     for (size_t i = 0; i < 9 * 3 * 3; i++)
         ints[i] = (float)(i % 50);
     u.pixels = ints;
@@ -237,7 +217,7 @@ static void test_exr_reader(void)
     free(ints);
     /* a data window inside a larger display window, and hanging over its right edge: the
      * image is the display window, black where no data is */
-    float *px8 = exr_pixels(8, 2, 3), *px6 = exr_pixels(6, 3, 3);
+    float *px8 = pc_exr_test_pixels(8, 2, 3), *px6 = pc_exr_test_pixels(6, 3, 3);
     pc_exr_desc off = {.width = 8,
                        .height = 2,
                        .x = 3,
@@ -269,7 +249,7 @@ static void test_exr_reader(void)
     free(px6);
     /* alpha and other channels are ignored (channels stored in any order) */
     static const char *const abgr[] = {"A", "B", "G", "R", "Z"};
-    float *five = exr_pixels(5, 4, 5);
+    float *five = pc_exr_test_pixels(5, 4, 5);
     for (size_t i = 0; i < 5 * 4; i++) { /* the writer's order: A, B, G, R, Z */
         float r = five[i * 5], g = five[i * 5 + 1], b = five[i * 5 + 2];
         five[i * 5] = 0.5f, five[i * 5 + 1] = b, five[i * 5 + 2] = g, five[i * 5 + 3] = r;
@@ -288,7 +268,7 @@ static void test_exr_reader(void)
     free(five);
     /* a lone Y is grey */
     static const char *const y_only[] = {"Y"};
-    float *lum = exr_pixels(4, 2, 1);
+    float *lum = pc_exr_test_pixels(4, 2, 1);
     pc_exr_desc grey = {.width = 4,
                         .height = 2,
                         .pixels = lum,

@@ -13,27 +13,6 @@
 #include "renderer/hdr_writer.h"
 #include "test_util.h"
 
-/* The EXR test texel: quarters, small integers and powers of two, exact in HALF. */
-static float exr_texel(unsigned x, unsigned y, int c)
-{
-    return c == 0   ? 0.25f * (float)x + 0.125f
-           : c == 1 ? 2.0f + (float)y
-                    : 1.0f / (float)(1u << ((x + y) % 8));
-}
-
-/* w x h interleaved pixels of channels channels (exr_texel for the first three, 7 after). */
-static float *exr_pixels(unsigned w, unsigned h, int channels)
-{
-    float *p = malloc((size_t)w * h * (size_t)channels * sizeof *p);
-    if (!p) abort();
-    for (unsigned y = 0; y < h; y++)
-        for (unsigned x = 0; x < w; x++)
-            for (int c = 0; c < channels; c++)
-                p[((size_t)y * w + x) * (size_t)channels + (size_t)c] =
-                    c < 3 ? exr_texel(x, y, c) : 7.0f;
-    return p;
-}
-
 /* Reads file twice: at full size then rd_env_image_limit (the reference: the whole image in
  * memory), and reduced while decoding; both must agree bit for bit. */
 static void check_striped(const uint8_t *file, size_t n, uint32_t max_width, uint32_t want_w,
@@ -241,7 +220,7 @@ static void test_bounded_memory(void)
     rd_env_image img;
     /* .exr: a 16384 x 16 ZIP band in a 16384 x 2048 display window (the rest is black; 384
      * MiB at full size), reduced to 4096 x 512 (24 MiB) */
-    float *px = exr_pixels(16384, 16, 3);
+    float *px = pc_exr_test_pixels(16384, 16, 3);
     pc_exr_desc d = {.width = 16384,
                      .height = 16,
                      .y = 1000,
