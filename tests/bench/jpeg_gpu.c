@@ -85,60 +85,23 @@ static bool encode_rows(srv_jpeg_encoder *c, const jpeg_gpu *g, unsigned y0, uns
            SRV_JPEG_OK;
 }
 
-/* ---- entropy threads ----------------------------------------------------------------------- */
+/* ---- entropy tasks ------------------------------------------------------------------------- */
 
-typedef struct worker_arg {
+typedef struct stripe_task {
+    rd_task task; /* first: the pool hands this back */
     jpeg_gpu *g;
+    const srv_jpeg_plan *plan;
     unsigned index;
-    uint64_t job; /* the last job before the thread started */
-} worker_arg;
+    srv_jpeg_buf *out;
+    bool ok;
+} stripe_task;
 
-/* Encodes this thread's share of the job's stripes (index, index + n, ...). */
-static bool run_share(jpeg_gpu *g, unsigned index, unsigned n)
+/* Stripe t->index with that stripe's own compressor (no two tasks share one). */
+static void stripe_run(rd_task *task)
 {
-    const srv_jpeg_plan *plan = g->plan;
-    bool ok = true;
-    for (unsigned i = index; i < plan->stripe_count; i += n)
-        ok &= encode_rows(g->coders[index], g, srv_jpeg_stripe_y(plan, i),
-                          srv_jpeg_stripe_rows(plan, i), plan->restart_interval, &g->stripes[i]);
-    return ok;
-}
-
-static void *worker_main(void *arg)
-{
-    worker_arg a = *(worker_arg *)arg;
-    free(arg);
-    jpeg_gpu *g = a.g;
-    pthread_mutex_lock(&g->lock);
-    uint64_t seen = a.job;
-    for (;;) {
-        while (g->job == seen && !g->quit)
-            pthread_cond_wait(&g->wake, &g->lock);
-        if (g->quit) break;
-        seen = g->job;
-        unsigned n = g->job_threads;
-        if (a.index >= n) continue;
-        pthread_mutex_unlock(&g->lock);
-        bool ok = run_share(g, a.index, n);
-        pthread_mutex_lock(&g->lock);
-        if (!ok) g->job_failed = 1;
-        if (--g->job_pending == 0) pthread_cond_signal(&g->done);
-    }
-    pthread_mutex_unlock(&g->lock);
-    return NULL;
-}
-
-static void start_threads(jpeg_gpu *g, unsigned n)
-{
-    while (g->thread_count < n) {
-        unsigned i = g->thread_count;
-        g->coders[i] = srv_jpeg_encoder_create();
-        worker_arg *a = malloc(sizeof *a);
-        if (!a) abort();
-        *a = (worker_arg){g, i, g->job};
-        if (pthread_create(&g->threads[i], NULL, worker_main, a) != 0) abort();
-        g->thread_count++;
-    }
+    stripe_task *t = (stripe_task *)task;
+    t->ok = encode_rows(t->g->coders[t->index], t->g, srv_jpeg_stripe_y(t->plan, t->index),
+                        srv_jpeg_stripe_rows(t->plan, t->index), t->plan->restart_interval, t->out);
 }
 
 /* ---- Vulkan -------------------------------------------------------------------------------- */
@@ -147,11 +110,9 @@ rd_vk_result jpeg_gpu_create(jpeg_gpu *g, rd_vk *vk, char *err, size_t errlen)
 {
     memset(g, 0, sizeof *g);
     g->vk = vk;
-    pthread_mutex_init(&g->lock, NULL);
-    pthread_cond_init(&g->wake, NULL);
-    pthread_cond_init(&g->done, NULL);
     g->coders[0] = srv_jpeg_encoder_create();
-    g->thread_count = 1;
+    g->coder_count = 1;
+    g->pool_threads = 1;
     rd_vk_result r = rd_pipeline_create(vk, &g->pipeline, "jpeg_dct", pc_spv_jpeg_dct_comp,
                                         sizeof pc_spv_jpeg_dct_comp, sizeof(pc_push), err, errlen);
     if (r == RD_VK_OK)
@@ -165,17 +126,9 @@ rd_vk_result jpeg_gpu_create(jpeg_gpu *g, rd_vk *vk, char *err, size_t errlen)
 void jpeg_gpu_destroy(jpeg_gpu *g)
 {
     if (!g->vk) return;
-    pthread_mutex_lock(&g->lock);
-    g->quit = true;
-    pthread_cond_broadcast(&g->wake);
-    pthread_mutex_unlock(&g->lock);
-    for (unsigned i = 1; i < g->thread_count; i++)
-        pthread_join(g->threads[i], NULL);
-    for (unsigned i = 0; i < g->thread_count; i++)
+    rd_task_pool_destroy(g->pool);
+    for (unsigned i = 0; i < g->coder_count; i++)
         srv_jpeg_encoder_destroy(g->coders[i]);
-    pthread_cond_destroy(&g->done);
-    pthread_cond_destroy(&g->wake);
-    pthread_mutex_destroy(&g->lock);
     rd_vk_wait_idle(g->vk);
     rd_timer_destroy(g->vk, &g->timer);
     rd_buffer_destroy(g->vk, &g->frame_host);
@@ -304,23 +257,28 @@ bool jpeg_gpu_entropy_striped(jpeg_gpu *g, unsigned threads, const srv_jpeg_plan
         snprintf(err, errlen, "the plan is for another frame size");
         return false;
     }
-    start_threads(g, threads);
-    pthread_mutex_lock(&g->lock);
-    g->plan = plan;
-    g->stripes = stripes;
-    g->job_failed = 0;
-    g->job_threads = threads;
-    g->job_pending = threads - 1;
-    g->job++;
-    pthread_cond_broadcast(&g->wake);
-    pthread_mutex_unlock(&g->lock);
-
-    bool ok = run_share(g, 0, threads);
-    pthread_mutex_lock(&g->lock);
-    while (g->job_pending > 0)
-        pthread_cond_wait(&g->done, &g->lock);
-    ok &= !g->job_failed;
-    pthread_mutex_unlock(&g->lock);
+    if (plan->stripe_count > JPEG_GPU_MAX_THREADS) {
+        snprintf(err, errlen, "more than %d stripes", JPEG_GPU_MAX_THREADS);
+        return false;
+    }
+    if (g->pool_threads != threads) {
+        rd_task_pool_destroy(g->pool);
+        g->pool = threads > 1 ? rd_task_pool_create(threads) : NULL;
+        if (threads > 1 && !g->pool) abort(); /* out of memory or threads */
+        g->pool_threads = threads;
+    }
+    while (g->coder_count < plan->stripe_count)
+        g->coders[g->coder_count++] = srv_jpeg_encoder_create();
+    stripe_task tasks[JPEG_GPU_MAX_THREADS];
+    rd_task_group group = {0};
+    for (unsigned i = 0; i < plan->stripe_count; i++) {
+        tasks[i] = (stripe_task){.g = g, .plan = plan, .index = i, .out = &stripes[i]};
+        rd_task_submit(g->pool, &group, &tasks[i].task, stripe_run);
+    }
+    rd_task_wait(g->pool, &group);
+    bool ok = true;
+    for (unsigned i = 0; i < plan->stripe_count; i++)
+        ok &= tasks[i].ok;
     if (!ok) {
         snprintf(err, errlen, "libjpeg failed on a stripe");
         return false;

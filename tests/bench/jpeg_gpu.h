@@ -21,10 +21,10 @@
 #ifndef JPEG_GPU_H
 #define JPEG_GPU_H
 
-#include <pthread.h>
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "renderer/task_pool.h"
 #include "renderer/vk_buffer.h"
 #include "renderer/vk_compute.h"
 #include "server/jpeg_striped.h"
@@ -44,19 +44,12 @@ typedef struct jpeg_gpu {
     bool direct; /* the pass writes coefs_host itself over the bus (no coefs, no copy) */
     unsigned mcu_cols, mcu_rows;
 
-    /* entropy threads: coders[0] is the caller's; threads 1.. wait for a job */
-    srv_jpeg_encoder *coders[JPEG_GPU_MAX_THREADS]; /* one libjpeg compressor per thread */
-    pthread_t threads[JPEG_GPU_MAX_THREADS];
-    unsigned thread_count; /* started threads + 1 */
-    pthread_mutex_t lock;
-    pthread_cond_t wake, done;
-    uint64_t job;         /* generation: a new value starts a job */
-    unsigned job_threads; /* threads taking part in the current job */
-    unsigned job_pending; /* workers still encoding the current job */
-    bool quit;
-    const srv_jpeg_plan *plan; /* the current job */
-    srv_jpeg_buf *stripes;
-    int job_failed;
+    /* entropy coding: one libjpeg compressor per stripe (coders[0] also codes whole frames),
+     * stripes run as tasks on a pool of pool_threads threads (renderer/task_pool.h) */
+    srv_jpeg_encoder *coders[JPEG_GPU_MAX_THREADS];
+    unsigned coder_count;
+    rd_task_pool *pool; /* NULL for one thread */
+    unsigned pool_threads;
 } jpeg_gpu;
 
 /* Timings of jpeg_gpu_transform, from GPU timestamps (0 when the device has none) and the
@@ -87,8 +80,8 @@ rd_vk_result jpeg_gpu_time_frame_copy(jpeg_gpu *g, jpeg_gpu_times *times, char *
 /* Entropy-codes the coefficients as one baseline JPEG (no restart markers) on this thread
  * into out. false on a libjpeg error (message in err). */
 bool jpeg_gpu_entropy(jpeg_gpu *g, srv_jpeg_buf *out, char *err, size_t errlen);
-/* The same in stripes: threads (1..JPEG_GPU_MAX_THREADS, started on first use and kept) encode
- * the plan's stripes (srv_jpeg_plan_make for the frame), each with a restart interval of one
+/* The same in stripes: threads (1..JPEG_GPU_MAX_THREADS; the pool is kept while the count stays)
+ * encode the plan's stripes (srv_jpeg_plan_make for the frame), each with a restart interval of one
  * stripe, into stripes[] (plan->stripe_count buffers), and this thread joins them into out:
  * the bytes of one encode with that restart interval. */
 bool jpeg_gpu_entropy_striped(jpeg_gpu *g, unsigned threads, const srv_jpeg_plan *plan,
