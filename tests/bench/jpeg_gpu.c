@@ -1,88 +1,27 @@
-/* jpeg_gpu.c: GPU DCT and quantisation, CPU entropy coding with libjpeg's transcoding API. */
+/* jpeg_gpu.c: the product's GPU DCT pass and coefficient entropy coder, driven for measurement. */
 #include "jpeg_gpu.h"
 
-#include <stdio.h> /* jpeglib.h needs FILE and size_t first */
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include <jerror.h>
-#include <jpeglib.h>
 
-#include "bench/jpeg_dct_comp.spv.h"
 #include "server/clock.h"
-#include "shaders/gpu_types.h"
 
-_Static_assert(sizeof(JCOEF) == 2 && sizeof(JBLOCK) == 128, "libjpeg blocks of 64 int16");
-
-/* ---- quantisation tables ------------------------------------------------------------------- */
-
-void jpeg_gpu_quant_tables(unsigned quality, unsigned tables[2][64])
+srv_jpeg_coefs jpeg_gpu_coefs(const jpeg_gpu *g)
 {
-    struct jpeg_compress_struct c;
-    struct jpeg_error_mgr e;
-    c.err = jpeg_std_error(&e);
-    jpeg_create_compress(&c);
-    c.in_color_space = JCS_RGB;
-    c.input_components = 3;
-    jpeg_set_defaults(&c);
-    jpeg_set_quality(&c, (int)quality, TRUE); /* what tjCompress2 and srv_jpeg_encode do */
-    for (int t = 0; t < 2; t++)
-        for (int k = 0; k < 64; k++)
-            tables[t][k] = c.quant_tbl_ptrs[t]->quantval[k]; /* natural order */
-    jpeg_destroy_compress(&c);
+    return (srv_jpeg_coefs){.blocks = g->coefs_host.mapped,
+                            .width = g->width,
+                            .height = g->height,
+                            .quality = g->quality};
 }
 
-/* Entropy-codes image rows [y0, y0 + rows) (y0 a multiple of 16) of g's coefficients with the
- * given restart interval. libjpeg's coefficient arrays for the rows are requested and realised
- * as jpegtran's are, then their block-row pointers are pointed into the host copy of the GPU's
- * planes (whose layout is the arrays'): access_virt_barray of an array held in memory returns
- * the array's own row-pointer table, so jpeg_write_coefficients reads the GPU's blocks where
- * they lie. libjpeg writes dummy blocks past the image's last block column and row itself. */
-typedef struct rows_job {
-    const jpeg_gpu *g;
-    unsigned y0, rows, restart;
-} rows_job;
-
-static void feed_rows(struct jpeg_compress_struct *ci, void *user)
+static bool encode_stripe(jpeg_gpu *g, unsigned coder, const srv_jpeg_plan *plan, unsigned index,
+                          srv_jpeg_buf *out)
 {
-    const rows_job *job = user;
-    const jpeg_gpu *g = job->g;
-    ci->image_width = g->width;
-    ci->image_height = job->rows;
-    ci->input_components = 3;
-    ci->in_color_space = JCS_RGB;
-    jpeg_set_defaults(ci); /* YCbCr 4:2:0, JFIF, standard Huffman tables, no optimize_coding */
-    jpeg_set_quality(ci, (int)g->quality, TRUE);
-    ci->restart_interval = job->restart;
-
-    const JBLOCK *all = g->coefs_host.mapped;
-    size_t plane = (size_t)g->mcu_cols * g->mcu_rows; /* blocks in a chroma plane */
-    unsigned mcu_y0 = job->y0 / SRV_JPEG_MCU, mcu_n = (job->rows + SRV_JPEG_MCU - 1) / SRV_JPEG_MCU;
-    jvirt_barray_ptr arrays[3];
-    for (int k = 0; k < 3; k++) {
-        unsigned s = k == 0 ? 2 : 1; /* blocks an MCU across and down */
-        arrays[k] = ci->mem->request_virt_barray((j_common_ptr)ci, JPOOL_IMAGE, FALSE,
-                                                 g->mcu_cols * s, mcu_n * s, mcu_n * s);
-    }
-    ci->mem->realize_virt_arrays((j_common_ptr)ci);
-    for (int k = 0; k < 3; k++) {
-        unsigned s = k == 0 ? 2 : 1, across = g->mcu_cols * s;
-        JBLOCKARRAY r =
-            ci->mem->access_virt_barray((j_common_ptr)ci, arrays[k], 0, mcu_n * s, TRUE);
-        const JBLOCK *base = all + (k == 0 ? 0 : (size_t)(3 + k) * plane);
-        for (unsigned i = 0; i < mcu_n * s; i++)
-            r[i] = (JBLOCKROW)(base + (size_t)(mcu_y0 * s + i) * across);
-    }
-    jpeg_write_coefficients(ci, arrays);
-    jpeg_finish_compress(ci);
-}
-
-static bool encode_rows(srv_jpeg_encoder *c, const jpeg_gpu *g, unsigned y0, unsigned rows,
-                        unsigned restart, srv_jpeg_buf *out)
-{
-    rows_job job = {.g = g, .y0 = y0, .rows = rows, .restart = restart};
-    return srv_jpeg_encoder_run(c, out, (size_t)g->width * rows / 2 + 2048, feed_rows, &job) ==
-           SRV_JPEG_OK;
+    srv_jpeg_coefs c = jpeg_gpu_coefs(g);
+    return srv_jpeg_encode_coefs(g->coders[coder], plan, &c, g->quality, index,
+                                 &g->scratch[coder], out) == SRV_JPEG_OK;
 }
 
 /* ---- entropy tasks ------------------------------------------------------------------------- */
@@ -100,8 +39,7 @@ typedef struct stripe_task {
 static void stripe_run(rd_task *task)
 {
     stripe_task *t = (stripe_task *)task;
-    t->ok = encode_rows(t->g->coders[t->index], t->g, srv_jpeg_stripe_y(t->plan, t->index),
-                        srv_jpeg_stripe_rows(t->plan, t->index), t->plan->restart_interval, t->out);
+    t->ok = encode_stripe(t->g, t->index, t->plan, t->index, t->out);
 }
 
 /* ---- Vulkan -------------------------------------------------------------------------------- */
@@ -113,11 +51,9 @@ rd_vk_result jpeg_gpu_create(jpeg_gpu *g, rd_vk *vk, char *err, size_t errlen)
     g->coders[0] = srv_jpeg_encoder_create();
     g->coder_count = 1;
     g->pool_threads = 1;
-    rd_vk_result r = rd_pipeline_create(vk, &g->pipeline, "jpeg_dct", pc_spv_jpeg_dct_comp,
-                                        sizeof pc_spv_jpeg_dct_comp, sizeof(pc_push), err, errlen);
-    if (r == RD_VK_OK)
-        r = rd_buffer_create(vk, &g->quant, 2 * 64 * sizeof(uint32_t), RD_MEMORY_UPLOAD, err,
-                             errlen);
+    static rd_jpeg_tables tables;
+    srv_jpeg_quant_tables_all(&tables);
+    rd_vk_result r = rd_jpeg_dct_create(vk, &g->dct, &tables, err, errlen);
     if (r == RD_VK_OK) r = rd_timer_create(vk, &g->timer, err, errlen);
     if (r != RD_VK_OK) jpeg_gpu_destroy(g);
     return r;
@@ -127,16 +63,17 @@ void jpeg_gpu_destroy(jpeg_gpu *g)
 {
     if (!g->vk) return;
     rd_task_pool_destroy(g->pool);
-    for (unsigned i = 0; i < g->coder_count; i++)
+    for (unsigned i = 0; i < g->coder_count; i++) {
         srv_jpeg_encoder_destroy(g->coders[i]);
+        srv_jpeg_buf_free(&g->scratch[i]);
+    }
     rd_vk_wait_idle(g->vk);
     rd_timer_destroy(g->vk, &g->timer);
     rd_buffer_destroy(g->vk, &g->frame_host);
-    rd_buffer_destroy(g->vk, &g->quant);
     rd_buffer_destroy(g->vk, &g->coefs_host);
     rd_buffer_destroy(g->vk, &g->coefs);
     rd_buffer_destroy(g->vk, &g->frame);
-    rd_pipeline_destroy(g->vk, &g->pipeline);
+    rd_jpeg_dct_destroy(g->vk, &g->dct);
     memset(g, 0, sizeof *g);
 }
 
@@ -160,21 +97,15 @@ rd_vk_result jpeg_gpu_set_frame(jpeg_gpu *g, const uint8_t *rgba, unsigned width
     g->width = width;
     g->height = height;
     g->quality = quality;
-    g->mcu_cols = (width + SRV_JPEG_MCU - 1) / SRV_JPEG_MCU;
-    g->mcu_rows = (height + SRV_JPEG_MCU - 1) / SRV_JPEG_MCU;
+    g->mcu_cols = rd_jpeg_mcu_cols(width);
+    g->mcu_rows = rd_jpeg_mcu_rows(height);
     VkDeviceSize pixels = (VkDeviceSize)width * height * 4;
-    VkDeviceSize coefs = (VkDeviceSize)g->mcu_cols * g->mcu_rows * 6 * sizeof(JBLOCK);
+    VkDeviceSize coefs = rd_jpeg_coef_bytes(width, height);
     rd_vk_result r = ensure(g->vk, &g->frame, pixels, RD_MEMORY_DEVICE, err, errlen);
     if (r == RD_VK_OK) r = ensure(g->vk, &g->coefs, coefs, RD_MEMORY_DEVICE, err, errlen);
     if (r == RD_VK_OK) r = ensure(g->vk, &g->coefs_host, coefs, RD_MEMORY_READBACK, err, errlen);
     if (r == RD_VK_OK) r = rd_buffer_upload(g->vk, &g->frame, 0, rgba, pixels, err, errlen);
-    if (r != RD_VK_OK) return r;
-    unsigned tables[2][64];
-    jpeg_gpu_quant_tables(quality, tables);
-    uint32_t *q = g->quant.mapped;
-    for (int k = 0; k < 128; k++)
-        q[k] = tables[k / 64][k % 64];
-    return RD_VK_OK;
+    return r;
 }
 
 rd_vk_result jpeg_gpu_transform(jpeg_gpu *g, jpeg_gpu_times *times, char *err, size_t errlen)
@@ -184,16 +115,12 @@ rd_vk_result jpeg_gpu_transform(jpeg_gpu *g, jpeg_gpu_times *times, char *err, s
     rd_vk_result r = rd_cmd_begin(g->vk, &cmd, err, errlen);
     if (r != RD_VK_OK) return r;
     rd_timer_begin(&cmd, &g->timer);
-    pc_push push = {.buf0 = g->frame.address,
-                    .buf1 = g->direct ? g->coefs_host.address : g->coefs.address,
-                    .buf2 = g->quant.address,
-                    .params = {g->width, g->height, g->mcu_cols, g->mcu_rows}};
-    rd_cmd_dispatch(&cmd, &g->pipeline, &push, g->mcu_cols, g->mcu_rows, 1);
+    rd_jpeg_dct_record(&g->dct, &cmd, &g->frame, g->width, g->height, g->quality,
+                       g->direct ? &g->coefs_host : &g->coefs);
     rd_timer_mark(&cmd, &g->timer, "dct"); /* its barrier: the pass's writes, host-visible */
     if (!g->direct) {
         rd_cmd_barrier(&cmd);
-        VkBufferCopy region = {.size =
-                                   (VkDeviceSize)g->mcu_cols * g->mcu_rows * 6 * sizeof(JBLOCK)};
+        VkBufferCopy region = {.size = rd_jpeg_coef_bytes(g->width, g->height)};
         vkCmdCopyBuffer(cmd.cb, g->coefs.buffer, g->coefs_host.buffer, 1, &region);
         rd_cmd_barrier(&cmd); /* the copy's writes become visible to the host */
         rd_timer_mark(&cmd, &g->timer, "copy");
@@ -243,7 +170,9 @@ rd_vk_result jpeg_gpu_time_frame_copy(jpeg_gpu *g, jpeg_gpu_times *times, char *
 
 bool jpeg_gpu_entropy(jpeg_gpu *g, srv_jpeg_buf *out, char *err, size_t errlen)
 {
-    bool ok = encode_rows(g->coders[0], g, 0, g->height, 0, out);
+    srv_jpeg_plan whole;
+    bool ok = srv_jpeg_plan_make(&whole, g->width, g->height, 1, 1) == SRV_JPEG_OK &&
+              encode_stripe(g, 0, &whole, 0, out);
     if (!ok) snprintf(err, errlen, "libjpeg: %s", srv_jpeg_encoder_error(g->coders[0]));
     return ok;
 }

@@ -1,18 +1,11 @@
-/* jpeg_gpu.h: a baseline 4:2:0 JPEG whose lossy half runs on the GPU, for probecast_jpegbench
- * (issue 14: GPU JPEG against the striped CPU encoder). A benchmark path, not the daemon's.
+/* jpeg_gpu.h: the daemon's GPU JPEG path driven frame by frame, for probecast_jpegbench and
+ * test_gpu_jpeg (issue 14: GPU JPEG against the striped CPU encoder).
  *
- * tests/bench/shaders/jpeg_dct.comp converts an RGBA8 frame (the renderer's view buffer layout)
- * to YCbCr, averages chroma 2x2, transforms and quantises every 8x8 block with the tables
- * libjpeg itself computes for the quality (jpeg_set_quality); the coefficients are copied to a
- * host-visible buffer (or the pass writes that buffer itself: jpeg_gpu.direct); libjpeg's
- * transcoding API (jpeg_write_coefficients, standard Huffman tables) entropy-codes them on the
- * CPU, whole on one thread or in stripes of MCU rows on several threads, joined with restart
- * markers by server/jpeg_striped.c's srv_jpeg_join.
- *
- * Coefficient layout (GPU buffer = host copy = libjpeg's coefficient arrays): three planes of
- * 8x8 blocks (64 int16, natural order), rows of blocks top to bottom: Y with 2 * mcu_cols x
- * 2 * mcu_rows blocks, then Cb and Cr with mcu_cols x mcu_rows each. The encoder points
- * libjpeg's block rows straight at the host copy (no copy of the coefficients on the CPU).
+ * The product's pass (renderer/jpeg_dct.h: colour conversion, chroma averaging, DCT and
+ * quantisation with libjpeg's tables) runs on an uploaded RGBA8 frame; the coefficients are
+ * copied to a host-visible buffer (or the pass writes that buffer itself: jpeg_gpu.direct); the
+ * product's entropy coder (server/jpeg_coefs.h) codes them on the CPU, whole on one thread or in
+ * stripes of MCU rows on several threads, joined with restart markers by srv_jpeg_join.
  *
  * Use: jpeg_gpu_create, jpeg_gpu_set_frame (uploads; the renderer would have it on the GPU),
  * then per frame jpeg_gpu_transform and jpeg_gpu_entropy or jpeg_gpu_entropy_striped.
@@ -27,17 +20,18 @@
 #include "renderer/task_pool.h"
 #include "renderer/vk_buffer.h"
 #include "renderer/vk_compute.h"
+#include "renderer/jpeg_dct.h"
+#include "server/jpeg_coefs.h"
 #include "server/jpeg_striped.h"
 
 #define JPEG_GPU_MAX_THREADS 64
 
 typedef struct jpeg_gpu {
     rd_vk *vk;
-    rd_pipeline pipeline;
+    rd_jpeg_dct dct;
     rd_buffer frame;      /* device local: width * height RGBA8 pixels */
     rd_buffer coefs;      /* device local: the quantised coefficients */
     rd_buffer coefs_host; /* RD_MEMORY_READBACK: their copy, read by the entropy coders */
-    rd_buffer quant;      /* RD_MEMORY_UPLOAD: luma and chroma tables, 64 uints each */
     rd_buffer frame_host; /* RD_MEMORY_READBACK: the frame, for jpeg_gpu_time_frame_copy */
     rd_timer timer;
     unsigned width, height, quality;
@@ -47,6 +41,7 @@ typedef struct jpeg_gpu {
     /* entropy coding: one libjpeg compressor per stripe (coders[0] also codes whole frames),
      * stripes run as tasks on a pool of pool_threads threads (renderer/task_pool.h) */
     srv_jpeg_encoder *coders[JPEG_GPU_MAX_THREADS];
+    srv_jpeg_buf scratch[JPEG_GPU_MAX_THREADS]; /* unused: the coders encode at g->quality */
     unsigned coder_count;
     rd_task_pool *pool; /* NULL for one thread */
     unsigned pool_threads;
@@ -65,8 +60,8 @@ rd_vk_result jpeg_gpu_create(jpeg_gpu *g, rd_vk *vk, char *err, size_t errlen);
 /* Stops the threads, frees everything; idempotent. */
 void jpeg_gpu_destroy(jpeg_gpu *g);
 
-/* Uploads width x height RGBA8 pixels (tight rows, top row first) and the quantisation tables
- * of `quality` (1-100), growing the buffers as needed. */
+/* Uploads width x height RGBA8 pixels (tight rows, top row first) to be quantised at `quality`
+ * (1-100), growing the buffers as needed. */
 rd_vk_result jpeg_gpu_set_frame(jpeg_gpu *g, const uint8_t *rgba, unsigned width, unsigned height,
                                 unsigned quality, char *err, size_t errlen);
 /* Runs the compute pass and the copy on the frame (or the pass alone, writing host memory, when
@@ -87,8 +82,7 @@ bool jpeg_gpu_entropy(jpeg_gpu *g, srv_jpeg_buf *out, char *err, size_t errlen);
 bool jpeg_gpu_entropy_striped(jpeg_gpu *g, unsigned threads, const srv_jpeg_plan *plan,
                               srv_jpeg_buf *stripes, srv_jpeg_buf *out, char *err, size_t errlen);
 
-/* The quantisation tables libjpeg uses for quality (jpeg_set_quality, baseline), natural order:
- * tables[0] luma, tables[1] chroma. */
-void jpeg_gpu_quant_tables(unsigned quality, unsigned tables[2][64]);
+/* The coefficients of the last jpeg_gpu_transform (in g->coefs_host), for srv_jpeg_encode_coefs. */
+srv_jpeg_coefs jpeg_gpu_coefs(const jpeg_gpu *g);
 
 #endif

@@ -1,7 +1,8 @@
 #version 460
-/* jpeg_dct.comp: the lossy half of a baseline 4:2:0 JPEG encode, one 16x16 MCU a workgroup, for
- * tests/bench/jpeg_gpu.c. Mirrors libjpeg(-turbo) step by step so that the entropy coder on the
- * CPU (jpeg_write_coefficients) writes what one libjpeg encode of the frame would:
+/* jpeg_dct.comp: the lossy half of a baseline 4:2:0 JPEG encode, one 16x16 MCU a workgroup
+ * (renderer/jpeg_dct.h; the entropy coding follows on the CPU: server/jpeg_coefs.h). Mirrors
+ * libjpeg(-turbo) step by step so that the entropy coder on the CPU (jpeg_write_coefficients)
+ * writes what one libjpeg encode of the frame would:
  *  - colour: JFIF RGB -> YCbCr in libjpeg's 16-bit fixed point (jccolor.c rgb_ycc_convert),
  *    bit exact;
  *  - edges: pixels past the right and bottom edges replicate the last column and row
@@ -13,8 +14,9 @@
  *    separable (rows, then columns);
  *  - quantisation: F / Q rounded half away from zero (jcdctmgr.c quantize), Q in natural order.
  * push (pc_push): buf0 = the frame, one uint a pixel (R in the low byte, as packUnorm4x8 writes
- * it: the renderer's RGBA8 view buffer), buf1 = coefficients out, buf2 = two quantisation tables
- * of 64 uints (luma, chroma; natural order), params = (width, height, MCU columns, MCU rows).
+ * it: the renderer's RGBA8 view buffer), buf1 = coefficients out, buf2 = the quality's two
+ * quantisation tables of 64 uints (luma, chroma; natural order), params = (width, height, MCU
+ * columns, MCU rows).
  * Coefficients: three planes of 8x8 blocks, 64 int16 a block in natural order (row = vertical
  * frequency), rows of blocks top to bottom: Y (2 * MCU columns x 2 * MCU rows blocks), then Cb,
  * then Cr (MCU columns x MCU rows each): libjpeg's coefficient arrays (jvirt_barray) end to end.

@@ -1,0 +1,59 @@
+/* jpeg_dct.c: the GPU half of a JPEG encode (see jpeg_dct.h). */
+#include "jpeg_dct.h"
+
+#include <string.h>
+
+#include "shaders/gpu_types.h"
+#include "shaders/jpeg_dct.spv.h"
+
+rd_vk_result rd_jpeg_dct_create(rd_vk *vk, rd_jpeg_dct *d, const rd_jpeg_tables *tables,
+                                char *err, size_t errlen)
+{
+    memset(d, 0, sizeof *d);
+    rd_vk_result r = rd_pipeline_create(vk, &d->pipeline, "jpeg_dct", pc_spv_jpeg_dct,
+                                        sizeof pc_spv_jpeg_dct, sizeof(pc_push), err, errlen);
+    uint32_t words[RD_JPEG_QUALITIES * 128];
+    for (unsigned q = 0; q < RD_JPEG_QUALITIES; q++)
+        for (unsigned k = 0; k < 128; k++)
+            words[q * 128 + k] = (*tables)[q][k / 64][k % 64];
+    if (r == RD_VK_OK)
+        r = rd_buffer_create(vk, &d->tables, sizeof words, RD_MEMORY_DEVICE, err, errlen);
+    if (r == RD_VK_OK) r = rd_buffer_upload(vk, &d->tables, 0, words, sizeof words, err, errlen);
+    if (r != RD_VK_OK) rd_jpeg_dct_destroy(vk, d);
+    return r;
+}
+
+void rd_jpeg_dct_destroy(rd_vk *vk, rd_jpeg_dct *d)
+{
+    rd_buffer_destroy(vk, &d->tables);
+    rd_pipeline_destroy(vk, &d->pipeline);
+}
+
+unsigned rd_jpeg_mcu_cols(unsigned width)
+{
+    return (width + RD_JPEG_MCU - 1) / RD_JPEG_MCU;
+}
+
+unsigned rd_jpeg_mcu_rows(unsigned height)
+{
+    return (height + RD_JPEG_MCU - 1) / RD_JPEG_MCU;
+}
+
+uint64_t rd_jpeg_coef_bytes(unsigned width, unsigned height)
+{
+    return (uint64_t)rd_jpeg_mcu_cols(width) * rd_jpeg_mcu_rows(height) * 6 * RD_JPEG_BLOCK_BYTES;
+}
+
+void rd_jpeg_dct_record(const rd_jpeg_dct *d, rd_cmd *c, const rd_buffer *rgba, unsigned width,
+                        unsigned height, unsigned quality, const rd_buffer *coefs)
+{
+    if (quality < 1) quality = 1;
+    if (quality > RD_JPEG_QUALITIES) quality = RD_JPEG_QUALITIES;
+    unsigned cols = rd_jpeg_mcu_cols(width), rows = rd_jpeg_mcu_rows(height);
+    pc_push push = {.buf0 = rgba->address,
+                    .buf1 = coefs->address,
+                    .buf2 = d->tables.address + (uint64_t)(quality - 1) * 128 * sizeof(uint32_t),
+                    .params = {width, height, cols, rows}};
+    rd_cmd_barrier(c);
+    rd_cmd_dispatch(c, &d->pipeline, &push, cols, rows, 1);
+}
