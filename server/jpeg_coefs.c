@@ -1,7 +1,6 @@
 /* jpeg_coefs.c: entropy coding of GPU coefficients with libjpeg's transcoding API. */
 #include "jpeg_coefs.h"
 
-#include <math.h>
 #include <stdio.h> /* jpeglib.h needs FILE and size_t first */
 #include <string.h>
 
@@ -33,29 +32,11 @@ void srv_jpeg_quant_tables_all(rd_jpeg_tables *tables)
         srv_jpeg_quant_tables(q, (*tables)[q - 1]);
 }
 
-/* Requantises n blocks from table `from` to table `to`: round(c * from / to), half away from
- * zero (in float: |c * from| <= 2^21 is exact, and so is the product with the reciprocal up to
- * its own rounding). */
-static void requantise(JBLOCK *dst, const JBLOCK *src, size_t n, const uint16_t from[64],
-                       const uint16_t to[64])
-{
-    float scale[64];
-    for (int k = 0; k < 64; k++)
-        scale[k] = (float)from[k] / (float)to[k];
-    for (size_t b = 0; b < n; b++)
-        for (int k = 0; k < 64; k++) {
-            float v = (float)src[b][k] * scale[k];
-            dst[b][k] = (JCOEF)(v < 0 ? -floorf(-v + 0.5f) : floorf(v + 0.5f));
-        }
-}
-
-/* What feed_rows encodes: image rows [y0, y0 + rows) (y0 a multiple of 16) of the coefficient
- * planes at `planes` (the frame's own, or requantised copies of just these rows: then
- * plane_row0 is y0's MCU row and the planes start there). */
+/* What feed_rows encodes: image rows [y0, y0 + rows) (y0 a multiple of 16) of the frame's
+ * coefficient planes. */
 typedef struct rows_job {
-    unsigned width, mcu_cols, mcu_rows; /* the frame's */
+    unsigned width, mcu_cols; /* the frame's */
     const JBLOCK *planes[3];
-    unsigned plane_row0; /* MCU row at the start of planes[] */
     unsigned y0, rows, quality, restart;
 } rows_job;
 
@@ -88,50 +69,29 @@ static void feed_rows(struct jpeg_compress_struct *ci, void *user)
         JBLOCKARRAY r =
             ci->mem->access_virt_barray((j_common_ptr)ci, arrays[k], 0, mcu_n * s, TRUE);
         for (unsigned i = 0; i < mcu_n * s; i++)
-            r[i] = (JBLOCKROW)(job->planes[k] +
-                               (size_t)((mcu_y0 - job->plane_row0) * s + i) * across);
+            r[i] = (JBLOCKROW)(job->planes[k] + (size_t)(mcu_y0 * s + i) * across);
     }
     jpeg_write_coefficients(ci, arrays);
     jpeg_finish_compress(ci);
 }
 
 srv_jpeg_result srv_jpeg_encode_coefs(srv_jpeg_encoder *e, const srv_jpeg_plan *plan,
-                                      const srv_jpeg_coefs *coefs, unsigned quality,
-                                      unsigned index, srv_jpeg_buf *scratch, srv_jpeg_buf *out)
+                                      const srv_jpeg_coefs *coefs, unsigned index,
+                                      srv_jpeg_buf *out)
 {
     unsigned rows = srv_jpeg_stripe_rows(plan, index);
-    if (rows == 0 || quality < 1 || quality > 100 || coefs->quality < 1 || coefs->quality > 100 ||
-        plan->width != coefs->width || plan->height != coefs->height)
+    if (rows == 0 || coefs->quality < 1 || coefs->quality > 100 || plan->width != coefs->width ||
+        plan->height != coefs->height)
         return SRV_JPEG_ERR_ARGS;
+    unsigned cols = rd_jpeg_mcu_cols(coefs->width);
+    size_t chroma = (size_t)cols * rd_jpeg_mcu_rows(coefs->height); /* blocks in a plane */
+    const JBLOCK *all = (const JBLOCK *)coefs->blocks;
     rows_job job = {.width = coefs->width,
-                    .mcu_cols = rd_jpeg_mcu_cols(coefs->width),
-                    .mcu_rows = rd_jpeg_mcu_rows(coefs->height),
+                    .mcu_cols = cols,
+                    .planes = {all, all + 4 * chroma, all + 5 * chroma},
                     .y0 = srv_jpeg_stripe_y(plan, index),
                     .rows = rows,
-                    .quality = quality,
+                    .quality = coefs->quality,
                     .restart = plan->restart_interval};
-    const JBLOCK *all = (const JBLOCK *)coefs->blocks;
-    size_t chroma = (size_t)job.mcu_cols * job.mcu_rows; /* blocks in a chroma plane */
-    job.planes[0] = all;
-    job.planes[1] = all + 4 * chroma;
-    job.planes[2] = all + 5 * chroma;
-    if (quality != coefs->quality) {
-        /* this stripe's MCU rows of each plane, requantised into scratch, end to end */
-        unsigned mcu_y0 = job.y0 / SRV_JPEG_MCU, mcu_n = (rows + SRV_JPEG_MCU - 1) / SRV_JPEG_MCU;
-        size_t row_blocks = (size_t)job.mcu_cols * mcu_n; /* in a chroma plane */
-        srv_jpeg_buf_reserve(scratch, 6 * row_blocks * sizeof(JBLOCK));
-        JBLOCK *dst = (JBLOCK *)scratch->data;
-        uint16_t from[2][64], to[2][64];
-        srv_jpeg_quant_tables(coefs->quality, from);
-        srv_jpeg_quant_tables(quality, to);
-        for (int k = 0; k < 3; k++) {
-            size_t n = k == 0 ? 4 * row_blocks : row_blocks;
-            size_t first = (size_t)mcu_y0 * job.mcu_cols * (k == 0 ? 4 : 1);
-            requantise(dst, job.planes[k] + first, n, from[k > 0], to[k > 0]);
-            job.planes[k] = dst;
-            dst += n;
-        }
-        job.plane_row0 = mcu_y0;
-    }
     return srv_jpeg_encoder_run(e, out, (size_t)coefs->width * rows / 2 + 2048, feed_rows, &job);
 }

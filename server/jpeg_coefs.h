@@ -7,10 +7,10 @@
  * jpeg_striped.h: each stripe of a plan is encoded on its own with a restart interval of one
  * stripe and srv_jpeg_join makes them one JPEG.
  *
- * A frame's coefficients are quantised at one quality; another quality (the lag-driven lower
- * variants, encoder_pool.h) requantises them on the CPU first: each coefficient c becomes
- * round(c * Q1 / Q2), half away from zero. That rounds twice, so such a variant can differ from
- * a direct encode at its quality by one step in some coefficients (tested: PSNR within 0.5 dB).
+ * Coefficients are quantised at one quality: every quality a frame is sent at (the lag-driven
+ * lower variants of encoder_pool.h) is its own GPU pass. Requantising one set on the CPU was
+ * tried and dropped: rounding twice cost up to 1.2 dB and made JPEGs up to a third larger than a
+ * direct encode at the lower quality (test_gpu_jpeg, tables one step apart: q80 -> q60).
  */
 #ifndef SRV_JPEG_COEFS_H
 #define SRV_JPEG_COEFS_H
@@ -34,11 +34,10 @@ typedef struct srv_jpeg_coefs {
 } srv_jpeg_coefs;
 
 /* Entropy-codes stripe `index` of the plan (made for coefs' width and height; one stripe: the
- * whole frame without restart markers) at quality (1-100) into out (grown as needed, out->size
- * set). A quality other than coefs->quality requantises the stripe's blocks into scratch
- * (grown as needed; reuse it). */
+ * whole frame without restart markers) at coefs->quality into out (grown as needed, out->size
+ * set). The blocks are read where they lie (no copy). */
 srv_jpeg_result srv_jpeg_encode_coefs(srv_jpeg_encoder *e, const srv_jpeg_plan *plan,
-                                      const srv_jpeg_coefs *coefs, unsigned quality,
-                                      unsigned index, srv_jpeg_buf *scratch, srv_jpeg_buf *out);
+                                      const srv_jpeg_coefs *coefs, unsigned index,
+                                      srv_jpeg_buf *out);
 
 #endif

@@ -20,8 +20,7 @@ static bool encode_stripe(jpeg_gpu *g, unsigned coder, const srv_jpeg_plan *plan
                           srv_jpeg_buf *out)
 {
     srv_jpeg_coefs c = jpeg_gpu_coefs(g);
-    return srv_jpeg_encode_coefs(g->coders[coder], plan, &c, g->quality, index,
-                                 &g->scratch[coder], out) == SRV_JPEG_OK;
+    return srv_jpeg_encode_coefs(g->coders[coder], plan, &c, index, out) == SRV_JPEG_OK;
 }
 
 /* ---- entropy tasks ------------------------------------------------------------------------- */
@@ -63,10 +62,8 @@ void jpeg_gpu_destroy(jpeg_gpu *g)
 {
     if (!g->vk) return;
     rd_task_pool_destroy(g->pool);
-    for (unsigned i = 0; i < g->coder_count; i++) {
+    for (unsigned i = 0; i < g->coder_count; i++)
         srv_jpeg_encoder_destroy(g->coders[i]);
-        srv_jpeg_buf_free(&g->scratch[i]);
-    }
     rd_vk_wait_idle(g->vk);
     rd_timer_destroy(g->vk, &g->timer);
     rd_buffer_destroy(g->vk, &g->frame_host);

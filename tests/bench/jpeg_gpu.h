@@ -41,7 +41,6 @@ typedef struct jpeg_gpu {
     /* entropy coding: one libjpeg compressor per stripe (coders[0] also codes whole frames),
      * stripes run as tasks on a pool of pool_threads threads (renderer/task_pool.h) */
     srv_jpeg_encoder *coders[JPEG_GPU_MAX_THREADS];
-    srv_jpeg_buf scratch[JPEG_GPU_MAX_THREADS]; /* unused: the coders encode at g->quality */
     unsigned coder_count;
     rd_task_pool *pool; /* NULL for one thread */
     unsigned pool_threads;

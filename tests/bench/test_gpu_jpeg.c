@@ -1,9 +1,9 @@
-/* test_gpu_jpeg.c: the GPU JPEG path of probecast_jpegbench (tests/bench/jpeg_gpu.c) against
- * libjpeg-turbo at the same quality and 4:2:0 subsampling, at tiny sizes (odd ones too): its
- * coefficients are libjpeg's (accurate integer DCT) but for DCT rounding (at most 1 apart, in
- * at most 2% of them), its JPEG decodes,
- * has the size of tjCompress2's within 5% and decodes to nearly the same pixels; the striped
- * entropy coding decodes to exactly the pixels of the whole one. */
+/* test_gpu_jpeg.c: the daemon's GPU JPEG path (renderer/jpeg_dct.c, server/jpeg_coefs.c, driven
+ * by tests/bench/jpeg_gpu.c) against libjpeg-turbo at the same quality and 4:2:0 subsampling, at
+ * tiny sizes (odd ones too): its coefficients are libjpeg's (accurate integer DCT) but for DCT
+ * rounding (at most 1 apart, in at most 2% of them), its JPEG decodes, has the size of
+ * tjCompress2's within 5% and decodes to nearly the same pixels; the striped entropy coding
+ * decodes to exactly the pixels of the whole one. */
 #include <math.h>
 #include <stdio.h> /* jpeglib.h needs FILE and size_t first */
 #include <stdlib.h>
@@ -165,6 +165,16 @@ static void check_size(jpeg_gpu *g, unsigned w, unsigned h, unsigned q)
     dec_striped = decode(joined.data, joined.size, w, h);
     CHECKF(dec_striped && memcmp(dec_striped, dec, (size_t)w * h * 4) == 0,
            "%ux%u q%u: %u stripes decode to other pixels", w, h, q, plan.stripe_count);
+
+    /* bad arguments are refused */
+    srv_jpeg_coefs c = jpeg_gpu_coefs(g);
+    srv_jpeg_plan other;
+    CHECK(srv_jpeg_plan_make(&other, w + 16, h, 1, 1) == SRV_JPEG_OK);
+    CHECK(srv_jpeg_encode_coefs(g->coders[0], &other, &c, 0, &whole) == SRV_JPEG_ERR_ARGS);
+    CHECK(srv_jpeg_encode_coefs(g->coders[0], &plan, &c, plan.stripe_count, &whole) ==
+          SRV_JPEG_ERR_ARGS);
+    c.quality = 0;
+    CHECK(srv_jpeg_encode_coefs(g->coders[0], &plan, &c, 0, &whole) == SRV_JPEG_ERR_ARGS);
 done:
     free(src);
     free(ref);
