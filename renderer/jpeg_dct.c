@@ -1,13 +1,14 @@
 /* jpeg_dct.c: the GPU half of a JPEG encode (see jpeg_dct.h). */
 #include "jpeg_dct.h"
 
+#include <stdio.h>
 #include <string.h>
 
 #include "shaders/gpu_types.h"
 #include "shaders/jpeg_dct.spv.h"
 
-rd_vk_result rd_jpeg_dct_create(rd_vk *vk, rd_jpeg_dct *d, const rd_jpeg_tables *tables,
-                                char *err, size_t errlen)
+rd_vk_result rd_jpeg_dct_create(rd_vk *vk, rd_jpeg_dct *d, const rd_jpeg_tables *tables, char *err,
+                                size_t errlen)
 {
     memset(d, 0, sizeof *d);
     rd_vk_result r = rd_pipeline_create(vk, &d->pipeline, "jpeg_dct", pc_spv_jpeg_dct,
@@ -56,4 +57,29 @@ void rd_jpeg_dct_record(const rd_jpeg_dct *d, rd_cmd *c, const rd_buffer *rgba, 
                     .params = {width, height, cols, rows}};
     rd_cmd_barrier(c);
     rd_cmd_dispatch(c, &d->pipeline, &push, cols, rows, 1);
+}
+
+rd_vk_result rd_jpeg_dct_record_view(const rd_jpeg_dct *d, rd_view *v, rd_cmd *c,
+                                     const unsigned *qualities, unsigned n, bool timed, char *err,
+                                     size_t errlen)
+{
+    if (n < 1 || n > 8 || !v->width || !v->height) {
+        snprintf(err, errlen, "JPEG pass: %u qualities over a %ux%u image", n, v->width, v->height);
+        return RD_VK_ERR_UNSUPPORTED;
+    }
+    uint64_t set = rd_jpeg_coef_bytes(v->width, v->height);
+    if (!v->jpeg_coefs.buffer || v->jpeg_coefs.size < n * set) {
+        if (v->jpeg_coefs.buffer) vkDeviceWaitIdle(v->vk->device); /* a readback may copy it */
+        rd_buffer_destroy(v->vk, &v->jpeg_coefs);
+        rd_vk_result r =
+            rd_buffer_create(v->vk, &v->jpeg_coefs, n * set, RD_MEMORY_DEVICE, err, errlen);
+        if (r != RD_VK_OK) return r;
+    }
+    for (unsigned i = 0; i < n; i++) {
+        rd_buffer part = v->jpeg_coefs; /* the set's range: the pass addresses it */
+        part.address += i * set;
+        rd_jpeg_dct_record(d, c, &v->rgba8, v->width, v->height, qualities[i], &part);
+    }
+    if (timed) rd_timer_mark(c, &v->timer, "jpeg");
+    return RD_VK_OK;
 }

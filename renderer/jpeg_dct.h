@@ -18,8 +18,10 @@
 #ifndef RD_JPEG_DCT_H
 #define RD_JPEG_DCT_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
+#include "view.h"
 #include "vk_buffer.h"
 #include "vk_compute.h"
 
@@ -35,8 +37,8 @@ typedef struct rd_jpeg_dct {
     rd_buffer tables; /* RD_JPEG_QUALITIES x 128 uints */
 } rd_jpeg_dct;
 
-rd_vk_result rd_jpeg_dct_create(rd_vk *vk, rd_jpeg_dct *d, const rd_jpeg_tables *tables,
-                                char *err, size_t errlen);
+rd_vk_result rd_jpeg_dct_create(rd_vk *vk, rd_jpeg_dct *d, const rd_jpeg_tables *tables, char *err,
+                                size_t errlen);
 void rd_jpeg_dct_destroy(rd_vk *vk, rd_jpeg_dct *d); /* idempotent */
 
 /* MCUs across and down, and bytes of the coefficients, of a width x height image. */
@@ -49,5 +51,14 @@ uint64_t rd_jpeg_coef_bytes(unsigned width, unsigned height);
  * the pass after the commands that wrote rgba; the caller orders what reads coefs after it. */
 void rd_jpeg_dct_record(const rd_jpeg_dct *d, rd_cmd *c, const rd_buffer *rgba, unsigned width,
                         unsigned height, unsigned quality, const rd_buffer *coefs);
+
+/* Records the pass once per quality (n of them, at most 8) over view v's RGBA8 image (its last
+ * frame, or the frame recorded before into c) into v->jpeg_coefs, set i at offset
+ * i * rd_jpeg_coef_bytes; the buffer is created or grown first (waiting for the device when an
+ * older one may still be read). timed: c holds the view's frame (rd_view_record), whose timer
+ * then gets a "jpeg" section. */
+rd_vk_result rd_jpeg_dct_record_view(const rd_jpeg_dct *d, rd_view *v, rd_cmd *c,
+                                     const unsigned *qualities, unsigned n, bool timed, char *err,
+                                     size_t errlen);
 
 #endif

@@ -88,7 +88,7 @@ void rd_readback_abort(rd_readback *rb)
     rb->open = NULL;
 }
 
-rd_vk_result rd_readback_finish(rd_readback *rb, const rd_buffer *src, unsigned width,
+rd_vk_result rd_readback_finish(rd_readback *rb, const rd_buffer *src, size_t bytes, unsigned width,
                                 unsigned height, const void *info, size_t info_size, char *err,
                                 size_t errlen)
 {
@@ -97,7 +97,6 @@ rd_vk_result rd_readback_finish(rd_readback *rb, const rd_buffer *src, unsigned 
         rd_vk_errorf(err, errlen, "rd_readback_finish without rd_readback_begin.");
         return RD_VK_ERR_VULKAN;
     }
-    VkDeviceSize bytes = (VkDeviceSize)width * height * 4;
     if (info_size > RD_READBACK_INFO_MAX || (info_size && !info)) {
         rd_readback_abort(rb);
         rd_vk_errorf(err, errlen, "Readback record of %zu bytes (at most %d).", info_size,
@@ -161,20 +160,22 @@ rd_vk_result rd_readback_finish(rd_readback *rb, const rd_buffer *src, unsigned 
     s->seq = rb->next_seq++;
     s->width = width;
     s->height = height;
+    s->bytes = bytes;
     s->info_size = info_size;
     memset(s->info, 0, sizeof s->info);
     if (info_size) memcpy(s->info, info, info_size);
     return RD_VK_OK;
 }
 
-rd_vk_result rd_readback_submit(rd_readback *rb, const rd_buffer *src, unsigned width,
+rd_vk_result rd_readback_submit(rd_readback *rb, const rd_buffer *src, size_t bytes, unsigned width,
                                 unsigned height, const void *info, size_t info_size, char *err,
                                 size_t errlen)
 {
     rd_cmd *cmd;
     rd_vk_result r = rd_readback_begin(rb, &cmd, err, errlen);
-    return r == RD_VK_OK ? rd_readback_finish(rb, src, width, height, info, info_size, err, errlen)
-                         : r;
+    return r == RD_VK_OK
+               ? rd_readback_finish(rb, src, bytes, width, height, info, info_size, err, errlen)
+               : r;
 }
 
 static rd_readback_slot *oldest(rd_readback *rb)
@@ -213,7 +214,8 @@ rd_vk_result rd_readback_poll(rd_readback *rb, uint64_t timeout_ns, rd_readback_
                 return rd_vk_fail(rb->vk, vr, "vkInvalidateMappedMemoryRanges", err, errlen);
         }
         unsigned index = (unsigned)(s - rb->slots);
-        if (fn(user, s->info, s->width, s->height, (const uint8_t *)s->buffer.mapped, index))
+        if (fn(user, s->info, s->width, s->height, (const uint8_t *)s->buffer.mapped, s->bytes,
+               index))
             atomic_store_explicit(&s->leased, true, memory_order_relaxed);
     }
     return RD_VK_OK;

@@ -105,6 +105,7 @@ static void free_images(rd_view *v)
     rd_buffer_destroy(v->vk, &v->reflect_history);
     v->reflect_keyed = false;
     rd_buffer_destroy(v->vk, &v->rgba8);
+    rd_buffer_destroy(v->vk, &v->jpeg_coefs);
     rd_buffer_destroy(v->vk, &v->radiance);
     rd_buffer_destroy(v->vk, &v->gbuffer);
     v->width = v->height = 0;

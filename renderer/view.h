@@ -59,6 +59,9 @@ typedef struct rd_view {
      * valid for one epoch, which restarts when what the view sees may have changed (camera,
      * size, seed, scene, environment, world changes: reflect_key). */
     rd_buffer reflect_ctrl, reflect_history;
+    /* the frame's JPEG coefficients, one set per quality, when the GPU encodes
+     * (renderer/jpeg_dct.h: rd_jpeg_dct_record_view creates and grows it) */
+    rd_buffer jpeg_coefs;
     uint32_t reflect_epoch;
     bool reflect_keyed;
     rd_view_history_key reflect_key; /* of the last frame that traced reflections */

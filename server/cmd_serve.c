@@ -65,6 +65,10 @@ static void serve_usage(FILE *f)
         "  --max-total-pixels N   pixels over all views (default 16777216)\n"
         "  --web-dir DIR          viewer files served at / (default: web/ of the source tree)\n"
         "  --encoders N           JPEG encoder threads (default: the CPU cores, 2 to 16)\n"
+        "  --jpeg auto|gpu|cpu    where JPEGs are transformed and quantised: gpu (a compute\n"
+        "                         pass; the encoders only entropy-code), cpu (libjpeg-turbo\n"
+        "                         encodes the pixels); auto: gpu unless the device is the CPU\n"
+        "                         (lavapipe) (default: $PROBECAST_JPEG, else auto)\n"
         "  --device INDEX|NAME    Vulkan device (default: $PROBECAST_DEVICE, else the best)\n"
         "  --log-level L          error, warn, info (default) or debug ($PROBECAST_LOG)\n"
         "  --help                 this text\n"
@@ -84,6 +88,8 @@ typedef struct serve_args {
     srv_settings settings;
     unsigned given; /* SRV_SET_* chosen on the command line */
     int animate;    /* -1 default, 0 off, 1 on */
+    srv_jpeg_path jpeg;
+    bool jpeg_given;
 } serve_args;
 
 static bool parse_size(const char *opt, const char *v, size_t *out)
@@ -220,6 +226,13 @@ static int parse(int argc, char **argv, serve_args *a)
             NEED_VALUE if (!cli_parse_uint(o, v, 1, 10000, &a->http_connections)) return 2;
         } else if (IS("--encoders")) {
             NEED_VALUE if (!cli_parse_uint(o, v, 1, 64, &a->encoders)) return 2;
+        } else if (IS("--jpeg")) {
+            NEED_VALUE
+            a->jpeg_given = true;
+            if (!srv_jpeg_path_parse(v, &a->jpeg)) {
+                fprintf(stderr, "probecast serve: --jpeg expects auto, gpu or cpu\n");
+                return 2;
+            }
         } else if (IS("--log-level")) {
             NEED_VALUE
             srv_log_level lv;
@@ -301,6 +314,11 @@ int cli_serve(int argc, char **argv)
     const char *env_log = getenv("PROBECAST_LOG");
     if (env_log && srv_log_parse_level(env_log, &lv)) srv_log_set_level(lv);
     if (!a.token) a.token = getenv("PROBECAST_TOKEN");
+    const char *env_jpeg = getenv("PROBECAST_JPEG");
+    if (!a.jpeg_given && env_jpeg && *env_jpeg && !srv_jpeg_path_parse(env_jpeg, &a.jpeg)) {
+        fprintf(stderr, "probecast serve: PROBECAST_JPEG expects auto, gpu or cpu\n");
+        return 2;
+    }
     if (a.token && !*a.token) a.token = NULL;
     if (a.token) {
         for (const char *p = a.token; *p; p++) {
@@ -414,6 +432,7 @@ int cli_serve(int argc, char **argv)
         .device = a.device,
         .settings = a.settings,
         .encoders = enc,
+        .jpeg_path = a.jpeg,
         .snapshot = snap,
         .persist = persist,
         .max_views = a.max_views,

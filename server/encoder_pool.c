@@ -18,6 +18,7 @@
 #include <time.h>
 #include <turbojpeg.h>
 
+#include "jpeg_coefs.h"
 #include "jpeg_striped.h"
 #include "log.h"
 
@@ -88,24 +89,29 @@ void srv_image_pool_drain(void)
     pthread_mutex_unlock(&pool_mu);
 }
 
-srv_image *srv_image_new(unsigned width, unsigned height)
+srv_image *srv_image_alloc(unsigned width, unsigned height, size_t bytes)
 {
     srv_image *img = xcalloc(1, sizeof *img);
     atomic_init(&img->refs, 1);
     img->width = width;
     img->height = height;
-    img->rgba = pixels_take((size_t)width * height * 4, &img->cap);
+    img->data = pixels_take(bytes, &img->cap);
     return img;
 }
 
-srv_image *srv_image_wrap(unsigned width, unsigned height, uint8_t *rgba,
+srv_image *srv_image_new(unsigned width, unsigned height)
+{
+    return srv_image_alloc(width, height, (size_t)width * height * 4);
+}
+
+srv_image *srv_image_wrap(unsigned width, unsigned height, uint8_t *data,
                           void (*release)(void *ctx, unsigned token), void *ctx, unsigned token)
 {
     srv_image *img = xcalloc(1, sizeof *img);
     atomic_init(&img->refs, 1);
     img->width = width;
     img->height = height;
-    img->rgba = rgba;
+    img->data = data;
     img->release = release;
     img->release_ctx = ctx;
     img->release_token = token;
@@ -124,7 +130,7 @@ void srv_image_unref(srv_image *img)
         if (img->release)
             img->release(img->release_ctx, img->release_token);
         else
-            pixels_give(img->rgba, img->cap);
+            pixels_give(img->data, img->cap);
         free(img);
     }
 }
@@ -163,7 +169,7 @@ void srv_frame_unref(srv_frame *f)
 {
     if (!f || atomic_fetch_sub(&f->refs, 1) != 1) return;
     for (unsigned i = 0; i < f->variant_count; i++)
-        if (f->variants[i].data) tjFree(f->variants[i].data);
+        free(f->variants[i].data);
     stripe_sets_free(f);
     srv_image_unref(f->image);
     free(f);
@@ -264,38 +270,77 @@ static void job_drop(srv_encoder_pool *p, job *j)
 }
 
 /* Counts one encoded JPEG of ms milliseconds. Lock held. */
-static void count_jpeg(srv_encoder_pool *p, size_t size, double ms, bool striped)
+static void count_jpeg(srv_encoder_pool *p, size_t size, double ms, bool striped, bool from_gpu)
 {
     p->stats.jpegs_encoded++;
     p->stats.jpegs_striped += striped;
+    p->stats.jpegs_from_gpu += from_gpu;
     p->stats.bytes_encoded += size;
     p->stats.encode_ms_last = ms;
     p->stats.encode_ms_avg =
         p->stats.jpegs_encoded == 1 ? ms : 0.9 * p->stats.encode_ms_avg + 0.1 * ms;
 }
 
-/* A whole variant with TurboJPEG. Lock not held; returns with it held. */
-static void run_whole(srv_encoder_pool *p, tjhandle tj, srv_frame *f, unsigned variant)
+/* Coefficient set `variant` of f's image. */
+static srv_jpeg_coefs coefs_of(const srv_frame *f, unsigned variant)
+{
+    const srv_image *img = f->image;
+    return (srv_jpeg_coefs){
+        .blocks =
+            (const int16_t *)(img->data + variant * rd_jpeg_coef_bytes(img->width, img->height)),
+        .width = img->width,
+        .height = img->height,
+        .quality = img->coef_quality[variant]};
+}
+
+/* A whole variant: pixels with TurboJPEG, coefficients with libjpeg's entropy coder. Lock not
+ * held; returns with it held. */
+static void run_whole(srv_encoder_pool *p, tjhandle tj, srv_jpeg_encoder *enc, srv_frame *f,
+                      unsigned variant)
 {
     srv_jpeg *v = &f->variants[variant];
     const srv_image *img = f->image;
     unsigned char *out = NULL;
-    unsigned long size = 0;
+    size_t size = 0;
     double t0 = srv_mono_ms();
-    int rc = tj ? tjCompress2(tj, img->rgba, (int)img->width, 0, (int)img->height, TJPF_RGBA, &out,
-                              &size, TJSAMP_420, (int)v->quality, TJFLAG_FASTDCT)
-                : -1;
-    double ms = srv_mono_ms() - t0;
-    if (rc != 0) {
-        srv_error("encoder", "JPEG encoding failed: %s", tj ? tjGetErrorStr2(tj) : "no encoder");
-        if (out) tjFree(out);
-        out = NULL;
+    if (img->coef_sets) {
+        srv_jpeg_coefs c = coefs_of(f, variant);
+        srv_jpeg_plan whole;
+        srv_jpeg_buf buf = {0};
+        srv_jpeg_result r = srv_jpeg_plan_make(&whole, img->width, img->height, 1, 1);
+        if (r == SRV_JPEG_OK) r = srv_jpeg_encode_coefs(enc, &whole, &c, 0, &buf);
+        if (r == SRV_JPEG_OK) {
+            out = buf.data; /* the buffer moves to the variant */
+            size = buf.size;
+        } else {
+            srv_error("encoder", "JPEG entropy coding failed: %s%s%s", srv_jpeg_strerror(r),
+                      r == SRV_JPEG_ERR_ENCODE ? ": " : "",
+                      r == SRV_JPEG_ERR_ENCODE ? srv_jpeg_encoder_error(enc) : "");
+            srv_jpeg_buf_free(&buf);
+        }
+    } else {
+        /* into a buffer of the worst case, so that TurboJPEG never reallocates it (the variants
+         * are freed with free()) */
+        unsigned long cap = tjBufSize((int)img->width, (int)img->height, TJSAMP_420), tj_size = 0;
+        out = cap != (unsigned long)-1 ? malloc(cap) : NULL;
+        int rc = tj && out ? tjCompress2(tj, img->data, (int)img->width, 0, (int)img->height,
+                                         TJPF_RGBA, &out, &tj_size, TJSAMP_420, (int)v->quality,
+                                         TJFLAG_FASTDCT | TJFLAG_NOREALLOC)
+                           : -1;
+        size = tj_size;
+        if (rc != 0) {
+            srv_error("encoder", "JPEG encoding failed: %s",
+                      tj ? tjGetErrorStr2(tj) : "no encoder");
+            free(out);
+            out = NULL;
+        }
     }
+    double ms = srv_mono_ms() - t0;
     pthread_mutex_lock(&p->mu);
     if (out) {
         v->data = out;
         v->size = size;
-        count_jpeg(p, size, ms, false);
+        count_jpeg(p, size, ms, false, img->coef_sets > 0);
     }
 }
 
@@ -306,8 +351,12 @@ static void run_stripe(srv_encoder_pool *p, srv_jpeg_encoder *enc, srv_frame *f,
 {
     srv_stripe_set *s = &f->stripe_sets[variant];
     srv_jpeg *v = &f->variants[variant];
-    srv_jpeg_result r =
-        srv_jpeg_encode_stripe(enc, &s->plan, f->image->rgba, v->quality, stripe, &s->bufs[stripe]);
+    srv_jpeg_coefs c;
+    if (f->image->coef_sets) c = coefs_of(f, variant);
+    srv_jpeg_result r = f->image->coef_sets
+                            ? srv_jpeg_encode_coefs(enc, &s->plan, &c, stripe, &s->bufs[stripe])
+                            : srv_jpeg_encode_stripe(enc, &s->plan, f->image->data, v->quality,
+                                                     stripe, &s->bufs[stripe]);
     pthread_mutex_lock(&p->mu);
     if (r != SRV_JPEG_OK) {
         srv_error("encoder", "JPEG stripe %u encoding failed: %s%s%s", stripe, srv_jpeg_strerror(r),
@@ -322,7 +371,7 @@ static void run_stripe(srv_encoder_pool *p, srv_jpeg_encoder *enc, srv_frame *f,
     pthread_mutex_unlock(&p->mu);
 
     size_t cap = srv_jpeg_join_bound(&s->plan, s->bufs), size = 0;
-    uint8_t *out = tjAlloc((int)(cap < INT_MAX ? cap : INT_MAX));
+    uint8_t *out = malloc(cap ? cap : 1);
     if (!out) abort(); /* out of memory */
     r = srv_jpeg_join(&s->plan, s->bufs, out, cap, &size);
     for (unsigned i = 0; i < s->plan.stripe_count; i++)
@@ -330,14 +379,14 @@ static void run_stripe(srv_encoder_pool *p, srv_jpeg_encoder *enc, srv_frame *f,
     double ms = srv_mono_ms() - start_ms;
     if (r != SRV_JPEG_OK) {
         srv_error("encoder", "joining JPEG stripes failed: %s", srv_jpeg_strerror(r));
-        tjFree(out);
+        free(out);
         out = NULL;
     }
     pthread_mutex_lock(&p->mu);
     if (out) {
         v->data = out;
         v->size = size;
-        count_jpeg(p, size, ms, true);
+        count_jpeg(p, size, ms, true, f->image->coef_sets > 0);
     }
 }
 
@@ -368,7 +417,7 @@ static void *encoder_main(void *arg)
             run_stripe(p, enc, f, variant, stripe);
         } else {
             pthread_mutex_unlock(&p->mu);
-            run_whole(p, tj, f, variant);
+            run_whole(p, tj, enc, f, variant);
         }
         job_done(p, f);
     }
@@ -446,6 +495,30 @@ void srv_encoder_set_caps(srv_encoder_pool *p, uint32_t mask)
     pthread_mutex_unlock(&p->mu);
 }
 
+/* srv_encoder_qualities with the lock held */
+static unsigned qualities_locked(const srv_encoder_pool *p, unsigned base_quality,
+                                 unsigned q[SRV_MAX_VARIANTS])
+{
+    unsigned n = 0;
+    for (unsigned i = 0; i < SRV_CAP_STEPS; i++) {
+        if (!(p->caps & (1u << i))) continue;
+        unsigned c = SRV_CAP_MIN + 10 * i;
+        unsigned v = c < base_quality ? c : base_quality;
+        if (n == 0 || q[n - 1] != v) q[n++] = v;
+    }
+    if (n == 0 || q[n - 1] != base_quality) q[n++] = base_quality;
+    return n;
+}
+
+unsigned srv_encoder_qualities(srv_encoder_pool *p, unsigned base_quality,
+                               unsigned q[SRV_MAX_VARIANTS])
+{
+    pthread_mutex_lock(&p->mu);
+    unsigned n = qualities_locked(p, base_quality, q);
+    pthread_mutex_unlock(&p->mu);
+    return n;
+}
+
 void srv_encoder_submit(srv_encoder_pool *p, srv_image *img, const srv_frame_info *info,
                         unsigned base_quality)
 {
@@ -457,15 +530,15 @@ void srv_encoder_submit(srv_encoder_pool *p, srv_image *img, const srv_frame_inf
     f->image = srv_image_ref(img);
 
     pthread_mutex_lock(&p->mu);
-    /* qualities: base, and min(base, cap) per cap, ascending and unique */
-    unsigned q[SRV_MAX_VARIANTS], n = 0;
-    for (unsigned i = 0; i < SRV_CAP_STEPS; i++) {
-        if (!(p->caps & (1u << i))) continue;
-        unsigned c = SRV_CAP_MIN + 10 * i;
-        unsigned v = c < base_quality ? c : base_quality;
-        if (n == 0 || q[n - 1] != v) q[n++] = v;
+    /* qualities: base, and min(base, cap) per cap, ascending and unique; coefficients come
+     * with theirs */
+    unsigned q[SRV_MAX_VARIANTS], n;
+    if (img->coef_sets) {
+        n = img->coef_sets < SRV_MAX_VARIANTS ? img->coef_sets : SRV_MAX_VARIANTS;
+        memcpy(q, img->coef_quality, n * sizeof q[0]);
+    } else {
+        n = qualities_locked(p, base_quality, q);
     }
-    if (n == 0 || q[n - 1] != base_quality) q[n++] = base_quality;
     f->variant_count = n;
     for (unsigned i = 0; i < n; i++)
         f->variants[i].quality = q[i];

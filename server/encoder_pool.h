@@ -1,17 +1,18 @@
-/* encoder_pool.h: TurboJPEG encoder threads between the render thread and the senders.
+/* encoder_pool.h: JPEG encoder threads between the render thread and the senders.
  *
  * The render thread submits each read-back image with its frame info; the pool encodes it at
  * the frame's base quality and at the lower qualities the viewers' lag calls for (one job per
- * quality, spread over the threads), and publishes the frame once all its variants are done
- * and only if it is newer than its view's published one: latest frame wins, per view. Jobs of a
- * view's older frames that have not started are dropped when a newer frame of that view
- * arrives, so a slow encoder never builds a queue. Encoders see only CPU memory: never a GPU
- * object.
+ * quality, spread over the threads): RGBA8 pixels with libjpeg-turbo, or the coefficients the
+ * GPU computed (one set per quality) with libjpeg's entropy coder (jpeg_coefs.h), and publishes the
+ * frame once all its variants are done and only if it is newer than its view's published one:
+ * latest frame wins, per view. Jobs of a view's older frames that have not started are dropped when
+ * a newer frame of that view arrives, so a slow encoder never builds a queue. Encoders see only CPU
+ * memory: never a GPU object.
  *
  * Large images (at least the stripe threshold's pixels, with more than one thread) are encoded in
  * horizontal stripes (jpeg_striped.h): each variant becomes one job per stripe, spread over the
  * threads like any job, and the thread that finishes a variant's last stripe joins them into its
- * one JPEG. Small images are one tjCompress2 job per variant. Both give the same decoded pixels.
+ * one JPEG. Small images are one job per variant. Both give the same decoded pixels.
  * A striped frame counts as started once its first stripe has: a newer frame of its view no longer
  * drops its other stripes (at most one frame a view in flight, one pending).
  */
@@ -28,12 +29,18 @@
 #define SRV_CAP_MIN 30u
 #define SRV_CAP_STEPS 7u
 
-/* A tone-mapped RGBA8 image on the CPU, shared read-only (reference counted). */
+/* A frame's image on the CPU, shared read-only (reference counted): its tone-mapped RGBA8
+ * pixels, or the JPEG coefficients the GPU computed of them (renderer/jpeg_dct.h). */
 typedef struct srv_image {
     atomic_int refs;
     unsigned width, height;
-    uint8_t *rgba; /* width * height * 4 bytes, top row first */
-    size_t cap;    /* bytes allocated (pixel buffers are recycled) */
+    /* coef_sets 0: width * height * 4 bytes of RGBA8, top row first; else coef_sets sets of
+     * coefficients end to end (rd_jpeg_coef_bytes each), set i quantised at coef_quality[i],
+     * ascending: the qualities its frame is encoded at */
+    uint8_t *data;
+    unsigned coef_sets;
+    unsigned coef_quality[SRV_MAX_VARIANTS];
+    size_t cap; /* bytes allocated (buffers are recycled) */
     /* pixels the image does not own (srv_image_wrap): release(ctx, token) when the last reference
      * goes */
     void (*release)(void *ctx, unsigned token);
@@ -41,10 +48,11 @@ typedef struct srv_image {
     unsigned release_token;
 } srv_image;
 
-srv_image *srv_image_new(unsigned width, unsigned height);
-/* An image over pixels owned elsewhere (a leased readback slot): release(ctx, token) runs, on
+srv_image *srv_image_new(unsigned width, unsigned height); /* RGBA8 */
+srv_image *srv_image_alloc(unsigned width, unsigned height, size_t bytes);
+/* An image over bytes owned elsewhere (a leased readback slot): release(ctx, token) runs, on
  * whichever thread drops the last reference, when nobody reads them any more. */
-srv_image *srv_image_wrap(unsigned width, unsigned height, uint8_t *rgba,
+srv_image *srv_image_wrap(unsigned width, unsigned height, uint8_t *data,
                           void (*release)(void *ctx, unsigned token), void *ctx, unsigned token);
 srv_image *srv_image_ref(srv_image *img);
 void srv_image_unref(srv_image *img); /* NULL is fine */
@@ -92,7 +100,8 @@ typedef struct srv_encoder_stats {
     uint64_t frames_published, frames_dropped, jpegs_encoded, bytes_encoded;
     double encode_ms_avg; /* exponential moving average per JPEG (wall: first stripe to join) */
     double encode_ms_last;
-    uint64_t jpegs_striped; /* of jpegs_encoded, those encoded in stripes */
+    uint64_t jpegs_striped;   /* of jpegs_encoded, those encoded in stripes */
+    uint64_t jpegs_from_gpu;  /* of jpegs_encoded, those entropy-coded from GPU coefficients */
 } srv_encoder_stats;
 
 /* Called (from an encoder thread) after a frame is published. Must be quick and thread-safe. */
@@ -106,8 +115,13 @@ srv_encoder_pool *srv_encoder_pool_create(unsigned threads);
 /* Stops and joins the threads, drops pending jobs, frees everything (NULL is fine). */
 void srv_encoder_pool_destroy(srv_encoder_pool *p);
 void srv_encoder_pool_set_listener(srv_encoder_pool *p, srv_frame_listener fn, void *user);
-/* Encodes img (a reference is taken) as frame info at base_quality and at
- * min(base_quality, cap) for each cap in the current cap mask. */
+/* The qualities a frame of base_quality is encoded at now: base_quality and
+ * min(base_quality, cap) for each cap in the current cap mask, ascending, unique. Returns how
+ * many (1..SRV_MAX_VARIANTS). */
+unsigned srv_encoder_qualities(srv_encoder_pool *p, unsigned base_quality,
+                               unsigned q[SRV_MAX_VARIANTS]);
+/* Encodes img (a reference is taken) as frame info: RGBA8 pixels at srv_encoder_qualities of
+ * base_quality; coefficients at the qualities they were quantised at (base_quality unused). */
 void srv_encoder_submit(srv_encoder_pool *p, srv_image *img, const srv_frame_info *info,
                         unsigned base_quality);
 /* Images of at least this many pixels are encoded in stripes, one per thread (fewer for images

@@ -8,8 +8,8 @@
 #include <string.h>
 
 #include "api_json.h"
+#include "frame_output.h"
 #include "log.h"
-#include "renderer/readback.h"
 #include "renderer/view.h"
 #include "scene_service.h"
 #include "scheduler.h"
@@ -19,9 +19,6 @@
 #define PERSIST_INTERVAL_MS 250
 #define DEFAULT_MAX_VIEWS 64u
 #define DEFAULT_MAX_TOTAL_PIXELS (16ull * 1024 * 1024)
-/* readback slots kept for frames in flight: a frame delivered with fewer free is copied out of its
- * slot instead of leasing it (every view holds its last frame's slot) */
-#define RENDER_SLOTS_IN_FLIGHT 8u
 
 struct srv_render_loop {
     srv_render_config cfg;
@@ -33,8 +30,8 @@ struct srv_render_loop {
     srv_scene_service svc;
     bool svc_ok;
     srv_views views;
-    rd_readback rb;
-    bool rb_ok;
+    srv_frame_output out; /* readback, GPU JPEG pass, hand-off to the encoders */
+    bool out_ok;
     srv_mailbox mb;
     srv_stats_board stats;
 
@@ -237,57 +234,6 @@ static void apply(srv_render_loop *l, srv_cmd *c)
 
 /* ---- frames --------------------------------------------------------------------------------- */
 
-static void release_slot(void *ctx, unsigned slot)
-{
-    rd_readback_release(&((srv_render_loop *)ctx)->rb, slot);
-}
-
-/* A frame's pixels are back: the encoders read them in the readback slot itself (leased until
- * the last reference to the image goes: the view's next frame replaces it, and the encoders are
- * done), unless too few slots would be left for frames in flight; then they are copied. */
-static bool on_readback(void *user, const void *blob, unsigned w, unsigned h, const uint8_t *rgba,
-                        unsigned slot)
-{
-    srv_render_loop *l = user;
-    srv_frame_info info;
-    memcpy(&info, blob, sizeof info);
-    srv_view *v = srv_views_find(&l->views, info.view_id);
-    if (!v) return false; /* the view went away while its frame was copied */
-    if (v->in_flight) { /* an asynchronous frame: its GPU times are ready now */
-        v->in_flight = false;
-        char err[256];
-        if (rd_view_collect(&v->gpu, err, sizeof err) != RD_VK_OK)
-            srv_warn("render", "view %u: frame statistics lost: %s", v->id, err);
-        srv_stats_board_frame(&l->stats, &v->gpu.stats, w, h, v->last_render_ms,
-                              srv_mono_ms() - v->last_render_ms);
-    }
-    bool lease = rd_readback_free_count(&l->rb) > RENDER_SLOTS_IN_FLIGHT;
-    srv_image *img;
-    if (lease) {
-        img = srv_image_wrap(w, h, (uint8_t *)rgba, release_slot, l, slot);
-    } else {
-        img = srv_image_new(w, h);
-        memcpy(img->rgba, rgba, (size_t)w * h * 4);
-    }
-    srv_image_unref(v->last_image);
-    v->last_image = img;
-    info.ready_us = srv_unix_us();
-    v->last_info = info;
-    const srv_settings *s = &l->svc.st.settings;
-    srv_encoder_submit(l->cfg.encoders, img, &info,
-                       srv_view_quality(v, info.still ? s->quality_still : s->quality_interactive));
-    return lease;
-}
-
-static void poll_readback(srv_render_loop *l, uint64_t timeout_ns)
-{
-    char err[256];
-    if (rd_readback_poll(&l->rb, timeout_ns, on_readback, l, err, sizeof err) != RD_VK_OK) {
-        srv_error("render", "frame readback failed: %s", err);
-        srv_stats_board_error(&l->stats, err, l->vk.device_lost);
-    }
-}
-
 static void render_view(srv_render_loop *l, srv_view *v, double now)
 {
     const srv_settings *s = &l->svc.st.settings;
@@ -326,30 +272,30 @@ static void render_view(srv_render_loop *l, srv_view *v, double now)
     v->requests = 0;
     v->renders_since_tick++;
     v->last_render_ms = now;
+    unsigned quality = srv_view_quality(v, info.still ? s->quality_still : s->quality_interactive);
     rd_vk_result vr;
+    rd_cmd *cmd;
     if (vs.pathtrace_spp) {
         /* path tracing submits batches of its own and waits for them */
         vr = rd_view_render(&v->gpu, &l->svc.world, &cam, &vs, err, sizeof err);
         v->pt_samples = vr == RD_VK_OK ? v->gpu.pathtrace_samples : 0;
         if (v->pt_samples < l->svc.pt_target) v->dirty = true; /* keep accumulating */
+        if (vr == RD_VK_OK) vr = srv_frame_output_begin(&l->out, &cmd, err, sizeof err);
         if (vr == RD_VK_OK)
-            vr = rd_readback_submit(&l->rb, &v->gpu.rgba8, v->gpu.width, v->gpu.height, &info,
-                                    sizeof info, err, sizeof err);
+            vr = srv_frame_output_finish(&l->out, v, &info, quality, false, err, sizeof err);
         if (vr == RD_VK_OK)
             srv_stats_board_frame(&l->stats, &v->gpu.stats, v->gpu.width, v->gpu.height, now,
                                   srv_mono_ms() - now);
     } else {
-        /* the frame and its readback in one submission, not waited for: the GPU renders it while
-         * this thread records the next view; on_readback delivers it */
-        rd_cmd *cmd;
-        vr = rd_readback_begin(&l->rb, &cmd, err, sizeof err);
+        /* the frame and its output in one submission, not waited for: the GPU renders it while
+         * this thread records the next view; srv_frame_output_poll delivers it */
+        vr = srv_frame_output_begin(&l->out, &cmd, err, sizeof err);
         if (vr == RD_VK_OK) {
             vr = rd_view_record(&v->gpu, &l->svc.world, &cam, &vs, cmd, err, sizeof err);
             if (vr == RD_VK_OK)
-                vr = rd_readback_finish(&l->rb, &v->gpu.rgba8, v->gpu.width, v->gpu.height, &info,
-                                        sizeof info, err, sizeof err);
+                vr = srv_frame_output_finish(&l->out, v, &info, quality, true, err, sizeof err);
             else
-                rd_readback_abort(&l->rb);
+                srv_frame_output_abort(&l->out);
         }
         v->in_flight = vr == RD_VK_OK;
     }
@@ -370,13 +316,14 @@ static void render_view(srv_render_loop *l, srv_view *v, double now)
 static void emit_still(srv_render_loop *l, srv_view *v)
 {
     v->need_still = false;
-    if (!v->last_image) return;
     srv_frame_info info = v->last_info;
-    info.frame_id = ++l->next_frame_id;
+    info.frame_id = l->next_frame_id + 1;
     info.still = true;
+    if (!srv_frame_output_again(&l->out, v, &info,
+                                srv_view_quality(v, l->svc.st.settings.quality_still)))
+        return;
+    l->next_frame_id = info.frame_id;
     v->last_frame_id = info.frame_id;
-    srv_encoder_submit(l->cfg.encoders, v->last_image, &info,
-                       srv_view_quality(v, l->svc.st.settings.quality_still));
     pthread_mutex_lock(&l->stats.mu);
     l->stats.s.stills_reencoded++;
     pthread_mutex_unlock(&l->stats.mu);
@@ -467,7 +414,7 @@ static void *render_main(void *arg)
             srv_cmd_unref(c);
         }
         if (closed) break;
-        poll_readback(l, 0);
+        srv_frame_output_poll(&l->out, 0);
 
         double now = srv_mono_ms();
         const srv_settings *s = &l->svc.st.settings;
@@ -500,7 +447,7 @@ static void *render_main(void *arg)
             .world_updates_left = converging ? SRV_SCHED_CONVERGE_UPDATES : 0,
             .update_ms = l->update_ms,
             .last_tick_ms = l->last_tick_ms,
-            .readback_free = rd_readback_has_free(&l->rb),
+            .readback_free = srv_frame_output_ready(&l->out),
             .views = sv,
             .view_count = n,
             .cursor = l->views.cursor < n ? l->views.cursor : 0,
@@ -529,10 +476,10 @@ static void *render_main(void *arg)
             else if (due < wake)
                 wake = due;
         }
-        if (rd_readback_busy(&l->rb) > 0) {
+        if (srv_frame_output_busy(&l->out)) {
             double ms = isinf(wake) ? 5 : wake - now;
             ms = ms < 0.1 ? 0.1 : ms > 5 ? 5 : ms;
-            poll_readback(l, (uint64_t)(ms * 1e6));
+            srv_frame_output_poll(&l->out, (uint64_t)(ms * 1e6));
             continue;
         }
         srv_mailbox_wait(&l->mb, wake);
@@ -573,9 +520,10 @@ srv_render_loop *srv_render_loop_create(const srv_render_config *cfg, rd_scene *
                  l->vk.device_name, settings.width, settings.height, settings.rays_per_probe,
                  settings.max_fps);
     }
-    rd_readback_init(&l->rb, &l->vk);
-    l->rb_ok = true;
-    vr = rd_view_passes_create(&l->vk, &l->passes, err, errlen);
+    vr = srv_frame_output_init(&l->out, &l->vk, cfg->jpeg_path, cfg->encoders, &l->stats, &l->views,
+                               err, errlen);
+    l->out_ok = true;
+    if (vr == RD_VK_OK) vr = rd_view_passes_create(&l->vk, &l->passes, err, errlen);
     l->passes_ok = vr == RD_VK_OK;
     if (vr == RD_VK_OK) vr = rd_pick_create(&l->vk, &l->pick, err, errlen);
     if (vr == RD_VK_OK) {
@@ -599,6 +547,7 @@ srv_render_loop *srv_render_loop_create(const srv_render_config *cfg, rd_scene *
     v0->requests = 1; /* a first frame, so /v1/frame.jpg and new viewers have one at once */
     publish_view(l, v0, true);
     snprintf(l->stats.s.device, sizeof l->stats.s.device, "%s", l->vk.device_name);
+    l->stats.s.jpeg_gpu = l->out.gpu;
     share_state(l, true);
     l->last_tick_ms = -1e9;
     l->last_persist_ms = -1e9;
@@ -635,7 +584,7 @@ void srv_render_loop_destroy(srv_render_loop *l)
     if (l->vk_ok) {
         rd_vk_wait_idle(&l->vk);
         srv_views_dispose(&l->views); /* their last images end their readback leases */
-        if (l->rb_ok) rd_readback_dispose(&l->rb);
+        if (l->out_ok) srv_frame_output_dispose(&l->out);
         if (l->svc_ok) srv_scene_service_dispose(&l->svc);
         rd_pick_destroy(&l->pick);
         if (l->passes_ok) rd_view_passes_destroy(&l->vk, &l->passes);

@@ -17,6 +17,7 @@
 
 #include "commands.h"
 #include "encoder_pool.h"
+#include "frame_output.h"
 #include "mailbox.h"
 #include "persist.h"
 #include "render_stats.h"
@@ -36,6 +37,7 @@ typedef struct srv_render_config {
     unsigned max_views;        /* views in all, the default view included (0 = 64) */
     uint64_t max_total_pixels; /* pixels over all views (0 = 16 Mi) */
     srv_encoder_pool *encoders;
+    srv_jpeg_path jpeg_path; /* where JPEGs are transformed (frame_output.h) */
     srv_snapshot *snapshot;
     srv_persist *persist; /* may be NULL */
 } srv_render_config;

@@ -24,6 +24,7 @@ typedef struct srv_pass_times {
 
 typedef struct srv_render_stats {
     char device[256];
+    bool jpeg_gpu; /* JPEGs transformed on the GPU (frame_output.h) */
     bool device_lost;
     char last_error[256];
     uint64_t frames_rendered, stills_reencoded, commands_applied;

@@ -111,7 +111,11 @@ srv_sched_step srv_sched_next(const srv_sched_state *s)
         const srv_sched_view *v = &s->views[i];
         if (!v->watched || v->dirty || v->busy || !v->need_still) continue;
         double due = v->last_input_ms + s->still_delay_ms;
-        if (due <= s->now_ms) {
+        if (due <= s->now_ms && !s->readback_free) {
+            /* the GPU JPEG path copies a still too: try again once a slot is free (leases end as
+             * the encoders finish) */
+            if (s->now_ms + 1 < step.wake_ms) step.wake_ms = s->now_ms + 1;
+        } else if (due <= s->now_ms) {
             step.action = SRV_SCHED_EMIT_STILL;
             step.view = i;
             step.wake_ms = INFINITY;

@@ -13,7 +13,7 @@
  *      number of views; with one probe update while someone interacts, else a few.
  *   4. When the world is still, dirty views are rendered in turn as fast as the cap allows.
  *   5. A watched view whose input stopped still_delay_ms ago gets its still frame (the last image
- *      re-encoded at full quality).
+ *      re-encoded at full quality), once a readback slot is free (the GPU JPEG path copies it).
  *   6. Otherwise sleep until the earliest deadline among those rules, or until woken.
  *
  * Each view is paced by the global frame-rate cap and by its own (a viewer's quality message),

@@ -37,6 +37,8 @@ cJSON *srv_stats_json(const srv_stats_snapshot *s)
     cJSON_AddNumberToObject(enc, "encode_ms_last", s->encoder.encode_ms_last);
     cJSON_AddNumberToObject(enc, "jpegs_encoded", (double)s->encoder.jpegs_encoded);
     cJSON_AddNumberToObject(enc, "jpegs_striped", (double)s->encoder.jpegs_striped);
+    cJSON_AddStringToObject(enc, "path", r->jpeg_gpu ? "gpu" : "cpu");
+    cJSON_AddNumberToObject(enc, "jpegs_from_gpu", (double)s->encoder.jpegs_from_gpu);
     cJSON_AddNumberToObject(enc, "frames_published", (double)s->encoder.frames_published);
     cJSON_AddNumberToObject(enc, "frames_dropped", (double)s->encoder.frames_dropped);
     cJSON *w = cJSON_AddObjectToObject(j, "world");

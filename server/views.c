@@ -121,7 +121,7 @@ bool srv_view_set_caps(srv_view *v, unsigned jpeg_cap, unsigned fps_cap)
 {
     if (v->jpeg_cap == jpeg_cap && v->fps_cap == fps_cap) return false;
     /* re-encode the last image under the new cap (the scheduler waits for owed frames first) */
-    if (v->last_image && jpeg_cap != v->jpeg_cap) v->need_still = true;
+    if (v->last_frame_id && jpeg_cap != v->jpeg_cap) v->need_still = true;
     v->jpeg_cap = jpeg_cap;
     v->fps_cap = fps_cap;
     return true;

@@ -271,10 +271,10 @@ static void measure(const uint8_t *rgba, unsigned w, unsigned h, unsigned q, uns
         srv_encoder_set_stripe_min_pixels(p, 1); /* every size striped, as 1 Mpixel would be */
 
         img = srv_image_new(w, h);
-        memcpy(img->rgba, rgba, (size_t)w * h * 4);
+        memcpy(img->data, rgba, (size_t)w * h * 4);
         /* one MCU column, two MCU rows a thread: as many stripes as the frame, almost no work */
         tiny = srv_image_new(16, 32 * threads);
-        memset(tiny->rgba, 128, (size_t)tiny->width * tiny->height * 4);
+        memset(tiny->data, 128, (size_t)tiny->width * tiny->height * 4);
     }
     double *ts = calloc(runs, sizeof *ts), *tc = calloc(runs, sizeof *tc);
     double *tp = calloc(runs, sizeof *tp), *td = calloc(runs, sizeof *td);

@@ -314,14 +314,15 @@ typedef struct delivered {
     record info[4];
     unsigned w[4], h[4];
     uint8_t *rgba[4];
-    bool lease;        /* keep the slots */
+    bool lease; /* keep the slots */
     unsigned slot[4];
     const uint8_t *mapped[4];
 } delivered;
 
 static bool on_frame(void *user, const void *info, unsigned w, unsigned h, const uint8_t *rgba,
-                     unsigned slot)
+                     size_t bytes, unsigned slot)
 {
+    CHECK(bytes == (size_t)w * h * 4);
     delivered *d = user;
     CHECK(d->count < 4);
     if (d->count >= 4) return false;
@@ -346,8 +347,8 @@ static void test_readback_ring(fixture *f)
     record ra = {.id = 0x1122334455667788ull, .tag = "view a, 32x24"};
     record rb_info = {.id = 42, .tag = "view b, 20x12"};
     char big[RD_READBACK_INFO_MAX + 1] = {0};
-    CHECK(rd_readback_submit(&rb, &f->a.rgba8, AW, AH, big, sizeof big, err, sizeof err) !=
-          RD_VK_OK);
+    CHECK(rd_readback_submit(&rb, &f->a.rgba8, AW * AH * 4, AW, AH, big, sizeof big, err,
+                             sizeof err) != RD_VK_OK);
     CHECK(rd_readback_busy(&rb) == 0);
     /* round 1: small then large; round 2: large then small into the same slots (a slot grows
      * for the large frame and keeps its size for the small one) */
@@ -355,10 +356,12 @@ static void test_readback_ring(fixture *f)
         delivered d = {0};
         rd_view *first = round == 0 ? &f->b : &f->a, *second = round == 0 ? &f->a : &f->b;
         const record *i1 = round == 0 ? &rb_info : &ra, *i2 = round == 0 ? &ra : &rb_info;
-        CHECK(rd_readback_submit(&rb, &first->rgba8, first->width, first->height, i1, sizeof *i1,
-                                 err, sizeof err) == RD_VK_OK);
-        CHECK(rd_readback_submit(&rb, &second->rgba8, second->width, second->height, i2, sizeof *i2,
-                                 err, sizeof err) == RD_VK_OK);
+        CHECK(rd_readback_submit(&rb, &first->rgba8, (size_t)first->width * first->height * 4,
+                                 first->width, first->height, i1, sizeof *i1, err,
+                                 sizeof err) == RD_VK_OK);
+        CHECK(rd_readback_submit(&rb, &second->rgba8, (size_t)second->width * second->height * 4,
+                                 second->width, second->height, i2, sizeof *i2, err,
+                                 sizeof err) == RD_VK_OK);
         CHECK(rd_readback_busy(&rb) == 2 && rd_readback_has_free(&rb));
         for (int tries = 0; tries < 100 && d.count < 2; tries++)
             CHECK(rd_readback_poll(&rb, 100ull * 1000 * 1000, on_frame, &d, err, sizeof err) ==
@@ -377,21 +380,25 @@ static void test_readback_ring(fixture *f)
     CHECK(rb.slots[0].buffer.size == AW * AH * 4 && rb.slots[1].buffer.size == AW * AH * 4);
     /* a leased slot keeps its pixels while later frames take other slots, until released */
     delivered d = {.lease = true};
-    CHECK(rd_readback_submit(&rb, &f->a.rgba8, AW, AH, &ra, sizeof ra, err, sizeof err) == RD_VK_OK);
+    CHECK(rd_readback_submit(&rb, &f->a.rgba8, AW * AH * 4, AW, AH, &ra, sizeof ra, err,
+                             sizeof err) == RD_VK_OK);
     for (int tries = 0; tries < 100 && d.count < 1; tries++)
-        CHECK(rd_readback_poll(&rb, 100ull * 1000 * 1000, on_frame, &d, err, sizeof err) == RD_VK_OK);
+        CHECK(rd_readback_poll(&rb, 100ull * 1000 * 1000, on_frame, &d, err, sizeof err) ==
+              RD_VK_OK);
     CHECK(d.count == 1 && rd_readback_free_count(&rb) == RD_READBACK_SLOTS - 1);
     d.lease = false;
     for (int k = 0; k < 2; k++) /* view b's frames must not land in the leased slot */
-        CHECK(rd_readback_submit(&rb, &f->b.rgba8, BW, BH, &rb_info, sizeof rb_info, err,
-                                 sizeof err) == RD_VK_OK);
+        CHECK(rd_readback_submit(&rb, &f->b.rgba8, BW * BH * 4, BW, BH, &rb_info, sizeof rb_info,
+                                 err, sizeof err) == RD_VK_OK);
     for (int tries = 0; tries < 100 && d.count < 3; tries++)
-        CHECK(rd_readback_poll(&rb, 100ull * 1000 * 1000, on_frame, &d, err, sizeof err) == RD_VK_OK);
+        CHECK(rd_readback_poll(&rb, 100ull * 1000 * 1000, on_frame, &d, err, sizeof err) ==
+              RD_VK_OK);
     CHECK(d.count == 3 && d.slot[1] != d.slot[0] && d.slot[2] != d.slot[0]);
     CHECKF(memcmp(d.mapped[0], img_a, AW * AH * 4) == 0, "the leased pixels are intact");
     rd_readback_release(&rb, d.slot[0]);
     CHECK(rd_readback_free_count(&rb) == RD_READBACK_SLOTS);
-    for (unsigned k = 0; k < d.count; k++) free(d.rgba[k]);
+    for (unsigned k = 0; k < d.count; k++)
+        free(d.rgba[k]);
     rd_readback_dispose(&rb);
     rd_readback_dispose(&rb); /* idempotent */
     free(img_a), free(img_b);
@@ -400,7 +407,8 @@ static void test_readback_ring(fixture *f)
 static double mean_of(const float *rgb, size_t n)
 {
     double sum = 0;
-    for (size_t i = 0; i < n; i++) sum += rgb[i];
+    for (size_t i = 0; i < n; i++)
+        sum += rgb[i];
     return sum / n;
 }
 
@@ -432,8 +440,8 @@ static void test_light_updates(fixture *f)
     while (f->scene.light_count <= cap)
         rd_build_point_light(&f->scene, 100, 100, 100, 0); /* far away and dark */
     CHECK(rd_gpu_scene_update_lights(&vk, &f->gs, &f->scene, err, sizeof err) == RD_VK_OK);
-    CHECKF(f->gs.light_capacity > cap && f->gs.lights_pending == NULL, "capacity %u -> %u",
-           cap, f->gs.light_capacity);
+    CHECKF(f->gs.light_capacity > cap && f->gs.lights_pending == NULL, "capacity %u -> %u", cap,
+           f->gs.light_capacity);
     render(f, &f->a);
     float *grown = read_hdr(&f->a);
     CHECKF(fabs(mean_of(grown, n) - m_lit) < 1e-6 * m_lit + 1e-9, "dark lights add nothing");

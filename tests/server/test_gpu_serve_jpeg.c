@@ -1,0 +1,199 @@
+/* The daemon's two JPEG paths end to end on lavapipe (probecast serve --jpeg): the same scene,
+ * camera and size served with --jpeg cpu (libjpeg-turbo encodes the pixels) and --jpeg gpu (the
+ * JPEG pass in the frame's command buffer, the encoders entropy-code its coefficients):
+ *  - both answer GET /v1/frame.jpg with a 4:2:0 JPEG of the view's size (odd, not a multiple of
+ *    the 16-pixel MCU) whose quantisation tables are libjpeg's for the quality it announces;
+ *  - they decode to nearly the same picture (the GPU path's float DCT against libjpeg-turbo's
+ *    fast integer one);
+ *  - /v1/stats names the path, and only the GPU daemon counts JPEGs from GPU coefficients;
+ *  - on the GPU path, input gives interactive frames at the interactive quality and, once it
+ *    stops, a still at the still quality re-encoded from the view's image (nothing rendered),
+ *    and a viewer's JPEG cap re-encodes the still under the cap.
+ * The frames here are small, so encoded whole; striped coefficient frames are covered by
+ * test_encoder_pool and test_gpu_jpeg, the lag-driven variants by test_gpu_serve_lag run on the
+ * GPU path (tests/CMakeLists.txt).
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <turbojpeg.h>
+
+#include <jpeglib.h>
+
+#include "serve_util.h"
+#include "server/jpeg_coefs.h"
+#include "test_util.h"
+
+#define W 97
+#define H 61
+
+static const char *const base_args[] = {
+    "--no-animate", "--width", "97", "--height", "61", "--gi", "off", "--scene", "builtin:cornell"};
+
+static bool start(pc_daemon *d, const char *path)
+{
+    const char *args[32];
+    unsigned n = 0;
+    for (unsigned i = 0; i < sizeof base_args / sizeof base_args[0]; i++)
+        args[n++] = base_args[i];
+    args[n++] = "--jpeg";
+    args[n++] = path;
+    args[n] = NULL;
+    return pc_daemon_start(d, args);
+}
+
+/* The JPEG's quantisation tables are libjpeg's for quality q. */
+static bool tables_match(const uint8_t *jpeg, size_t size, unsigned q)
+{
+    struct jpeg_decompress_struct c;
+    struct jpeg_error_mgr e;
+    c.err = jpeg_std_error(&e);
+    jpeg_create_decompress(&c);
+    jpeg_mem_src(&c, jpeg, (unsigned long)size);
+    bool ok = jpeg_read_header(&c, TRUE) == JPEG_HEADER_OK;
+    uint16_t want[2][64];
+    srv_jpeg_quant_tables(q, want);
+    for (int t = 0; ok && t < 2; t++)
+        for (int k = 0; ok && k < 64; k++)
+            ok = c.quant_tbl_ptrs[t] && c.quant_tbl_ptrs[t]->quantval[k] == want[t][k];
+    jpeg_destroy_decompress(&c);
+    return ok;
+}
+
+/* GET /v1/frame.jpg: decoded RGB (caller frees) and its announced quality; NULL on failure. */
+static uint8_t *get_frame(pc_daemon *d, unsigned *quality, const char *what)
+{
+    pc_http_response r;
+    uint8_t *rgb = NULL;
+    CHECKF(pc_api(d, "GET", "/v1/frame.jpg", NULL, true, &r) == 200, "%s: a frame", what);
+    const char *qh = r.headers ? strstr(r.headers, "X-Frame-Quality: ") : NULL;
+    *quality = qh ? (unsigned)atoi(qh + 17) : 0;
+    tjhandle tj = tjInitDecompress();
+    int w = 0, h = 0, sub = -1, cs = -1;
+    if (r.status == 200 && tjDecompressHeader3(tj, (const uint8_t *)r.body,
+                                               (unsigned long)r.body_len, &w, &h, &sub, &cs) == 0) {
+        CHECKF(w == W && h == H && sub == TJSAMP_420, "%s: %dx%d, subsampling %d", what, w, h, sub);
+        CHECKF(tables_match((const uint8_t *)r.body, r.body_len, *quality),
+               "%s: the tables are libjpeg's for quality %u", what, *quality);
+        rgb = malloc((size_t)W * H * 3);
+        if (w != W || h != H ||
+            tjDecompress2(tj, (const uint8_t *)r.body, (unsigned long)r.body_len, rgb, W, 0, H,
+                          TJPF_RGB, 0) != 0) {
+            free(rgb);
+            rgb = NULL;
+        }
+    }
+    CHECKF(rgb != NULL, "%s: the frame decodes", what);
+    tjDestroy(tj);
+    pc_http_response_free(&r);
+    return rgb;
+}
+
+static void check_stats(pc_daemon *d, const char *path, bool from_gpu)
+{
+    cJSON *st = pc_api_get_json(d, "/v1/stats");
+    const cJSON *enc = cJSON_GetObjectItemCaseSensitive(st, "encoder");
+    const cJSON *p = cJSON_GetObjectItemCaseSensitive(enc, "path");
+    CHECKF(cJSON_IsString(p) && strcmp(p->valuestring, path) == 0, "stats name the %s path", path);
+    double n = pc_json_number(enc, "jpegs_from_gpu"), all = pc_json_number(enc, "jpegs_encoded");
+    CHECKF(all >= 1 && (from_gpu ? n == all : n == 0), "%s: %g of %g JPEGs from GPU coefficients",
+           path, n, all);
+    cJSON_Delete(st);
+}
+
+/* On the GPU daemon: interactive frames at quality 60, then the still at 90, then (after a JPEG
+ * cap of 40 from this viewer) a still at 40, all decoding to the view's size. */
+static void check_stills(pc_daemon *d)
+{
+    pc_ws ws;
+    uint32_t view = 0;
+    CHECK(pc_stream_open_v2(d, &ws, &view));
+    pc_frame f;
+    CHECK(pc_stream_next(&ws, 60000, true, &f)); /* the view's first frame */
+    pc_frame_free(&f);
+    unsigned interactive = 0, stills = 0, q_interactive = 0, q_still = 0;
+    for (int i = 0; i < 5; i++) {
+        char msg[160];
+        snprintf(msg, sizeof msg,
+                 "{\"type\":\"camera\",\"seq\":%d,\"position\":[%g,1,3.5],\"target\":[0,1,0]}",
+                 i + 1, 0.1 * i);
+        CHECK(pc_ws_send_text(&ws, msg) == 0);
+        pc_sleep_ms(30);
+    }
+    double start = pc_now_ms();
+    while (pc_now_ms() - start < 30000 && !stills) {
+        if (!pc_stream_next(&ws, 5000, true, &f)) continue;
+        if (f.h.view_id == view) {
+            CHECK(f.h.width == W && f.h.height == H && f.rgb != NULL);
+            if (f.h.flags & 1) {
+                stills++;
+                q_still = f.h.quality;
+            } else {
+                interactive++;
+                q_interactive = f.h.quality;
+            }
+        }
+        pc_frame_free(&f);
+    }
+    CHECKF(interactive >= 1 && q_interactive == 60, "%u interactive frames, quality %u",
+           interactive, q_interactive);
+    CHECKF(stills == 1 && q_still == 90, "a still at quality %u", q_still);
+
+    /* a JPEG cap while idle: the still again, under the cap */
+    CHECK(pc_ws_send_text(&ws, "{\"type\":\"quality\",\"jpeg\":40,\"max_fps\":null}") == 0);
+    bool capped = false;
+    start = pc_now_ms();
+    while (pc_now_ms() - start < 30000 && !capped) {
+        if (!pc_stream_next(&ws, 5000, true, &f)) continue;
+        if (f.h.view_id == view && (f.h.flags & 1)) {
+            capped = f.h.quality == 40;
+            CHECKF(capped, "the capped still has quality %u", f.h.quality);
+            CHECK(f.rgb != NULL && f.mean > 5);
+            break;
+        }
+        pc_frame_free(&f);
+    }
+    if (capped) pc_frame_free(&f);
+    CHECK(capped);
+    pc_ws_close(&ws);
+}
+
+int main(void)
+{
+    pc_daemon cpu = {0}, gpu = {0};
+    if (!start(&cpu, "cpu") || !start(&gpu, "gpu")) {
+        CHECK(!"daemons started");
+        pc_daemon_stop(&cpu);
+        pc_daemon_stop(&gpu);
+        return test_finish();
+    }
+    unsigned q_cpu = 0, q_gpu = 0;
+    uint8_t *a = get_frame(&cpu, &q_cpu, "--jpeg cpu");
+    uint8_t *b = get_frame(&gpu, &q_gpu, "--jpeg gpu");
+    CHECKF(q_cpu == q_gpu && q_gpu >= 1, "qualities %u and %u", q_cpu, q_gpu);
+    if (a && b) {
+        double sum = 0, se = 0;
+        int worst = 0;
+        for (size_t i = 0; i < (size_t)W * H * 3; i++) {
+            int diff = abs((int)a[i] - (int)b[i]);
+            sum += diff;
+            se += (double)diff * diff;
+            if (diff > worst) worst = diff;
+        }
+        double mean = sum / (W * H * 3), psnr = 10 * log10(255.0 * 255.0 / (se / (W * H * 3)));
+        printf("cpu vs gpu path, quality %u: mean difference %.3f, max %d, PSNR %.1f dB\n", q_gpu,
+               mean, worst, psnr);
+        CHECKF(mean < 1.5 && psnr > 35, "the paths decode alike: mean %.3f, PSNR %.1f dB", mean,
+               psnr);
+    }
+    free(a);
+    free(b);
+    check_stats(&cpu, "cpu", false);
+    check_stats(&gpu, "gpu", true);
+    check_stills(&gpu);
+    check_stats(&gpu, "gpu", true);
+    CHECKF(pc_daemon_stop(&cpu) == 0, "the cpu daemon exits cleanly");
+    CHECKF(pc_daemon_stop(&gpu) == 0, "the gpu daemon exits cleanly");
+    return test_finish();
+}
