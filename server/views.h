@@ -2,9 +2,10 @@
  * HTTP-only clients and version-1 viewers). Render thread only.
  *
  * A view is a camera, a size and its own GPU images (rd_view) over the shared world; it keeps
- * the last image it produced (for still re-encodes), whether it owes a frame, and how many
- * connections watch it. A view nobody watches is never rendered. Sizes are clamped to the
- * per-view and total pixel limits here, so no caller can exceed them.
+ * its last frame's info and, on the CPU JPEG path, its RGBA8 image (for still re-encodes:
+ * frame_output.h), whether it owes a frame, and how many connections watch it. A view nobody
+ * watches is never rendered. Sizes are clamped to the per-view and total pixel limits here, so no
+ * caller can exceed them.
  */
 #ifndef SRV_VIEWS_H
 #define SRV_VIEWS_H
@@ -34,7 +35,7 @@ typedef struct srv_view {
     unsigned pt_samples;    /* progressive path tracing: samples accumulated */
     unsigned jpeg_cap;      /* its owner's JPEG quality cap, 1..100 (0: none; quality message) */
     unsigned fps_cap;       /* its owner's frame-rate cap, frames per second (0: none) */
-    srv_image *last_image;
+    srv_image *last_image;  /* CPU JPEG path only (the GPU path re-encodes from gpu.rgba8) */
     srv_frame_info last_info;
     rd_view gpu;
     bool gpu_ok;
