@@ -321,7 +321,8 @@ static void run_whole(srv_encoder_pool *p, tjhandle tj, srv_jpeg_encoder *enc, s
     } else {
         /* into a buffer of the worst case, so that TurboJPEG never reallocates it (the variants
          * are freed with free()) */
-        unsigned long cap = tjBufSize((int)img->width, (int)img->height, TJSAMP_420), tj_size = 0;
+        unsigned long cap = tjBufSize((int)img->width, (int)img->height, TJSAMP_420);
+        unsigned long tj_size = cap; /* the buffer's size going in, the JPEG's coming out */
         out = cap != (unsigned long)-1 ? malloc(cap) : NULL;
         int rc = tj && out ? tjCompress2(tj, img->data, (int)img->width, 0, (int)img->height,
                                          TJPF_RGBA, &out, &tj_size, TJSAMP_420, (int)v->quality,
