@@ -49,7 +49,8 @@ typedef struct srv_frame_output {
 } srv_frame_output;
 
 /* Sets up the ring and, for the GPU path (path, or AUTO on a device that is not the CPU), the
- * JPEG pass. */
+ * JPEG pass; when AUTO chose the GPU path and the pass cannot be made, the CPU path is used
+ * instead (with a warning); an explicit SRV_JPEG_GPU fails. */
 rd_vk_result srv_frame_output_init(srv_frame_output *o, rd_vk *vk, srv_jpeg_path path,
                                    srv_encoder_pool *encoders, srv_stats_board *stats,
                                    srv_views *views, char *err, size_t errlen);

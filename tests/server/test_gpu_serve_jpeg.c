@@ -8,7 +8,8 @@
  *  - /v1/stats names the path, and only the GPU daemon counts JPEGs from GPU coefficients;
  *  - on the GPU path, input gives interactive frames at the interactive quality and, once it
  *    stops, a still at the still quality re-encoded from the view's image (nothing rendered),
- *    and a viewer's JPEG cap re-encodes the still under the cap.
+ *    and a viewer's JPEG cap re-encodes the still under the cap;
+ *  - a path other than auto, gpu or cpu (flag or $PROBECAST_JPEG) is refused at start (exit 2).
  * The frames here are small, so encoded whole; striped coefficient frames are covered by
  * test_encoder_pool and test_gpu_jpeg, the lag-driven variants by test_gpu_serve_lag run on the
  * GPU path (tests/CMakeLists.txt).
@@ -17,6 +18,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/wait.h>
 #include <turbojpeg.h>
 
 #include <jpeglib.h>
@@ -159,8 +161,23 @@ static void check_stills(pc_daemon *d)
     pc_ws_close(&ws);
 }
 
+/* probecast serve with a bad --jpeg or $PROBECAST_JPEG exits 2 with a message naming it. */
+static void check_refused(const char *env, const char *flag)
+{
+    char cmd[1024];
+    snprintf(cmd, sizeof cmd, "%s%s '%s' serve --http 127.0.0.1:0 %s 2>&1 | grep -q %s", env,
+             env[0] ? " " : "", PROBECAST_EXE, flag, env[0] ? "PROBECAST_JPEG" : "-e --jpeg");
+    CHECKF(system(cmd) == 0, "refused with a message: %s", cmd);
+    snprintf(cmd, sizeof cmd, "%s%s '%s' serve --http 127.0.0.1:0 %s >/dev/null 2>&1", env,
+             env[0] ? " " : "", PROBECAST_EXE, flag);
+    int status = system(cmd);
+    CHECKF(WIFEXITED(status) && WEXITSTATUS(status) == 2, "exit status 2: %s", cmd);
+}
+
 int main(void)
 {
+    check_refused("", "--jpeg fast");
+    check_refused("PROBECAST_JPEG=fast", "");
     pc_daemon cpu = {0}, gpu = {0};
     if (!start(&cpu, "cpu") || !start(&gpu, "gpu")) {
         CHECK(!"daemons started");
