@@ -100,8 +100,8 @@ typedef struct srv_encoder_stats {
     uint64_t frames_published, frames_dropped, jpegs_encoded, bytes_encoded;
     double encode_ms_avg; /* exponential moving average per JPEG (wall: first stripe to join) */
     double encode_ms_last;
-    uint64_t jpegs_striped;   /* of jpegs_encoded, those encoded in stripes */
-    uint64_t jpegs_from_gpu;  /* of jpegs_encoded, those entropy-coded from GPU coefficients */
+    uint64_t jpegs_striped;  /* of jpegs_encoded, those encoded in stripes */
+    uint64_t jpegs_from_gpu; /* of jpegs_encoded, those entropy-coded from GPU coefficients */
 } srv_encoder_stats;
 
 /* Called (from an encoder thread) after a frame is published. Must be quick and thread-safe. */
