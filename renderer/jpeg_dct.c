@@ -46,14 +46,21 @@ uint64_t rd_jpeg_coef_bytes(unsigned width, unsigned height)
 }
 
 void rd_jpeg_dct_record(const rd_jpeg_dct *d, rd_cmd *c, const rd_buffer *rgba, unsigned width,
-                        unsigned height, unsigned quality, const rd_buffer *coefs)
+                        unsigned height, const unsigned *qualities, unsigned n,
+                        const rd_buffer *coefs)
 {
-    if (quality < 1) quality = 1;
-    if (quality > RD_JPEG_QUALITIES) quality = RD_JPEG_QUALITIES;
+    uint64_t packed = 0; /* one quality a byte from the lowest; 0 ends the list */
+    for (unsigned i = 0; i < n && i < RD_JPEG_MAX_SETS; i++) {
+        unsigned q = qualities[i] < 1                   ? 1
+                     : qualities[i] > RD_JPEG_QUALITIES ? RD_JPEG_QUALITIES
+                                                        : qualities[i];
+        packed |= (uint64_t)q << (8 * i);
+    }
     unsigned cols = rd_jpeg_mcu_cols(width), rows = rd_jpeg_mcu_rows(height);
-    pc_push push = {.buf0 = rgba->address,
+    pc_push push = {.globals = packed,
+                    .buf0 = rgba->address,
                     .buf1 = coefs->address,
-                    .buf2 = d->tables.address + (uint64_t)(quality - 1) * 128 * sizeof(uint32_t),
+                    .buf2 = d->tables.address,
                     .params = {width, height, cols, rows}};
     rd_cmd_barrier(c);
     rd_cmd_dispatch(c, &d->pipeline, &push, cols, rows, 1);
@@ -63,7 +70,7 @@ rd_vk_result rd_jpeg_dct_record_view(const rd_jpeg_dct *d, rd_view *v, rd_cmd *c
                                      const unsigned *qualities, unsigned n, bool timed, char *err,
                                      size_t errlen)
 {
-    if (n < 1 || n > 8 || !v->width || !v->height) {
+    if (n < 1 || n > RD_JPEG_MAX_SETS || !v->width || !v->height) {
         snprintf(err, errlen, "JPEG pass: %u qualities over a %ux%u image", n, v->width, v->height);
         return RD_VK_ERR_UNSUPPORTED;
     }
@@ -75,11 +82,7 @@ rd_vk_result rd_jpeg_dct_record_view(const rd_jpeg_dct *d, rd_view *v, rd_cmd *c
             rd_buffer_create(v->vk, &v->jpeg_coefs, n * set, RD_MEMORY_DEVICE, err, errlen);
         if (r != RD_VK_OK) return r;
     }
-    for (unsigned i = 0; i < n; i++) {
-        rd_buffer part = v->jpeg_coefs; /* the set's range: the pass addresses it */
-        part.address += i * set;
-        rd_jpeg_dct_record(d, c, &v->rgba8, v->width, v->height, qualities[i], &part);
-    }
+    rd_jpeg_dct_record(d, c, &v->rgba8, v->width, v->height, qualities, n, &v->jpeg_coefs);
     if (timed) rd_timer_mark(c, &v->timer, "jpeg");
     return RD_VK_OK;
 }

@@ -46,13 +46,17 @@ unsigned rd_jpeg_mcu_cols(unsigned width);
 unsigned rd_jpeg_mcu_rows(unsigned height);
 uint64_t rd_jpeg_coef_bytes(unsigned width, unsigned height);
 
+#define RD_JPEG_MAX_SETS 8u /* qualities one pass quantises at */
+
 /* Records the pass into c: rgba (width x height RGBA8, one uint a pixel, R in the low byte) to
- * coefs (at least rd_jpeg_coef_bytes), quantised at quality (1-100). A barrier before it orders
+ * coefs, transformed once and quantised at each of n qualities (1-100; n <= RD_JPEG_MAX_SETS):
+ * set i at offset i * rd_jpeg_coef_bytes (coefs must hold n sets). A barrier before it orders
  * the pass after the commands that wrote rgba; the caller orders what reads coefs after it. */
 void rd_jpeg_dct_record(const rd_jpeg_dct *d, rd_cmd *c, const rd_buffer *rgba, unsigned width,
-                        unsigned height, unsigned quality, const rd_buffer *coefs);
+                        unsigned height, const unsigned *qualities, unsigned n,
+                        const rd_buffer *coefs);
 
-/* Records the pass once per quality (n of them, at most 8) over view v's RGBA8 image (its last
+/* Records the pass at n qualities (1..RD_JPEG_MAX_SETS) over view v's RGBA8 image (its last
  * frame, or the frame recorded before into c) into v->jpeg_coefs, set i at offset
  * i * rd_jpeg_coef_bytes; the buffer is created or grown first (waiting for the device when an
  * older one may still be read). timed: c holds the view's frame (rd_view_record), whose timer

@@ -20,6 +20,7 @@ typedef struct output_record {
     bool timed; /* the view's passes ran in the same submission */
 } output_record;
 _Static_assert(sizeof(output_record) <= RD_READBACK_INFO_MAX, "fits a readback slot");
+_Static_assert(SRV_MAX_VARIANTS <= RD_JPEG_MAX_SETS, "one JPEG pass quantises every variant");
 
 bool srv_jpeg_path_parse(const char *s, srv_jpeg_path *out)
 {

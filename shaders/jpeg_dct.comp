@@ -14,9 +14,11 @@
  *    separable (rows, then columns);
  *  - quantisation: F / Q rounded half away from zero (jcdctmgr.c quantize), Q in natural order.
  * push (pc_push): buf0 = the frame, one uint a pixel (R in the low byte, as packUnorm4x8 writes
- * it: the renderer's RGBA8 view buffer), buf1 = coefficients out, buf2 = the quality's two
- * quantisation tables of 64 uints (luma, chroma; natural order), params = (width, height, MCU
- * columns, MCU rows).
+ * it: the renderer's RGBA8 view buffer), buf1 = coefficients out, buf2 = quantisation tables,
+ * 128 uints a quality from quality 1 on (luma, chroma; natural order), globals = the qualities
+ * of up to 8 sets, one a byte from the lowest (0 ends the list), params = (width, height, MCU
+ * columns, MCU rows). Set i is written at buf1 + i * the bytes of one set: the transform runs
+ * once for all of them.
  * Coefficients: three planes of 8x8 blocks, 64 int16 a block in natural order (row = vertical
  * frequency), rows of blocks top to bottom: Y (2 * MCU columns x 2 * MCU rows blocks), then Cb,
  * then Cr (MCU columns x MCU rows each): libjpeg's coefficient arrays (jvirt_barray) end to end.
@@ -95,14 +97,12 @@ void main()
     if (t < 192u) {
         uint blk = t >> 5, k0 = (t & 31u) * 2u, v = k0 >> 3;
         uint table = blk < 4u ? 0u : 64u;
-        int q[2];
+        float f[2];
         for (uint j = 0u; j < 2u; j++) {
             uint u = (k0 + j) & 7u;
-            float f = 0.0;
+            f[j] = 0.0;
             for (uint yy = 0u; yy < 8u; yy++)
-                f += s_rows[blk * 64u + yy * 8u + u] * s_basis[v * 8u + yy];
-            float d = f / float(JpegQuant(pc.buf2).v[table + k0 + j]);
-            q[j] = int(sign(d) * floor(abs(d) + 0.5));
+                f[j] += s_rows[blk * 64u + yy * 8u + u] * s_basis[v * 8u + yy];
         }
         uint plane, bw, bx, by;
         if (blk < 4u) {
@@ -116,8 +116,19 @@ void main()
             bx = mcu.x;
             by = mcu.y;
         }
-        uint block = plane + by * bw + bx;
-        JpegCoefs(pc.buf1).v[block * 32u + (k0 >> 1)] =
-            (uint(q[0]) & 0xffffu) | (uint(q[1]) << 16);
+        uint word = (plane + by * bw + bx) * 32u + (k0 >> 1);
+        uint set_words = 6u * mcu_cols * mcu_rows * 32u;
+        /* one set of coefficients a quality, the transform shared */
+        for (uint i = 0u; i < 8u; i++) {
+            uint quality = uint(pc.globals >> (8u * i)) & 255u;
+            if (quality == 0u) break;
+            uint base = (quality - 1u) * 128u + table + k0;
+            int q[2];
+            for (uint j = 0u; j < 2u; j++) {
+                float d = f[j] / float(JpegQuant(pc.buf2).v[base + j]);
+                q[j] = int(sign(d) * floor(abs(d) + 0.5));
+            }
+            JpegCoefs(pc.buf1).v[i * set_words + word] = (uint(q[0]) & 0xffffu) | (uint(q[1]) << 16);
+        }
     }
 }

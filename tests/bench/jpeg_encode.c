@@ -431,6 +431,19 @@ static void gpu_table(const char *device, const char *csv, const char *machine, 
                     rw.single_ms, rw.bytes, rw.single_bytes, ratio, rw.single_ms / rw.total_ms,
                     rw.psnr_src, rw.psnr_ref, rw.psnr_single);
         }
+        /* a frame's lag variants: three qualities in one pass or in three */
+        static const unsigned qs[3] = {30, 60, 90};
+        double fused[64], apart[64];
+        unsigned n = runs < 64 ? runs : 64;
+        for (unsigned k = 0; k < n; k++)
+            if (jpeg_gpu_time_sets(&g, qs, 3, true, &fused[k], err, sizeof err) != RD_VK_OK ||
+                jpeg_gpu_time_sets(&g, qs, 3, false, &apart[k], err, sizeof err) != RD_VK_OK) {
+                fprintf(stderr, "GPU path: %s\n", err);
+                exit(1);
+            }
+        printf("# %ux%u, qualities 30, 60, 90: one pass %.3f ms, three passes %.3f ms (GPU, "
+               "median)\n",
+               w, h, median(fused, n), median(apart, n));
         free(rgba);
     }
     if (out) fclose(out);

@@ -66,6 +66,7 @@ void jpeg_gpu_destroy(jpeg_gpu *g)
     rd_vk_wait_idle(g->vk);
     rd_timer_destroy(g->vk, &g->timer);
     rd_buffer_destroy(g->vk, &g->frame_host);
+    rd_buffer_destroy(g->vk, &g->sets);
     rd_buffer_destroy(g->vk, &g->coefs_host);
     rd_buffer_destroy(g->vk, &g->coefs);
     rd_buffer_destroy(g->vk, &g->frame);
@@ -111,7 +112,7 @@ rd_vk_result jpeg_gpu_transform(jpeg_gpu *g, jpeg_gpu_times *times, char *err, s
     rd_vk_result r = rd_cmd_begin(g->vk, &cmd, err, errlen);
     if (r != RD_VK_OK) return r;
     rd_timer_begin(&cmd, &g->timer);
-    rd_jpeg_dct_record(&g->dct, &cmd, &g->frame, g->width, g->height, g->quality,
+    rd_jpeg_dct_record(&g->dct, &cmd, &g->frame, g->width, g->height, &g->quality, 1,
                        g->direct ? &g->coefs_host : &g->coefs);
     rd_timer_mark(&cmd, &g->timer, "dct"); /* its barrier: the pass's writes, host-visible */
     if (!g->direct) {
@@ -159,6 +160,32 @@ rd_vk_result jpeg_gpu_time_frame_copy(jpeg_gpu *g, jpeg_gpu_times *times, char *
     times->dct_ms = 0;
     times->copy_ms = g->timer.valid ? g->timer.ms[1] : 0;
     times->wall_ms = srv_mono_ms() - t0;
+    return r;
+}
+
+rd_vk_result jpeg_gpu_time_sets(jpeg_gpu *g, const unsigned *qualities, unsigned n, bool fused,
+                                double *ms, char *err, size_t errlen)
+{
+    VkDeviceSize set = rd_jpeg_coef_bytes(g->width, g->height);
+    rd_vk_result r = ensure(g->vk, &g->sets, n * set, RD_MEMORY_DEVICE, err, errlen);
+    rd_cmd cmd;
+    if (r == RD_VK_OK) r = rd_cmd_begin(g->vk, &cmd, err, errlen);
+    if (r != RD_VK_OK) return r;
+    rd_timer_begin(&cmd, &g->timer);
+    if (fused) {
+        rd_jpeg_dct_record(&g->dct, &cmd, &g->frame, g->width, g->height, qualities, n, &g->sets);
+    } else {
+        for (unsigned i = 0; i < n; i++) {
+            rd_buffer part = g->sets; /* set i's range: the pass addresses it */
+            part.address += i * set;
+            rd_jpeg_dct_record(&g->dct, &cmd, &g->frame, g->width, g->height, &qualities[i], 1,
+                               &part);
+        }
+    }
+    rd_timer_mark(&cmd, &g->timer, "sets");
+    r = rd_cmd_submit_wait(g->vk, &cmd, err, errlen);
+    if (r == RD_VK_OK) r = rd_timer_resolve(g->vk, &g->timer, err, errlen);
+    *ms = g->timer.valid ? g->timer.ms[1] : 0;
     return r;
 }
 

@@ -33,6 +33,7 @@ typedef struct jpeg_gpu {
     rd_buffer coefs;      /* device local: the quantised coefficients */
     rd_buffer coefs_host; /* RD_MEMORY_READBACK: their copy, read by the entropy coders */
     rd_buffer frame_host; /* RD_MEMORY_READBACK: the frame, for jpeg_gpu_time_frame_copy */
+    rd_buffer sets;       /* device local: coefficient sets for jpeg_gpu_time_sets */
     rd_timer timer;
     unsigned width, height, quality;
     bool direct; /* the pass writes coefs_host itself over the bus (no coefs, no copy) */
@@ -70,6 +71,12 @@ rd_vk_result jpeg_gpu_transform(jpeg_gpu *g, jpeg_gpu_times *times, char *err, s
 /* For comparison, what the CPU encoders' input costs instead: the frame copied to host-visible
  * memory as the renderer's readback does (renderer/readback.c). times->dct_ms is 0. */
 rd_vk_result jpeg_gpu_time_frame_copy(jpeg_gpu *g, jpeg_gpu_times *times, char *err, size_t errlen);
+
+/* GPU time (ms, from timestamps; 0 without them) of the frame's coefficients at n qualities
+ * (qualities[0..n), n <= RD_JPEG_MAX_SETS): in one pass (fused, as the daemon quantises a frame's
+ * lag variants), or in n passes of one quality each. */
+rd_vk_result jpeg_gpu_time_sets(jpeg_gpu *g, const unsigned *qualities, unsigned n, bool fused,
+                                double *ms, char *err, size_t errlen);
 
 /* Entropy-codes the coefficients as one baseline JPEG (no restart markers) on this thread
  * into out. false on a libjpeg error (message in err). */

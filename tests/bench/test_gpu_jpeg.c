@@ -188,6 +188,36 @@ done:
         srv_jpeg_buf_free(&stripes[i]);
 }
 
+/* One pass at three qualities writes, set by set, exactly the coefficients of three passes at one
+ * quality each (the daemon quantises a frame's lag variants in one pass). */
+static void check_sets(jpeg_gpu *g, unsigned w, unsigned h)
+{
+    static const unsigned qs[3] = {30, 60, 90};
+    uint8_t *src = make_image(w, h, 99);
+    size_t set = rd_jpeg_coef_bytes(w, h);
+    rd_buffer sets = {0};
+    uint8_t *all = NULL;
+    VK_CHECK(jpeg_gpu_set_frame(g, src, w, h, qs[0], err, sizeof err));
+    VK_CHECK(rd_buffer_create(g->vk, &sets, 3 * set, RD_MEMORY_READBACK, err, sizeof err));
+    rd_cmd cmd;
+    VK_CHECK(rd_cmd_begin(g->vk, &cmd, err, sizeof err));
+    rd_jpeg_dct_record(&g->dct, &cmd, &g->frame, w, h, qs, 3, &sets);
+    rd_cmd_barrier(&cmd);
+    VK_CHECK(rd_cmd_submit_wait(g->vk, &cmd, err, sizeof err));
+    all = malloc(3 * set);
+    VK_CHECK(rd_buffer_download(g->vk, &sets, 0, all, 3 * set, err, sizeof err));
+    for (unsigned i = 0; i < 3; i++) {
+        VK_CHECK(jpeg_gpu_set_frame(g, src, w, h, qs[i], err, sizeof err));
+        VK_CHECK(jpeg_gpu_transform(g, NULL, err, sizeof err));
+        CHECKF(memcmp(all + i * set, g->coefs_host.mapped, set) == 0,
+               "%ux%u: set %u (q%u) of one pass equals a pass at q%u alone", w, h, i, qs[i], qs[i]);
+    }
+done:
+    free(all);
+    free(src);
+    rd_buffer_destroy(g->vk, &sets);
+}
+
 int main(void)
 {
     rd_vk vk;
@@ -199,6 +229,8 @@ int main(void)
     for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++)
         for (size_t q = 0; q < sizeof qualities / sizeof qualities[0]; q++)
             check_size(&g, sizes[s][0], sizes[s][1], qualities[q]);
+    check_sets(&g, 37, 29);
+    check_sets(&g, 96, 80);
 done:
     jpeg_gpu_destroy(&g);
     return test_vk_close(&vk);
