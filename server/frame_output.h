@@ -8,10 +8,11 @@
  *
  * What is copied depends on the JPEG path:
  *  - CPU (libjpeg-turbo encodes the pixels): the RGBA8 image, 4 bytes a pixel;
- *  - GPU: the JPEG pass (renderer/jpeg_dct.h) runs in the frame's command buffer once for every
- *    quality the frame is sent at (the encoders' lag-driven variants, srv_encoder_qualities),
- *    and its coefficients are copied, 3 bytes a pixel a quality; the encoders only entropy-code
- *    them (server/jpeg_coefs.h), about half the CPU time of encoding the pixels.
+ *  - GPU: the JPEG pass (renderer/jpeg_dct.h) runs in the frame's command buffer, transforming
+ *    once and quantising at every quality the frame is sent at (the encoders' lag-driven
+ *    variants, srv_encoder_qualities), and its coefficients are copied, 3 bytes a pixel a
+ *    quality; the encoders only entropy-code them (server/jpeg_coefs.h), about 40% of the CPU
+ *    time of encoding the pixels.
  * A still (the last frame at still quality once input stops) re-encodes the view's last image:
  * the RGBA8 image kept on the CPU, or on the GPU path the JPEG pass over the view's image,
  * which still holds that frame (nothing rendered the view since).
