@@ -47,9 +47,7 @@ rd_vk_result srv_frame_output_init(srv_frame_output *o, rd_vk *vk, srv_jpeg_path
     o->gpu = path == SRV_JPEG_GPU || (path == SRV_JPEG_AUTO && !vk->is_cpu);
     rd_vk_result r = RD_VK_OK;
     if (o->gpu) {
-        static rd_jpeg_tables tables; /* 25 KiB: not on the stack */
-        srv_jpeg_quant_tables_all(&tables);
-        r = rd_jpeg_dct_create(vk, &o->dct, &tables, err, errlen);
+        r = srv_jpeg_dct_create(vk, &o->dct, err, errlen);
         o->gpu = r == RD_VK_OK;
         if (r != RD_VK_OK && path == SRV_JPEG_AUTO) { /* chosen for the user: fall back */
             srv_warn("render", "JPEG pass unavailable (%s): encoding on the CPU", err);

@@ -2,6 +2,7 @@
 #include "jpeg_coefs.h"
 
 #include <stdio.h> /* jpeglib.h needs FILE and size_t first */
+#include <stdlib.h>
 #include <string.h>
 
 #include <jpeglib.h>
@@ -26,10 +27,15 @@ void srv_jpeg_quant_tables(unsigned quality, uint16_t tables[2][64])
     jpeg_destroy_compress(&c);
 }
 
-void srv_jpeg_quant_tables_all(rd_jpeg_tables *tables)
+rd_vk_result srv_jpeg_dct_create(rd_vk *vk, rd_jpeg_dct *d, char *err, size_t errlen)
 {
+    rd_jpeg_tables *tables = malloc(sizeof *tables); /* 25 KiB: not on the stack */
+    if (!tables) abort();
     for (unsigned q = 1; q <= RD_JPEG_QUALITIES; q++)
         srv_jpeg_quant_tables(q, (*tables)[q - 1]);
+    rd_vk_result r = rd_jpeg_dct_create(vk, d, tables, err, errlen);
+    free(tables);
+    return r;
 }
 
 /* What feed_rows encodes: image rows [y0, y0 + rows) (y0 a multiple of 16) of the frame's

@@ -23,8 +23,8 @@
 /* The quantisation tables libjpeg uses at quality (jpeg_set_quality, baseline), natural order:
  * tables[0] luma, tables[1] chroma. */
 void srv_jpeg_quant_tables(unsigned quality, uint16_t tables[2][64]);
-/* The same for every quality 1-100 (for rd_jpeg_dct_create). */
-void srv_jpeg_quant_tables_all(rd_jpeg_tables *tables);
+/* The JPEG pass (rd_jpeg_dct_create) with these tables for every quality 1-100. */
+rd_vk_result srv_jpeg_dct_create(rd_vk *vk, rd_jpeg_dct *d, char *err, size_t errlen);
 
 /* One frame's coefficients in renderer/jpeg_dct.h's layout (rd_jpeg_coef_bytes bytes). */
 typedef struct srv_jpeg_coefs {

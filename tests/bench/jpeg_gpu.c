@@ -49,9 +49,7 @@ rd_vk_result jpeg_gpu_create(jpeg_gpu *g, rd_vk *vk, char *err, size_t errlen)
     g->coders[0] = srv_jpeg_encoder_create();
     g->coder_count = 1;
     g->pool_threads = 1;
-    static rd_jpeg_tables tables;
-    srv_jpeg_quant_tables_all(&tables);
-    rd_vk_result r = rd_jpeg_dct_create(vk, &g->dct, &tables, err, errlen);
+    rd_vk_result r = srv_jpeg_dct_create(vk, &g->dct, err, errlen);
     if (r == RD_VK_OK) r = rd_timer_create(vk, &g->timer, err, errlen);
     if (r != RD_VK_OK) jpeg_gpu_destroy(g);
     return r;
