@@ -43,7 +43,6 @@ rd_vk_result srv_frame_output_init(srv_frame_output *o, rd_vk *vk, srv_jpeg_path
     o->stats = stats;
     o->views = views;
     rd_readback_init(&o->rb, vk);
-    o->rb_ok = true;
     o->gpu = path == SRV_JPEG_GPU || (path == SRV_JPEG_AUTO && !vk->is_cpu);
     rd_vk_result r = RD_VK_OK;
     if (o->gpu) {
@@ -63,7 +62,7 @@ rd_vk_result srv_frame_output_init(srv_frame_output *o, rd_vk *vk, srv_jpeg_path
 void srv_frame_output_dispose(srv_frame_output *o)
 {
     if (!o->vk) return;
-    if (o->rb_ok) rd_readback_dispose(&o->rb);
+    rd_readback_dispose(&o->rb);
     rd_jpeg_dct_destroy(o->vk, &o->dct);
     memset(o, 0, sizeof *o);
 }

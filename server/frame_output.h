@@ -41,7 +41,6 @@ bool srv_jpeg_path_parse(const char *s, srv_jpeg_path *out);
 typedef struct srv_frame_output {
     rd_vk *vk;
     rd_readback rb;
-    bool rb_ok;
     bool gpu; /* the GPU JPEG path is on */
     rd_jpeg_dct dct;
     srv_encoder_pool *encoders;

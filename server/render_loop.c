@@ -31,7 +31,6 @@ struct srv_render_loop {
     bool svc_ok;
     srv_views views;
     srv_frame_output out; /* readback, GPU JPEG pass, hand-off to the encoders */
-    bool out_ok;
     srv_mailbox mb;
     srv_stats_board stats;
 
@@ -522,7 +521,6 @@ srv_render_loop *srv_render_loop_create(const srv_render_config *cfg, rd_scene *
     }
     vr = srv_frame_output_init(&l->out, &l->vk, cfg->jpeg_path, cfg->encoders, &l->stats, &l->views,
                                err, errlen);
-    l->out_ok = true;
     if (vr == RD_VK_OK) vr = rd_view_passes_create(&l->vk, &l->passes, err, errlen);
     l->passes_ok = vr == RD_VK_OK;
     if (vr == RD_VK_OK) vr = rd_pick_create(&l->vk, &l->pick, err, errlen);
@@ -583,8 +581,8 @@ void srv_render_loop_destroy(srv_render_loop *l)
     srv_mailbox_dispose(&l->mb);
     if (l->vk_ok) {
         rd_vk_wait_idle(&l->vk);
-        srv_views_dispose(&l->views); /* their last images end their readback leases */
-        if (l->out_ok) srv_frame_output_dispose(&l->out);
+        srv_views_dispose(&l->views);      /* their last images end their readback leases */
+        srv_frame_output_dispose(&l->out); /* idempotent, and a no-op before its init */
         if (l->svc_ok) srv_scene_service_dispose(&l->svc);
         rd_pick_destroy(&l->pick);
         if (l->passes_ok) rd_view_passes_destroy(&l->vk, &l->passes);
