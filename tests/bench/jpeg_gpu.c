@@ -92,8 +92,6 @@ rd_vk_result jpeg_gpu_set_frame(jpeg_gpu *g, const uint8_t *rgba, unsigned width
     g->width = width;
     g->height = height;
     g->quality = quality;
-    g->mcu_cols = rd_jpeg_mcu_cols(width);
-    g->mcu_rows = rd_jpeg_mcu_rows(height);
     VkDeviceSize pixels = (VkDeviceSize)width * height * 4;
     VkDeviceSize coefs = rd_jpeg_coef_bytes(width, height);
     rd_vk_result r = ensure(g->vk, &g->frame, pixels, RD_MEMORY_DEVICE, err, errlen);

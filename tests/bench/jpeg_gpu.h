@@ -37,7 +37,6 @@ typedef struct jpeg_gpu {
     rd_timer timer;
     unsigned width, height, quality;
     bool direct; /* the pass writes coefs_host itself over the bus (no coefs, no copy) */
-    unsigned mcu_cols, mcu_rows;
 
     /* entropy coding: one libjpeg compressor per stripe (coders[0] also codes whole frames),
      * stripes run as tasks on a pool of pool_threads threads (renderer/task_pool.h) */

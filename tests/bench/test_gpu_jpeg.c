@@ -89,7 +89,8 @@ static int compare_coefs(const jpeg_gpu *g, const uint8_t *jpeg, size_t size, si
     jpeg_read_header(&d, TRUE);
     jvirt_barray_ptr *arrays = jpeg_read_coefficients(&d);
     const JBLOCK *all = g->coefs_host.mapped;
-    size_t plane = (size_t)g->mcu_cols * g->mcu_rows;
+    unsigned cols = rd_jpeg_mcu_cols(g->width);
+    size_t plane = (size_t)cols * rd_jpeg_mcu_rows(g->height);
     int worst = 0;
     *count = *differ = 0;
     for (int ci = 0; ci < 3; ci++) {
@@ -100,7 +101,7 @@ static int compare_coefs(const jpeg_gpu *g, const uint8_t *jpeg, size_t size, si
             JBLOCKARRAY row = d.mem->access_virt_barray((j_common_ptr)&d, arrays[ci], r, 1, FALSE);
             for (JDIMENSION x = 0; x < c->width_in_blocks; x++)
                 for (int k = 0; k < 64; k++) {
-                    int a = base[(size_t)r * g->mcu_cols * s + x][k], b = row[0][x][k];
+                    int a = base[(size_t)r * cols * s + x][k], b = row[0][x][k];
                     if (abs(a - b) > worst) worst = abs(a - b);
                     *differ += a != b;
                     ++*count;
