@@ -8,7 +8,8 @@
  *  - /v1/stats names the path, and only the GPU daemon counts JPEGs from GPU coefficients;
  *  - on the GPU path, input gives interactive frames at the interactive quality and, once it
  *    stops, a still at the still quality re-encoded from the view's image (nothing rendered),
- *    and a viewer's JPEG cap re-encodes the still under the cap;
+ *    and a viewer's JPEG cap re-encodes the still under the cap (the stream may carry a lower
+ *    lag variant to a slow viewer; GET /v1/frame.jpg?view= gives the still's best one);
  *  - a path other than auto, gpu or cpu (flag or $PROBECAST_JPEG) is refused at start (exit 2).
  * The frames here are small, so encoded whole; striped coefficient frames are covered by
  * test_encoder_pool and test_gpu_jpeg, the lag-driven variants by test_gpu_serve_lag run on the
@@ -63,14 +64,18 @@ static bool tables_match(const uint8_t *jpeg, size_t size, unsigned q)
     return ok;
 }
 
-/* GET /v1/frame.jpg: decoded RGB (caller frees) and its announced quality; NULL on failure. */
-static uint8_t *get_frame(pc_daemon *d, unsigned *quality, const char *what)
+/* GET path (/v1/frame.jpg[?view=ID]): decoded RGB (caller frees), its announced quality and
+ * frame id; NULL on failure. */
+static uint8_t *get_frame(pc_daemon *d, const char *path, unsigned *quality, uint64_t *id,
+                          const char *what)
 {
     pc_http_response r;
     uint8_t *rgb = NULL;
-    CHECKF(pc_api(d, "GET", "/v1/frame.jpg", NULL, true, &r) == 200, "%s: a frame", what);
+    CHECKF(pc_api(d, "GET", path, NULL, true, &r) == 200, "%s: a frame", what);
     const char *qh = r.headers ? strstr(r.headers, "X-Frame-Quality: ") : NULL;
+    const char *ih = r.headers ? strstr(r.headers, "X-Frame-Id: ") : NULL;
     *quality = qh ? (unsigned)atoi(qh + 17) : 0;
+    *id = ih ? strtoull(ih + 12, NULL, 10) : 0;
     tjhandle tj = tjInitDecompress();
     int w = 0, h = 0, sub = -1, cs = -1;
     if (r.status == 200 && tjDecompressHeader3(tj, (const uint8_t *)r.body,
@@ -104,8 +109,46 @@ static void check_stats(pc_daemon *d, const char *path, bool from_gpu)
     cJSON_Delete(st);
 }
 
-/* On the GPU daemon: interactive frames at quality 60, then the still at 90, then (after a JPEG
- * cap of 40 from this viewer) a still at 40, all decoding to the view's size. */
+/* Waits up to 30 s for the next still of view on ws (acknowledging frames); counts the
+ * interactive frames before it and their highest quality. False when none came. */
+static bool next_still(pc_ws *ws, uint32_t view, pc_frame *still, unsigned *interactive,
+                       unsigned *q_interactive)
+{
+    double start = pc_now_ms();
+    while (pc_now_ms() - start < 30000) {
+        pc_frame f;
+        if (!pc_stream_next(ws, 5000, true, &f)) continue;
+        if (f.h.view_id == view) {
+            CHECK(f.h.width == W && f.h.height == H && f.rgb != NULL);
+            if (f.h.flags & 1) {
+                *still = f;
+                return true;
+            }
+            ++*interactive;
+            if (f.h.quality > *q_interactive) *q_interactive = f.h.quality;
+        }
+        pc_frame_free(&f);
+    }
+    return false;
+}
+
+/* The view's newest frame over HTTP is the still frame_id, whose best variant has quality q
+ * (the stream may carry a lower variant to a viewer whose acknowledgements lag). */
+static void check_best(pc_daemon *d, uint32_t view, uint64_t frame_id, unsigned q)
+{
+    char path[64];
+    snprintf(path, sizeof path, "/v1/frame.jpg?view=%u", view);
+    unsigned quality = 0;
+    uint64_t id = 0;
+    uint8_t *rgb = get_frame(d, path, &quality, &id, "the still");
+    CHECKF(id == frame_id && quality == q, "the still %llu at quality %u: got %llu at %u",
+           (unsigned long long)frame_id, q, (unsigned long long)id, quality);
+    free(rgb);
+}
+
+/* On the GPU daemon: interactive frames at quality 60 (or a lag variant under it), then the
+ * still at 90, then (after a JPEG cap of 40 from this viewer) the still again at 40, all
+ * decoding to the view's size. */
 static void check_stills(pc_daemon *d)
 {
     pc_ws ws;
@@ -114,7 +157,6 @@ static void check_stills(pc_daemon *d)
     pc_frame f;
     CHECK(pc_stream_next(&ws, 60000, true, &f)); /* the view's first frame */
     pc_frame_free(&f);
-    unsigned interactive = 0, stills = 0, q_interactive = 0, q_still = 0;
     for (int i = 0; i < 5; i++) {
         char msg[160];
         snprintf(msg, sizeof msg,
@@ -123,41 +165,30 @@ static void check_stills(pc_daemon *d)
         CHECK(pc_ws_send_text(&ws, msg) == 0);
         pc_sleep_ms(30);
     }
-    double start = pc_now_ms();
-    while (pc_now_ms() - start < 30000 && !stills) {
-        if (!pc_stream_next(&ws, 5000, true, &f)) continue;
-        if (f.h.view_id == view) {
-            CHECK(f.h.width == W && f.h.height == H && f.rgb != NULL);
-            if (f.h.flags & 1) {
-                stills++;
-                q_still = f.h.quality;
-            } else {
-                interactive++;
-                q_interactive = f.h.quality;
-            }
-        }
-        pc_frame_free(&f);
+    unsigned interactive = 0, q_interactive = 0;
+    pc_frame still;
+    bool got = next_still(&ws, view, &still, &interactive, &q_interactive);
+    CHECKF(got, "a still after the input");
+    CHECKF(interactive >= 1 && q_interactive >= 1 && q_interactive <= 60,
+           "%u interactive frames, quality up to %u", interactive, q_interactive);
+    if (got) {
+        CHECKF(still.h.quality >= 1 && still.h.quality <= 90, "the still's quality %u",
+               still.h.quality);
+        check_best(d, view, still.h.frame_id, 90);
+        pc_frame_free(&still);
     }
-    CHECKF(interactive >= 1 && q_interactive == 60, "%u interactive frames, quality %u",
-           interactive, q_interactive);
-    CHECKF(stills == 1 && q_still == 90, "a still at quality %u", q_still);
 
     /* a JPEG cap while idle: the still again, under the cap */
     CHECK(pc_ws_send_text(&ws, "{\"type\":\"quality\",\"jpeg\":40,\"max_fps\":null}") == 0);
-    bool capped = false;
-    start = pc_now_ms();
-    while (pc_now_ms() - start < 30000 && !capped) {
-        if (!pc_stream_next(&ws, 5000, true, &f)) continue;
-        if (f.h.view_id == view && (f.h.flags & 1)) {
-            capped = f.h.quality == 40;
-            CHECKF(capped, "the capped still has quality %u", f.h.quality);
-            CHECK(f.rgb != NULL && f.mean > 5);
-            break;
-        }
-        pc_frame_free(&f);
+    interactive = q_interactive = 0;
+    got = next_still(&ws, view, &still, &interactive, &q_interactive);
+    CHECKF(got, "a still under the new cap");
+    if (got) {
+        CHECKF(still.h.quality >= 1 && still.h.quality <= 40 && still.mean > 5,
+               "the capped still: quality %u, mean %.1f", still.h.quality, still.mean);
+        check_best(d, view, still.h.frame_id, 40);
+        pc_frame_free(&still);
     }
-    if (capped) pc_frame_free(&f);
-    CHECK(capped);
     pc_ws_close(&ws);
 }
 
@@ -186,8 +217,9 @@ int main(void)
         return test_finish();
     }
     unsigned q_cpu = 0, q_gpu = 0;
-    uint8_t *a = get_frame(&cpu, &q_cpu, "--jpeg cpu");
-    uint8_t *b = get_frame(&gpu, &q_gpu, "--jpeg gpu");
+    uint64_t id_cpu = 0, id_gpu = 0;
+    uint8_t *a = get_frame(&cpu, "/v1/frame.jpg", &q_cpu, &id_cpu, "--jpeg cpu");
+    uint8_t *b = get_frame(&gpu, "/v1/frame.jpg", &q_gpu, &id_gpu, "--jpeg gpu");
     CHECKF(q_cpu == q_gpu && q_gpu >= 1, "qualities %u and %u", q_cpu, q_gpu);
     if (a && b) {
         double sum = 0, se = 0;
