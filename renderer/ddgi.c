@@ -187,7 +187,8 @@ void rd_ddgi_ray_order(unsigned rays, uint32_t *order)
         double x = cos(phi) * r, y = sin(phi) * r;
         double l1 = fabs(x) + fabs(y) + fabs(z), u = x / l1, v = y / l1;
         if (z < 0) { /* fold the lower hemisphere onto the square's corners */
-            double fu = (1.0 - fabs(v)) * (u >= 0 ? 1 : -1), fv = (1.0 - fabs(u)) * (v >= 0 ? 1 : -1);
+            double fu = (1.0 - fabs(v)) * (u >= 0 ? 1 : -1),
+                   fv = (1.0 - fabs(u)) * (v >= 0 ? 1 : -1);
             u = fu, v = fv;
         }
         uint32_t qu = (uint32_t)fmin(65535.0, (u * 0.5 + 0.5) * 65536.0);
@@ -195,16 +196,18 @@ void rd_ddgi_ray_order(unsigned rays, uint32_t *order)
         keys[i] = (ray_key){spread_bits(qu) | spread_bits(qv) << 1, i};
     }
     qsort(keys, rays, sizeof keys[0], cmp_ray_key);
-    for (unsigned i = 0; i < rays; i++) order[i] = keys[i].ray;
+    for (unsigned i = 0; i < rays; i++)
+        order[i] = keys[i].ray;
 }
 
 static rd_vk_result upload_ray_order(rd_ddgi *d, unsigned rays, char *err, size_t errlen)
 {
     uint32_t order[PC_DDGI_MAX_RAYS];
     rd_ddgi_ray_order(rays, order);
-    rd_vk_result r = rd_buffer_create(d->vk, &d->order, (VkDeviceSize)rays * 4, RD_MEMORY_DEVICE,
-                                      err, errlen);
-    if (r == RD_VK_OK) r = rd_buffer_upload(d->vk, &d->order, 0, order, (VkDeviceSize)rays * 4, err, errlen);
+    rd_vk_result r =
+        rd_buffer_create(d->vk, &d->order, (VkDeviceSize)rays * 4, RD_MEMORY_DEVICE, err, errlen);
+    if (r == RD_VK_OK)
+        r = rd_buffer_upload(d->vk, &d->order, 0, order, (VkDeviceSize)rays * 4, err, errlen);
     return r;
 }
 
@@ -441,27 +444,35 @@ void rd_ddgi_record_update(rd_ddgi *d, rd_cmd *c, rd_timer *timer, VkDeviceAddre
     rd_cmd_dispatch(c, &d->select, &push, probe_groups, 1, 1);
     rd_cmd_barrier(c);
     /* everything below works on the listed probes only (indirect sizes) */
-    vkCmdFillBuffer(c->cb, d->bins.buffer, 0, VK_WHOLE_SIZE, 0);
     rd_cmd_dispatch_indirect(c, &d->trace, &push, &d->ctrl, offsetof(pc_ddgi_control, trace_args));
     rd_cmd_barrier(c);
     if (timer) rd_timer_mark(c, timer, "probe trace");
-    /* the hits sorted by place (a counting sort over a grid of cells), then shaded in that order */
-    pc_push bin = {.globals = globals,
-                   .buf0 = d->bins.address,
-                   .buf1 = d->hits.address,
-                   .buf2 = d->sorted.address};
-    rd_cmd_dispatch_indirect(c, &d->bin, &bin, &d->ctrl, offsetof(pc_ddgi_control, trace_args));
-    rd_cmd_barrier(c);
-    rd_cmd_dispatch(c, &d->scan, &bin, 1, 1, 1);
-    rd_cmd_barrier(c);
-    bin.params.x = 1;
-    rd_cmd_dispatch_indirect(c, &d->bin, &bin, &d->ctrl, offsetof(pc_ddgi_control, trace_args));
-    rd_cmd_barrier(c);
-    if (timer) rd_timer_mark(c, timer, "probe sort");
     push.params.y = d->updates > 0;
-    push.params.z = 1; /* sorted */
-    push.buf2 = d->sorted.address;
-    rd_cmd_dispatch_indirect(c, &d->shade, &push, &d->ctrl, offsetof(pc_ddgi_control, shade_args));
+    if (d->sort_hits) {
+        /* the hits sorted by place (a counting sort over a grid of cells), then shaded in that
+         * order */
+        vkCmdFillBuffer(c->cb, d->bins.buffer, 0, VK_WHOLE_SIZE, 0);
+        rd_cmd_barrier(c);
+        pc_push bin = {.globals = globals,
+                       .buf0 = d->bins.address,
+                       .buf1 = d->hits.address,
+                       .buf2 = d->sorted.address};
+        rd_cmd_dispatch_indirect(c, &d->bin, &bin, &d->ctrl, offsetof(pc_ddgi_control, trace_args));
+        rd_cmd_barrier(c);
+        rd_cmd_dispatch(c, &d->scan, &bin, 1, 1, 1);
+        rd_cmd_barrier(c);
+        bin.params.x = 1;
+        rd_cmd_dispatch_indirect(c, &d->bin, &bin, &d->ctrl, offsetof(pc_ddgi_control, trace_args));
+        rd_cmd_barrier(c);
+        if (timer) rd_timer_mark(c, timer, "probe sort");
+        push.params.z = 1;
+        push.buf2 = d->sorted.address;
+        rd_cmd_dispatch_indirect(c, &d->shade, &push, &d->ctrl,
+                                 offsetof(pc_ddgi_control, shade_args));
+    } else {
+        rd_cmd_dispatch_indirect(c, &d->shade, &push, &d->ctrl,
+                                 offsetof(pc_ddgi_control, trace_args));
+    }
     rd_cmd_barrier(c);
     push.params.z = 0;
     push.buf2 = 0;

@@ -49,6 +49,13 @@ typedef struct rd_ddgi {
     double drift, drift_var;
     bool hold;
     unsigned wake_count; /* wake boxes waiting for the next update */
+    /* Sort the hits by place before shading them (probe sort) when shading traces shadow rays:
+     * neighbouring hits' shadow rays then run side by side. When every light's visibility
+     * comes from its distance map (shadow_maps.h) the hits are shaded in the trace's order
+     * instead, which measured cheaper than sorting on builtin:interior (H100, 256 rays: 0.69
+     * against 0.20 + 0.60 ms; tests/bench/results/h100/probe_shading.txt). Set by the world
+     * before each update. */
+    bool sort_hits;
     pc_ddgi_wake wakes[PC_DDGI_WAKE_MAX];
 } rd_ddgi;
 
@@ -75,7 +82,8 @@ float rd_ddgi_sleep_age(float max_hysteresis);
 /* Chooses the next update's random rotation; call before writing pc_globals for it. */
 void rd_ddgi_begin_update(rd_ddgi *d);
 /* Records one probe update. globals must hold d->vol as set by rd_ddgi_begin_update.
- * Timer marks: "probe trace", "probe shade", "blend distance", "blend irradiance", "borders".
+ * Timer marks: "probe trace", "probe sort" (only with sort_hits), "probe shade",
+ * "blend distance", "blend irradiance", "borders".
  * Off probes (inside geometry) trace PC_DDGI_INACTIVE_RAYS rays and are not shaded or blended. */
 void rd_ddgi_record_update(rd_ddgi *d, rd_cmd *c, rd_timer *timer, VkDeviceAddress globals,
                            VkDeviceAddress counters);

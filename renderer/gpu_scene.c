@@ -301,9 +301,20 @@ static void rows3(pc_vec4 out[3], const float m[16])
         out[r] = (pc_vec4){m[r], m[4 + r], m[8 + r], m[12 + r]};
 }
 
+/* Source of rd_gpu_scene.revision (render thread only, like all of Vulkan here). */
+static uint64_t last_revision;
+
+static void fnv(uint64_t *h, const void *data, size_t n)
+{
+    const unsigned char *b = data;
+    for (size_t i = 0; i < n; i++)
+        *h = (*h ^ b[i]) * 0x100000001b3ull;
+}
+
 rd_vk_result rd_gpu_scene_update_instances(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
                                            char *err, size_t errlen)
 {
+    gs->revision = ++last_revision;
     double t0 = now_ms();
     uint32_t n = s->instance_count;
     if (n != gs->instance_capacity && gs->instance_capacity != 0) {
@@ -408,6 +419,23 @@ rd_vk_result rd_gpu_scene_update_lights(rd_vk *vk, rd_gpu_scene *gs, const rd_sc
                                     : l->type == RD_LIGHT_DIRECTIONAL ? PC_LIGHT_DIRECTIONAL
                                                                       : PC_LIGHT_POINT,
                                     0, 0, 0};
+    }
+    uint64_t shape = 0xcbf29ce484222325ull;
+    memset(gs->directional, 0, sizeof gs->directional);
+    for (uint32_t i = 0; i < n; i++) {
+        fnv(&shape, &lights[i].position_range, sizeof lights[i].position_range);
+        fnv(&shape, &lights[i].info.x, sizeof lights[i].info.x);
+        if (lights[i].info.x != PC_LIGHT_POINT) /* spot and directional lights aim */
+            fnv(&shape, &lights[i].direction, sizeof lights[i].direction);
+        if (lights[i].info.x == PC_LIGHT_SPOT)
+            fnv(&shape, &lights[i].spot.x, sizeof lights[i].spot.x);
+        if (lights[i].info.x == PC_LIGHT_DIRECTIONAL && i < PC_SHADOW_MAP_MAX_LIGHTS)
+            gs->directional[i / 64] |= 1ull << (i % 64);
+    }
+    fnv(&shape, &n, sizeof n);
+    if (shape != gs->light_shape || grow) {
+        gs->light_shape = shape;
+        gs->revision = ++last_revision;
     }
     rd_vk_result r = RD_VK_OK;
     gs->refs.counts.y = n;

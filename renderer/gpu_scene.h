@@ -32,6 +32,15 @@ typedef struct rd_gpu_scene {
     /* some material can trace reflection rays (glossy: see PC_REFLECT_MAX_ROUGHNESS); when
      * none can, views record no reflection pass */
     bool glossy;
+    /* What rays see: a number no other state of any scene in this process has had, renewed by
+     * every upload, instance update and light update that moves, re-aims, re-ranges or retypes
+     * a light (not by colour or intensity); distance maps (shadow_maps.h) built for one
+     * revision stay right until it changes. */
+    uint64_t revision;
+    uint64_t light_shape; /* hash of the lights' placement behind the last revision change */
+    /* bit i % 64 of word i / 64: light i (of the first PC_SHADOW_MAP_MAX_LIGHTS) is
+     * directional */
+    uint64_t directional[PC_SHADOW_MAP_MAX_LIGHTS / 64];
     /* statistics */
     double blas_build_ms, tlas_build_ms, upload_ms;
     uint64_t tri_count, blas_node_count;

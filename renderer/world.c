@@ -16,6 +16,7 @@ rd_vk_result rd_world_create(rd_vk *vk, rd_world *w, char *err, size_t errlen)
         res = rd_buffer_create(vk, &w->counters, sizeof(pc_counters), RD_MEMORY_READBACK, err,
                                errlen);
     if (res == RD_VK_OK) res = rd_timer_create(vk, &w->timer, err, errlen);
+    rd_shadow_maps_init(vk, &w->shadow_maps);
     if (res != RD_VK_OK) rd_world_destroy(w);
     const float black[3] = {0, 0, 0};
     if (res == RD_VK_OK) rd_world_set_sky(w, black);
@@ -27,6 +28,7 @@ void rd_world_destroy(rd_world *w)
     if (!w->vk) return;
     rd_ddgi_destroy(&w->ddgi);
     w->gi = false;
+    rd_shadow_maps_destroy(&w->shadow_maps);
     rd_timer_destroy(w->vk, &w->timer);
     rd_buffer_destroy(w->vk, &w->counters);
     rd_buffer_destroy(w->vk, &w->globals);
@@ -112,6 +114,7 @@ rd_vk_result rd_world_configure_gi(rd_world *w, const float bmin[3], const float
     w->changes++;
     if (gi->mode == PC_GI_OFF) {
         rd_ddgi_destroy(&w->ddgi); /* model only what is used: no probe memory when off */
+        rd_shadow_maps_release(&w->shadow_maps);
         return RD_VK_OK;
     }
     if (gi->mode != PC_GI_CLASSIC && gi->mode != PC_GI_DDGI) {
@@ -156,6 +159,14 @@ void rd_world_fill_camera(const rd_world *w, const rd_view_camera *camera, unsig
     g->view.size.y = height;
 }
 
+/* The probe hits an update is expected to shade: the probes the last update worked on (all of
+ * them before the first), times the rays per probe. */
+static uint64_t probe_hits(const rd_ddgi *d)
+{
+    uint64_t probes = d->census.updated ? d->census.updated : rd_ddgi_probe_count(d);
+    return probes * d->vol.counts.w;
+}
+
 rd_vk_result rd_world_update(rd_world *w, unsigned n, char *err, size_t errlen)
 {
     memset(&w->stats, 0, sizeof w->stats);
@@ -169,15 +180,29 @@ rd_vk_result rd_world_update(rd_world *w, unsigned n, char *err, size_t errlen)
     for (unsigned u = 0; u < n && res == RD_VK_OK; u++) {
         /* each update has its own ray rotation in the globals: one submission per update */
         rd_ddgi_begin_update(&w->ddgi);
-        pc_globals g;
-        memset(&g, 0, sizeof g);
-        rd_world_fill_globals(w, &g);
-        memcpy(w->globals.mapped, &g, sizeof g);
         rd_cmd cmd;
         res = rd_cmd_begin(w->vk, &cmd, err, errlen);
         if (res != RD_VK_OK) break;
         rd_gpu_scene_record_updates(w->scene, &cmd);
         rd_timer_begin(&cmd, &w->timer);
+        /* the lights' distance maps, when they are stale and rebuilding pays (shadow_maps.h) */
+        uint32_t mapped;
+        VkDeviceAddress maps;
+        res = rd_shadow_maps_prepare(&w->shadow_maps, &cmd, &w->timer, w->scene,
+                                     probe_hits(&w->ddgi), w->globals.address, w->counters.address,
+                                     &mapped, &maps, err, errlen);
+        if (res != RD_VK_OK) {
+            rd_cmd_abandon(w->vk, &cmd);
+            break;
+        }
+        w->ddgi.vol.control.w = mapped;
+        w->ddgi.vol.shadow_maps = maps;
+        w->ddgi.sort_hits = !(mapped && w->shadow_maps.complete); /* for shadow rays */
+        /* the GPU reads the globals when the commands run, after this */
+        pc_globals g;
+        memset(&g, 0, sizeof g);
+        rd_world_fill_globals(w, &g);
+        memcpy(w->globals.mapped, &g, sizeof g);
         rd_ddgi_record_update(&w->ddgi, &cmd, &w->timer, w->globals.address, w->counters.address);
         res = rd_cmd_submit_wait(w->vk, &cmd, err, errlen);
         if (res != RD_VK_OK) break;

@@ -14,6 +14,7 @@
 #include "environment.h"
 #include "frame_stats.h"
 #include "gpu_scene.h"
+#include "shadow_maps.h"
 #include "vk_buffer.h"
 #include "vk_compute.h"
 
@@ -28,6 +29,7 @@ typedef struct rd_world {
     rd_buffer env_texels;        /* the image as RGBA16F, on the GPU; only while there is one */
     float env_sh[9][3];          /* irradiance SH9 of env */
     rd_ddgi ddgi;                /* the probe field; valid when gi */
+    rd_shadow_maps shadow_maps;  /* the lights' distance maps its updates shade hits with */
     bool gi;                     /* a GI mode other than off is configured */
     rd_buffer globals, counters; /* for probe updates */
     rd_timer timer;

@@ -14,7 +14,7 @@
 #include "renderer/render.h"
 
 #define RENDER_MAX_UPDATES 2000u /* default cap of the convergence without --frames */
-#define RENDER_WARMUP_MS 500.0 /* --timings renders untimed frames this long first */
+#define RENDER_WARMUP_MS 500.0   /* --timings renders untimed frames this long first */
 
 static void render_usage(FILE *f)
 {
@@ -50,6 +50,10 @@ static void render_usage(FILE *f)
             "  --frames N             probe updates before the image is taken (default: until\n"
             "                         every probe has converged, at most --max-updates)\n"
             "  --max-updates N        cap of the default convergence (default %u)\n"
+            "  --probe-shadows maps|rays|rebuild  visibility of lights from probe-ray hits:\n"
+            "                         point and spot lights' distance maps, rebuilt when the\n"
+            "                         scene changes (default); a shadow ray per hit (exact);\n"
+            "                         or maps rebuilt every update (benchmarks)\n"
             "  --hysteresis H         maximum temporal blend weight of the old probe value\n"
             "                         (default %g; each probe ramps up to it as it settles)\n"
             "  --seed S               seed of the probe ray rotations (same seed, same image)\n"
@@ -68,12 +72,12 @@ static void render_usage(FILE *f)
             (double)RD_DDGI_DEFAULT_HYSTERESIS);
 }
 
-
 typedef struct render_args {
     const char *scene, *out, *hdr, *device, *dump;
     rd_frame_settings fs;
     rd_ddgi_settings gi;
     unsigned frames, max_updates, spp; /* frames 0: converge (at most max_updates) */
+    rd_probe_shadows probe_shadows;
     bool pathtrace;
     int camera;
     bool has_time;
@@ -217,6 +221,19 @@ static int parse(int argc, char **argv, render_args *a)
         } else if (strcmp(o, "--frames") == 0) {
             NEED_VALUE
             if (!cli_parse_uint(o, v, 1, 100000, &a->frames)) return 2;
+        } else if (strcmp(o, "--probe-shadows") == 0) {
+            NEED_VALUE
+            if (strcmp(v, "maps") == 0)
+                a->probe_shadows = RD_PROBE_SHADOWS_MAPS;
+            else if (strcmp(v, "rays") == 0)
+                a->probe_shadows = RD_PROBE_SHADOWS_RAYS;
+            else if (strcmp(v, "rebuild") == 0)
+                a->probe_shadows = RD_PROBE_SHADOWS_REBUILD;
+            else {
+                fprintf(stderr,
+                        "probecast render: --probe-shadows expects maps, rays or rebuild\n");
+                return 2;
+            }
         } else if (strcmp(o, "--max-updates") == 0) {
             NEED_VALUE
             if (!cli_parse_uint(o, v, 1, 100000, &a->max_updates)) return 2;
@@ -321,6 +338,7 @@ static void print_timings(const rd_vk *vk, const rd_scene *s, const rd_gpu_scene
         if (strcmp(avg->pass_name[i], "probe shade") == 0) rays = avg->rays.probe_shadow_rays;
         if (strcmp(avg->pass_name[i], "probe trace") == 0) rays = avg->rays.probe_rays;
         if (strcmp(avg->pass_name[i], "path trace") == 0) rays = avg->rays.path_rays;
+        if (strcmp(avg->pass_name[i], "shadow maps") == 0) rays = avg->rays.shadow_map_rays;
         total += avg->pass_ms[i];
         if (rays > 0)
             printf("%-17s %10.3f %12.0f %12.1f\n", avg->pass_name[i], avg->pass_ms[i], rays,
@@ -414,6 +432,7 @@ int cli_render(int argc, char **argv)
     }
     vr = rd_gpu_scene_create(&vk, &gs, &scene, err, sizeof err);
     if (vr == RD_VK_OK) vr = rd_renderer_create(&vk, &r, err, sizeof err);
+    if (vr == RD_VK_OK) r.world.shadow_maps.mode = a.probe_shadows;
     if (vr == RD_VK_OK)
         vr = rd_renderer_configure_gi(&r, scene.bounds_min, scene.bounds_max, &a.gi, err,
                                       sizeof err);
@@ -460,19 +479,35 @@ int cli_render(int argc, char **argv)
         if (f < 2 || now < warm_until) continue;
         const rd_frame_stats *st = &r.stats;
         med.timed = st->timed;
-        med.pass_count = st->pass_count;
+        /* passes by name: a frame may run passes others do not (a distance-map rebuild) */
         for (unsigned i = 0; i < st->pass_count; i++) {
-            med.pass_name[i] = st->pass_name[i];
-            samples[(size_t)timed * RD_TIMER_MAX + i] = st->pass_ms[i];
+            unsigned j = 0;
+            while (j < med.pass_count && strcmp(med.pass_name[j], st->pass_name[i]) != 0)
+                j++;
+            if (j == RD_TIMER_MAX) continue;
+            if (j == med.pass_count) {
+                med.pass_name[med.pass_count++] = st->pass_name[i];
+                for (unsigned k = 0; k < timed; k++)
+                    samples[(size_t)k * RD_TIMER_MAX + j] = -1;
+            }
+            samples[(size_t)timed * RD_TIMER_MAX + j] = st->pass_ms[i];
+        }
+        for (unsigned j = 0; j < med.pass_count; j++) { /* passes this frame did not run */
+            bool ran = false;
+            for (unsigned i = 0; i < st->pass_count; i++)
+                ran = ran || strcmp(med.pass_name[j], st->pass_name[i]) == 0;
+            if (!ran) samples[(size_t)timed * RD_TIMER_MAX + j] = -1;
         }
         med.rays = st->rays;
         timed++;
     }
     for (unsigned i = 0; timed && i < med.pass_count; i++) {
         double col[1000];
+        unsigned n = 0; /* the median over the frames that ran the pass */
         for (unsigned k = 0; k < timed; k++)
-            col[k] = samples[(size_t)k * RD_TIMER_MAX + i];
-        med.pass_ms[i] = median(col, timed);
+            if (samples[(size_t)k * RD_TIMER_MAX + i] >= 0)
+                col[n++] = samples[(size_t)k * RD_TIMER_MAX + i];
+        med.pass_ms[i] = n ? median(col, n) : 0;
     }
     free(samples);
     size_t px = (size_t)a.fs.width * a.fs.height;

@@ -357,45 +357,61 @@ float light_weight_total(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, vec3 v, pc_br
     return total;
 }
 
-/* The same sum estimated with at most ONE shadow ray: light i is chosen with probability
+/* The light choice of direct_radiance_sampled: light i is chosen with probability
  * p_i = w_i / W, w_i the summed RGB of its unshadowed term f E_i cos (lights below the surfaces
- * weigh 0), and its shadowed term is returned divided by p_i. Unbiased (E[result] equals
- * direct_radiance), and exactly direct_radiance when at most one light reaches p. Probe hits use
- * it (ddgi_shade.comp): their shadow rays are most of an update's cost and grow with the light
- * count, while a probe texel averages hundreds of rays over many updates, which absorbs the
- * selection noise. u: a uniform number in [0, 1). */
-vec3 direct_radiance_sampled(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, vec3 v, pc_brdf b,
-                             float u, inout uint rays)
+ * weigh 0), W their sum. Returns its index (PC_INVALID when no light reaches p) with its
+ * unshadowed term divided by p_i (term), its direction and its distance. u: uniform in [0, 1). */
+uint choose_light(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, vec3 v, pc_brdf b, float u,
+                  out vec3 term, out vec3 wi, out float dist)
 {
+    term = vec3(0.0);
+    wi = vec3(0.0);
+    dist = 0.0;
     float total = light_weight_total(s, p, n, ng, v, b);
-    if (!(total > 0.0)) return vec3(0.0);
-    vec3 wi;
-    float dist;
-    float target = u * total, acc = 0.0;
-    vec3 chosen = vec3(0.0), chosen_wi = vec3(0.0);
-    float chosen_w = 0.0, chosen_dist = 0.0;
+    if (!(total > 0.0)) return PC_INVALID;
+    float target = u * total, acc = 0.0, chosen_w = 0.0;
+    uint chosen = PC_INVALID;
     for (uint i = 0u; i < s.counts.y; i++) {
-        vec3 f = light_term(s, i, p, n, ng, v, b, wi, dist);
+        vec3 l_wi;
+        float l_dist;
+        vec3 f = light_term(s, i, p, n, ng, v, b, l_wi, l_dist);
         float w = f.r + f.g + f.b;
         if (!(w > 0.0)) continue;
         /* the last light with weight takes any rounding left at the top of [0, total) */
-        chosen = f;
+        chosen = i;
+        term = f;
         chosen_w = w;
-        chosen_wi = wi;
-        chosen_dist = dist;
+        wi = l_wi;
+        dist = l_dist;
         acc += w;
         if (target < acc) break;
     }
+    term *= total / chosen_w;
+    return chosen;
+}
+
+/* The sum of direct_radiance estimated with at most ONE shadow ray, toward the light that
+ * choose_light picks; its shadowed term divided by p_i. Unbiased (E[result] equals
+ * direct_radiance), and exactly direct_radiance when at most one light reaches p. Probe hits use
+ * the choice (ddgi_shade.comp): their shadow rays are most of an update's cost and grow with the
+ * light count, while a probe texel averages hundreds of rays over many updates, which absorbs
+ * the selection noise. */
+vec3 direct_radiance_sampled(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, vec3 v, pc_brdf b,
+                             float u, inout uint rays)
+{
+    vec3 term, wi;
+    float dist;
+    if (choose_light(s, p, n, ng, v, b, u, term, wi, dist) == PC_INVALID) return vec3(0.0);
     pc_hit sh;
     rays++;
-    if (trace_ray(s, offset_ray_origin(p, ng), chosen_wi, 0.0, chosen_dist, PC_TRACE_ANY_HIT, sh))
+    if (trace_ray(s, offset_ray_origin(p, ng), wi, 0.0, dist, PC_TRACE_ANY_HIT, sh))
         return vec3(0.0);
-    return chosen * (total / chosen_w);
+    return term;
 }
 
 /* Ray counting with one global atomic per workgroup. Every invocation of the workgroup must
  * call both (no early return in between). which: 0 primary, 1 shadow, 2 probe, 3 path,
- * 4 probe shadow, 5 reflection. */
+ * 4 probe shadow, 5 reflection, 6 shadow map. */
 shared uint pc_wg_rays;
 void count_rays_begin()
 {
@@ -413,7 +429,8 @@ void count_rays_end(uint64_t counters, uint which, uint rays)
         else if (which == 2u) atomicAdd(c.c.probe_rays, pc_wg_rays);
         else if (which == 3u) atomicAdd(c.c.path_rays, pc_wg_rays);
         else if (which == 4u) atomicAdd(c.c.probe_shadow_rays, pc_wg_rays);
-        else atomicAdd(c.c.reflect_rays, pc_wg_rays);
+        else if (which == 5u) atomicAdd(c.c.reflect_rays, pc_wg_rays);
+        else atomicAdd(c.c.shadow_map_rays, pc_wg_rays);
     }
 }
 

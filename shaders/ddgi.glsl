@@ -101,6 +101,14 @@ uint ddgi_probe_state(pc_ddgi_volume vol, uint index)
 /* The probe an update pass works on: entry `slot` of this update's list. */
 uint ddgi_listed_probe(pc_ddgi_volume vol, uint slot) { return DdgiListRef(vol.list).v[slot]; }
 
+/* Radiance a probe ray brings back without shading: a miss (tri PC_INVALID) sees the sky; a
+ * back face of a single-sided surface carries nothing. */
+vec3 ddgi_miss_radiance(pc_environment env, pc_ddgi_volume vol, uint ray, uint tri)
+{
+    vec3 radiance = tri == PC_INVALID ? env_radiance(env, ddgi_ray_dir(vol, ray)) : vec3(0.0);
+    return any(isnan(radiance)) || any(isinf(radiance)) ? vec3(0.0) : radiance;
+}
+
 /* The ray thread x of a probe's workgroups traces and shades (see pc_ddgi_volume.order);
  * threads past the ray count keep their index (and do nothing). */
 uint ddgi_thread_ray(pc_ddgi_volume vol, uint x)

@@ -38,12 +38,8 @@ void main()
     uvec4 rec = HitRef(pc.buf1).v[slot];
     float t = DdgiRayRef(vol.rays).v[slot].w;
     if (rec.x == PC_INVALID || t < 0.0) { /* a miss sees the sky; a back face carries nothing */
-        if (pc.params.x == 0u) {
-            vec3 radiance = rec.x == PC_INVALID ? env_radiance(g.env, ddgi_ray_dir(vol, ray))
-                                                : vec3(0.0);
-            if (any(isnan(radiance)) || any(isinf(radiance))) radiance = vec3(0.0);
-            DdgiRayRef(vol.rays).v[slot] = vec4(radiance, t);
-        }
+        if (pc.params.x == 0u)
+            DdgiRayRef(vol.rays).v[slot] = vec4(ddgi_miss_radiance(g.env, vol, ray, rec.x), t);
         return;
     }
     vec3 p = ddgi_probe_position(vol, probe) + ddgi_ray_dir(vol, ray) * t;

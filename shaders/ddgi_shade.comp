@@ -1,9 +1,11 @@
 #version 460
 /* DDGI probe-ray shading (paper Sec. 4.1 and 5): radiance leaving each probe ray's hit toward
- * the probe = emission + A/pi * direct irradiance (shadow rays) + occlusion * min(A, 0.9)/pi *
- * the previous update's irradiance at the hit, where A = brdf_lambert_albedo (the direct term
- * from one shadow ray per hit to a light chosen by its unshadowed contribution, unbiased:
- * direct_radiance_sampled): the hit is
+ * the probe = emission + A/pi * direct irradiance + occlusion * min(A, 0.9)/pi * the previous
+ * update's irradiance at the hit, where A = brdf_lambert_albedo. The direct term comes from one
+ * light per hit, chosen by its unshadowed contribution and divided by the choice's probability
+ * (choose_light, unbiased); its visibility is read from the light's distance map where the
+ * update has one (lights [0, vol.control.w): shadow_map.glsl) and the map covers the hit, else
+ * traced by one shadow ray. The hit is
  * shaded as a Lambertian whose albedo folds in the specular lobe's Fresnel-averaged energy
  * (paper: probe hits are shaded diffusely; folding keeps the metals' energy instead of
  * dropping it, and A <= 1 keeps energy conserved). The last term carries light across updates,
@@ -16,6 +18,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
 #include "ddgi.glsl"
+#include "shadow_map.glsl"
 
 layout(local_size_x = PC_WG_1D) in;
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer HitRef { uvec4 v[]; };
@@ -26,13 +29,30 @@ void main()
     count_rays_begin();
     pc_globals g = load_globals();
     pc_ddgi_volume vol = g.ddgi;
-    uint i = gl_GlobalInvocationID.x;
     uint shadow_rays = 0u;
-    if (i < DdgiControlRef(vol.ctrl).shade_args.w) {
-        uint slot = SortedRef(pc.buf2).v[i];
-        uint probe = slot / vol.counts.w, ray = slot - probe * vol.counts.w;
-        vec4 r = DdgiRayRef(vol.rays).v[slot];
-        uvec4 rec = HitRef(pc.buf0).v[slot];
+    uint slot = PC_INVALID, ray = 0u;
+    if (pc.params.z != 0u) { /* sorted: the binned list of hits */
+        uint i = gl_GlobalInvocationID.x;
+        if (i < DdgiControlRef(vol.ctrl).shade_args.w) {
+            slot = SortedRef(pc.buf2).v[i];
+            ray = slot % vol.counts.w;
+        }
+    } else { /* in the trace's order: every ray of the listed active probes */
+        uint probe = ddgi_listed_probe(vol, gl_WorkGroupID.y);
+        ray = ddgi_thread_ray(vol, gl_GlobalInvocationID.x);
+        if (ray < vol.counts.w && ddgi_probe_active(vol, probe)) slot = probe * vol.counts.w + ray;
+    }
+    vec4 r = vec4(0.0);
+    uvec4 rec = uvec4(PC_INVALID);
+    if (slot != PC_INVALID) {
+        r = DdgiRayRef(vol.rays).v[slot];
+        rec = HitRef(pc.buf0).v[slot];
+        if (rec.x == PC_INVALID || r.w < 0.0) { /* only unsorted: the binning shades these */
+            DdgiRayRef(vol.rays).v[slot] = vec4(ddgi_miss_radiance(g.env, vol, ray, rec.x), r.w);
+            slot = PC_INVALID;
+        }
+    }
+    if (slot != PC_INVALID) {
         pc_hit hit;
         hit.t = r.w;
         hit.tri = rec.x;
@@ -45,8 +65,27 @@ void main()
         vec3 albedo = brdf_lambert_albedo(surface_brdf(sf));
         pc_brdf lambert = brdf_make(albedo, 0.0, 1.0, 0.0); /* f = albedo / pi */
         uint seed = pcg(slot ^ pcg(vol.info.y * 0x9E3779B9u + 0x632BE5ABu));
-        vec3 direct = direct_radiance_sampled(g.scene, sf.position, sf.normal, sf.geom_normal,
-                                              -dir, lambert, rnd(seed), shadow_rays);
+        vec3 term, wi;
+        float dist;
+        uint light = choose_light(g.scene, sf.position, sf.normal, sf.geom_normal, -dir, lambert,
+                                  rnd(seed), term, wi, dist);
+        vec3 direct = vec3(0.0);
+        if (light != PC_INVALID) {
+            float seen = -1.0;
+            if (light < vol.control.w)
+                seen = shadow_map_visibility(g.scene, vol.shadow_maps, light,
+                                             LightRef(g.scene.lights).v[light], sf.position,
+                                             sf.geom_normal);
+            if (seen >= 0.0) {
+                direct = term * seen;
+            } else {
+                pc_hit sh;
+                shadow_rays++;
+                if (!trace_ray(g.scene, offset_ray_origin(sf.position, sf.geom_normal), wi, 0.0,
+                               dist, PC_TRACE_ANY_HIT, sh))
+                    direct = term;
+            }
+        }
         vec3 indirect = vec3(0.0);
         if (pc.params.y != 0u)
             indirect = ddgi_irradiance(vol, env_irradiance(g.env, sf.normal), sf.position,

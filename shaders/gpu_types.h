@@ -298,6 +298,14 @@ PC_END(pc_environment);
 #define PC_DDGI_WAKE_AGE_LIGHT 4.0    /* a light or the sky changed: h = 0.5 at first */
 #define PC_DDGI_WAKE_AGE_NUDGE 23.0   /* one small step of an animated light: h = 0.85 */
 #define PC_DDGI_WAKE_MAX 32u          /* wake boxes per update; more become "wake all" */
+/* Lights' distance maps for the direct light at probe-ray hits (renderer/shadow_maps.h,
+ * shaders/shadow_map.glsl): a point or spot light has a cube of 6 faces of SIDE^2 float
+ * texels, each the distance from the light to the first surface along the texel's centre
+ * direction; a directional light has one SUN_SIDE^2 orthographic map over the scene's bounding
+ * sphere. Lights past MAX_LIGHTS keep shadow rays. */
+#define PC_SHADOW_MAP_SIDE 128u
+#define PC_SHADOW_MAP_SUN_SIDE 1024u
+#define PC_SHADOW_MAP_MAX_LIGHTS 256u
 #define PC_DDGI_DRIFT_SCALE 16384.0   /* fixed point of the drift sums */
 /* Irradiance texels hold (E / pi)^(1/5) (the paper's perceptual encoding, blended in that
  * space); readers raise the stored value to the 5th power. A fixed 5 lets the shaders decode
@@ -339,13 +347,14 @@ PC_STRUCT(pc_ddgi_volume)
     pc_u64 distance;
     pc_u64 rays;
     pc_u64 probes;
-    pc_uvec4 control;
+    pc_uvec4 control; /* x hold, y sleep age (float bits), z wake boxes this update, w lights
+                         [0, w) read their distance maps at probe hits (0: shadow rays only) */
     pc_u64 stats;
     pc_u64 list;
     pc_u64 ctrl;
     pc_u64 wake;
     pc_u64 order;
-    pc_u64 pad; /* std430 rounds the struct up to 16 bytes; C must see the same size */
+    pc_u64 shadow_maps; /* float[]: the lights' distance maps (renderer/shadow_maps.h); 0: none */
 }
 PC_END(pc_ddgi_volume);
 
@@ -413,7 +422,8 @@ PC_STRUCT(pc_counters)
     pc_u32 path_rays;         /* path-traced rays, shadow rays included */
     pc_u32 probe_shadow_rays; /* from probe-ray hits */
     pc_u32 reflect_rays;      /* reflection rays of camera pixels and their shadow rays */
-    pc_u32 pad[2];
+    pc_u32 shadow_map_rays;   /* rays that built lights' distance maps */
+    pc_u32 pad;
 }
 PC_END(pc_counters);
 
@@ -491,6 +501,7 @@ PC_CHECK(pc_ddgi_volume, 224);
 PC_OFF(pc_ddgi_volume, control, 160);
 PC_OFF(pc_ddgi_volume, wake, 200);
 PC_OFF(pc_ddgi_volume, order, 208);
+PC_OFF(pc_ddgi_volume, shadow_maps, 216);
 PC_CHECK(pc_ddgi_control, 112);
 PC_CHECK(pc_ddgi_wake, 32);
 PC_OFF(pc_ddgi_volume, counts, 32);

@@ -1,0 +1,74 @@
+/* shadow_maps.h: distance maps of the scene's lights (cubes around point and spot lights,
+ * orthographic squares for directional ones), the visibility that probe-ray hits read instead
+ * of tracing a shadow ray (shaders/shadow_map.glsl has the layout
+ * and the lookup, shaders/shadow_map.comp the build).
+ *
+ * Why: a probe update shades every hit of its probe rays with one shadow ray; on an interior
+ * with 11 lights those rays cost more than the probe rays themselves (issue 14; measurements in
+ * tests/bench/results/h100/probe_shading.txt). A map costs one ray per texel once (6 x
+ * PC_SHADOW_MAP_SIDE^2 for a point light, PC_SHADOW_MAP_SUN_SIDE^2 for a sun) and then serves every
+ * update until the scene's revision changes (a node moves, a light moves), so an idle or static
+ * scene pays for it once.
+ *
+ * When maps are stale, each update decides whether rebuilding pays: a rebuild is worth it when
+ * its rays are at most the shadow rays it saves, i.e. the update's probe hits times the updates
+ * the maps are expected to serve: as many as the previous revision lasted, or as the current one
+ * has lasted so far, whichever is more. A scene that changes every update with few probe hits
+ * traces shadow rays; once it stands still, the maps come back after its shadow rays have cost
+ * about one rebuild (the rent-or-buy rule, never more than twice the better choice's cost).
+ * Render thread only (this is Vulkan).
+ */
+#ifndef RD_SHADOW_MAPS_H
+#define RD_SHADOW_MAPS_H
+
+#include "gpu_scene.h"
+#include "vk_buffer.h"
+#include "vk_compute.h"
+
+/* How probe hits see the lights (render --probe-shadows): distance maps where they pay (the
+ * default), shadow rays always (the exact reference), or maps rebuilt every update (what a scene
+ * that changes every update costs at most; for benchmarks). */
+typedef enum rd_probe_shadows {
+    RD_PROBE_SHADOWS_MAPS = 0,
+    RD_PROBE_SHADOWS_RAYS,
+    RD_PROBE_SHADOWS_REBUILD,
+} rd_probe_shadows;
+
+typedef struct rd_shadow_maps {
+    rd_vk *vk;
+    rd_probe_shadows mode;
+    rd_pipeline build; /* created with the first build */
+    rd_buffer maps;    /* offset table and distances (layout: shaders/shadow_map.glsl) */
+    uint64_t capacity; /* words the buffer holds */
+    uint32_t lights;   /* lights [0, lights) have a map of `revision`; 0: no valid maps */
+    uint64_t revision; /* the scene revision the maps show */
+    bool complete;     /* every light of the scene has a map (none is past the limits) */
+    /* revision change tracking: the revision last seen, the updates since it changed, and the
+     * updates the one before it lasted (UINT64_MAX before any change was seen) */
+    uint64_t seen;
+    uint64_t seen_updates;
+    uint64_t interval;
+    uint64_t builds; /* maps built since creation (for tests and statistics) */
+} rd_shadow_maps;
+
+/* Sets m up empty for vk (no pipeline, no memory until a scene needs them). */
+void rd_shadow_maps_init(rd_vk *vk, rd_shadow_maps *m);
+/* Frees the pipeline and the maps. Idempotent. */
+void rd_shadow_maps_destroy(rd_shadow_maps *m);
+/* Frees the maps' memory (GI went off, or the scene has no point or spot light). */
+void rd_shadow_maps_release(rd_shadow_maps *m);
+
+/* Called once per probe update before its shading is recorded into c, after the scene's
+ * pending light values (rd_gpu_scene_record_updates). Records a rebuild when the maps are stale
+ * and rebuilding pays for `hits` probe hits per update (see above), marking the timer section
+ * "shadow maps". *mapped gets the number of lights whose maps the update's shading may read
+ * (lights [0, *mapped); 0: shadow rays for all; m->complete: every light has one) and
+ * *address the maps' address. globals and
+ * counters as for any pass (the build reads the scene's lights and counts its rays). */
+rd_vk_result rd_shadow_maps_prepare(rd_shadow_maps *m, rd_cmd *c, rd_timer *timer,
+                                    const rd_gpu_scene *scene, uint64_t hits,
+                                    VkDeviceAddress globals, VkDeviceAddress counters,
+                                    uint32_t *mapped, VkDeviceAddress *address, char *err,
+                                    size_t errlen);
+
+#endif

@@ -1,0 +1,63 @@
+#version 460
+/* Builds the lights' distance maps (layout: shadow_map.glsl): one closest-hit ray per texel,
+ * from the light through the texel's centre up to the light's range, or, for a directional
+ * light, from the texel's centre on the square's plane along the light across the scene's
+ * bounding sphere. A spot light traces only the texels its cone (widened by two texels, the
+ * reach of a lookup's filter) can light and marks the rest far.
+ * Two dispatches: params.x = 0 for point and spot lights (x: groups over 6 SIDE^2 texels),
+ * 1 for directional lights (x: groups over SUN_SIDE^2 texels); z: lights [0, z); a light of the
+ * other kind, or without a map, leaves at once.
+ * push: globals, buf0 = the maps buffer, buf1 = pc_counters. */
+#extension GL_GOOGLE_include_directive : require
+#include "common.glsl"
+#include "shadow_map.glsl"
+
+layout(local_size_x = PC_WG_1D) in;
+
+void main()
+{
+    count_rays_begin();
+    pc_globals g = load_globals();
+    uint texel = gl_GlobalInvocationID.x, index = gl_WorkGroupID.z;
+    uint rays = 0u;
+    pc_light l = LightRef(g.scene.lights).v[index];
+    bool sun = l.info.x == PC_LIGHT_DIRECTIONAL;
+    uint base = ShadowMapWordRef(pc.buf0).v[index];
+    const uint face_texels = PC_SHADOW_MAP_SIDE * PC_SHADOW_MAP_SIDE;
+    uint texels = sun ? PC_SHADOW_MAP_SUN_SIDE * PC_SHADOW_MAP_SUN_SIDE : 6u * face_texels;
+    if (base != 0u && sun == (pc.params.x == 1u) && texel < texels) {
+        vec3 org, dir;
+        float tmax;
+        bool wanted = true;
+        if (sun) {
+            uint side = PC_SHADOW_MAP_SUN_SIDE;
+            vec2 uv = (vec2(texel % side, texel / side) + 0.5) / float(side) * 2.0 - 1.0;
+            vec3 c, u, v;
+            float r;
+            dir = l.direction.xyz;
+            shadow_map_sun_frame(g.scene, dir, c, r, u, v);
+            org = c + (uv.x * u + uv.y * v - dir) * r;
+            tmax = 2.0 * r;
+        } else {
+            uint face = texel / face_texels, at = texel - face * face_texels;
+            uint side = PC_SHADOW_MAP_SIDE;
+            vec2 uv = (vec2(at % side, at / side) + 0.5) / float(side) * 2.0 - 1.0;
+            dir = shadow_map_dir(face, uv);
+            org = l.position_range.xyz;
+            tmax = l.position_range.w > 0.0 ? l.position_range.w : 1e30;
+            if (l.info.x == PC_LIGHT_SPOT) {
+                float margin = 4.0 / float(side); /* two texels' angle at a face centre */
+                float outer = acos(clamp(l.spot.x, -1.0, 1.0));
+                wanted = dot(dir, l.direction.xyz) >= cos(min(outer + margin, PC_PI));
+            }
+        }
+        float t = SHADOW_MAP_FAR;
+        if (wanted) {
+            pc_hit hit;
+            rays = 1u;
+            if (trace_ray(g.scene, org, dir, 0.0, tmax, 0u, hit)) t = hit.t;
+        }
+        ShadowMapRef(pc.buf0).v[base + texel] = t;
+    }
+    count_rays_end(pc.buf1, 6u, rays);
+}

@@ -1,0 +1,114 @@
+/* shadow_map.glsl: lights' distance maps, read for the direct light at probe-ray hits. The DDGI
+ * paper shades its probe hits like the camera's G-buffer, shadow maps included (Sec. 5); here a
+ * map is traced, not rasterised (shadow_map.comp: one ray per texel through the scene's BVH),
+ * and rebuilt only when the lights or the geometry change (renderer/shadow_maps.h), so a probe
+ * hit's visibility costs four texel reads instead of a shadow ray. Camera pixels keep exact
+ * shadow rays.
+ *
+ * Layout of the maps buffer (floats and uints of 4 bytes): words [0, PC_SHADOW_MAP_MAX_LIGHTS)
+ * hold each light's map offset in words (0: the light has no map), then the maps:
+ * - a point or spot light: 6 faces of SIDE^2 texels; face f looks along axis f / 2, toward +
+ *   for even f, and spans [-1, 1]^2 over the two following axes at distance 1; a texel holds
+ *   the distance from the light to the first surface along its centre direction;
+ * - a directional light: SUN_SIDE^2 texels over a square across the scene's bounding sphere,
+ *   seen along the light (shadow_map_sun_frame); a texel holds the distance from the square's
+ *   plane, one radius before the centre, to the first surface along the light.
+ * SHADOW_MAP_FAR where nothing is hit within the light's range. */
+#ifndef PC_SHADOW_MAP_GLSL
+#define PC_SHADOW_MAP_GLSL
+
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer ShadowMapRef { float v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer ShadowMapWordRef { uint v[]; };
+
+#define SHADOW_MAP_FAR 3e38
+/* A hit's lookup point q is moved off its surface along the geometric normal by NORMAL_OFFSET
+ * texel widths (normal-offset shadows). A tap reads the distance along a ray up to 1.5 texels
+ * (the filter's diagonal) from q's; where the surface is tilted by theta from the light, it
+ * lies up to 1.5 tan(theta) texel widths nearer along that ray than at q's foot, while the
+ * offset puts q NORMAL_OFFSET / cos(theta) widths before the surface along q's own ray: an
+ * offset of 1.5 widths covers every tilt, with no depth bias to scale by slope (a slope-scaled
+ * bias let light through walls onto the floors behind them: builtin two-rooms came out 31%
+ * brighter). DEPTH_BIAS absorbs rounding. */
+#define SHADOW_MAP_NORMAL_OFFSET 1.5
+#define SHADOW_MAP_DEPTH_BIAS 0.1
+
+/* Unit direction from the light through the point uv in [-1, 1]^2 of face f. */
+vec3 shadow_map_dir(uint face, vec2 uv)
+{
+    uint a = face >> 1u;
+    vec3 d;
+    d[a] = (face & 1u) == 0u ? 1.0 : -1.0;
+    d[(a + 1u) % 3u] = uv.x;
+    d[(a + 2u) % 3u] = uv.y;
+    return normalize(d);
+}
+
+/* The face a direction d (not zero) falls on and its point uv in [-1, 1]^2 there. */
+uint shadow_map_face(vec3 d, out vec2 uv)
+{
+    vec3 ad = abs(d);
+    uint a = ad.x >= ad.y && ad.x >= ad.z ? 0u : (ad.y >= ad.z ? 1u : 2u);
+    uv = vec2(d[(a + 1u) % 3u], d[(a + 2u) % 3u]) / ad[a];
+    return a * 2u + (d[a] < 0.0 ? 1u : 0u);
+}
+
+/* A directional light's map frame: the scene's bounding sphere (centre c, radius r, from the
+ * top-level BVH's root box) seen along the light's direction d, with axes u, v across it. */
+void shadow_map_sun_frame(pc_scene_refs s, vec3 d, out vec3 c, out float r, out vec3 u,
+                          out vec3 v)
+{
+    pc_bvh_node root = TraceNodes(s.tlas_nodes).n[0];
+    c = 0.5 * (root.bmin.xyz + root.bmax.xyz);
+    r = max(0.5 * length(root.bmax.xyz - root.bmin.xyz), 1e-3) * 1.001;
+    u = normalize(cross(abs(d.y) < 0.9 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0), d));
+    v = cross(d, u);
+}
+
+/* Percentage-closer filter over the side x side grid at word `base`: the fraction of the four
+ * texels around uv in [-1, 1]^2 whose stored distance lies beyond `reach`. */
+float shadow_map_pcf(uint64_t maps, uint base, uint side, vec2 uv, float reach)
+{
+    float fs = float(side);
+    vec2 xy = clamp((uv * 0.5 + 0.5) * fs - 0.5, vec2(0.0), vec2(fs - 1.0));
+    uvec2 i0 = uvec2(min(floor(xy), vec2(fs - 2.0)));
+    vec2 f = xy - vec2(i0);
+    uint at = base + i0.y * side + i0.x;
+    ShadowMapRef m = ShadowMapRef(maps);
+    float v00 = reach >= m.v[at] ? 0.0 : 1.0;
+    float v10 = reach >= m.v[at + 1u] ? 0.0 : 1.0;
+    float v01 = reach >= m.v[at + side] ? 0.0 : 1.0;
+    float v11 = reach >= m.v[at + side + 1u] ? 0.0 : 1.0;
+    return mix(mix(v00, v10, f.x), mix(v01, v11, f.x), f.y);
+}
+
+/* Fraction of light `index` (l) that reaches the surface point p with unit geometric normal ng
+ * on the light's side, from the light's map; negative when the map cannot tell (the light has
+ * none, or p lies outside a directional light's square): the caller then traces a ray. */
+float shadow_map_visibility(pc_scene_refs s, uint64_t maps, uint index, pc_light l, vec3 p,
+                            vec3 ng)
+{
+    uint base = ShadowMapWordRef(maps).v[index];
+    if (base == 0u) return -1.0;
+    if (l.info.x == PC_LIGHT_DIRECTIONAL) {
+        vec3 c, u, v;
+        float r;
+        vec3 d = l.direction.xyz;
+        shadow_map_sun_frame(s, d, c, r, u, v);
+        float texel = 2.0 * r / float(PC_SHADOW_MAP_SUN_SIDE);
+        vec3 rel = p + ng * (SHADOW_MAP_NORMAL_OFFSET * texel) - c;
+        vec2 uv = vec2(dot(rel, u), dot(rel, v)) / r;
+        if (any(greaterThan(abs(uv), vec2(1.0)))) return -1.0;
+        float reach = dot(rel, d) + r - texel * SHADOW_MAP_DEPTH_BIAS;
+        return shadow_map_pcf(maps, base, PC_SHADOW_MAP_SUN_SIDE, uv, reach);
+    }
+    vec3 lpos = l.position_range.xyz;
+    float texel = 2.0 * length(p - lpos) / float(PC_SHADOW_MAP_SIDE); /* at most, at p */
+    vec3 d = p + ng * (SHADOW_MAP_NORMAL_OFFSET * texel) - lpos;
+    vec2 uv;
+    uint face = shadow_map_face(d, uv);
+    float reach = length(d) - texel * SHADOW_MAP_DEPTH_BIAS;
+    return shadow_map_pcf(maps, base + face * PC_SHADOW_MAP_SIDE * PC_SHADOW_MAP_SIDE,
+                          PC_SHADOW_MAP_SIDE, uv, reach);
+}
+
+#endif

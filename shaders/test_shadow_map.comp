@@ -1,0 +1,35 @@
+#version 460
+/* test_shadow_map.comp: a light's visibility from surface points two ways, for
+ * tests/renderer/test_gpu_shadow_maps.c: from the world's distance maps (shadow_map_visibility,
+ * as probe hits read it) and from a shadow ray (as camera pixels trace it).
+ * push: globals (the world's, after an update), buf0 = points (vec4 position in the GPU frame,
+ * vec4 unit geometric normal), buf1 = results (vec4: x map visibility, or -2 when the update
+ * mapped no light this far, -1 when the map cannot tell; y 1 when the shadow ray reaches the
+ * light, else 0; z cosine between the normal and the light), params.x = point count, params.y =
+ * the light. */
+#extension GL_GOOGLE_include_directive : require
+#include "common.glsl"
+#include "shadow_map.glsl"
+
+layout(local_size_x = PC_WG_1D) in;
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer PointRef { vec4 v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer OutRef { vec4 v[]; };
+
+void main()
+{
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= pc.params.x) return;
+    pc_globals g = load_globals();
+    vec3 p = PointRef(pc.buf0).v[2u * i].xyz, n = PointRef(pc.buf0).v[2u * i + 1u].xyz;
+    uint index = pc.params.y;
+    pc_light l = LightRef(g.scene.lights).v[index];
+    vec3 wi;
+    float dist;
+    light_incident(l, p, wi, dist);
+    float map = -2.0;
+    if (index < g.ddgi.control.w)
+        map = shadow_map_visibility(g.scene, g.ddgi.shadow_maps, index, l, p, n);
+    pc_hit hit;
+    bool blocked = trace_ray(g.scene, offset_ray_origin(p, n), wi, 0.0, dist, PC_TRACE_ANY_HIT, hit);
+    OutRef(pc.buf1).v[i] = vec4(map, blocked ? 0.0 : 1.0, dot(n, wi), 0.0);
+}

@@ -1,0 +1,266 @@
+/* test_gpu_shadow_maps.c: the lights' distance maps that probe hits read for visibility
+ * (renderer/shadow_maps.h, shaders/shadow_map.glsl).
+ *
+ * 1. Against geometry: builtin:shadow (a floor, a 0.5 x 0.2 x 0.5 m box above it, a point light
+ *    above the box) plus a slanted sun. For floor points on a grid, the map's visibility of each
+ *    light must match the analytic answer (a slab test of the segment toward the light against
+ *    the box, in C, sharing nothing with the GPU code) wherever the answer is the same for every
+ *    point within MARGIN (two map texels or more); the shadow ray must match everywhere.
+ * 2. What is built when: maps are built by the first probe update; an update of an unchanged
+ *    scene builds nothing (no rays); a colour change builds nothing.
+ * 3. The pay rule: in a scene that changes every update while an update shades far fewer hits
+ *    than the maps have texels, hits trace shadow rays instead of rebuilding, and once the
+ *    scene stays still long enough for the rebuild to pay, the maps are rebuilt and match the
+ *    moved light's analytic shadow. In rebuild mode a moved light is re-mapped at once.
+ * 4. --probe-shadows rays: no maps (and no memory for them); hits trace shadow rays.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "renderer/procedural.h"
+#include "renderer/world.h"
+#include "shaders/test_shadow_map.spv.h"
+#include "test_render_util.h"
+#include "test_util.h"
+
+enum { GRID = 64, POINTS = GRID * GRID };
+static const float BOX_LO[3] = {-0.25f, 0.9f, -0.25f}, BOX_HI[3] = {0.25f, 1.1f, 0.25f};
+#define HALF 1.6f    /* floor points cover [-HALF, HALF]^2 */
+#define MARGIN 0.09f /* point light: 2 texels at 2.4 m are 0.075 m; sun (r = 7.1 m): 0.028 m */
+
+static char err[512];
+
+/* Does the segment from p toward the light (dir unit, length len) cross the box? */
+static bool box_blocks(const float p[3], const float dir[3], float len)
+{
+    float t0 = 1e-4f, t1 = len;
+    for (int k = 0; k < 3; k++) {
+        if (fabsf(dir[k]) < 1e-12f) {
+            if (p[k] < BOX_LO[k] || p[k] > BOX_HI[k]) return false;
+            continue;
+        }
+        float a = (BOX_LO[k] - p[k]) / dir[k], b = (BOX_HI[k] - p[k]) / dir[k];
+        if (a > b) {
+            float t = a;
+            a = b;
+            b = t;
+        }
+        t0 = fmaxf(t0, a);
+        t1 = fminf(t1, b);
+    }
+    return t0 <= t1;
+}
+
+/* Analytic visibility of light l from floor point (x, 0, z): 1 lit, 0 shadowed. */
+static int analytic(const rd_light *l, float x, float z)
+{
+    float p[3] = {x, 0, z}, dir[3], len;
+    if (l->type == RD_LIGHT_DIRECTIONAL) {
+        for (int k = 0; k < 3; k++)
+            dir[k] = -l->direction[k];
+        len = 1e30f;
+    } else {
+        float d2 = 0;
+        for (int k = 0; k < 3; k++) {
+            dir[k] = l->position[k] - p[k];
+            d2 += dir[k] * dir[k];
+        }
+        len = sqrtf(d2);
+        for (int k = 0; k < 3; k++)
+            dir[k] /= len;
+    }
+    return box_blocks(p, dir, len) ? 0 : 1;
+}
+
+/* The same answer everywhere within MARGIN of (x, z)? */
+static bool clear_of_edges(const rd_light *l, float x, float z)
+{
+    int v = analytic(l, x, z);
+    for (int i = -2; i <= 2; i++)
+        for (int j = -2; j <= 2; j++)
+            if (analytic(l, x + MARGIN * (float)i / 2, z + MARGIN * (float)j / 2) != v)
+                return false;
+    return true;
+}
+
+typedef struct harness {
+    rd_vk *vk;
+    rd_pipeline pipe;
+    rd_buffer points, out;
+    float *res;
+} harness;
+
+/* Compares map and ray visibility of light `index` over the floor grid with the analytic
+ * answer; returns false (after failing checks) on a mismatch. */
+static bool check_light(harness *h, rd_world *w, const rd_scene *s, uint32_t index,
+                        const char *what)
+{
+    rd_cmd c;
+    if (rd_cmd_begin(h->vk, &c, err, sizeof err) != RD_VK_OK) return false;
+    pc_push push = {.globals = w->globals.address,
+                    .buf0 = h->points.address,
+                    .buf1 = h->out.address,
+                    .params = {POINTS, index, 0, 0}};
+    rd_cmd_dispatch(&c, &h->pipe, &push, (POINTS + PC_WG_1D - 1) / PC_WG_1D, 1, 1);
+    rd_cmd_barrier(&c);
+    if (rd_cmd_submit_wait(h->vk, &c, err, sizeof err) != RD_VK_OK) return false;
+    memcpy(h->res, h->out.mapped, POINTS * 4 * sizeof(float));
+    const rd_light *l = &s->lights[index];
+    int clear = 0, shadowed = 0, map_bad = 0, ray_bad = 0, unmapped = 0, agree = 0;
+    for (int i = 0; i < POINTS; i++) {
+        float x = -HALF + 2 * HALF * (float)(i % GRID) / (GRID - 1);
+        float z = -HALF + 2 * HALF * (float)(i / GRID) / (GRID - 1);
+        const float *r = h->res + 4 * i;
+        int want = analytic(l, x, z);
+        if (r[0] < 0) unmapped++;
+        if (r[1] != (float)want && clear_of_edges(l, x, z)) ray_bad++;
+        agree += (r[0] >= 0.5f) == (want == 1);
+        if (!clear_of_edges(l, x, z)) continue;
+        clear++;
+        shadowed += want == 0;
+        if (fabsf(r[0] - (float)want) > 1e-6f) {
+            if (map_bad < 5)
+                fprintf(stderr, "%s, light %u at (%.3f, 0, %.3f): map %.3f, analytic %d\n", what,
+                        index, x, z, r[0], want);
+            map_bad++;
+        }
+    }
+    printf("%s, light %u: %d of %d points clear of shadow edges (%d in shadow); map agrees "
+           "with the analytic answer at %d of %d points\n",
+           what, index, clear, POINTS, shadowed, agree, POINTS);
+    CHECKF(unmapped == 0, "%s, light %u: %d points without a map answer", what, index, unmapped);
+    CHECKF(shadowed > 50 && clear - shadowed > 50, "%s, light %u: %d shadowed of %d", what, index,
+           shadowed, clear);
+    CHECKF(ray_bad == 0, "%s, light %u: the shadow ray is wrong at %d points", what, index,
+           ray_bad);
+    CHECKF(map_bad == 0, "%s, light %u: the map is wrong at %d points clear of edges", what, index,
+           map_bad);
+    CHECKF(agree >= POINTS * 98 / 100, "%s, light %u: the map agrees at only %d of %d points", what,
+           index, agree, POINTS);
+    return map_bad == 0 && ray_bad == 0;
+}
+
+int main(void)
+{
+    rd_vk vk;
+    if (!test_vk_open(&vk)) return test_finish();
+    rd_scene s;
+    CHECKF(rd_procedural_build("shadow", &s, err, sizeof err), "%s", err);
+    float a = 35.0f * (float)M_PI / 180.0f;
+    rd_light sun = {.name = "sun",
+                    .type = RD_LIGHT_DIRECTIONAL,
+                    .color = {1, 1, 1},
+                    .intensity = 2.0f,
+                    .node = -1,
+                    .direction = {sinf(a) * 0.8f, -cosf(a), sinf(a) * 0.6f}};
+    rd_scene_add_light(&s, &sun);
+    CHECK(s.light_count == 2 && s.lights[0].type == RD_LIGHT_POINT);
+
+    rd_gpu_scene gs = {0};
+    rd_world w = {0};
+    harness h = {.vk = &vk, .res = malloc(POINTS * 4 * sizeof(float))};
+    float *pts = calloc(POINTS * 8, sizeof(float));
+    VK_CHECK(rd_gpu_scene_create(&vk, &gs, &s, err, sizeof err));
+    VK_CHECK(rd_world_create(&vk, &w, err, sizeof err));
+    rd_world_set_scene(&w, &gs);
+    rd_ddgi_settings gi = {.mode = PC_GI_DDGI, .counts = {3, 3, 3}, .rays = 64, .seed = 1};
+    VK_CHECK(rd_world_configure_gi(&w, s.bounds_min, s.bounds_max, &gi, err, sizeof err));
+    VK_CHECK(rd_pipeline_create(&vk, &h.pipe, "test_shadow_map", pc_spv_test_shadow_map,
+                                sizeof pc_spv_test_shadow_map, sizeof(pc_push), err, sizeof err));
+    for (int i = 0; i < POINTS; i++) { /* floor points, in the GPU frame */
+        float *p = pts + 8 * i;
+        p[0] = -HALF + 2 * HALF * (float)(i % GRID) / (GRID - 1) - gs.origin_shift[0];
+        p[1] = 0 - gs.origin_shift[1];
+        p[2] = -HALF + 2 * HALF * (float)(i / GRID) / (GRID - 1) - gs.origin_shift[2];
+        p[5] = 1; /* normal +y */
+    }
+    VK_CHECK(rd_buffer_create(&vk, &h.points, POINTS * 8 * sizeof(float), RD_MEMORY_DEVICE, err,
+                              sizeof err));
+    VK_CHECK(rd_buffer_upload(&vk, &h.points, 0, pts, POINTS * 8 * sizeof(float), err, sizeof err));
+    VK_CHECK(rd_buffer_create(&vk, &h.out, POINTS * 4 * sizeof(float), RD_MEMORY_READBACK, err,
+                              sizeof err));
+
+    /* 1. the first update maps both lights, and the maps match the geometry */
+    const uint64_t map_rays = 6ull * PC_SHADOW_MAP_SIDE * PC_SHADOW_MAP_SIDE +
+                              (uint64_t)PC_SHADOW_MAP_SUN_SIDE * PC_SHADOW_MAP_SUN_SIDE;
+    VK_CHECK(rd_world_update(&w, 1, err, sizeof err));
+    CHECKF(w.shadow_maps.builds == 1 && w.ddgi.vol.control.w == 2 && w.shadow_maps.complete,
+           "builds %llu, mapped %u", (unsigned long long)w.shadow_maps.builds,
+           w.ddgi.vol.control.w);
+    CHECKF(w.stats.rays.shadow_map_rays == map_rays, "%u map rays, want %llu",
+           w.stats.rays.shadow_map_rays, (unsigned long long)map_rays);
+    CHECKF(w.stats.rays.probe_shadow_rays == 0, "%u probe shadow rays with every light mapped",
+           w.stats.rays.probe_shadow_rays);
+    CHECK(!w.ddgi.sort_hits);
+    check_light(&h, &w, &s, 0, "point light");
+    check_light(&h, &w, &s, 1, "sun");
+
+    /* 2. an unchanged scene, and a colour change, build nothing; a moved light is re-mapped */
+    VK_CHECK(rd_world_update(&w, 2, err, sizeof err));
+    CHECKF(w.shadow_maps.builds == 1 && w.stats.rays.shadow_map_rays == 0,
+           "static scene: builds %llu, %u map rays", (unsigned long long)w.shadow_maps.builds,
+           w.stats.rays.shadow_map_rays);
+    s.lights[0].color[1] = 0.5f;
+    VK_CHECK(rd_gpu_scene_update_lights(&vk, &gs, &s, err, sizeof err));
+    VK_CHECK(rd_world_update(&w, 1, err, sizeof err));
+    CHECKF(w.shadow_maps.builds == 1, "a colour change rebuilt the maps");
+
+    /* 3. changes every update, few hits: shadow rays; then still long enough: rebuilt (the
+     * point light alone, so that a rebuild pays after tens of updates, not hundreds) */
+    rd_scene_remove_light(&s, 1);
+    const uint64_t point_rays = 6ull * PC_SHADOW_MAP_SIDE * PC_SHADOW_MAP_SIDE;
+    s.lights[0].position[0] = 0.6f;
+    s.lights[0].position[1] = 1.7f;
+    for (int k = 0; k < 3; k++) {
+        s.lights[0].position[2] = 0.05f * (float)(k + 1);
+        VK_CHECK(rd_gpu_scene_update_lights(&vk, &gs, &s, err, sizeof err));
+        VK_CHECK(rd_world_update(&w, 1, err, sizeof err));
+    }
+    uint64_t hits = (uint64_t)rd_ddgi_probe_count(&w.ddgi) * gi.rays;
+    CHECKF(w.shadow_maps.builds == 1 && w.ddgi.vol.control.w == 0 && w.ddgi.sort_hits &&
+               w.stats.rays.probe_shadow_rays > 0,
+           "moving every update with %llu hits against %llu map texels: builds %llu, mapped %u, "
+           "%u shadow rays",
+           (unsigned long long)hits, (unsigned long long)point_rays,
+           (unsigned long long)w.shadow_maps.builds, w.ddgi.vol.control.w,
+           w.stats.rays.probe_shadow_rays);
+    unsigned still = 0;
+    while (w.shadow_maps.builds == 1 && still < 1000) {
+        VK_CHECK(rd_world_update(&w, 1, err, sizeof err));
+        still++;
+    }
+    printf("maps rebuilt after %u still updates (%llu hits each at most, %llu map texels)\n", still,
+           (unsigned long long)hits, (unsigned long long)point_rays);
+    CHECKF(w.shadow_maps.builds == 2 && still + 1 >= point_rays / hits,
+           "still scene: builds %llu after %u updates", (unsigned long long)w.shadow_maps.builds,
+           still);
+    check_light(&h, &w, &s, 0, "moved point light");
+
+    /* --probe-shadows rebuild: a moved light is re-mapped at the next update */
+    w.shadow_maps.mode = RD_PROBE_SHADOWS_REBUILD;
+    s.lights[0].position[0] = -0.4f;
+    VK_CHECK(rd_gpu_scene_update_lights(&vk, &gs, &s, err, sizeof err));
+    VK_CHECK(rd_world_update(&w, 1, err, sizeof err));
+    CHECKF(w.shadow_maps.builds == 3 && w.ddgi.vol.control.w == 1, "rebuild mode: builds %llu",
+           (unsigned long long)w.shadow_maps.builds);
+    check_light(&h, &w, &s, 0, "point light moved again");
+
+    /* 4. rays only: no maps and no memory for them */
+    w.shadow_maps.mode = RD_PROBE_SHADOWS_RAYS;
+    VK_CHECK(rd_world_update(&w, 1, err, sizeof err));
+    CHECKF(w.shadow_maps.maps.buffer == VK_NULL_HANDLE && w.ddgi.vol.control.w == 0 &&
+               w.stats.rays.probe_shadow_rays > 0 && w.stats.rays.shadow_map_rays == 0,
+           "rays mode: maps kept or no shadow rays (%u)", w.stats.rays.probe_shadow_rays);
+
+done:
+    rd_buffer_destroy(&vk, &h.points);
+    rd_buffer_destroy(&vk, &h.out);
+    rd_pipeline_destroy(&vk, &h.pipe);
+    rd_world_destroy(&w);
+    rd_gpu_scene_destroy(&vk, &gs);
+    rd_scene_destroy(&s);
+    free(pts);
+    free(h.res);
+    return test_vk_close(&vk);
+}
