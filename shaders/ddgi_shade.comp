@@ -10,11 +10,16 @@
  * (paper: probe hits are shaded diffusely; folding keeps the metals' energy instead of
  * dropping it, and A <= 1 keeps energy conserved). The last term carries light across updates,
  * one more bounce per update; the 0.9 cap guards energy (production practice).
- * One thread per hit of the update's binned list (ddgi_bin.comp, which already gave misses the
- * sky and back faces nothing), in cell order: a warp shades hits that lie close together, so
- * their shadow rays run side by side. The list's length comes from ddgi_scan.comp.
- * push: globals, buf0 = uvec4 hits[], buf1 = pc_counters, buf2 = uint sorted[] (ray slots),
- * params.y = 1 when the probe field already holds an update (else no indirect term). */
+ * Two orders (rd_ddgi.sort_hits):
+ * - params.z = 1, sorted: one thread per hit of the update's binned list (ddgi_bin.comp, which
+ *   already gave misses the sky and back faces nothing), in cell order: a warp shades hits that
+ *   lie close together, so their shadow rays run side by side. The list's length comes from
+ *   ddgi_scan.comp; dispatched by shade_args.
+ * - params.z = 0, when every light has a map: one thread per ray of the listed active probes,
+ *   as the trace ran them (dispatched by trace_args); misses and back faces are shaded here.
+ * push: globals, buf0 = uvec4 hits[], buf1 = pc_counters, buf2 = uint sorted[] (ray slots;
+ * sorted order only), params.y = 1 when the probe field already holds an update (else no
+ * indirect term). */
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
 #include "ddgi.glsl"
