@@ -314,7 +314,7 @@ static void fnv(uint64_t *h, const void *data, size_t n)
 rd_vk_result rd_gpu_scene_update_instances(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
                                            char *err, size_t errlen)
 {
-    gs->revision = ++last_revision;
+    gs->revision = gs->geometry_revision = ++last_revision;
     double t0 = now_ms();
     uint32_t n = s->instance_count;
     if (n != gs->instance_capacity && gs->instance_capacity != 0) {
@@ -420,23 +420,23 @@ rd_vk_result rd_gpu_scene_update_lights(rd_vk *vk, rd_gpu_scene *gs, const rd_sc
                                                                       : PC_LIGHT_POINT,
                                     0, 0, 0};
     }
-    uint64_t shape = 0xcbf29ce484222325ull;
     memset(gs->directional, 0, sizeof gs->directional);
-    for (uint32_t i = 0; i < n; i++) {
+    for (uint32_t i = 0; i < n && i < PC_SHADOW_MAP_MAX_LIGHTS; i++) {
+        uint64_t shape = 0xcbf29ce484222325ull;
         fnv(&shape, &lights[i].position_range, sizeof lights[i].position_range);
         fnv(&shape, &lights[i].info.x, sizeof lights[i].info.x);
         if (lights[i].info.x != PC_LIGHT_POINT) /* spot and directional lights aim */
             fnv(&shape, &lights[i].direction, sizeof lights[i].direction);
         if (lights[i].info.x == PC_LIGHT_SPOT)
             fnv(&shape, &lights[i].spot.x, sizeof lights[i].spot.x);
-        if (lights[i].info.x == PC_LIGHT_DIRECTIONAL && i < PC_SHADOW_MAP_MAX_LIGHTS)
-            gs->directional[i / 64] |= 1ull << (i % 64);
+        if (lights[i].info.x == PC_LIGHT_DIRECTIONAL) gs->directional[i / 64] |= 1ull << (i % 64);
+        /* a light new at this index (the count grew) always gets a revision */
+        if (shape != gs->light_shape[i] || i >= gs->refs.counts.y || gs->light_revision[i] == 0) {
+            gs->light_shape[i] = shape;
+            gs->light_revision[i] = gs->revision = ++last_revision;
+        }
     }
-    fnv(&shape, &n, sizeof n);
-    if (shape != gs->light_shape || grow) {
-        gs->light_shape = shape;
-        gs->revision = ++last_revision;
-    }
+    if (n != gs->refs.counts.y) gs->revision = ++last_revision;
     rd_vk_result r = RD_VK_OK;
     gs->refs.counts.y = n;
     if (grow) { /* a new buffer: nothing reads it yet */

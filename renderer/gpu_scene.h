@@ -32,12 +32,14 @@ typedef struct rd_gpu_scene {
     /* some material can trace reflection rays (glossy: see PC_REFLECT_MAX_ROUGHNESS); when
      * none can, views record no reflection pass */
     bool glossy;
-    /* What rays see: a number no other state of any scene in this process has had, renewed by
-     * every upload, instance update and light update that moves, re-aims, re-ranges or retypes
-     * a light (not by colour or intensity); distance maps (shadow_maps.h) built for one
-     * revision stay right until it changes. */
-    uint64_t revision;
-    uint64_t light_shape; /* hash of the lights' placement behind the last revision change */
+    /* What rays see, as revisions: numbers no other state of any scene in this process has
+     * had. geometry_revision is renewed by every upload and instance update; light_revision[i]
+     * when light i moves, re-aims, re-ranges, changes type or appears (not its colour or
+     * intensity); revision by either. Distance maps (shadow_maps.h) built for them stay right
+     * until they change. Lights past PC_SHADOW_MAP_MAX_LIGHTS are not tracked. */
+    uint64_t revision, geometry_revision;
+    uint64_t light_revision[PC_SHADOW_MAP_MAX_LIGHTS];
+    uint64_t light_shape[PC_SHADOW_MAP_MAX_LIGHTS]; /* hash of light i's placement */
     /* bit i % 64 of word i / 64: light i (of the first PC_SHADOW_MAP_MAX_LIGHTS) is
      * directional */
     uint64_t directional[PC_SHADOW_MAP_MAX_LIGHTS / 64];

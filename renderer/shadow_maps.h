@@ -1,22 +1,22 @@
 /* shadow_maps.h: distance maps of the scene's lights (cubes around point and spot lights,
  * orthographic squares for directional ones), the visibility that probe-ray hits read instead
- * of tracing a shadow ray (shaders/shadow_map.glsl has the layout
- * and the lookup, shaders/shadow_map.comp the build).
+ * of tracing a shadow ray (shaders/shadow_map.glsl has the layout and the lookup,
+ * shaders/shadow_map.comp the build).
  *
  * Why: a probe update shades every hit of its probe rays with one shadow ray; on an interior
  * with 11 lights those rays cost more than the probe rays themselves (issue 14; measurements in
  * tests/bench/results/h100/probe_shading.txt). A map costs one ray per texel once (6 x
- * PC_SHADOW_MAP_SIDE^2 for a point light, PC_SHADOW_MAP_SUN_SIDE^2 for a sun) and then serves every
- * update until the scene's revision changes (a node moves, a light moves), so an idle or static
- * scene pays for it once.
+ * PC_SHADOW_MAP_SIDE^2 for a point light, PC_SHADOW_MAP_SUN_SIDE^2 for a sun) and then serves
+ * every update until the geometry changes (every map) or its light moves (that light's map),
+ * so an idle or static scene pays for it once.
  *
- * When maps are stale, each update decides whether rebuilding pays: a rebuild is worth it when
- * its rays are at most the shadow rays it saves, i.e. the update's probe hits times the updates
- * the maps are expected to serve: as many as the previous revision lasted, or as the current one
- * has lasted so far, whichever is more. A scene that changes every update with few probe hits
- * traces shadow rays; once it stands still, the maps come back after its shadow rays have cost
- * about one rebuild (the rent-or-buy rule, never more than twice the better choice's cost).
- * Render thread only (this is Vulkan).
+ * When maps are stale, each update decides whether rebuilding them pays: a rebuild is worth it
+ * when its rays are at most the shadow rays it saves, i.e. the update's probe hits times the
+ * updates the maps are expected to serve: as many as the scene's previous revision lasted, or
+ * as the current one has lasted so far, whichever is more. A scene that changes every update
+ * with few probe hits traces shadow rays for its stale lights; once it stands still, the maps
+ * come back after its shadow rays have cost about one rebuild (the rent-or-buy rule, never more
+ * than twice the better choice's cost). Render thread only (this is Vulkan).
  */
 #ifndef RD_SHADOW_MAPS_H
 #define RD_SHADOW_MAPS_H
@@ -38,11 +38,16 @@ typedef struct rd_shadow_maps {
     rd_vk *vk;
     rd_probe_shadows mode;
     rd_pipeline build; /* created with the first build */
-    rd_buffer maps;    /* offset table and distances (layout: shaders/shadow_map.glsl) */
+    rd_buffer maps;    /* tables and distances (layout: shaders/shadow_map.glsl) */
     uint64_t capacity; /* words the buffer holds */
-    uint32_t lights;   /* lights [0, lights) have a map of `revision`; 0: no valid maps */
-    uint64_t revision; /* the scene revision the maps show */
-    bool complete;     /* every light of the scene has a map (none is past the limits) */
+    uint32_t lights;   /* lights the layout covers (the first PC_SHADOW_MAP_MAX_LIGHTS) */
+    uint32_t layout[PC_SHADOW_MAP_MAX_LIGHTS]; /* light i's map offset in words (0: none) */
+    /* what the maps show: the scene's geometry revision, and per light the light revision
+     * (0: no valid map); a light whose map is stale traces shadow rays until it is rebuilt */
+    uint64_t geometry;
+    uint64_t shown[PC_SHADOW_MAP_MAX_LIGHTS];
+    uint32_t table[PC_SHADOW_MAP_MAX_LIGHTS]; /* offsets as the GPU has them (0: no map) */
+    bool complete; /* every light of the scene has a valid map this update */
     /* revision change tracking: the revision last seen, the updates since it changed, and the
      * updates the one before it lasted (UINT64_MAX before any change was seen) */
     uint64_t seen;

@@ -6,7 +6,7 @@
  * reach of a lookup's filter) can light and marks the rest far.
  * Two dispatches: params.x = 0 for point and spot lights (x: groups over 6 SIDE^2 texels),
  * 1 for directional lights (x: groups over SUN_SIDE^2 texels); z: lights [0, z); a light of the
- * other kind, or without a map, leaves at once.
+ * other kind, without a map, or not to be rebuilt leaves at once.
  * push: globals, buf0 = the maps buffer, buf1 = pc_counters. */
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
@@ -23,9 +23,10 @@ void main()
     pc_light l = LightRef(g.scene.lights).v[index];
     bool sun = l.info.x == PC_LIGHT_DIRECTIONAL;
     uint base = ShadowMapWordRef(pc.buf0).v[index];
+    bool rebuild = ShadowMapWordRef(pc.buf0).v[PC_SHADOW_MAP_MAX_LIGHTS + index] != 0u;
     const uint face_texels = PC_SHADOW_MAP_SIDE * PC_SHADOW_MAP_SIDE;
     uint texels = sun ? PC_SHADOW_MAP_SUN_SIDE * PC_SHADOW_MAP_SUN_SIDE : 6u * face_texels;
-    if (base != 0u && sun == (pc.params.x == 1u) && texel < texels) {
+    if (rebuild && base != 0u && sun == (pc.params.x == 1u) && texel < texels) {
         vec3 org, dir;
         float tmax;
         bool wanted = true;

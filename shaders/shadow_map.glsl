@@ -6,7 +6,9 @@
  * shadow rays.
  *
  * Layout of the maps buffer (floats and uints of 4 bytes): words [0, PC_SHADOW_MAP_MAX_LIGHTS)
- * hold each light's map offset in words (0: the light has no map), then the maps:
+ * hold each light's map offset in words (0: the light has no valid map, its hits trace shadow
+ * rays), the next PC_SHADOW_MAP_MAX_LIGHTS words whether the build rebuilds the light's map
+ * (1) or leaves it (0), then the maps:
  * - a point or spot light: 6 faces of SIDE^2 texels; face f looks along axis f / 2, toward +
  *   for even f, and spans [-1, 1]^2 over the two following axes at distance 1; a texel holds
  *   the distance from the light to the first surface along its centre direction;
