@@ -311,10 +311,57 @@ static void fnv(uint64_t *h, const void *data, size_t n)
         *h = (*h ^ b[i]) * 0x100000001b3ull;
 }
 
+/* Logs where the geometry changed (gs->dirty) between the instances as last placed and inst
+ * (new boxes lo, hi; n instances), under a new geometry revision when anything moved, and keeps
+ * inst as the last placed. */
+static void log_moves(rd_gpu_scene *gs, const pc_instance *inst, const float *lo, const float *hi,
+                      uint32_t n)
+{
+    if (!gs->placed) { /* a new scene: nothing before it is logged */
+        gs->placed = xcalloc(n ? n : 1, sizeof *gs->placed);
+        memcpy(gs->placed, inst, sizeof *inst * n);
+        gs->revision = gs->geometry_revision = ++last_revision;
+        gs->dirty_count = 0;
+        gs->dirty_since = gs->geometry_revision;
+        return;
+    }
+    bool moved = false;
+    for (uint32_t i = 0; i < n; i++) {
+        if (memcmp(&gs->placed[i], &inst[i], sizeof *inst) == 0) continue;
+        if (!moved) gs->revision = gs->geometry_revision = ++last_revision;
+        moved = true;
+        /* where it was (the box of its old placement) and where it is */
+        float old_lo[3], old_hi[3], m[16] = {0};
+        for (int r = 0; r < 3; r++) {
+            const float *row = &gs->placed[i].object_to_world[r].x;
+            m[r] = row[0], m[4 + r] = row[1], m[8 + r] = row[2], m[12 + r] = row[3];
+        }
+        m[15] = 1;
+        world_box(m, &gs->mesh_bounds[gs->placed[i].info.y * 6], old_lo, old_hi);
+        const float *box[2][2] = {{old_lo, old_hi}, {&lo[i * 3], &hi[i * 3]}};
+        for (int b = 0; b < 2; b++) {
+            if (!(box[b][0][0] <= box[b][1][0])) continue; /* empty (a singular transform) */
+            if (gs->dirty_count == RD_GPU_SCENE_DIRTY_MAX) {
+                /* full: the older half goes, and maps older than it rebuild whole */
+                uint32_t drop = RD_GPU_SCENE_DIRTY_MAX / 2;
+                gs->dirty_since = gs->dirty[drop - 1].revision;
+                memmove(gs->dirty, gs->dirty + drop,
+                        sizeof gs->dirty[0] * (gs->dirty_count - drop));
+                gs->dirty_count -= drop;
+                if (gs->dirty_since == gs->geometry_revision) gs->dirty_count = 0;
+            }
+            rd_gpu_scene_dirty *d = &gs->dirty[gs->dirty_count++];
+            d->revision = gs->geometry_revision;
+            memcpy(d->lo, box[b][0], sizeof d->lo);
+            memcpy(d->hi, box[b][1], sizeof d->hi);
+        }
+        gs->placed[i] = inst[i];
+    }
+}
+
 rd_vk_result rd_gpu_scene_update_instances(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
                                            char *err, size_t errlen)
 {
-    gs->revision = gs->geometry_revision = ++last_revision;
     double t0 = now_ms();
     uint32_t n = s->instance_count;
     if (n != gs->instance_capacity && gs->instance_capacity != 0) {
@@ -342,6 +389,7 @@ rd_vk_result rd_gpu_scene_update_instances(rd_vk *vk, rd_gpu_scene *gs, const rd
             hi[i * 3] = hi[i * 3 + 1] = hi[i * 3 + 2] = -INFINITY;
         }
     }
+    log_moves(gs, inst, lo, hi, n);
     rd_bvh tlas = {0};
     if (!rd_bvh_build(&tlas, lo, hi, n, NULL)) {
         fprintf(stderr, "probecast: out of memory building the top-level BVH\n");
@@ -349,6 +397,12 @@ rd_vk_result rd_gpu_scene_update_instances(rd_vk *vk, rd_gpu_scene *gs, const rd
     }
     free(lo);
     free(hi);
+    if (tlas.node_count) {
+        const pc_bvh_node *root = &tlas.nodes[0];
+        const float b[6] = {root->bmin.x, root->bmin.y, root->bmin.z,
+                            root->bmax.x, root->bmax.y, root->bmax.z};
+        memcpy(gs->bounds, b, sizeof b);
+    }
     gs->tlas_build_ms = now_ms() - t0;
     gs->tlas_node_count = tlas.node_count;
 
@@ -430,6 +484,7 @@ rd_vk_result rd_gpu_scene_update_lights(rd_vk *vk, rd_gpu_scene *gs, const rd_sc
         if (lights[i].info.x == PC_LIGHT_SPOT)
             fnv(&shape, &lights[i].spot.x, sizeof lights[i].spot.x);
         if (lights[i].info.x == PC_LIGHT_DIRECTIONAL) gs->directional[i / 64] |= 1ull << (i % 64);
+        memcpy(gs->light_position[i], &lights[i].position_range, sizeof gs->light_position[i]);
         /* a light new at this index (the count grew) always gets a revision */
         if (shape != gs->light_shape[i] || i >= gs->refs.counts.y || gs->light_revision[i] == 0) {
             gs->light_shape[i] = shape;
@@ -520,6 +575,8 @@ void rd_gpu_scene_destroy(rd_vk *vk, rd_gpu_scene *gs)
         rd_buffer_destroy(vk, bufs[i]);
     free(gs->mesh_root);
     free(gs->mesh_bounds);
+    free(gs->placed);
+    gs->placed = NULL;
     free(gs->lights_pending);
     gs->mesh_root = NULL;
     gs->mesh_bounds = NULL;

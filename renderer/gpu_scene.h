@@ -12,6 +12,12 @@
 #include "vk_buffer.h"
 #include "vk_compute.h"
 
+#define RD_GPU_SCENE_DIRTY_MAX PC_SHADOW_MAP_BOXES
+typedef struct rd_gpu_scene_dirty {
+    uint64_t revision;
+    float lo[3], hi[3];
+} rd_gpu_scene_dirty;
+
 typedef struct rd_gpu_scene {
     rd_buffer tris, tri_attrs, blas_nodes, tlas_nodes, tlas_index, instances;
     rd_buffer materials, textures, texels, lights;
@@ -33,13 +39,25 @@ typedef struct rd_gpu_scene {
      * none can, views record no reflection pass */
     bool glossy;
     /* What rays see, as revisions: numbers no other state of any scene in this process has
-     * had. geometry_revision is renewed by every upload and instance update; light_revision[i]
+     * had. geometry_revision is renewed by every upload and instance update that moves an
+     * instance; light_revision[i]
      * when light i moves, re-aims, re-ranges, changes type or appears (not its colour or
      * intensity); revision by either. Distance maps (shadow_maps.h) built for them stay right
      * until they change. Lights past PC_SHADOW_MAP_MAX_LIGHTS are not tracked. */
     uint64_t revision, geometry_revision;
+    /* Where the geometry changed (GPU frame): the boxes of moved instances before and after,
+     * tagged with the geometry revision that moved them, the last RD_GPU_SCENE_DIRTY_MAX of
+     * them. Every change after geometry revision dirty_since is in the log (an upload, or a
+     * log that overflowed, moves dirty_since up): a distance map showing a revision at or
+     * after it needs only the texels whose rays cross the later boxes re-traced. */
+    rd_gpu_scene_dirty dirty[RD_GPU_SCENE_DIRTY_MAX];
+    uint32_t dirty_count; /* entries in dirty[], oldest first */
+    uint64_t dirty_since;
+    pc_instance *placed; /* the instances as last uploaded (to tell which moved) */
+    float bounds[6];     /* the top level's root box (GPU frame): min, max */
     uint64_t light_revision[PC_SHADOW_MAP_MAX_LIGHTS];
-    uint64_t light_shape[PC_SHADOW_MAP_MAX_LIGHTS]; /* hash of light i's placement */
+    uint64_t light_shape[PC_SHADOW_MAP_MAX_LIGHTS];    /* hash of light i's placement */
+    float light_position[PC_SHADOW_MAP_MAX_LIGHTS][3]; /* GPU frame (point and spot lights) */
     /* bit i % 64 of word i / 64: light i (of the first PC_SHADOW_MAP_MAX_LIGHTS) is
      * directional */
     uint64_t directional[PC_SHADOW_MAP_MAX_LIGHTS / 64];

@@ -1,6 +1,7 @@
 /* shadow_maps.c: the lights' distance maps for probe-hit shading (see shadow_maps.h). */
 #include "shadow_maps.h"
 
+#include <math.h>
 #include <stdint.h>
 #include <string.h>
 
@@ -8,8 +9,6 @@
 
 #define FACE_TEXELS ((uint64_t)PC_SHADOW_MAP_SIDE * PC_SHADOW_MAP_SIDE)
 #define SUN_TEXELS ((uint64_t)PC_SHADOW_MAP_SUN_SIDE * PC_SHADOW_MAP_SUN_SIDE)
-/* The tables before the maps: offsets, then build flags (shaders/shadow_map.glsl). */
-#define TABLE_WORDS (2u * PC_SHADOW_MAP_MAX_LIGHTS)
 /* Memory the maps may take, in 4-byte words (128 MiB: 80 point lights and 20 suns at once);
  * lights past it keep shadow rays. */
 #define BUDGET_WORDS (32ull << 20)
@@ -62,7 +61,7 @@ static void track(rd_shadow_maps *m, uint64_t revision)
  * past the memory budget get none. Returns the words the buffer needs. */
 static uint64_t lay_out(const rd_gpu_scene *scene, uint32_t n, uint32_t layout[])
 {
-    uint64_t at = TABLE_WORDS;
+    uint64_t at = PC_SHADOW_MAP_HEADER_WORDS;
     memset(layout, 0, sizeof(uint32_t) * PC_SHADOW_MAP_MAX_LIGHTS);
     for (uint32_t i = 0; i < n; i++) {
         uint64_t texels = light_texels(scene, i);
@@ -71,6 +70,47 @@ static uint64_t lay_out(const rd_gpu_scene *scene, uint32_t n, uint32_t layout[]
         at += texels;
     }
     return at;
+}
+
+/* Fraction of light i's map whose rays may cross the boxes (an estimate for the pay rule): for
+ * a point or spot light, the solid angle of each box's bounding sphere over the full sphere; for
+ * a sun, its disc's area over the frame's square. */
+static double coverage(const rd_shadow_maps *m, const rd_gpu_scene *scene, uint32_t i,
+                       const float boxes[][8], uint32_t nbox)
+{
+    bool sun = light_texels(scene, i) == SUN_TEXELS;
+    double f = 0;
+    for (uint32_t k = 0; k < nbox; k++) {
+        double rho2 = 0, d2 = 0;
+        for (int a = 0; a < 3; a++) {
+            double h = 0.5 * (boxes[k][4 + a] - boxes[k][a]);
+            double c = 0.5 * (boxes[k][4 + a] + boxes[k][a]);
+            rho2 += h * h;
+            double d = c - scene->light_position[i][a];
+            d2 += d * d;
+        }
+        if (sun)
+            f += 3.14159265 * rho2 / (4.0 * m->frame[3] * m->frame[3]);
+        else if (d2 <= rho2)
+            return 1;
+        else
+            f += 0.5 * (1 - sqrt(1 - rho2 / d2));
+    }
+    return f < 1 ? f : 1;
+}
+
+/* Does the suns' frame sphere still hold the scene's box? */
+static bool frame_holds(const rd_shadow_maps *m, const float bounds[6])
+{
+    for (int c = 0; c < 8; c++) {
+        double d2 = 0;
+        for (int a = 0; a < 3; a++) {
+            double d = bounds[((c >> a) & 1) ? 3 + a : a] - m->frame[a];
+            d2 += d * d;
+        }
+        if (d2 > (double)m->frame[3] * m->frame[3]) return false;
+    }
+    return true;
 }
 
 rd_vk_result rd_shadow_maps_prepare(rd_shadow_maps *m, rd_cmd *c, rd_timer *timer,
@@ -89,34 +129,61 @@ rd_vk_result rd_shadow_maps_prepare(rd_shadow_maps *m, rd_cmd *c, rd_timer *time
         return RD_VK_OK;
     }
     track(m, scene->revision);
-    /* what is stale: everything after a new layout or new geometry; else the moved lights */
+    bool forced = m->mode == RD_PROBE_SHADOWS_REBUILD;
     uint32_t layout[PC_SHADOW_MAP_MAX_LIGHTS];
     uint64_t words = lay_out(scene, n, layout);
-    if (n != m->lights || memcmp(layout, m->layout, sizeof layout) != 0 ||
-        m->geometry != scene->geometry_revision || m->mode == RD_PROBE_SHADOWS_REBUILD) {
+    bool suns = false;
+    for (uint32_t i = 0; i < n; i++)
+        suns = suns || (layout[i] && light_texels(scene, i) == SUN_TEXELS);
+    /* What is stale: every map after a new layout, or after geometry changes that the scene's
+     * log does not cover (or that left the suns' frame); else the texels whose rays cross the
+     * moved boxes, and the maps of lights that moved. */
+    bool moved = m->geometry != scene->geometry_revision;
+    bool partial = moved && m->geometry != 0 && m->geometry >= scene->dirty_since &&
+                   (!suns || frame_holds(m, scene->bounds));
+    if (n != m->lights || memcmp(layout, m->layout, sizeof layout) != 0 || forced ||
+        (moved && !partial)) {
         memcpy(m->layout, layout, sizeof layout);
         m->lights = n;
         memset(m->shown, 0, sizeof m->shown);
     }
-    uint32_t flags[PC_SHADOW_MAP_MAX_LIGHTS] = {0};
-    uint64_t rays = 0, stale = 0;
-    bool local = false, sun = false;
-    for (uint32_t i = 0; i < n; i++) {
-        if (!layout[i] || m->shown[i] == scene->light_revision[i]) continue;
-        flags[i] = 1;
-        stale++;
-        rays += light_texels(scene, i);
-        if (light_texels(scene, i) == SUN_TEXELS)
-            sun = true;
-        else
-            local = true;
+    float boxes[PC_SHADOW_MAP_BOXES][8];
+    uint32_t nbox = 0;
+    for (uint32_t k = 0; partial && k < scene->dirty_count; k++) {
+        const rd_gpu_scene_dirty *d = &scene->dirty[k];
+        if (d->revision <= m->geometry || nbox == PC_SHADOW_MAP_BOXES) continue;
+        float *b = boxes[nbox++];
+        memcpy(b, d->lo, sizeof d->lo);
+        memcpy(b + 4, d->hi, sizeof d->hi);
+        b[3] = b[7] = 0;
     }
-    bool forced = m->mode == RD_PROBE_SHADOWS_REBUILD;
+    uint32_t todo[PC_SHADOW_MAP_MAX_LIGHTS] = {0};
+    bool sun_whole = false;
+    for (uint32_t i = 0; i < n; i++) {
+        if (!layout[i]) continue;
+        if (m->shown[i] != scene->light_revision[i]) {
+            todo[i] = 1;
+            sun_whole = sun_whole || light_texels(scene, i) == SUN_TEXELS;
+        } else if (moved) {
+            todo[i] = 2;
+        }
+    }
+    /* a sun traced whole gets a new frame, and so do the other suns */
+    for (uint32_t i = 0; sun_whole && i < n; i++)
+        if (todo[i] == 2 && light_texels(scene, i) == SUN_TEXELS) todo[i] = 1;
+    uint64_t rays = 0;
+    bool any = false;
+    for (uint32_t i = 0; i < n; i++) {
+        if (todo[i] == 1) rays += light_texels(scene, i);
+        if (todo[i] == 2)
+            rays += (uint64_t)((double)light_texels(scene, i) * coverage(m, scene, i, boxes, nbox));
+        any = any || todo[i];
+    }
     /* the updates the maps would serve: as many as the last revision lasted, or as this one
      * has lasted so far, whichever is more (a scene that stops changing gets its maps once its
      * shadow rays have cost what a rebuild costs) */
     uint64_t serves = m->interval > m->seen_updates ? m->interval : m->seen_updates;
-    bool build = stale && (forced || serves == UINT64_MAX || rays <= hits * serves);
+    bool build = any && (forced || serves == UINT64_MAX || rays <= hits * serves);
     rd_vk_result r = RD_VK_OK;
     if (build && !m->build.pipeline)
         r = rd_pipeline_create(m->vk, &m->build, "shadow map", pc_spv_shadow_map,
@@ -129,37 +196,53 @@ rd_vk_result rd_shadow_maps_prepare(rd_shadow_maps *m, rd_cmd *c, rd_timer *time
         memset(m->table, 0, sizeof m->table);
         r = rd_buffer_create(m->vk, &m->maps, words * 4, RD_MEMORY_DEVICE, err, errlen);
         if (r == RD_VK_OK) m->capacity = words;
-        for (uint32_t i = 0; r == RD_VK_OK && i < n; i++)
-            if (layout[i] && !flags[i]) { /* nothing of it survived */
-                flags[i] = 1;
-                rays += light_texels(scene, i);
-                if (light_texels(scene, i) == SUN_TEXELS)
-                    sun = true;
-                else
-                    local = true;
-            }
+        for (uint32_t i = 0; i < n; i++)
+            if (layout[i]) todo[i] = 1;
+        sun_whole = suns;
     }
     if (r != RD_VK_OK) return r;
     if (!m->maps.buffer) return RD_VK_OK; /* nothing built yet: shadow rays */
+    bool local = false, sun = false;
     if (build) {
-        for (uint32_t i = 0; i < n; i++)
-            if (flags[i]) m->shown[i] = scene->light_revision[i];
+        for (uint32_t i = 0; i < n; i++) {
+            if (!todo[i]) continue;
+            m->shown[i] = scene->light_revision[i];
+            sun = sun || light_texels(scene, i) == SUN_TEXELS;
+            local = local || light_texels(scene, i) != SUN_TEXELS;
+        }
         m->geometry = scene->geometry_revision;
+        if (sun_whole) { /* the scene's bounding sphere, a little wider */
+            double r2 = 0;
+            for (int a = 0; a < 3; a++) {
+                double h = 0.5 * ((double)scene->bounds[3 + a] - scene->bounds[a]);
+                m->frame[a] = 0.5f * (scene->bounds[a] + scene->bounds[3 + a]);
+                r2 += h * h;
+            }
+            m->frame[3] = (float)fmax(sqrt(r2), 1e-3) * 1.001f;
+        }
     }
-    /* the GPU's table: offsets of the valid maps; then the lights to build */
-    uint32_t table[PC_SHADOW_MAP_MAX_LIGHTS] = {0};
+    /* the GPU's header: offsets of the valid maps, build orders, frame, boxes */
+    uint32_t header[PC_SHADOW_MAP_HEADER_WORDS] = {0};
     bool all = n == scene->refs.counts.y;
     for (uint32_t i = 0; i < n; i++) {
-        bool valid = layout[i] && m->shown[i] == scene->light_revision[i];
-        table[i] = valid ? layout[i] : 0;
+        bool valid = layout[i] && m->shown[i] == scene->light_revision[i] &&
+                     m->geometry == scene->geometry_revision;
+        header[i] = valid ? layout[i] : 0;
         all = all && valid;
     }
-    if (memcmp(table, m->table, sizeof table) != 0 || build) {
+    if (memcmp(header, m->table, sizeof m->table) != 0 || build) {
+        if (build) {
+            memcpy(header + PC_SHADOW_MAP_MAX_LIGHTS, todo, sizeof todo);
+            memcpy(header + PC_SHADOW_MAP_FRAME_WORD, m->frame, sizeof m->frame);
+            header[PC_SHADOW_MAP_FRAME_WORD + 4] = nbox;
+            memcpy(header + PC_SHADOW_MAP_BOX_WORD, boxes, sizeof(float) * 8 * nbox);
+        } else { /* the frame stays (lookups read it) */
+            memcpy(header + PC_SHADOW_MAP_FRAME_WORD, m->frame, sizeof m->frame);
+        }
         rd_cmd_barrier(c);
-        vkCmdUpdateBuffer(c->cb, m->maps.buffer, 0, sizeof table, table);
-        if (build) vkCmdUpdateBuffer(c->cb, m->maps.buffer, sizeof table, sizeof flags, flags);
+        vkCmdUpdateBuffer(c->cb, m->maps.buffer, 0, sizeof header, header);
         rd_cmd_barrier(c);
-        memcpy(m->table, table, sizeof table);
+        memcpy(m->table, header, sizeof m->table);
     }
     if (build) {
         pc_push push = {.globals = globals, .buf0 = m->maps.address, .buf1 = counters};

@@ -47,7 +47,8 @@ typedef struct rd_shadow_maps {
     uint64_t geometry;
     uint64_t shown[PC_SHADOW_MAP_MAX_LIGHTS];
     uint32_t table[PC_SHADOW_MAP_MAX_LIGHTS]; /* offsets as the GPU has them (0: no map) */
-    bool complete; /* every light of the scene has a valid map this update */
+    bool complete;  /* every light of the scene has a valid map this update */
+    float frame[4]; /* the suns' frame: centre xyz and radius (GPU frame) */
     /* revision change tracking: the revision last seen, the updates since it changed, and the
      * updates the one before it lasted (UINT64_MAX before any change was seen) */
     uint64_t seen;

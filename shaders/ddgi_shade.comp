@@ -78,7 +78,7 @@ void main()
         if (light != PC_INVALID) {
             float seen = -1.0;
             if (light < vol.control.w)
-                seen = shadow_map_visibility(g.scene, vol.shadow_maps, light,
+                seen = shadow_map_visibility(vol.shadow_maps, light,
                                              LightRef(g.scene.lights).v[light], sf.position,
                                              sf.geom_normal);
             if (seen >= 0.0) {

@@ -302,10 +302,16 @@ PC_END(pc_environment);
  * shaders/shadow_map.glsl): a point or spot light has a cube of 6 faces of SIDE^2 float
  * texels, each the distance from the light to the first surface along the texel's centre
  * direction; a directional light has one SUN_SIDE^2 orthographic map over the scene's bounding
- * sphere. Lights past MAX_LIGHTS keep shadow rays. */
+ * sphere. Lights past MAX_LIGHTS keep shadow rays. Header layout: shaders/shadow_map.glsl. */
 #define PC_SHADOW_MAP_SIDE 128u
+#define PC_SHADOW_MAP_BOXES 32u /* boxes of moved geometry a partial rebuild re-traces */
 #define PC_SHADOW_MAP_SUN_SIDE 1024u
 #define PC_SHADOW_MAP_MAX_LIGHTS 256u
+/* The maps buffer's header (words): offsets, build orders, the suns' frame and box count, the
+ * boxes; the maps follow. */
+#define PC_SHADOW_MAP_FRAME_WORD (2u * PC_SHADOW_MAP_MAX_LIGHTS)
+#define PC_SHADOW_MAP_BOX_WORD (PC_SHADOW_MAP_FRAME_WORD + 8u)
+#define PC_SHADOW_MAP_HEADER_WORDS (PC_SHADOW_MAP_BOX_WORD + 8u * PC_SHADOW_MAP_BOXES)
 #define PC_DDGI_DRIFT_SCALE 16384.0   /* fixed point of the drift sums */
 /* Irradiance texels hold (E / pi)^(1/5) (the paper's perceptual encoding, blended in that
  * space); readers raise the stored value to the 5th power. A fixed 5 lets the shaders decode

@@ -3,7 +3,8 @@
  * from the light through the texel's centre up to the light's range, or, for a directional
  * light, from the texel's centre on the square's plane along the light across the scene's
  * bounding sphere. A spot light traces only the texels its cone (widened by two texels, the
- * reach of a lookup's filter) can light and marks the rest far.
+ * reach of a lookup's filter) can light and marks the rest far. A light flagged 2 re-traces only
+ * the texels whose rays cross a box of moved geometry: elsewhere the first surface is the same.
  * Two dispatches: params.x = 0 for point and spot lights (x: groups over 6 SIDE^2 texels),
  * 1 for directional lights (x: groups over SUN_SIDE^2 texels); z: lights [0, z); a light of the
  * other kind, without a map, or not to be rebuilt leaves at once.
@@ -14,6 +15,25 @@
 
 layout(local_size_x = PC_WG_1D) in;
 
+/* Does the ray (org, dir, up to tmax) cross a box of the header's moved geometry? */
+bool crosses_moved(uint64_t maps, vec3 org, vec3 dir, float tmax)
+{
+    ShadowMapRef m = ShadowMapRef(maps);
+    uint n = min(ShadowMapWordRef(maps).v[PC_SHADOW_MAP_FRAME_WORD + 4u], PC_SHADOW_MAP_BOXES);
+    vec3 inv = 1.0 / mix(dir, vec3(1e-30), equal(dir, vec3(0.0))); /* no 0 * inf */
+    for (uint k = 0u; k < n; k++) {
+        uint at = PC_SHADOW_MAP_BOX_WORD + 8u * k;
+        vec3 lo = vec3(m.v[at], m.v[at + 1u], m.v[at + 2u]);
+        vec3 hi = vec3(m.v[at + 4u], m.v[at + 5u], m.v[at + 6u]);
+        vec3 a = (lo - org) * inv, b = (hi - org) * inv;
+        vec3 near = min(a, b), far = max(a, b);
+        float t0 = max(max(near.x, near.y), max(near.z, 0.0));
+        float t1 = min(min(far.x, far.y), min(far.z, tmax));
+        if (t0 <= t1) return true;
+    }
+    return false;
+}
+
 void main()
 {
     count_rays_begin();
@@ -23,10 +43,10 @@ void main()
     pc_light l = LightRef(g.scene.lights).v[index];
     bool sun = l.info.x == PC_LIGHT_DIRECTIONAL;
     uint base = ShadowMapWordRef(pc.buf0).v[index];
-    bool rebuild = ShadowMapWordRef(pc.buf0).v[PC_SHADOW_MAP_MAX_LIGHTS + index] != 0u;
+    uint todo = ShadowMapWordRef(pc.buf0).v[PC_SHADOW_MAP_MAX_LIGHTS + index];
     const uint face_texels = PC_SHADOW_MAP_SIDE * PC_SHADOW_MAP_SIDE;
     uint texels = sun ? PC_SHADOW_MAP_SUN_SIDE * PC_SHADOW_MAP_SUN_SIDE : 6u * face_texels;
-    if (rebuild && base != 0u && sun == (pc.params.x == 1u) && texel < texels) {
+    if (todo != 0u && base != 0u && sun == (pc.params.x == 1u) && texel < texels) {
         vec3 org, dir;
         float tmax;
         bool wanted = true;
@@ -36,7 +56,7 @@ void main()
             vec3 c, u, v;
             float r;
             dir = l.direction.xyz;
-            shadow_map_sun_frame(g.scene, dir, c, r, u, v);
+            shadow_map_sun_frame(pc.buf0, dir, c, r, u, v);
             org = c + (uv.x * u + uv.y * v - dir) * r;
             tmax = 2.0 * r;
         } else {
@@ -52,13 +72,15 @@ void main()
                 wanted = dot(dir, l.direction.xyz) >= cos(min(outer + margin, PC_PI));
             }
         }
+        if (todo == 2u) wanted = wanted && crosses_moved(pc.buf0, org, dir, tmax);
+        else if (!wanted) ShadowMapRef(pc.buf0).v[base + texel] = SHADOW_MAP_FAR;
         float t = SHADOW_MAP_FAR;
         if (wanted) {
             pc_hit hit;
             rays = 1u;
             if (trace_ray(g.scene, org, dir, 0.0, tmax, 0u, hit)) t = hit.t;
         }
-        ShadowMapRef(pc.buf0).v[base + texel] = t;
+        if (wanted) ShadowMapRef(pc.buf0).v[base + texel] = t;
     }
     count_rays_end(pc.buf1, 6u, rays);
 }

@@ -5,16 +5,20 @@
  * hit's visibility costs four texel reads instead of a shadow ray. Camera pixels keep exact
  * shadow rays.
  *
- * Layout of the maps buffer (floats and uints of 4 bytes): words [0, PC_SHADOW_MAP_MAX_LIGHTS)
- * hold each light's map offset in words (0: the light has no valid map, its hits trace shadow
- * rays), the next PC_SHADOW_MAP_MAX_LIGHTS words whether the build rebuilds the light's map
- * (1) or leaves it (0), then the maps:
- * - a point or spot light: 6 faces of SIDE^2 texels; face f looks along axis f / 2, toward +
- *   for even f, and spans [-1, 1]^2 over the two following axes at distance 1; a texel holds
- *   the distance from the light to the first surface along its centre direction;
- * - a directional light: SUN_SIDE^2 texels over a square across the scene's bounding sphere,
- *   seen along the light (shadow_map_sun_frame); a texel holds the distance from the square's
- *   plane, one radius before the centre, to the first surface along the light.
+ * Layout of the maps buffer (floats and uints of 4 bytes), a header, then the maps:
+ * - words [0, MAX_LIGHTS): each light's map offset in words (0: the light has no valid map; its
+ *   hits trace shadow rays);
+ * - [MAX_LIGHTS, 2 MAX_LIGHTS): what the build does with each light's map: 0 nothing, 1 trace
+ *   it whole, 2 re-trace the texels whose rays cross a box of moved geometry;
+ * - PC_SHADOW_MAP_FRAME_WORD: the suns' frame (centre xyz, radius), then the box count;
+ *   PC_SHADOW_MAP_BOX_WORD: PC_SHADOW_MAP_BOXES boxes (min xyz, 0, max xyz, 0);
+ * - a point or spot light's map: 6 faces of SIDE^2 texels; face f looks along axis f / 2,
+ *   toward + for even f, and spans [-1, 1]^2 over the two following axes at distance 1; a
+ *   texel holds the distance from the light to the first surface along its centre direction;
+ * - a directional light's map: SUN_SIDE^2 texels over a square across the frame's sphere (the
+ *   scene's bounding sphere when the suns were last traced whole), seen along the light
+ *   (shadow_map_sun_frame); a texel holds the distance from the square's plane, one radius
+ *   before the centre, to the first surface along the light.
  * SHADOW_MAP_FAR where nothing is hit within the light's range. */
 #ifndef PC_SHADOW_MAP_GLSL
 #define PC_SHADOW_MAP_GLSL
@@ -54,14 +58,14 @@ uint shadow_map_face(vec3 d, out vec2 uv)
     return a * 2u + (d[a] < 0.0 ? 1u : 0u);
 }
 
-/* A directional light's map frame: the scene's bounding sphere (centre c, radius r, from the
- * top-level BVH's root box) seen along the light's direction d, with axes u, v across it. */
-void shadow_map_sun_frame(pc_scene_refs s, vec3 d, out vec3 c, out float r, out vec3 u,
-                          out vec3 v)
+/* A directional light's map frame: the sphere (centre c, radius r) of the maps' header seen
+ * along the light's direction d, with axes u, v across it. */
+void shadow_map_sun_frame(uint64_t maps, vec3 d, out vec3 c, out float r, out vec3 u, out vec3 v)
 {
-    pc_bvh_node root = TraceNodes(s.tlas_nodes).n[0];
-    c = 0.5 * (root.bmin.xyz + root.bmax.xyz);
-    r = max(0.5 * length(root.bmax.xyz - root.bmin.xyz), 1e-3) * 1.001;
+    ShadowMapRef m = ShadowMapRef(maps);
+    const uint f = PC_SHADOW_MAP_FRAME_WORD;
+    c = vec3(m.v[f], m.v[f + 1u], m.v[f + 2u]);
+    r = m.v[f + 3u];
     u = normalize(cross(abs(d.y) < 0.9 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0), d));
     v = cross(d, u);
 }
@@ -86,8 +90,7 @@ float shadow_map_pcf(uint64_t maps, uint base, uint side, vec2 uv, float reach)
 /* Fraction of light `index` (l) that reaches the surface point p with unit geometric normal ng
  * on the light's side, from the light's map; negative when the map cannot tell (the light has
  * none, or p lies outside a directional light's square): the caller then traces a ray. */
-float shadow_map_visibility(pc_scene_refs s, uint64_t maps, uint index, pc_light l, vec3 p,
-                            vec3 ng)
+float shadow_map_visibility(uint64_t maps, uint index, pc_light l, vec3 p, vec3 ng)
 {
     uint base = ShadowMapWordRef(maps).v[index];
     if (base == 0u) return -1.0;
@@ -95,7 +98,7 @@ float shadow_map_visibility(pc_scene_refs s, uint64_t maps, uint index, pc_light
         vec3 c, u, v;
         float r;
         vec3 d = l.direction.xyz;
-        shadow_map_sun_frame(s, d, c, r, u, v);
+        shadow_map_sun_frame(maps, d, c, r, u, v);
         float texel = 2.0 * r / float(PC_SHADOW_MAP_SUN_SIDE);
         vec3 rel = p + ng * (SHADOW_MAP_NORMAL_OFFSET * texel) - c;
         vec2 uv = vec2(dot(rel, u), dot(rel, v)) / r;

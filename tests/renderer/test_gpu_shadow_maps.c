@@ -1,25 +1,29 @@
 /* test_gpu_shadow_maps.c: the lights' distance maps that probe hits read for visibility
  * (renderer/shadow_maps.h, shaders/shadow_map.glsl).
  *
- * 1. Against geometry: builtin:shadow (a floor, a 0.5 x 0.2 x 0.5 m box above it, a point light
- *    above the box) plus a slanted sun. For floor points on a grid, the map's visibility of each
- *    light must match the analytic answer (a slab test of the segment toward the light against
- *    the box, in C, sharing nothing with the GPU code) wherever the answer is the same for every
- *    point within MARGIN (two map texels or more); the shadow ray must match everywhere.
+ * 1. Against geometry: builtin:shadow's layout (a floor, a 0.5 x 0.2 x 0.5 m box above it, a
+ *    point light above the box), the box its own instance, plus a slanted sun. For floor points on
+ * a grid, the map's visibility of each light must match the analytic answer (a slab test of the
+ * segment toward the light against the box, in C, sharing nothing with the GPU code) wherever the
+ * answer is the same for every point within MARGIN (two map texels or more); the shadow ray must
+ * match everywhere.
  * 2. What is built when: maps are built by the first probe update; an update of an unchanged
  *    scene builds nothing (no rays); a colour change builds nothing.
  * 3. The pay rule, per light: while a light moves every update and an update shades far fewer
  *    hits than its map has texels, hits that chose it trace shadow rays instead of rebuilding
  *    (the sun keeps its map); once the light stays still long enough for the rebuild to pay,
  *    its map alone is rebuilt and matches the moved light's analytic shadow. In rebuild mode a
- *    moved light is re-mapped at once. New geometry makes every map stale.
+ *    moved light is re-mapped at once. An instance update that moves nothing stales nothing.
  * 4. --probe-shadows rays: no maps (and no memory for them); hits trace shadow rays.
+ * 5. A moved object: the maps re-trace only the texels whose rays cross its old or new box,
+ *    and then show its new shadow (checked against the moved box, analytically); moved out of
+ *    the suns' frame, it makes every map stale.
  */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "renderer/procedural.h"
+#include "renderer/mesh_builder.h"
 #include "renderer/world.h"
 #include "shaders/test_shadow_map.spv.h"
 #include "test_render_util.h"
@@ -27,7 +31,8 @@
 
 enum { GRID = 64, POINTS = GRID * GRID };
 static const float BOX_LO[3] = {-0.25f, 0.9f, -0.25f}, BOX_HI[3] = {0.25f, 1.1f, 0.25f};
-#define HALF 1.6f    /* floor points cover [-HALF, HALF]^2 */
+static float box_shift[3]; /* where the box's node has moved it */
+#define HALF 1.6f          /* floor points cover [-HALF, HALF]^2 */
 #define MARGIN 0.09f /* point light: 2 texels at 2.4 m are 0.075 m; sun (r = 7.1 m): 0.028 m */
 
 static char err[512];
@@ -37,11 +42,12 @@ static bool box_blocks(const float p[3], const float dir[3], float len)
 {
     float t0 = 1e-4f, t1 = len;
     for (int k = 0; k < 3; k++) {
+        float lo = BOX_LO[k] + box_shift[k], hi = BOX_HI[k] + box_shift[k];
         if (fabsf(dir[k]) < 1e-12f) {
-            if (p[k] < BOX_LO[k] || p[k] > BOX_HI[k]) return false;
+            if (p[k] < lo || p[k] > hi) return false;
             continue;
         }
-        float a = (BOX_LO[k] - p[k]) / dir[k], b = (BOX_HI[k] - p[k]) / dir[k];
+        float a = (lo - p[k]) / dir[k], b = (hi - p[k]) / dir[k];
         if (a > b) {
             float t = a;
             a = b;
@@ -146,8 +152,18 @@ int main(void)
 {
     rd_vk vk;
     if (!test_vk_open(&vk)) return test_finish();
+    /* builtin:shadow's floor, box and point light, with the box its own instance (it moves in
+     * part 5), and a slanted sun */
     rd_scene s;
-    CHECKF(rd_procedural_build("shadow", &s, err, sizeof err), "%s", err);
+    rd_scene_init(&s);
+    rd_tri_list t = {0};
+    uint32_t grey = rd_build_material(&s, "grey", 0.5f, 0.5f, 0.5f, 0, 0, 0);
+    const float f0[3] = {-5, 0, -5}, f1[3] = {-5, 0, 5}, f2[3] = {5, 0, 5}, f3[3] = {5, 0, -5};
+    rd_tris_quad(&t, f0, f1, f2, f3, grey);
+    rd_tris_commit(&t, &s, "floor");
+    rd_tris_box(&t, BOX_LO, BOX_HI, grey);
+    uint32_t box = rd_tris_commit(&t, &s, "box");
+    rd_build_point_light(&s, 0, 2, 0, 100);
     float a = 35.0f * (float)M_PI / 180.0f;
     rd_light sun = {.name = "sun",
                     .type = RD_LIGHT_DIRECTIONAL,
@@ -156,7 +172,8 @@ int main(void)
                     .node = -1,
                     .direction = {sinf(a) * 0.8f, -cosf(a), sinf(a) * 0.6f}};
     rd_scene_add_light(&s, &sun);
-    CHECK(s.light_count == 2 && s.lights[0].type == RD_LIGHT_POINT);
+    CHECKF(rd_scene_update(&s, err, sizeof err), "%s", err);
+    CHECK(s.light_count == 2 && s.lights[0].type == RD_LIGHT_POINT && s.instance_count == 2);
 
     rd_gpu_scene gs = {0};
     rd_world w = {0};
@@ -252,14 +269,50 @@ int main(void)
            (unsigned long long)w.shadow_maps.builds);
     check_light(&h, &w, &s, 0, "point light moved again");
 
-    /* new geometry (an instance update) makes every map stale: with few hits, rays for all */
+    /* an instance update that moves nothing stales nothing */
     w.shadow_maps.mode = RD_PROBE_SHADOWS_MAPS;
+    uint64_t builds = w.shadow_maps.builds;
+    VK_CHECK(rd_gpu_scene_update_instances(&vk, &gs, &s, err, sizeof err));
+    VK_CHECK(rd_world_update(&w, 1, err, sizeof err));
+    CHECKF(w.shadow_maps.builds == builds && w.shadow_maps.complete &&
+               w.stats.rays.probe_shadow_rays == 0,
+           "an update that moves nothing: builds %llu -> %llu, %u shadow rays",
+           (unsigned long long)builds, (unsigned long long)w.shadow_maps.builds,
+           w.stats.rays.probe_shadow_rays);
+
+    /* 5. a moved box: after a whole rebuild, moving the box re-traces only the texels whose
+     * rays cross its old or new box, and the maps show its new shadow */
+    w.shadow_maps.mode = RD_PROBE_SHADOWS_REBUILD;
+    VK_CHECK(rd_world_update(&w, 1, err, sizeof err));
+    w.shadow_maps.mode = RD_PROBE_SHADOWS_MAPS;
+    VK_CHECK(rd_world_update(&w, 10, err, sizeof err)); /* still: a rebuild will pay */
+    uint64_t before = w.shadow_maps.builds;
+    box_shift[0] = 0.4f;
+    box_shift[2] = -0.2f;
+    s.nodes[box].translation[0] = box_shift[0];
+    s.nodes[box].translation[2] = box_shift[2];
+    CHECKF(rd_scene_update(&s, err, sizeof err), "%s", err);
+    VK_CHECK(rd_gpu_scene_update_instances(&vk, &gs, &s, err, sizeof err));
+    VK_CHECK(rd_world_update(&w, 1, err, sizeof err));
+    printf("moved box: %u of %llu map texels re-traced\n", w.stats.rays.shadow_map_rays,
+           (unsigned long long)map_rays);
+    CHECKF(w.shadow_maps.builds == before + 1 && w.shadow_maps.complete &&
+               w.stats.rays.shadow_map_rays > 0 && w.stats.rays.shadow_map_rays < map_rays / 10,
+           "moved box: builds %llu -> %llu, %u rays", (unsigned long long)before,
+           (unsigned long long)w.shadow_maps.builds, w.stats.rays.shadow_map_rays);
+    check_light(&h, &w, &s, 0, "point light over the moved box");
+    check_light(&h, &w, &s, 1, "sun over the moved box");
+
+    /* a box moved out of the suns' frame (the scene's bounding sphere): every map is stale,
+     * and with few hits their lights trace shadow rays */
+    s.nodes[box].translation[1] = 40;
+    CHECKF(rd_scene_update(&s, err, sizeof err), "%s", err);
     VK_CHECK(rd_gpu_scene_update_instances(&vk, &gs, &s, err, sizeof err));
     VK_CHECK(rd_world_update(&w, 1, err, sizeof err));
     CHECKF(w.shadow_maps.table[0] == 0 && w.shadow_maps.table[1] == 0 && w.ddgi.sort_hits &&
-               w.stats.rays.probe_shadow_rays > 0 && w.shadow_maps.builds == 3,
-           "after new geometry: offsets %u %u, builds %llu", w.shadow_maps.table[0],
-           w.shadow_maps.table[1], (unsigned long long)w.shadow_maps.builds);
+               w.stats.rays.probe_shadow_rays > 0 && w.stats.rays.shadow_map_rays == 0,
+           "box out of the frame: offsets %u %u, %u map rays", w.shadow_maps.table[0],
+           w.shadow_maps.table[1], w.stats.rays.shadow_map_rays);
 
     /* 4. rays only: no maps and no memory for them */
     w.shadow_maps.mode = RD_PROBE_SHADOWS_RAYS;
