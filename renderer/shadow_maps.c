@@ -17,7 +17,6 @@ void rd_shadow_maps_init(rd_vk *vk, rd_shadow_maps *m)
 {
     memset(m, 0, sizeof *m);
     m->vk = vk;
-    m->interval = UINT64_MAX;
 }
 
 void rd_shadow_maps_release(rd_shadow_maps *m)
@@ -180,10 +179,10 @@ rd_vk_result rd_shadow_maps_prepare(rd_shadow_maps *m, rd_cmd *c, rd_timer *time
         any = any || todo[i];
     }
     /* the updates the maps would serve: as many as the last revision lasted, or as this one
-     * has lasted so far, whichever is more (a scene that stops changing gets its maps once its
-     * shadow rays have cost what a rebuild costs) */
+     * has lasted so far, whichever is more (a scene, new or one that stops changing, gets its
+     * maps once its shadow rays have cost what a rebuild costs) */
     uint64_t serves = m->interval > m->seen_updates ? m->interval : m->seen_updates;
-    bool build = any && (forced || serves == UINT64_MAX || rays <= hits * serves);
+    bool build = any && (forced || rays <= hits * serves);
     rd_vk_result r = RD_VK_OK;
     if (build && !m->build.pipeline)
         r = rd_pipeline_create(m->vk, &m->build, "shadow map", pc_spv_shadow_map,

@@ -14,9 +14,11 @@
  * when its rays are at most the shadow rays it saves, i.e. the update's probe hits times the
  * updates the maps are expected to serve: as many as the scene's previous revision lasted, or
  * as the current one has lasted so far, whichever is more. A scene that changes every update
- * with few probe hits traces shadow rays for its stale lights; once it stands still, the maps
- * come back after its shadow rays have cost about one rebuild (the rent-or-buy rule, never more
- * than twice the better choice's cost). Render thread only (this is Vulkan).
+ * with few probe hits traces shadow rays for its stale lights; a new scene, or one that stands
+ * still, gets its maps once its shadow rays have cost about one rebuild (the rent-or-buy rule,
+ * never more than twice the better choice's cost: builtin:interior at 256 rays per probe
+ * builds them at its first update, at 64 rays at its fourth; a tiny probe grid may never).
+ * Render thread only (this is Vulkan).
  */
 #ifndef RD_SHADOW_MAPS_H
 #define RD_SHADOW_MAPS_H
@@ -50,7 +52,7 @@ typedef struct rd_shadow_maps {
     bool complete;  /* every light of the scene has a valid map this update */
     float frame[4]; /* the suns' frame: centre xyz and radius (GPU frame) */
     /* revision change tracking: the revision last seen, the updates since it changed, and the
-     * updates the one before it lasted (UINT64_MAX before any change was seen) */
+     * updates the one before it lasted (0 before any change was seen) */
     uint64_t seen;
     uint64_t seen_updates;
     uint64_t interval;

@@ -2,6 +2,7 @@
  *
  *   probecast_probe_bench [--scene NAME] [--probes X,Y,Z] [--rays N] [--frames N]
  *                         [--width W --height H] [--ref-spp N] [--out FILE.csv] [--device D]
+ *                         [--probe-shadows maps|rays]
  *
  * 1. Animated object: a small sphere added to the scene circles over the floor; the field first
  *    converges, then each frame moves the sphere (top-level rebuild), wakes the probes around
@@ -24,6 +25,7 @@
 typedef struct bench_args {
     const char *scene, *out, *device;
     unsigned probes[3], rays, frames, width, height, ref_spp;
+    rd_probe_shadows shadows; /* how probe hits see the lights (render --probe-shadows) */
 } bench_args;
 
 static char err[512];
@@ -59,6 +61,10 @@ static bool parse(int argc, char **argv, bench_args *a)
             a->out = v;
         else if (strcmp(o, "--device") == 0)
             a->device = v;
+        else if (strcmp(o, "--probe-shadows") == 0 && strcmp(v, "maps") == 0)
+            a->shadows = RD_PROBE_SHADOWS_MAPS;
+        else if (strcmp(o, "--probe-shadows") == 0 && strcmp(v, "rays") == 0)
+            a->shadows = RD_PROBE_SHADOWS_RAYS;
         else
             return false;
         i++;
@@ -117,7 +123,7 @@ int main(int argc, char **argv)
     if (!parse(argc, argv, &a)) {
         fprintf(stderr, "usage: probecast_probe_bench [--scene NAME] [--probes X,Y,Z] [--rays N] "
                         "[--frames N] [--width W --height H] [--ref-spp N] [--out FILE.csv] "
-                        "[--device D]\n");
+                        "[--device D] [--probe-shadows maps|rays]\n");
         return 2;
     }
     rd_scene s;
@@ -150,8 +156,10 @@ int main(int argc, char **argv)
         fprintf(stderr, "probe_bench: %s\n", err);
         return 1;
     }
-    printf("device %s, scene %s + mover, %llu triangles\n", vk.device_name, a.scene,
-           (unsigned long long)s.tri_total);
+    r.world.shadow_maps.mode = a.shadows;
+    printf("device %s, scene %s + mover, %llu triangles, probe hits see lights by %s\n",
+           vk.device_name, a.scene, (unsigned long long)s.tri_total,
+           a.shadows == RD_PROBE_SHADOWS_RAYS ? "shadow rays" : "distance maps");
     FILE *csv = fopen(a.out, "w");
     if (!csv) {
         fprintf(stderr, "probe_bench: cannot write %s\n", a.out);
