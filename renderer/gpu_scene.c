@@ -485,6 +485,7 @@ rd_vk_result rd_gpu_scene_update_lights(rd_vk *vk, rd_gpu_scene *gs, const rd_sc
             fnv(&shape, &lights[i].spot.x, sizeof lights[i].spot.x);
         if (lights[i].info.x == PC_LIGHT_DIRECTIONAL) gs->directional[i / 64] |= 1ull << (i % 64);
         memcpy(gs->light_position[i], &lights[i].position_range, sizeof gs->light_position[i]);
+        memcpy(gs->light_direction[i], &lights[i].direction, sizeof gs->light_direction[i]);
         /* a light new at this index (the count grew) always gets a revision */
         if (shape != gs->light_shape[i] || i >= gs->refs.counts.y || gs->light_revision[i] == 0) {
             gs->light_shape[i] = shape;

@@ -56,8 +56,9 @@ typedef struct rd_gpu_scene {
     pc_instance *placed; /* the instances as last uploaded (to tell which moved) */
     float bounds[6];     /* the top level's root box (GPU frame): min, max */
     uint64_t light_revision[PC_SHADOW_MAP_MAX_LIGHTS];
-    uint64_t light_shape[PC_SHADOW_MAP_MAX_LIGHTS];    /* hash of light i's placement */
-    float light_position[PC_SHADOW_MAP_MAX_LIGHTS][3]; /* GPU frame (point and spot lights) */
+    uint64_t light_shape[PC_SHADOW_MAP_MAX_LIGHTS];     /* hash of light i's placement */
+    float light_position[PC_SHADOW_MAP_MAX_LIGHTS][3];  /* GPU frame (point and spot lights) */
+    float light_direction[PC_SHADOW_MAP_MAX_LIGHTS][3]; /* unit, as uploaded */
     /* bit i % 64 of word i / 64: light i (of the first PC_SHADOW_MAP_MAX_LIGHTS) is
      * directional */
     uint64_t directional[PC_SHADOW_MAP_MAX_LIGHTS / 64];

@@ -71,31 +71,102 @@ static uint64_t lay_out(const rd_gpu_scene *scene, uint32_t n, uint32_t layout[]
     return at;
 }
 
-/* Fraction of light i's map whose rays may cross the boxes (an estimate for the pay rule): for
- * a point or spot light, the solid angle of each box's bounding sphere over the full sphere; for
- * a sun, its disc's area over the frame's square. */
-static double coverage(const rd_shadow_maps *m, const rd_gpu_scene *scene, uint32_t i,
-                       const float boxes[][8], uint32_t nbox)
+/* A rectangle of one face of a light's map (face 6: a sun's square) that a partial rebuild
+ * re-traces: texels [x0, x0 + w) x [y0, y0 + h). */
+typedef struct region {
+    uint32_t light, face, x0, y0, w, h;
+} region;
+
+/* Grows the rectangle [lo, hi] (in uv of [-1, 1]^2) into texels of a side x side grid, one
+ * texel wider on every side (the lookup's filter and rounding), and appends it. */
+static void add_region(region *out, uint32_t *n, uint32_t light, uint32_t face, uint32_t side,
+                       const double lo[2], const double hi[2])
 {
-    bool sun = light_texels(scene, i) == SUN_TEXELS;
-    double f = 0;
-    for (uint32_t k = 0; k < nbox; k++) {
-        double rho2 = 0, d2 = 0;
-        for (int a = 0; a < 3; a++) {
-            double h = 0.5 * (boxes[k][4 + a] - boxes[k][a]);
-            double c = 0.5 * (boxes[k][4 + a] + boxes[k][a]);
-            rho2 += h * h;
-            double d = c - scene->light_position[i][a];
-            d2 += d * d;
-        }
-        if (sun)
-            f += 3.14159265 * rho2 / (4.0 * m->frame[3] * m->frame[3]);
-        else if (d2 <= rho2)
-            return 1;
-        else
-            f += 0.5 * (1 - sqrt(1 - rho2 / d2));
+    if (lo[0] > 1 || lo[1] > 1 || hi[0] < -1 || hi[1] < -1) return;
+    uint32_t x[2], y[2];
+    for (int e = 0; e < 2; e++) {
+        double u = (e ? hi[0] : lo[0]) * 0.5 + 0.5, v = (e ? hi[1] : lo[1]) * 0.5 + 0.5;
+        double fx = floor(u * side) + (e ? 1 : -1), fy = floor(v * side) + (e ? 1 : -1);
+        x[e] = (uint32_t)fmin(fmax(fx, 0), side - 1);
+        y[e] = (uint32_t)fmin(fmax(fy, 0), side - 1);
     }
-    return f < 1 ? f : 1;
+    out[(*n)++] = (region){light, face, x[0], y[0], x[1] - x[0] + 1, y[1] - y[0] + 1};
+}
+
+/* The rectangles of light i's map whose rays may cross the boxes: per cube face, the box
+ * corners' projections (the whole face when a box straddles the face's plane through the
+ * light); for a sun, their projections on its square. Returns how many (at most 6). */
+static uint32_t regions_of(const rd_shadow_maps *m, const rd_gpu_scene *scene, uint32_t i,
+                           const float boxes[][8], uint32_t nbox, region *out)
+{
+    uint32_t n = 0;
+    if (light_texels(scene, i) == SUN_TEXELS) {
+        const float *d = scene->light_direction[i];
+        double a[3] = {0, 1, 0}, u[3], v[3];
+        if (fabs(d[1]) >= 0.9) a[0] = 1, a[1] = 0;
+        u[0] = a[1] * d[2] - a[2] * d[1], u[1] = a[2] * d[0] - a[0] * d[2],
+        u[2] = a[0] * d[1] - a[1] * d[0];
+        double ul = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+        for (int k = 0; k < 3; k++)
+            u[k] /= ul;
+        v[0] = d[1] * u[2] - d[2] * u[1], v[1] = d[2] * u[0] - d[0] * u[2],
+        v[2] = d[0] * u[1] - d[1] * u[0];
+        double lo[2] = {1e30, 1e30}, hi[2] = {-1e30, -1e30};
+        for (uint32_t b = 0; b < nbox; b++)
+            for (int c = 0; c < 8; c++) {
+                double p[3], pu = 0, pv = 0;
+                for (int k = 0; k < 3; k++) {
+                    p[k] = boxes[b][((c >> k) & 1) ? 4 + k : k] - m->frame[k];
+                    pu += p[k] * u[k];
+                    pv += p[k] * v[k];
+                }
+                lo[0] = fmin(lo[0], pu / m->frame[3]), hi[0] = fmax(hi[0], pu / m->frame[3]);
+                lo[1] = fmin(lo[1], pv / m->frame[3]), hi[1] = fmax(hi[1], pv / m->frame[3]);
+            }
+        if (nbox) add_region(out, &n, i, 6, PC_SHADOW_MAP_SUN_SIDE, lo, hi);
+        return n;
+    }
+    const float *l = scene->light_position[i];
+    for (uint32_t f = 0; f < 6; f++) {
+        uint32_t ax = f / 2, bx = (ax + 1) % 3, cx = (ax + 2) % 3;
+        double s = (f & 1) ? -1 : 1;
+        double lo[2] = {1e30, 1e30}, hi[2] = {-1e30, -1e30};
+        bool seen = false;
+        for (uint32_t b = 0; b < nbox; b++) {
+            /* the box relative to the light; a point of it shows on this face only where its
+             * distance along the axis, da, is at least its distance off the axis in either
+             * other coordinate, so the box can be cut to da >= the least such distance */
+            double blo[3], bhi[3];
+            for (int k = 0; k < 3; k++) {
+                blo[k] = boxes[b][k] - l[k];
+                bhi[k] = boxes[b][4 + k] - l[k];
+            }
+            double a0 = s > 0 ? blo[ax] : -bhi[ax], a1 = s > 0 ? bhi[ax] : -blo[ax];
+            double off_b = blo[bx] > 0 ? blo[bx] : (bhi[bx] < 0 ? -bhi[bx] : 0);
+            double off_c = blo[cx] > 0 ? blo[cx] : (bhi[cx] < 0 ? -bhi[cx] : 0);
+            double cut = fmax(off_b, off_c);
+            a0 = fmax(a0, cut);
+            if (a1 <= 0 || a0 > a1) continue; /* never on this face */
+            double ulo[2], uhi[2];
+            if (a0 <= 1e-9) { /* it holds the light's axis: all of the face */
+                ulo[0] = ulo[1] = -1, uhi[0] = uhi[1] = 1;
+            } else { /* extremes of d[b] / da and d[c] / da lie at da = a0 or a1 */
+                const double ob[2] = {blo[bx], bhi[bx]}, oc[2] = {blo[cx], bhi[cx]};
+                ulo[0] = ulo[1] = 1e30, uhi[0] = uhi[1] = -1e30;
+                for (int e = 0; e < 2; e++)
+                    for (int q = 0; q < 2; q++) {
+                        double da = q ? a1 : a0;
+                        ulo[0] = fmin(ulo[0], ob[e] / da), uhi[0] = fmax(uhi[0], ob[e] / da);
+                        ulo[1] = fmin(ulo[1], oc[e] / da), uhi[1] = fmax(uhi[1], oc[e] / da);
+                    }
+            }
+            for (int k = 0; k < 2; k++)
+                lo[k] = fmin(lo[k], ulo[k]), hi[k] = fmax(hi[k], uhi[k]);
+            seen = true;
+        }
+        if (seen) add_region(out, &n, i, f, PC_SHADOW_MAP_SIDE, lo, hi);
+    }
+    return n;
 }
 
 /* Does the suns' frame sphere still hold the scene's box? */
@@ -170,12 +241,19 @@ rd_vk_result rd_shadow_maps_prepare(rd_shadow_maps *m, rd_cmd *c, rd_timer *time
     /* a sun traced whole gets a new frame, and so do the other suns */
     for (uint32_t i = 0; sun_whole && i < n; i++)
         if (todo[i] == 2 && light_texels(scene, i) == SUN_TEXELS) todo[i] = 1;
+    /* a partial rebuild re-traces rectangles around the moved boxes' projections */
+    static region regions[6 * PC_SHADOW_MAP_MAX_LIGHTS];
+    uint32_t nreg = 0;
     uint64_t rays = 0;
     bool any = false;
     for (uint32_t i = 0; i < n; i++) {
         if (todo[i] == 1) rays += light_texels(scene, i);
-        if (todo[i] == 2)
-            rays += (uint64_t)((double)light_texels(scene, i) * coverage(m, scene, i, boxes, nbox));
+        if (todo[i] == 2) {
+            uint32_t k = regions_of(m, scene, i, boxes, nbox, regions + nreg);
+            for (uint32_t j = 0; j < k; j++)
+                rays += (uint64_t)regions[nreg + j].w * regions[nreg + j].h;
+            nreg += k;
+        }
         any = any || todo[i];
     }
     /* the updates the maps would serve: as many as the last revision lasted, or as this one
@@ -198,6 +276,7 @@ rd_vk_result rd_shadow_maps_prepare(rd_shadow_maps *m, rd_cmd *c, rd_timer *time
         for (uint32_t i = 0; i < n; i++)
             if (layout[i]) todo[i] = 1;
         sun_whole = suns;
+        nreg = 0;
     }
     if (r != RD_VK_OK) return r;
     if (!m->maps.buffer) return RD_VK_OK; /* nothing built yet: shadow rays */
@@ -206,6 +285,7 @@ rd_vk_result rd_shadow_maps_prepare(rd_shadow_maps *m, rd_cmd *c, rd_timer *time
         for (uint32_t i = 0; i < n; i++) {
             if (!todo[i]) continue;
             m->shown[i] = scene->light_revision[i];
+            if (todo[i] != 1) continue; /* partial ones go by region */
             sun = sun || light_texels(scene, i) == SUN_TEXELS;
             local = local || light_texels(scene, i) != SUN_TEXELS;
         }
@@ -249,6 +329,12 @@ rd_vk_result rd_shadow_maps_prepare(rd_shadow_maps *m, rd_cmd *c, rd_timer *time
             rd_cmd_dispatch(c, &m->build, &push, (uint32_t)(6 * FACE_TEXELS / PC_WG_1D), 1, n);
         push.params.x = 1;
         if (sun) rd_cmd_dispatch(c, &m->build, &push, (uint32_t)(SUN_TEXELS / PC_WG_1D), 1, n);
+        for (uint32_t k = 0; k < nreg; k++) {
+            const region *g = &regions[k];
+            push.params = (pc_uvec4){2, g->light, g->face, g->x0 | g->y0 << 16};
+            push.buf2 = g->w | (uint64_t)g->h << 32;
+            rd_cmd_dispatch(c, &m->build, &push, (g->w * g->h + PC_WG_1D - 1) / PC_WG_1D, 1, 1);
+        }
         rd_cmd_barrier(c);
         if (timer) rd_timer_mark(c, timer, "shadow maps");
         m->builds++;

@@ -5,9 +5,11 @@
  * bounding sphere. A spot light traces only the texels its cone (widened by two texels, the
  * reach of a lookup's filter) can light and marks the rest far. A light flagged 2 re-traces only
  * the texels whose rays cross a box of moved geometry: elsewhere the first surface is the same.
- * Two dispatches: params.x = 0 for point and spot lights (x: groups over 6 SIDE^2 texels),
- * 1 for directional lights (x: groups over SUN_SIDE^2 texels); z: lights [0, z); a light of the
- * other kind, without a map, or not to be rebuilt leaves at once.
+ * Dispatches: params.x = 0 traces whole the maps of point and spot lights flagged 1 (x: groups
+ * over 6 SIDE^2 texels, z: lights [0, z)), 1 those of directional lights flagged 1 (x: groups
+ * over SUN_SIDE^2 texels); 2 re-traces a rectangle of a light flagged 2: params.y the light,
+ * params.z the face (6: a sun's square), params.w x0 | y0 << 16, buf2 width | height << 32
+ * (renderer/shadow_maps.c picks rectangles around the moved boxes' projections).
  * push: globals, buf0 = the maps buffer, buf1 = pc_counters. */
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
@@ -39,14 +41,24 @@ void main()
     count_rays_begin();
     pc_globals g = load_globals();
     uint texel = gl_GlobalInvocationID.x, index = gl_WorkGroupID.z;
+    const uint face_texels = PC_SHADOW_MAP_SIDE * PC_SHADOW_MAP_SIDE;
+    bool region = pc.params.x == 2u, inside = true;
+    if (region) { /* texel j of the rectangle, as the whole map's texel */
+        index = pc.params.y;
+        uint w = uint(pc.buf2 & 0xFFFFFFFFul), h = uint(pc.buf2 >> 32u), j = texel;
+        uint side = pc.params.z == 6u ? PC_SHADOW_MAP_SUN_SIDE : PC_SHADOW_MAP_SIDE;
+        uint x = (pc.params.w & 0xFFFFu) + j % w, y = (pc.params.w >> 16u) + j / w;
+        inside = j < w * h;
+        texel = (pc.params.z == 6u ? 0u : pc.params.z * face_texels) + y * side + x;
+    }
     uint rays = 0u;
     pc_light l = LightRef(g.scene.lights).v[index];
     bool sun = l.info.x == PC_LIGHT_DIRECTIONAL;
     uint base = ShadowMapWordRef(pc.buf0).v[index];
     uint todo = ShadowMapWordRef(pc.buf0).v[PC_SHADOW_MAP_MAX_LIGHTS + index];
-    const uint face_texels = PC_SHADOW_MAP_SIDE * PC_SHADOW_MAP_SIDE;
     uint texels = sun ? PC_SHADOW_MAP_SUN_SIDE * PC_SHADOW_MAP_SUN_SIDE : 6u * face_texels;
-    if (todo != 0u && base != 0u && sun == (pc.params.x == 1u) && texel < texels) {
+    bool mine = region ? todo == 2u && inside : todo == 1u && sun == (pc.params.x == 1u);
+    if (mine && base != 0u && texel < texels) {
         vec3 org, dir;
         float tmax;
         bool wanted = true;

@@ -294,7 +294,7 @@ int main(void)
     w.shadow_maps.mode = RD_PROBE_SHADOWS_REBUILD;
     VK_CHECK(rd_world_update(&w, 1, err, sizeof err));
     w.shadow_maps.mode = RD_PROBE_SHADOWS_MAPS;
-    VK_CHECK(rd_world_update(&w, 10, err, sizeof err)); /* still: a rebuild will pay */
+    VK_CHECK(rd_world_update(&w, 40, err, sizeof err)); /* still: a rebuild will pay */
     uint64_t before = w.shadow_maps.builds;
     box_shift[0] = 0.4f;
     box_shift[2] = -0.2f;
