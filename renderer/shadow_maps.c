@@ -30,6 +30,14 @@ void rd_shadow_maps_release(rd_shadow_maps *m)
     memset(m->table, 0, sizeof m->table);
 }
 
+unsigned rd_shadow_maps_valid(const rd_shadow_maps *m)
+{
+    unsigned n = 0;
+    for (unsigned i = 0; m->maps.buffer && i < PC_SHADOW_MAP_MAX_LIGHTS; i++)
+        n += m->table[i] != 0;
+    return n;
+}
+
 /* Texels (one ray each) of light i's map. */
 static uint64_t light_texels(const rd_gpu_scene *scene, uint32_t i)
 {

@@ -63,8 +63,10 @@ typedef struct rd_shadow_maps {
 void rd_shadow_maps_init(rd_vk *vk, rd_shadow_maps *m);
 /* Frees the pipeline and the maps. Idempotent. */
 void rd_shadow_maps_destroy(rd_shadow_maps *m);
-/* Frees the maps' memory (GI went off, or the scene has no point or spot light). */
+/* Frees the maps' memory (GI went off, or the scene has no light). */
 void rd_shadow_maps_release(rd_shadow_maps *m);
+/* Lights whose map the last update could read. */
+unsigned rd_shadow_maps_valid(const rd_shadow_maps *m);
 
 /* Called once per probe update before its shading is recorded into c, after the scene's
  * pending light values (rd_gpu_scene_record_updates). Records a rebuild when the maps are stale

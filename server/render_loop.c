@@ -376,6 +376,9 @@ static void share_state(srv_render_loop *l, bool rendering)
     s->probes_sleeping = w->gi ? w->ddgi.census.sleeping : 0;
     s->probes_off = w->gi ? w->ddgi.census.off : 0;
     s->gi_drift = w->gi ? w->ddgi.drift : 0;
+    s->shadow_map_lights = rd_shadow_maps_valid(&w->shadow_maps);
+    s->shadow_map_builds = w->shadow_maps.builds;
+    s->shadow_map_bytes = w->shadow_maps.capacity * 4;
     s->device_lost = l->vk.device_lost;
     s->gi_mode = w->gi || l->svc.pt_target ? l->svc.st.settings.gi_mode : 0;
     s->probe_counts[0] = w->gi ? w->ddgi.vol.counts.x : 0;

@@ -70,6 +70,10 @@ cJSON *srv_stats_json(const srv_stats_snapshot *s)
     cJSON_AddNumberToObject(p, "convergence", lit ? (double)r->probes_sleeping / lit : 1.0);
     cJSON_AddNumberToObject(p, "drift_per_update", r->gi_drift);
     cJSON_AddNumberToObject(p, "updates_per_second", r->world_updates_per_second);
+    cJSON *sm = cJSON_AddObjectToObject(p, "shadow_maps");
+    cJSON_AddNumberToObject(sm, "lights", r->shadow_map_lights);
+    cJSON_AddNumberToObject(sm, "builds", (double)r->shadow_map_builds);
+    cJSON_AddNumberToObject(sm, "bytes", (double)r->shadow_map_bytes);
     if (r->pt_target) {
         cJSON *pt = cJSON_AddObjectToObject(j, "pathtrace");
         cJSON_AddNumberToObject(pt, "samples", r->pt_samples);

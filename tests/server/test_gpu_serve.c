@@ -267,6 +267,13 @@ int main(void)
            "probe states when idle: %g awake, %g sleeping, %g off", pc_json_number(states, "awake"),
            pc_json_number(states, "sleeping"), pc_json_number(states, "off"));
     CHECK(pc_json_number(pr, "convergence") == 1);
+    /* 8 probes x 16 rays shade 128 hits an update: a light's distance map (98304 rays) would
+     * pay only after some 768 updates of shadow rays, so none is built and none takes memory */
+    const cJSON *sm = cJSON_GetObjectItemCaseSensitive(pr, "shadow_maps");
+    CHECKF(sm && pc_json_number(sm, "lights") == 0 && pc_json_number(sm, "builds") == 0 &&
+               pc_json_number(sm, "bytes") == 0,
+           "shadow maps of a tiny probe grid: %g lights, %g builds, %g bytes",
+           pc_json_number(sm, "lights"), pc_json_number(sm, "builds"), pc_json_number(sm, "bytes"));
     const cJSON *st = cJSON_GetObjectItemCaseSensitive(s2, "stream");
     CHECK(pc_json_number(st, "viewers") == 1 && pc_json_number(st, "frames_sent") >= 5);
     CHECK(pc_json_number(cJSON_GetObjectItemCaseSensitive(s2, "encoder"), "jpegs_encoded") >= 5);
