@@ -5,8 +5,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-
-void rd_tris_push(rd_tri_list *t, const float a[3], const float b[3], const float c[3], uint32_t mat)
+void rd_tris_push(rd_tri_list *t, const float a[3], const float b[3], const float c[3],
+                  uint32_t mat)
 {
     if (t->count == t->cap) {
         t->cap = t->cap ? t->cap * 2 : 64;
@@ -21,7 +21,7 @@ void rd_tris_push(rd_tri_list *t, const float a[3], const float b[3], const floa
 
 /* Quad a-b-c-d, counter-clockwise seen from its front. */
 void rd_tris_quad(rd_tri_list *t, const float a[3], const float b[3], const float c[3],
-                    const float d[3], uint32_t mat)
+                  const float d[3], uint32_t mat)
 {
     rd_tris_push(t, a, b, c, mat);
     rd_tris_push(t, a, c, d, mat);
@@ -46,16 +46,20 @@ void rd_tris_box(rd_tri_list *t, const float lo[3], const float hi[3], uint32_t 
 
 /* UV sphere with outward-facing triangles: 2 * seg * (rings - 1) triangles. */
 void rd_tris_sphere(rd_tri_list *t, const float c[3], float r, uint32_t rings, uint32_t seg,
-                      uint32_t mat)
+                    uint32_t mat)
 {
     for (uint32_t i = 0; i < rings; i++) {
         float t0 = (float)M_PI * i / rings, t1 = (float)M_PI * (i + 1) / rings;
         for (uint32_t j = 0; j < seg; j++) {
             float p0 = 2.0f * (float)M_PI * j / seg, p1 = 2.0f * (float)M_PI * (j + 1) / seg;
-            float a[3] = {c[0] + r * sinf(t0) * cosf(p0), c[1] + r * cosf(t0), c[2] + r * sinf(t0) * sinf(p0)};
-            float b[3] = {c[0] + r * sinf(t1) * cosf(p0), c[1] + r * cosf(t1), c[2] + r * sinf(t1) * sinf(p0)};
-            float d[3] = {c[0] + r * sinf(t1) * cosf(p1), c[1] + r * cosf(t1), c[2] + r * sinf(t1) * sinf(p1)};
-            float e[3] = {c[0] + r * sinf(t0) * cosf(p1), c[1] + r * cosf(t0), c[2] + r * sinf(t0) * sinf(p1)};
+            float a[3] = {c[0] + r * sinf(t0) * cosf(p0), c[1] + r * cosf(t0),
+                          c[2] + r * sinf(t0) * sinf(p0)};
+            float b[3] = {c[0] + r * sinf(t1) * cosf(p0), c[1] + r * cosf(t1),
+                          c[2] + r * sinf(t1) * sinf(p0)};
+            float d[3] = {c[0] + r * sinf(t1) * cosf(p1), c[1] + r * cosf(t1),
+                          c[2] + r * sinf(t1) * sinf(p1)};
+            float e[3] = {c[0] + r * sinf(t0) * cosf(p1), c[1] + r * cosf(t0),
+                          c[2] + r * sinf(t0) * sinf(p1)};
             if (i != 0) rd_tris_push(t, a, e, d, mat);
             if (i != rings - 1) rd_tris_push(t, a, d, b, mat);
         }
@@ -73,8 +77,11 @@ uint32_t rd_tris_commit(rd_tri_list *t, rd_scene *s, const char *name)
     free(t->pos);
     free(t->mat);
     memset(t, 0, sizeof *t);
-    rd_node node = {.name = (char *)name, .parent = -1, .mesh = (int32_t)m,
-                    .rotation = {0, 0, 0, 1}, .scale = {1, 1, 1}};
+    rd_node node = {.name = (char *)name,
+                    .parent = -1,
+                    .mesh = (int32_t)m,
+                    .rotation = {0, 0, 0, 1},
+                    .scale = {1, 1, 1}};
     return rd_scene_add_node(s, &node);
 }
 
@@ -96,29 +103,48 @@ void rd_tris_room(rd_tri_list *t, const float lo[3], const float hi[3], uint32_t
 }
 
 uint32_t rd_build_material(rd_scene *s, const char *name, float r, float g, float b, float er,
-                         float eg, float eb)
+                           float eg, float eb)
 {
-    rd_material m = {.name = (char *)name, .base_color = {r, g, b, 1}, .emission = {er, eg, eb},
-                     .roughness = 1.0f, .normal_scale = 1.0f, .occlusion_strength = 1.0f,
-                     .base_color_texture = -1, .emissive_texture = -1,
-                     .metallic_roughness_texture = -1, .normal_texture = -1,
-                     .occlusion_texture = -1, .alpha_cutoff = 0.5f};
+    rd_material m = {.name = (char *)name,
+                     .base_color = {r, g, b, 1},
+                     .emission = {er, eg, eb},
+                     .roughness = 1.0f,
+                     .normal_scale = 1.0f,
+                     .occlusion_strength = 1.0f,
+                     .base_color_texture = -1,
+                     .emissive_texture = -1,
+                     .metallic_roughness_texture = -1,
+                     .normal_texture = -1,
+                     .occlusion_texture = -1,
+                     .alpha_cutoff = 0.5f};
     return rd_scene_add_material(s, &m);
 }
 
 void rd_build_point_light(rd_scene *s, float x, float y, float z, float cd)
 {
-    rd_light l = {.name = "light", .type = RD_LIGHT_POINT, .color = {1, 1, 1}, .intensity = cd,
-                  .node = -1, .position = {x, y, z}, .direction = {0, -1, 0}};
+    rd_light l = {.name = "light",
+                  .type = RD_LIGHT_POINT,
+                  .color = {1, 1, 1},
+                  .intensity = cd,
+                  .node = -1,
+                  .position = {x, y, z},
+                  .direction = {0, -1, 0}};
+    rd_scene_add_light(s, &l);
+}
+
+void rd_build_sun(rd_scene *s, const float dir[3], const float color[3], float lux)
+{
+    rd_light l = {.name = "sun", .type = RD_LIGHT_DIRECTIONAL, .intensity = lux, .node = -1};
+    memcpy(l.color, color, sizeof l.color);
+    memcpy(l.direction, dir, sizeof l.direction);
     rd_scene_add_light(s, &l);
 }
 
 void rd_build_camera(rd_scene *s, const float eye[3], const float fwd[3], const float up[3],
-                   float yfov_deg)
+                     float yfov_deg)
 {
-    rd_camera c = {.name = "camera", .yfov = yfov_deg * (float)M_PI / 180.0f, .znear = 0.01f,
-                   .node = -1};
+    rd_camera c = {
+        .name = "camera", .yfov = yfov_deg * (float)M_PI / 180.0f, .znear = 0.01f, .node = -1};
     memcpy(c.position, eye, 12), memcpy(c.forward, fwd, 12), memcpy(c.up, up, 12);
     rd_scene_add_camera(s, &c);
 }
-

@@ -33,6 +33,8 @@ uint32_t rd_tris_commit(rd_tri_list *t, rd_scene *s, const char *name);
 uint32_t rd_build_material(rd_scene *s, const char *name, float r, float g, float b, float er,
                            float eg, float eb);
 void rd_build_point_light(rd_scene *s, float x, float y, float z, float cd);
+/* A directional light named "sun" shining toward dir (any length) with illuminance lux. */
+void rd_build_sun(rd_scene *s, const float dir[3], const float color[3], float lux);
 void rd_build_camera(rd_scene *s, const float eye[3], const float fwd[3], const float up[3],
                      float yfov_deg);
 

@@ -41,13 +41,8 @@ static void build_plane_directional(rd_scene *s)
     floor_plane(&t, 5.0f, rd_build_material(s, "grey", 0.5f, 0.5f, 0.5f, 0, 0, 0));
     rd_tris_commit(&t, s, "plane");
     float a = 60.0f * (float)M_PI / 180.0f;
-    rd_light l = {.name = "sun",
-                  .type = RD_LIGHT_DIRECTIONAL,
-                  .color = {1, 1, 1},
-                  .intensity = 3.0f,
-                  .node = -1,
-                  .direction = {sinf(a), -cosf(a), 0}};
-    rd_scene_add_light(s, &l);
+    const float dir[3] = {sinf(a), -cosf(a), 0}, white[3] = {1, 1, 1};
+    rd_build_sun(s, dir, white, 3.0f);
     const float eye[3] = {0, 4, 0};
     rd_build_camera(s, eye, DOWN, NEG_Z, 40);
 }
@@ -198,13 +193,8 @@ static void build_spheres(rd_scene *s, uint64_t min_tris)
         rd_tris_commit(&sp, s, "spheres");
     }
     rd_build_point_light(s, 0, 9.0f, 4.0f, 400.0f);
-    rd_light sun = {.name = "sun",
-                    .type = RD_LIGHT_DIRECTIONAL,
-                    .color = {1, 0.95f, 0.9f},
-                    .intensity = 2.0f,
-                    .node = -1,
-                    .direction = {0.3f, -0.8f, -0.5f}};
-    rd_scene_add_light(s, &sun);
+    const float sun_dir[3] = {0.3f, -0.8f, -0.5f}, sun_color[3] = {1, 0.95f, 0.9f};
+    rd_build_sun(s, sun_dir, sun_color, 2.0f);
     float fwd[3];
     const float dir[3] = {0, -0.45f, -1};
     rd_vec3_normalize(fwd, dir, NULL);

@@ -418,14 +418,9 @@ static void build(rd_scene *s, uint32_t detail)
         rd_build_point_light(s, 5.0f * k, HEIGHT - 0.25f, 0, 8.0f);
     float sun[3];
     const float sun_dir[3] = {0.25f, -0.45f, 0.85f}; /* low, through the south windows */
+    const float sun_color[3] = {1, 0.93f, 0.82f};
     rd_vec3_normalize(sun, sun_dir, NULL);
-    rd_light l = {.name = "sun",
-                  .type = RD_LIGHT_DIRECTIONAL,
-                  .color = {1, 0.93f, 0.82f},
-                  .intensity = 15.0f,
-                  .node = -1,
-                  .direction = {sun[0], sun[1], sun[2]}};
-    rd_scene_add_light(s, &l);
+    rd_build_sun(s, sun, sun_color, 15.0f);
 
     /* camera 0: a south room seen from its window corner, the door to the corridor in view;
      * camera 1: down the corridor */

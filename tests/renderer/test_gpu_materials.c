@@ -310,13 +310,8 @@ static void test_normal_map(int axis, float tangent_w)
         for (uint32_t i = 0; i < m->tri_count * 3; i++)
             m->tangents[i * 4] = 1, m->tangents[i * 4 + 3] = tangent_w;
     }
-    rd_light sun = {.name = "sun",
-                    .type = RD_LIGHT_DIRECTIONAL,
-                    .color = {1, 1, 1},
-                    .intensity = 2,
-                    .node = -1,
-                    .direction = {(float)-l[0], (float)-l[1], (float)-l[2]}};
-    rd_scene_add_light(&s, &sun);
+    const float sun_dir[3] = {(float)-l[0], (float)-l[1], (float)-l[2]}, white[3] = {1, 1, 1};
+    rd_build_sun(&s, sun_dir, white, 2);
     const float down[3] = {0, -1, 0}, negz[3] = {0, 0, -1};
     rd_view_camera cam = look(0, 3, 0, down, negz, 40);
     float *img = render_scene(&s, &cam, 0, 0);

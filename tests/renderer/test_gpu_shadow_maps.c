@@ -166,13 +166,8 @@ int main(void)
     uint32_t box = rd_tris_commit(&t, &s, "box");
     rd_build_point_light(&s, 0, 2, 0, 100);
     float a = 35.0f * (float)M_PI / 180.0f;
-    rd_light sun = {.name = "sun",
-                    .type = RD_LIGHT_DIRECTIONAL,
-                    .color = {1, 1, 1},
-                    .intensity = 2.0f,
-                    .node = -1,
-                    .direction = {sinf(a) * 0.8f, -cosf(a), sinf(a) * 0.6f}};
-    rd_scene_add_light(&s, &sun);
+    const float sun_dir[3] = {sinf(a) * 0.8f, -cosf(a), sinf(a) * 0.6f}, white[3] = {1, 1, 1};
+    rd_build_sun(&s, sun_dir, white, 2.0f);
     CHECKF(rd_scene_update(&s, err, sizeof err), "%s", err);
     CHECK(s.light_count == 2 && s.lights[0].type == RD_LIGHT_POINT && s.instance_count == 2);
 
