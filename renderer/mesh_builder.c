@@ -105,18 +105,10 @@ void rd_tris_room(rd_tri_list *t, const float lo[3], const float hi[3], uint32_t
 uint32_t rd_build_material(rd_scene *s, const char *name, float r, float g, float b, float er,
                            float eg, float eb)
 {
-    rd_material m = {.name = (char *)name,
-                     .base_color = {r, g, b, 1},
-                     .emission = {er, eg, eb},
-                     .roughness = 1.0f,
-                     .normal_scale = 1.0f,
-                     .occlusion_strength = 1.0f,
-                     .base_color_texture = -1,
-                     .emissive_texture = -1,
-                     .metallic_roughness_texture = -1,
-                     .normal_texture = -1,
-                     .occlusion_texture = -1,
-                     .alpha_cutoff = 0.5f};
+    rd_material m = rd_material_default();
+    m.name = (char *)name;
+    m.base_color[0] = r, m.base_color[1] = g, m.base_color[2] = b;
+    m.emission[0] = er, m.emission[1] = eg, m.emission[2] = eb;
     return rd_scene_add_material(s, &m);
 }
 

@@ -75,10 +75,9 @@ static uint32_t grow(void **arr, uint32_t *count, size_t size)
     return (*count)++;
 }
 
-void rd_scene_init(rd_scene *s)
+rd_material rd_material_default(void)
 {
-    memset(s, 0, sizeof *s);
-    rd_material def = {
+    return (rd_material){
         .name = "default",
         .base_color = {1.0f, 1.0f, 1.0f, 1.0f},
         .roughness = 1.0f,
@@ -93,6 +92,12 @@ void rd_scene_init(rd_scene *s)
         .alpha_cutoff = 0.5f,
         .double_sided = false,
     };
+}
+
+void rd_scene_init(rd_scene *s)
+{
+    memset(s, 0, sizeof *s);
+    rd_material def = rd_material_default();
     rd_scene_add_material(s, &def);
     for (int k = 0; k < 3; k++) {
         s->bounds_min[k] = -0.5f;

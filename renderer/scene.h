@@ -161,6 +161,9 @@ typedef struct rd_scene {
 } rd_scene;
 
 /* Initialises an empty scene holding only the default material. */
+/* White, dielectric, fully rough, untextured, opaque, single sided: materials[0] of every
+ * scene, and the start of materials built in code. */
+rd_material rd_material_default(void);
 void rd_scene_init(rd_scene *s);
 /* Frees everything the scene owns and leaves it empty (idempotent). */
 void rd_scene_destroy(rd_scene *s);

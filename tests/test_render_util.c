@@ -81,19 +81,12 @@ float *test_render(rd_vk *vk, const test_render_desc *d, pc_view *view_out,
 
 rd_material test_material(const float base[3], float metallic, float roughness, float specular)
 {
-    rd_material m = {.name = "m",
-                     .base_color = {base[0], base[1], base[2], 1},
-                     .metallic = metallic,
-                     .roughness = roughness,
-                     .specular = specular,
-                     .normal_scale = 1,
-                     .occlusion_strength = 1,
-                     .base_color_texture = -1,
-                     .emissive_texture = -1,
-                     .metallic_roughness_texture = -1,
-                     .normal_texture = -1,
-                     .occlusion_texture = -1,
-                     .alpha_cutoff = 0.5f};
+    rd_material m = rd_material_default();
+    m.name = "m";
+    m.base_color[0] = base[0], m.base_color[1] = base[1], m.base_color[2] = base[2];
+    m.metallic = metallic;
+    m.roughness = roughness;
+    m.specular = specular;
     return m;
 }
 
