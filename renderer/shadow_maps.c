@@ -79,16 +79,10 @@ static uint64_t lay_out(const rd_gpu_scene *scene, uint32_t n, uint32_t layout[]
     return at;
 }
 
-/* A rectangle of one face of a light's map (face 6: a sun's square) that a partial rebuild
- * re-traces: texels [x0, x0 + w) x [y0, y0 + h). */
-typedef struct region {
-    uint32_t light, face, x0, y0, w, h;
-} region;
-
 /* Grows the rectangle [lo, hi] (in uv of [-1, 1]^2) into texels of a side x side grid, one
  * texel wider on every side (the lookup's filter and rounding), and appends it. */
-static void add_region(region *out, uint32_t *n, uint32_t light, uint32_t face, uint32_t side,
-                       const double lo[2], const double hi[2])
+static void add_rect(rd_shadow_map_rect *out, uint32_t *n, uint32_t light, uint32_t face,
+                     uint32_t side, const double lo[2], const double hi[2])
 {
     if (lo[0] > 1 || lo[1] > 1 || hi[0] < -1 || hi[1] < -1) return;
     uint32_t x[2], y[2];
@@ -98,14 +92,14 @@ static void add_region(region *out, uint32_t *n, uint32_t light, uint32_t face, 
         x[e] = (uint32_t)fmin(fmax(fx, 0), side - 1);
         y[e] = (uint32_t)fmin(fmax(fy, 0), side - 1);
     }
-    out[(*n)++] = (region){light, face, x[0], y[0], x[1] - x[0] + 1, y[1] - y[0] + 1};
+    out[(*n)++] = (rd_shadow_map_rect){light, face, x[0], y[0], x[1] - x[0] + 1, y[1] - y[0] + 1};
 }
 
 /* The rectangles of light i's map whose rays may cross the boxes: per cube face, the box
  * corners' projections (the whole face when a box straddles the face's plane through the
  * light); for a sun, their projections on its square. Returns how many (at most 6). */
-static uint32_t regions_of(const rd_shadow_maps *m, const rd_gpu_scene *scene, uint32_t i,
-                           const float boxes[][8], uint32_t nbox, region *out)
+static uint32_t rects_of(const rd_shadow_maps *m, const rd_gpu_scene *scene, uint32_t i,
+                         const float boxes[][8], uint32_t nbox, rd_shadow_map_rect *out)
 {
     uint32_t n = 0;
     if (light_texels(scene, i) == SUN_TEXELS) {
@@ -131,7 +125,7 @@ static uint32_t regions_of(const rd_shadow_maps *m, const rd_gpu_scene *scene, u
                 lo[0] = fmin(lo[0], pu / m->frame[3]), hi[0] = fmax(hi[0], pu / m->frame[3]);
                 lo[1] = fmin(lo[1], pv / m->frame[3]), hi[1] = fmax(hi[1], pv / m->frame[3]);
             }
-        if (nbox) add_region(out, &n, i, 6, PC_SHADOW_MAP_SUN_SIDE, lo, hi);
+        if (nbox) add_rect(out, &n, i, PC_SHADOW_MAP_SUN_FACE, PC_SHADOW_MAP_SUN_SIDE, lo, hi);
         return n;
     }
     const float *l = scene->light_position[i];
@@ -172,7 +166,7 @@ static uint32_t regions_of(const rd_shadow_maps *m, const rd_gpu_scene *scene, u
                 lo[k] = fmin(lo[k], ulo[k]), hi[k] = fmax(hi[k], uhi[k]);
             seen = true;
         }
-        if (seen) add_region(out, &n, i, f, PC_SHADOW_MAP_SIDE, lo, hi);
+        if (seen) add_rect(out, &n, i, f, PC_SHADOW_MAP_SIDE, lo, hi);
     }
     return n;
 }
@@ -235,34 +229,34 @@ rd_vk_result rd_shadow_maps_prepare(rd_shadow_maps *m, rd_cmd *c, rd_timer *time
         memcpy(b + 4, d->hi, sizeof d->hi);
         b[3] = b[7] = 0;
     }
-    uint32_t todo[PC_SHADOW_MAP_MAX_LIGHTS] = {0};
+    uint32_t order[PC_SHADOW_MAP_MAX_LIGHTS] = {0};
     bool sun_whole = false;
     for (uint32_t i = 0; i < n; i++) {
         if (!layout[i]) continue;
         if (m->shown[i] != scene->light_revision[i]) {
-            todo[i] = 1;
+            order[i] = PC_SHADOW_MAP_WHOLE;
             sun_whole = sun_whole || light_texels(scene, i) == SUN_TEXELS;
         } else if (moved) {
-            todo[i] = 2;
+            order[i] = PC_SHADOW_MAP_PART;
         }
     }
     /* a sun traced whole gets a new frame, and so do the other suns */
     for (uint32_t i = 0; sun_whole && i < n; i++)
-        if (todo[i] == 2 && light_texels(scene, i) == SUN_TEXELS) todo[i] = 1;
+        if (order[i] == PC_SHADOW_MAP_PART && light_texels(scene, i) == SUN_TEXELS)
+            order[i] = PC_SHADOW_MAP_WHOLE;
     /* a partial rebuild re-traces rectangles around the moved boxes' projections */
-    static region regions[6 * PC_SHADOW_MAP_MAX_LIGHTS];
     uint32_t nreg = 0;
     uint64_t rays = 0;
     bool any = false;
     for (uint32_t i = 0; i < n; i++) {
-        if (todo[i] == 1) rays += light_texels(scene, i);
-        if (todo[i] == 2) {
-            uint32_t k = regions_of(m, scene, i, boxes, nbox, regions + nreg);
+        if (order[i] == PC_SHADOW_MAP_WHOLE) rays += light_texels(scene, i);
+        if (order[i] == PC_SHADOW_MAP_PART) {
+            uint32_t k = rects_of(m, scene, i, boxes, nbox, m->rects + nreg);
             for (uint32_t j = 0; j < k; j++)
-                rays += (uint64_t)regions[nreg + j].w * regions[nreg + j].h;
+                rays += (uint64_t)m->rects[nreg + j].w * m->rects[nreg + j].h;
             nreg += k;
         }
-        any = any || todo[i];
+        any = any || order[i] != PC_SHADOW_MAP_KEEP;
     }
     /* the updates the maps would serve: as many as the last revision lasted, or as this one
      * has lasted so far, whichever is more (a scene, new or one that stops changing, gets its
@@ -282,7 +276,7 @@ rd_vk_result rd_shadow_maps_prepare(rd_shadow_maps *m, rd_cmd *c, rd_timer *time
         r = rd_buffer_create(m->vk, &m->maps, words * 4, RD_MEMORY_DEVICE, err, errlen);
         if (r == RD_VK_OK) m->capacity = words;
         for (uint32_t i = 0; i < n; i++)
-            if (layout[i]) todo[i] = 1;
+            if (layout[i]) order[i] = PC_SHADOW_MAP_WHOLE;
         sun_whole = suns;
         nreg = 0;
     }
@@ -291,9 +285,9 @@ rd_vk_result rd_shadow_maps_prepare(rd_shadow_maps *m, rd_cmd *c, rd_timer *time
     bool local = false, sun = false;
     if (build) {
         for (uint32_t i = 0; i < n; i++) {
-            if (!todo[i]) continue;
+            if (order[i] == PC_SHADOW_MAP_KEEP) continue;
             m->shown[i] = scene->light_revision[i];
-            if (todo[i] != 1) continue; /* partial ones go by region */
+            if (order[i] != PC_SHADOW_MAP_WHOLE) continue; /* partial ones go by rectangle */
             sun = sun || light_texels(scene, i) == SUN_TEXELS;
             local = local || light_texels(scene, i) != SUN_TEXELS;
         }
@@ -319,7 +313,7 @@ rd_vk_result rd_shadow_maps_prepare(rd_shadow_maps *m, rd_cmd *c, rd_timer *time
     }
     if (memcmp(header, m->table, sizeof m->table) != 0 || build) {
         if (build) {
-            memcpy(header + PC_SHADOW_MAP_MAX_LIGHTS, todo, sizeof todo);
+            memcpy(header + PC_SHADOW_MAP_MAX_LIGHTS, order, sizeof order);
             memcpy(header + PC_SHADOW_MAP_FRAME_WORD, m->frame, sizeof m->frame);
             header[PC_SHADOW_MAP_FRAME_WORD + 4] = nbox;
             memcpy(header + PC_SHADOW_MAP_BOX_WORD, boxes, sizeof(float) * 8 * nbox);
@@ -335,11 +329,12 @@ rd_vk_result rd_shadow_maps_prepare(rd_shadow_maps *m, rd_cmd *c, rd_timer *time
         pc_push push = {.globals = globals, .buf0 = m->maps.address, .buf1 = counters};
         if (local)
             rd_cmd_dispatch(c, &m->build, &push, (uint32_t)(6 * FACE_TEXELS / PC_WG_1D), 1, n);
-        push.params.x = 1;
+        push.params.x = PC_SHADOW_MAP_PASS_SUNS;
         if (sun) rd_cmd_dispatch(c, &m->build, &push, (uint32_t)(SUN_TEXELS / PC_WG_1D), 1, n);
         for (uint32_t k = 0; k < nreg; k++) {
-            const region *g = &regions[k];
-            push.params = (pc_uvec4){2, g->light, g->face, g->x0 | g->y0 << 16};
+            const rd_shadow_map_rect *g = &m->rects[k];
+            push.params =
+                (pc_uvec4){PC_SHADOW_MAP_PASS_RECT, g->light, g->face, g->x0 | g->y0 << 16};
             push.buf2 = g->w | (uint64_t)g->h << 32;
             rd_cmd_dispatch(c, &m->build, &push, (g->w * g->h + PC_WG_1D - 1) / PC_WG_1D, 1, 1);
         }

@@ -36,6 +36,12 @@ typedef enum rd_probe_shadows {
     RD_PROBE_SHADOWS_REBUILD,
 } rd_probe_shadows;
 
+/* A rectangle of one face of a light's map (face PC_SHADOW_MAP_SUN_FACE: a sun's square) that
+ * a partial rebuild re-traces: texels [x0, x0 + w) x [y0, y0 + h). */
+typedef struct rd_shadow_map_rect {
+    uint32_t light, face, x0, y0, w, h;
+} rd_shadow_map_rect;
+
 typedef struct rd_shadow_maps {
     rd_vk *vk;
     rd_probe_shadows mode;
@@ -51,6 +57,7 @@ typedef struct rd_shadow_maps {
     uint32_t table[PC_SHADOW_MAP_MAX_LIGHTS]; /* offsets as the GPU has them (0: no map) */
     bool complete;  /* every light of the scene has a valid map this update */
     float frame[4]; /* the suns' frame: centre xyz and radius (GPU frame) */
+    rd_shadow_map_rect rects[6 * PC_SHADOW_MAP_MAX_LIGHTS]; /* a partial rebuild's (scratch) */
     /* revision change tracking: the revision last seen, the updates since it changed, and the
      * updates the one before it lasted (0 before any change was seen) */
     uint64_t seen;

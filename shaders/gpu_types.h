@@ -312,6 +312,16 @@ PC_END(pc_environment);
 #define PC_SHADOW_MAP_FRAME_WORD (2u * PC_SHADOW_MAP_MAX_LIGHTS)
 #define PC_SHADOW_MAP_BOX_WORD (PC_SHADOW_MAP_FRAME_WORD + 8u)
 #define PC_SHADOW_MAP_HEADER_WORDS (PC_SHADOW_MAP_BOX_WORD + 8u * PC_SHADOW_MAP_BOXES)
+/* What a build does with a light's map (the header's build orders)... */
+#define PC_SHADOW_MAP_KEEP 0u  /* nothing: it is valid, or it waits (its hits trace rays) */
+#define PC_SHADOW_MAP_WHOLE 1u /* trace every texel */
+#define PC_SHADOW_MAP_PART 2u  /* re-trace the texels whose rays cross a box of moved geometry */
+/* ...and the build's dispatches (push params.x): whole cubes, whole suns' squares, one
+ * rectangle of a map ordered PART (face PC_SHADOW_MAP_SUN_FACE: a sun's square) */
+#define PC_SHADOW_MAP_PASS_CUBES 0u
+#define PC_SHADOW_MAP_PASS_SUNS 1u
+#define PC_SHADOW_MAP_PASS_RECT 2u
+#define PC_SHADOW_MAP_SUN_FACE 6u
 #define PC_DDGI_DRIFT_SCALE 16384.0   /* fixed point of the drift sums */
 /* Irradiance texels hold (E / pi)^(1/5) (the paper's perceptual encoding, blended in that
  * space); readers raise the stored value to the 5th power. A fixed 5 lets the shaders decode

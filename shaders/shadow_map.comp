@@ -3,13 +3,15 @@
  * from the light through the texel's centre up to the light's range, or, for a directional
  * light, from the texel's centre on the square's plane along the light across the scene's
  * bounding sphere. A spot light traces only the texels its cone (widened by two texels, the
- * reach of a lookup's filter) can light and marks the rest far. A light flagged 2 re-traces only
- * the texels whose rays cross a box of moved geometry: elsewhere the first surface is the same.
- * Dispatches: params.x = 0 traces whole the maps of point and spot lights flagged 1 (x: groups
- * over 6 SIDE^2 texels, z: lights [0, z)), 1 those of directional lights flagged 1 (x: groups
- * over SUN_SIDE^2 texels); 2 re-traces a rectangle of a light flagged 2: params.y the light,
- * params.z the face (6: a sun's square), params.w x0 | y0 << 16, buf2 width | height << 32
- * (renderer/shadow_maps.c picks rectangles around the moved boxes' projections).
+ * reach of a lookup's filter) can light and marks the rest far. A light ordered PART re-traces
+ * only the texels whose rays cross a box of moved geometry: elsewhere the first surface is the
+ * same.
+ * Dispatches (params.x): PASS_CUBES traces whole the maps of point and spot lights ordered
+ * WHOLE (x: groups over 6 SIDE^2 texels, z: lights [0, z)), PASS_SUNS those of directional
+ * lights (x: groups over SUN_SIDE^2 texels); PASS_RECT re-traces a rectangle of a light ordered
+ * PART: params.y the light, params.z the face (SUN_FACE: a sun's square), params.w
+ * x0 | y0 << 16, buf2 width | height << 32 (renderer/shadow_maps.c picks rectangles around the
+ * moved boxes' projections).
  * push: globals, buf0 = the maps buffer, buf1 = pc_counters. */
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
@@ -42,22 +44,24 @@ void main()
     pc_globals g = load_globals();
     uint texel = gl_GlobalInvocationID.x, index = gl_WorkGroupID.z;
     const uint face_texels = PC_SHADOW_MAP_SIDE * PC_SHADOW_MAP_SIDE;
-    bool region = pc.params.x == 2u, inside = true;
+    bool region = pc.params.x == PC_SHADOW_MAP_PASS_RECT, inside = true;
     if (region) { /* texel j of the rectangle, as the whole map's texel */
         index = pc.params.y;
         uint w = uint(pc.buf2 & 0xFFFFFFFFul), h = uint(pc.buf2 >> 32u), j = texel;
-        uint side = pc.params.z == 6u ? PC_SHADOW_MAP_SUN_SIDE : PC_SHADOW_MAP_SIDE;
+        bool sun_face = pc.params.z == PC_SHADOW_MAP_SUN_FACE;
+        uint side = sun_face ? PC_SHADOW_MAP_SUN_SIDE : PC_SHADOW_MAP_SIDE;
         uint x = (pc.params.w & 0xFFFFu) + j % w, y = (pc.params.w >> 16u) + j / w;
         inside = j < w * h;
-        texel = (pc.params.z == 6u ? 0u : pc.params.z * face_texels) + y * side + x;
+        texel = (sun_face ? 0u : pc.params.z * face_texels) + y * side + x;
     }
     uint rays = 0u;
     pc_light l = LightRef(g.scene.lights).v[index];
     bool sun = l.info.x == PC_LIGHT_DIRECTIONAL;
     uint base = ShadowMapWordRef(pc.buf0).v[index];
-    uint todo = ShadowMapWordRef(pc.buf0).v[PC_SHADOW_MAP_MAX_LIGHTS + index];
+    uint order = ShadowMapWordRef(pc.buf0).v[PC_SHADOW_MAP_MAX_LIGHTS + index];
     uint texels = sun ? PC_SHADOW_MAP_SUN_SIDE * PC_SHADOW_MAP_SUN_SIDE : 6u * face_texels;
-    bool mine = region ? todo == 2u && inside : todo == 1u && sun == (pc.params.x == 1u);
+    bool mine = region ? order == PC_SHADOW_MAP_PART && inside
+                       : order == PC_SHADOW_MAP_WHOLE && sun == (pc.params.x == PC_SHADOW_MAP_PASS_SUNS);
     if (mine && base != 0u && texel < texels) {
         vec3 org, dir;
         float tmax;
@@ -84,7 +88,7 @@ void main()
                 wanted = dot(dir, l.direction.xyz) >= cos(min(outer + margin, PC_PI));
             }
         }
-        if (todo == 2u) wanted = wanted && crosses_moved(pc.buf0, org, dir, tmax);
+        if (order == PC_SHADOW_MAP_PART) wanted = wanted && crosses_moved(pc.buf0, org, dir, tmax);
         else if (!wanted) ShadowMapRef(pc.buf0).v[base + texel] = SHADOW_MAP_FAR;
         float t = SHADOW_MAP_FAR;
         if (wanted) {

@@ -8,8 +8,8 @@
  * Layout of the maps buffer (floats and uints of 4 bytes), a header, then the maps:
  * - words [0, MAX_LIGHTS): each light's map offset in words (0: the light has no valid map; its
  *   hits trace shadow rays);
- * - [MAX_LIGHTS, 2 MAX_LIGHTS): what the build does with each light's map: 0 nothing, 1 trace
- *   it whole, 2 re-trace the texels whose rays cross a box of moved geometry;
+ * - [MAX_LIGHTS, 2 MAX_LIGHTS): the build's order for each light's map (PC_SHADOW_MAP_KEEP,
+ *   WHOLE or PART);
  * - PC_SHADOW_MAP_FRAME_WORD: the suns' frame (centre xyz, radius), then the box count;
  *   PC_SHADOW_MAP_BOX_WORD: PC_SHADOW_MAP_BOXES boxes (min xyz, 0, max xyz, 0);
  * - a point or spot light's map: 6 faces of SIDE^2 texels; face f looks along axis f / 2,
