@@ -19,21 +19,21 @@
 
 layout(local_size_x = PC_WG_1D) in;
 
-/* Does the ray (org, dir, up to tmax) cross a box of the header's moved geometry? */
+/* Does the ray (org, dir, up to tmax) cross a box of the header's moved geometry? The same
+ * slab test as the traversal's (trace.glsl). */
 bool crosses_moved(uint64_t maps, vec3 org, vec3 dir, float tmax)
 {
     ShadowMapRef m = ShadowMapRef(maps);
     uint n = min(ShadowMapWordRef(maps).v[PC_SHADOW_MAP_FRAME_WORD + 4u], PC_SHADOW_MAP_BOXES);
-    vec3 inv = 1.0 / mix(dir, vec3(1e-30), equal(dir, vec3(0.0))); /* no 0 * inf */
+    vec3 inv;
+    bvec3 neg;
+    trace_setup_box(dir, inv, neg);
     for (uint k = 0u; k < n; k++) {
         uint at = PC_SHADOW_MAP_BOX_WORD + 8u * k;
-        vec3 lo = vec3(m.v[at], m.v[at + 1u], m.v[at + 2u]);
-        vec3 hi = vec3(m.v[at + 4u], m.v[at + 5u], m.v[at + 6u]);
-        vec3 a = (lo - org) * inv, b = (hi - org) * inv;
-        vec3 near = min(a, b), far = max(a, b);
-        float t0 = max(max(near.x, near.y), max(near.z, 0.0));
-        float t1 = min(min(far.x, far.y), min(far.z, tmax));
-        if (t0 <= t1) return true;
+        vec4 lo = vec4(m.v[at], m.v[at + 1u], m.v[at + 2u], 0.0);
+        vec4 hi = vec4(m.v[at + 4u], m.v[at + 5u], m.v[at + 6u], 0.0);
+        float tn;
+        if (trace_box(lo, hi, org, inv, neg, 0.0, tmax, tn)) return true;
     }
     return false;
 }
