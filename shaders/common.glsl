@@ -323,6 +323,16 @@ vec3 light_term(pc_scene_refs s, uint i, vec3 p, vec3 n, vec3 ng, vec3 v, pc_brd
     return brdf_eval(b, n, v, wi) * e * cos_n;
 }
 
+/* A shadow ray from origin (a surface point already offset along its geometric normal, on the
+ * light's side) toward a light at distance dist along wi: true when nothing blocks it. Counts
+ * the ray into rays. */
+bool shadow_ray_clear(pc_scene_refs s, vec3 origin, vec3 wi, float dist, inout uint rays)
+{
+    pc_hit sh;
+    rays++;
+    return !trace_ray(s, origin, wi, 0.0, dist, PC_TRACE_ANY_HIT, sh);
+}
+
 /* Radiance reflected toward v by a surface with BRDF b from all punctual lights:
  * sum over lights of f(v, l) * E_i * cos * visibility, with ray-traced hard shadows (shadow
  * rays start on the geometric side; lights below the shading or the geometric surface give
@@ -336,10 +346,7 @@ vec3 direct_radiance(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, vec3 v, pc_brdf b
         float dist;
         vec3 f = light_term(s, i, p, n, ng, v, b, wi, dist);
         if (all(equal(f, vec3(0.0)))) continue;
-        pc_hit sh;
-        rays++;
-        if (trace_ray(s, origin, wi, 0.0, dist, PC_TRACE_ANY_HIT, sh)) continue;
-        sum += f;
+        if (shadow_ray_clear(s, origin, wi, dist, rays)) sum += f;
     }
     return sum;
 }
@@ -402,11 +409,7 @@ vec3 direct_radiance_sampled(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, vec3 v, p
     vec3 term, wi;
     float dist;
     if (choose_light(s, p, n, ng, v, b, u, term, wi, dist) == PC_INVALID) return vec3(0.0);
-    pc_hit sh;
-    rays++;
-    if (trace_ray(s, offset_ray_origin(p, ng), wi, 0.0, dist, PC_TRACE_ANY_HIT, sh))
-        return vec3(0.0);
-    return term;
+    return shadow_ray_clear(s, offset_ray_origin(p, ng), wi, dist, rays) ? term : vec3(0.0);
 }
 
 /* Ray counting with one global atomic per workgroup. Every invocation of the workgroup must

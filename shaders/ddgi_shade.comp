@@ -75,22 +75,10 @@ void main()
         uint light = choose_light(g.scene, sf.position, sf.normal, sf.geom_normal, -dir, lambert,
                                   rnd(seed), term, wi, dist);
         vec3 direct = vec3(0.0);
-        if (light != PC_INVALID) {
-            float seen = -1.0;
-            if (light < vol.control.w)
-                seen = shadow_map_visibility(vol.shadow_maps, light,
-                                             LightRef(g.scene.lights).v[light], sf.position,
-                                             sf.geom_normal);
-            if (seen >= 0.0) {
-                direct = term * seen;
-            } else {
-                pc_hit sh;
-                shadow_rays++;
-                if (!trace_ray(g.scene, offset_ray_origin(sf.position, sf.geom_normal), wi, 0.0,
-                               dist, PC_TRACE_ANY_HIT, sh))
-                    direct = term;
-            }
-        }
+        if (light != PC_INVALID)
+            direct = term * probe_light_visibility(g.scene, vol.shadow_maps, vol.control.w, light,
+                                                   sf.position, sf.geom_normal, wi, dist,
+                                                   shadow_rays);
         vec3 indirect = vec3(0.0);
         if (pc.params.y != 0u)
             indirect = ddgi_irradiance(vol, env_irradiance(g.env, sf.normal), sf.position,

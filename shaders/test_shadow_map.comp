@@ -29,7 +29,7 @@ void main()
     float map = -2.0;
     if (index < g.ddgi.control.w)
         map = shadow_map_visibility(g.ddgi.shadow_maps, index, l, p, n);
-    pc_hit hit;
-    bool blocked = trace_ray(g.scene, offset_ray_origin(p, n), wi, 0.0, dist, PC_TRACE_ANY_HIT, hit);
-    OutRef(pc.buf1).v[i] = vec4(map, blocked ? 0.0 : 1.0, dot(n, wi), 0.0);
+    uint rays = 0u;
+    bool clear = shadow_ray_clear(g.scene, offset_ray_origin(p, n), wi, dist, rays);
+    OutRef(pc.buf1).v[i] = vec4(map, clear ? 1.0 : 0.0, dot(n, wi), 0.0);
 }
