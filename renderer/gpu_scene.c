@@ -304,11 +304,17 @@ static void rows3(pc_vec4 out[3], const float m[16])
 /* Source of rd_gpu_scene.revision (render thread only, like all of Vulkan here). */
 static uint64_t last_revision;
 
-static void fnv(uint64_t *h, const void *data, size_t n)
+/* Do a and b light the scene from the same place, in the same way as rays see it (type,
+ * position, range; aim for spot and directional lights; the spot's cone)? Colour and intensity
+ * do not count. */
+static bool same_placement(const pc_light *a, const pc_light *b)
 {
-    const unsigned char *b = data;
-    for (size_t i = 0; i < n; i++)
-        *h = (*h ^ b[i]) * 0x100000001b3ull;
+    if (a->info.x != b->info.x ||
+        memcmp(&a->position_range, &b->position_range, sizeof a->position_range) != 0)
+        return false;
+    if (a->info.x != PC_LIGHT_POINT && memcmp(&a->direction, &b->direction, sizeof a->direction))
+        return false;
+    return a->info.x != PC_LIGHT_SPOT || a->spot.x == b->spot.x;
 }
 
 /* Logs where the geometry changed (gs->dirty) between the instances as last placed and inst
@@ -450,6 +456,11 @@ rd_vk_result rd_gpu_scene_update_lights(rd_vk *vk, rd_gpu_scene *gs, const rd_sc
         if (r != RD_VK_OK) return r;
         gs->light_capacity = cap;
         gs->refs.lights = gs->lights.address;
+        pc_light *placed = xcalloc(cap, sizeof *placed); /* the old ones are compared below */
+        if (gs->placed_lights)
+            memcpy(placed, gs->placed_lights, sizeof *placed * gs->refs.counts.y);
+        free(gs->placed_lights);
+        gs->placed_lights = placed;
     }
     pc_light *lights = xcalloc(n, sizeof *lights);
     for (uint32_t i = 0; i < n; i++) {
@@ -474,24 +485,13 @@ rd_vk_result rd_gpu_scene_update_lights(rd_vk *vk, rd_gpu_scene *gs, const rd_sc
                                                                       : PC_LIGHT_POINT,
                                     0, 0, 0};
     }
-    memset(gs->directional, 0, sizeof gs->directional);
     for (uint32_t i = 0; i < n && i < PC_SHADOW_MAP_MAX_LIGHTS; i++) {
-        uint64_t shape = 0xcbf29ce484222325ull;
-        fnv(&shape, &lights[i].position_range, sizeof lights[i].position_range);
-        fnv(&shape, &lights[i].info.x, sizeof lights[i].info.x);
-        if (lights[i].info.x != PC_LIGHT_POINT) /* spot and directional lights aim */
-            fnv(&shape, &lights[i].direction, sizeof lights[i].direction);
-        if (lights[i].info.x == PC_LIGHT_SPOT)
-            fnv(&shape, &lights[i].spot.x, sizeof lights[i].spot.x);
-        if (lights[i].info.x == PC_LIGHT_DIRECTIONAL) gs->directional[i / 64] |= 1ull << (i % 64);
-        memcpy(gs->light_position[i], &lights[i].position_range, sizeof gs->light_position[i]);
-        memcpy(gs->light_direction[i], &lights[i].direction, sizeof gs->light_direction[i]);
         /* a light new at this index (the count grew) always gets a revision */
-        if (shape != gs->light_shape[i] || i >= gs->refs.counts.y || gs->light_revision[i] == 0) {
-            gs->light_shape[i] = shape;
+        if (i >= gs->refs.counts.y || gs->light_revision[i] == 0 ||
+            !same_placement(&lights[i], &gs->placed_lights[i]))
             gs->light_revision[i] = gs->revision = ++last_revision;
-        }
     }
+    memcpy(gs->placed_lights, lights, sizeof *lights * n);
     if (n != gs->refs.counts.y) gs->revision = ++last_revision;
     rd_vk_result r = RD_VK_OK;
     gs->refs.counts.y = n;
@@ -578,6 +578,8 @@ void rd_gpu_scene_destroy(rd_vk *vk, rd_gpu_scene *gs)
     free(gs->mesh_bounds);
     free(gs->placed);
     gs->placed = NULL;
+    free(gs->placed_lights);
+    gs->placed_lights = NULL;
     free(gs->lights_pending);
     gs->mesh_root = NULL;
     gs->mesh_bounds = NULL;

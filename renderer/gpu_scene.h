@@ -40,10 +40,10 @@ typedef struct rd_gpu_scene {
     bool glossy;
     /* What rays see, as revisions: numbers no other state of any scene in this process has
      * had. geometry_revision is renewed by every upload and instance update that moves an
-     * instance; light_revision[i]
-     * when light i moves, re-aims, re-ranges, changes type or appears (not its colour or
-     * intensity); revision by either. Distance maps (shadow_maps.h) built for them stay right
-     * until they change. Lights past PC_SHADOW_MAP_MAX_LIGHTS are not tracked. */
+     * instance; light_revision[i] when light i moves, re-aims, re-ranges, changes type or
+     * appears (not its colour or intensity: placed_lights keeps the last upload to compare);
+     * revision by either. Distance maps (shadow_maps.h) built for them stay right until they
+     * change. Lights past PC_SHADOW_MAP_MAX_LIGHTS are not tracked. */
     uint64_t revision, geometry_revision;
     /* Where the geometry changed (GPU frame): the boxes of moved instances before and after,
      * tagged with the geometry revision that moved them, the last RD_GPU_SCENE_DIRTY_MAX of
@@ -56,12 +56,7 @@ typedef struct rd_gpu_scene {
     pc_instance *placed; /* the instances as last uploaded (to tell which moved) */
     float bounds[6];     /* the top level's root box (GPU frame): min, max */
     uint64_t light_revision[PC_SHADOW_MAP_MAX_LIGHTS];
-    uint64_t light_shape[PC_SHADOW_MAP_MAX_LIGHTS];     /* hash of light i's placement */
-    float light_position[PC_SHADOW_MAP_MAX_LIGHTS][3];  /* GPU frame (point and spot lights) */
-    float light_direction[PC_SHADOW_MAP_MAX_LIGHTS][3]; /* unit, as uploaded */
-    /* bit i % 64 of word i / 64: light i (of the first PC_SHADOW_MAP_MAX_LIGHTS) is
-     * directional */
-    uint64_t directional[PC_SHADOW_MAP_MAX_LIGHTS / 64];
+    pc_light *placed_lights; /* the lights as last uploaded (light_capacity of them) */
     /* statistics */
     double blas_build_ms, tlas_build_ms, upload_ms;
     uint64_t tri_count, blas_node_count;

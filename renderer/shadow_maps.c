@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "shaders/shadow_map.spv.h"
+#include "xform.h"
 
 #define FACE_TEXELS ((uint64_t)PC_SHADOW_MAP_SIDE * PC_SHADOW_MAP_SIDE)
 #define SUN_TEXELS ((uint64_t)PC_SHADOW_MAP_SUN_SIDE * PC_SHADOW_MAP_SUN_SIDE)
@@ -41,8 +42,7 @@ unsigned rd_shadow_maps_valid(const rd_shadow_maps *m)
 /* Texels (one ray each) of light i's map. */
 static uint64_t light_texels(const rd_gpu_scene *scene, uint32_t i)
 {
-    bool directional = (scene->directional[i / 64] >> (i % 64)) & 1u;
-    return directional ? SUN_TEXELS : 6 * FACE_TEXELS;
+    return scene->placed_lights[i].info.x == PC_LIGHT_DIRECTIONAL ? SUN_TEXELS : 6 * FACE_TEXELS;
 }
 
 void rd_shadow_maps_destroy(rd_shadow_maps *m)
@@ -103,16 +103,14 @@ static uint32_t rects_of(const rd_shadow_maps *m, const rd_gpu_scene *scene, uin
 {
     uint32_t n = 0;
     if (light_texels(scene, i) == SUN_TEXELS) {
-        const float *d = scene->light_direction[i];
-        double a[3] = {0, 1, 0}, u[3], v[3];
-        if (fabs(d[1]) >= 0.9) a[0] = 1, a[1] = 0;
-        u[0] = a[1] * d[2] - a[2] * d[1], u[1] = a[2] * d[0] - a[0] * d[2],
-        u[2] = a[0] * d[1] - a[1] * d[0];
-        double ul = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-        for (int k = 0; k < 3; k++)
-            u[k] /= ul;
-        v[0] = d[1] * u[2] - d[2] * u[1], v[1] = d[2] * u[0] - d[0] * u[2],
-        v[2] = d[0] * u[1] - d[1] * u[0];
+        /* the square's axes, as shadow_map_sun_frame makes them */
+        const pc_vec4 dir = scene->placed_lights[i].direction;
+        const float d[3] = {dir.x, dir.y, dir.z};
+        const float y[3] = {0, 1, 0}, x[3] = {1, 0, 0};
+        float u[3], v[3];
+        rd_vec3_cross(u, fabsf(d[1]) < 0.9f ? y : x, d);
+        rd_vec3_normalize(u, u, x);
+        rd_vec3_cross(v, d, u);
         double lo[2] = {1e30, 1e30}, hi[2] = {-1e30, -1e30};
         for (uint32_t b = 0; b < nbox; b++)
             for (int c = 0; c < 8; c++) {
@@ -128,7 +126,8 @@ static uint32_t rects_of(const rd_shadow_maps *m, const rd_gpu_scene *scene, uin
         if (nbox) add_rect(out, &n, i, PC_SHADOW_MAP_SUN_FACE, PC_SHADOW_MAP_SUN_SIDE, lo, hi);
         return n;
     }
-    const float *l = scene->light_position[i];
+    const pc_vec4 pos = scene->placed_lights[i].position_range;
+    const float l[3] = {pos.x, pos.y, pos.z};
     for (uint32_t f = 0; f < 6; f++) {
         uint32_t ax = f / 2, bx = (ax + 1) % 3, cx = (ax + 2) % 3;
         double s = (f & 1) ? -1 : 1;
