@@ -3,18 +3,24 @@
 
 #include <string.h>
 
-static void add_pass(rd_frame_stats *dst, const char *name, double ms)
+int rd_frame_stats_pass(rd_frame_stats *s, const char *name)
 {
     unsigned k = 0;
-    while (k < dst->pass_count && strcmp(dst->pass_name[k], name) != 0)
+    while (k < s->pass_count && strcmp(s->pass_name[k], name) != 0)
         k++;
-    if (k == dst->pass_count) {
-        if (k == RD_TIMER_MAX) return;
-        dst->pass_name[k] = name;
-        dst->pass_ms[k] = 0;
-        dst->pass_count++;
+    if (k == s->pass_count) {
+        if (k == RD_TIMER_MAX) return -1;
+        s->pass_name[k] = name;
+        s->pass_ms[k] = 0;
+        s->pass_count++;
     }
-    dst->pass_ms[k] += ms;
+    return (int)k;
+}
+
+static void add_pass(rd_frame_stats *dst, const char *name, double ms)
+{
+    int k = rd_frame_stats_pass(dst, name);
+    if (k >= 0) dst->pass_ms[k] += ms;
 }
 
 void rd_frame_stats_add(rd_frame_stats *dst, const rd_frame_stats *src)

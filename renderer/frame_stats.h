@@ -21,6 +21,9 @@ typedef struct rd_frame_stats {
  * in src's order (those past RD_TIMER_MAX are dropped), and ray counts are added. dst is timed
  * when either is. */
 void rd_frame_stats_add(rd_frame_stats *dst, const rd_frame_stats *src);
+/* The index of the pass called name in s, appended with 0 ms when s has none yet; -1 when s is
+ * full (RD_TIMER_MAX passes). */
+int rd_frame_stats_pass(rd_frame_stats *s, const char *name);
 /* GPU time of all passes together (0 when timestamps are unavailable). */
 double rd_frame_stats_total_ms(const rd_frame_stats *s);
 /* Adds the sections of a resolved timer (rd_timer_resolve) to dst, by name as above. */

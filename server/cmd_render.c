@@ -457,8 +457,10 @@ int cli_render(int argc, char **argv)
     unsigned frames = a.timings ? a.repeat : 1;
     rd_frame_stats med = {0};
     /* per timed frame and pass; the report gives each pass's median */
-    double *samples = calloc((size_t)frames * RD_TIMER_MAX, sizeof *samples);
+    double *samples = malloc((size_t)frames * RD_TIMER_MAX * sizeof *samples);
     if (!samples) abort();
+    for (size_t k = 0; k < (size_t)frames * RD_TIMER_MAX; k++)
+        samples[k] = -1; /* the pass did not run in that frame */
     double warm_until = 0;
     unsigned timed = 0;
     for (unsigned f = 0; vr == RD_VK_OK && timed < frames; f++) {
@@ -481,22 +483,8 @@ int cli_render(int argc, char **argv)
         med.timed = st->timed;
         /* passes by name: a frame may run passes others do not (a distance-map rebuild) */
         for (unsigned i = 0; i < st->pass_count; i++) {
-            unsigned j = 0;
-            while (j < med.pass_count && strcmp(med.pass_name[j], st->pass_name[i]) != 0)
-                j++;
-            if (j == RD_TIMER_MAX) continue;
-            if (j == med.pass_count) {
-                med.pass_name[med.pass_count++] = st->pass_name[i];
-                for (unsigned k = 0; k < timed; k++)
-                    samples[(size_t)k * RD_TIMER_MAX + j] = -1;
-            }
-            samples[(size_t)timed * RD_TIMER_MAX + j] = st->pass_ms[i];
-        }
-        for (unsigned j = 0; j < med.pass_count; j++) { /* passes this frame did not run */
-            bool ran = false;
-            for (unsigned i = 0; i < st->pass_count; i++)
-                ran = ran || strcmp(med.pass_name[j], st->pass_name[i]) == 0;
-            if (!ran) samples[(size_t)timed * RD_TIMER_MAX + j] = -1;
+            int j = rd_frame_stats_pass(&med, st->pass_name[i]);
+            if (j >= 0) samples[(size_t)timed * RD_TIMER_MAX + (unsigned)j] = st->pass_ms[i];
         }
         med.rays = st->rays;
         timed++;
