@@ -184,6 +184,150 @@ static bool frame_holds(const rd_shadow_maps *m, const float bounds[6])
     return true;
 }
 
+/* One update's plan: the layout, what each map needs (its order), the moved boxes and the
+ * rectangles a partial rebuild re-traces, and the rays it all costs. */
+typedef struct plan {
+    uint32_t n; /* lights considered: the first PC_SHADOW_MAP_MAX_LIGHTS */
+    uint32_t layout[PC_SHADOW_MAP_MAX_LIGHTS];
+    uint32_t order[PC_SHADOW_MAP_MAX_LIGHTS];
+    float boxes[PC_SHADOW_MAP_BOXES][8];
+    uint32_t nbox, nrect;
+    uint64_t words, rays;
+    bool suns, sun_whole, any;
+} plan;
+
+/* Every map of the layout traced whole (a new buffer holds none). */
+static void plan_whole(plan *p, const rd_gpu_scene *scene)
+{
+    p->rays = 0;
+    p->nrect = 0;
+    for (uint32_t i = 0; i < p->n; i++) {
+        p->order[i] = p->layout[i] ? PC_SHADOW_MAP_WHOLE : PC_SHADOW_MAP_KEEP;
+        if (p->layout[i]) p->rays += light_texels(scene, i);
+    }
+    p->sun_whole = p->suns;
+}
+
+/* What is stale: every map after a new layout, or after geometry changes that the scene's log
+ * does not cover (or that left the suns' frame); else the texels whose rays cross the moved
+ * boxes, and the maps of lights that moved. Forgets (m->shown) what no longer holds. */
+static void plan_stale(rd_shadow_maps *m, const rd_gpu_scene *scene, plan *p)
+{
+    p->words = lay_out(scene, p->n, p->layout);
+    for (uint32_t i = 0; i < p->n; i++)
+        p->suns = p->suns || (p->layout[i] && light_texels(scene, i) == SUN_TEXELS);
+    bool moved = m->geometry != scene->geometry_revision;
+    bool partial = moved && m->geometry != 0 && m->geometry >= scene->dirty_since &&
+                   (!p->suns || frame_holds(m, scene->bounds));
+    if (p->n != m->lights || memcmp(p->layout, m->layout, sizeof p->layout) != 0 ||
+        m->mode == RD_PROBE_SHADOWS_REBUILD || (moved && !partial)) {
+        memcpy(m->layout, p->layout, sizeof p->layout);
+        m->lights = p->n;
+        memset(m->shown, 0, sizeof m->shown);
+    }
+    for (uint32_t k = 0; partial && k < scene->dirty_count; k++) {
+        const rd_gpu_scene_dirty *d = &scene->dirty[k];
+        if (d->revision <= m->geometry || p->nbox == PC_SHADOW_MAP_BOXES) continue;
+        float *b = p->boxes[p->nbox++];
+        memcpy(b, d->lo, sizeof d->lo);
+        memcpy(b + 4, d->hi, sizeof d->hi);
+        b[3] = b[7] = 0;
+    }
+    for (uint32_t i = 0; i < p->n; i++) {
+        if (!p->layout[i]) continue;
+        if (m->shown[i] != scene->light_revision[i]) {
+            p->order[i] = PC_SHADOW_MAP_WHOLE;
+            p->sun_whole = p->sun_whole || light_texels(scene, i) == SUN_TEXELS;
+        } else if (moved) {
+            p->order[i] = PC_SHADOW_MAP_PART;
+        }
+    }
+    /* a sun traced whole gets a new frame, and so do the other suns */
+    for (uint32_t i = 0; p->sun_whole && i < p->n; i++)
+        if (p->order[i] == PC_SHADOW_MAP_PART && light_texels(scene, i) == SUN_TEXELS)
+            p->order[i] = PC_SHADOW_MAP_WHOLE;
+    /* a partial rebuild re-traces rectangles around the moved boxes' projections */
+    for (uint32_t i = 0; i < p->n; i++) {
+        if (p->order[i] == PC_SHADOW_MAP_WHOLE) p->rays += light_texels(scene, i);
+        if (p->order[i] == PC_SHADOW_MAP_PART) {
+            uint32_t k = rects_of(m, scene, i, p->boxes, p->nbox, m->rects + p->nrect);
+            for (uint32_t j = 0; j < k; j++)
+                p->rays += (uint64_t)m->rects[p->nrect + j].w * m->rects[p->nrect + j].h;
+            p->nrect += k;
+        }
+        p->any = p->any || p->order[i] != PC_SHADOW_MAP_KEEP;
+    }
+}
+
+/* Takes a planned build as done: the maps it traces show the scene's revisions, and suns traced
+ * whole get a new frame (the scene's bounding sphere, a little wider). Before write_header. */
+static void accept_build(rd_shadow_maps *m, const rd_gpu_scene *scene, const plan *p)
+{
+    for (uint32_t i = 0; i < p->n; i++)
+        if (p->order[i] != PC_SHADOW_MAP_KEEP) m->shown[i] = scene->light_revision[i];
+    m->geometry = scene->geometry_revision;
+    if (!p->sun_whole) return;
+    double r2 = 0;
+    for (int a = 0; a < 3; a++) {
+        double h = 0.5 * ((double)scene->bounds[3 + a] - scene->bounds[a]);
+        m->frame[a] = 0.5f * (scene->bounds[a] + scene->bounds[3 + a]);
+        r2 += h * h;
+    }
+    m->frame[3] = (float)fmax(sqrt(r2), 1e-3) * 1.001f;
+}
+
+/* Records the build's dispatches into c: whole cubes, whole suns, then the rectangles. */
+static void record_build(rd_shadow_maps *m, rd_cmd *c, const rd_gpu_scene *scene, const plan *p,
+                         VkDeviceAddress globals, VkDeviceAddress counters)
+{
+    bool local = false, sun = false;
+    for (uint32_t i = 0; i < p->n; i++) {
+        if (p->order[i] != PC_SHADOW_MAP_WHOLE) continue; /* partial ones go by rectangle */
+        sun = sun || light_texels(scene, i) == SUN_TEXELS;
+        local = local || light_texels(scene, i) != SUN_TEXELS;
+    }
+    pc_push push = {.globals = globals, .buf0 = m->maps.address, .buf1 = counters};
+    if (local)
+        rd_cmd_dispatch(c, &m->build, &push, (uint32_t)(6 * FACE_TEXELS / PC_WG_1D), 1, p->n);
+    push.params.x = PC_SHADOW_MAP_PASS_SUNS;
+    if (sun) rd_cmd_dispatch(c, &m->build, &push, (uint32_t)(SUN_TEXELS / PC_WG_1D), 1, p->n);
+    for (uint32_t k = 0; k < p->nrect; k++) {
+        const rd_shadow_map_rect *g = &m->rects[k];
+        push.params = (pc_uvec4){PC_SHADOW_MAP_PASS_RECT, g->light, g->face, g->x0 | g->y0 << 16};
+        push.buf2 = g->w | (uint64_t)g->h << 32;
+        rd_cmd_dispatch(c, &m->build, &push, (g->w * g->h + PC_WG_1D - 1) / PC_WG_1D, 1, 1);
+    }
+}
+
+/* Writes the GPU's header when it changed or a build needs its orders: offsets of the valid
+ * maps, the build orders, the suns' frame, the boxes. Returns whether every light of the scene
+ * has a valid map. The recording comes before the build's dispatches and the shading. */
+static bool write_header(rd_shadow_maps *m, rd_cmd *c, const rd_gpu_scene *scene, const plan *p,
+                         bool build)
+{
+    uint32_t header[PC_SHADOW_MAP_HEADER_WORDS] = {0};
+    bool all = p->n == scene->refs.counts.y;
+    for (uint32_t i = 0; i < p->n; i++) {
+        bool valid = p->layout[i] && m->shown[i] == scene->light_revision[i] &&
+                     m->geometry == scene->geometry_revision;
+        header[i] = valid ? p->layout[i] : 0;
+        all = all && valid;
+    }
+    memcpy(header + PC_SHADOW_MAP_FRAME_WORD, m->frame, sizeof m->frame); /* lookups read it */
+    if (build) {
+        memcpy(header + PC_SHADOW_MAP_MAX_LIGHTS, p->order, sizeof p->order);
+        header[PC_SHADOW_MAP_FRAME_WORD + 4] = p->nbox;
+        memcpy(header + PC_SHADOW_MAP_BOX_WORD, p->boxes, sizeof(float) * 8 * p->nbox);
+    }
+    if (build || memcmp(header, m->table, sizeof m->table) != 0) {
+        rd_cmd_barrier(c);
+        vkCmdUpdateBuffer(c->cb, m->maps.buffer, 0, sizeof header, header);
+        rd_cmd_barrier(c);
+        memcpy(m->table, header, sizeof m->table);
+    }
+    return all;
+}
+
 rd_vk_result rd_shadow_maps_prepare(rd_shadow_maps *m, rd_cmd *c, rd_timer *timer,
                                     const rd_gpu_scene *scene, uint64_t hits,
                                     VkDeviceAddress globals, VkDeviceAddress counters,
@@ -193,156 +337,45 @@ rd_vk_result rd_shadow_maps_prepare(rd_shadow_maps *m, rd_cmd *c, rd_timer *time
     *mapped = 0;
     *address = 0;
     m->complete = false;
-    uint32_t n = scene->refs.counts.y;
-    if (n > PC_SHADOW_MAP_MAX_LIGHTS) n = PC_SHADOW_MAP_MAX_LIGHTS;
-    if (n == 0 || m->mode == RD_PROBE_SHADOWS_RAYS) {
+    plan p = {0}; /* 3 KB */
+    p.n = scene->refs.counts.y < PC_SHADOW_MAP_MAX_LIGHTS ? scene->refs.counts.y
+                                                          : PC_SHADOW_MAP_MAX_LIGHTS;
+    if (p.n == 0 || m->mode == RD_PROBE_SHADOWS_RAYS) {
         rd_shadow_maps_release(m);
         return RD_VK_OK;
     }
     track(m, scene->revision);
-    bool forced = m->mode == RD_PROBE_SHADOWS_REBUILD;
-    uint32_t layout[PC_SHADOW_MAP_MAX_LIGHTS];
-    uint64_t words = lay_out(scene, n, layout);
-    bool suns = false;
-    for (uint32_t i = 0; i < n; i++)
-        suns = suns || (layout[i] && light_texels(scene, i) == SUN_TEXELS);
-    /* What is stale: every map after a new layout, or after geometry changes that the scene's
-     * log does not cover (or that left the suns' frame); else the texels whose rays cross the
-     * moved boxes, and the maps of lights that moved. */
-    bool moved = m->geometry != scene->geometry_revision;
-    bool partial = moved && m->geometry != 0 && m->geometry >= scene->dirty_since &&
-                   (!suns || frame_holds(m, scene->bounds));
-    if (n != m->lights || memcmp(layout, m->layout, sizeof layout) != 0 || forced ||
-        (moved && !partial)) {
-        memcpy(m->layout, layout, sizeof layout);
-        m->lights = n;
-        memset(m->shown, 0, sizeof m->shown);
-    }
-    float boxes[PC_SHADOW_MAP_BOXES][8];
-    uint32_t nbox = 0;
-    for (uint32_t k = 0; partial && k < scene->dirty_count; k++) {
-        const rd_gpu_scene_dirty *d = &scene->dirty[k];
-        if (d->revision <= m->geometry || nbox == PC_SHADOW_MAP_BOXES) continue;
-        float *b = boxes[nbox++];
-        memcpy(b, d->lo, sizeof d->lo);
-        memcpy(b + 4, d->hi, sizeof d->hi);
-        b[3] = b[7] = 0;
-    }
-    uint32_t order[PC_SHADOW_MAP_MAX_LIGHTS] = {0};
-    bool sun_whole = false;
-    for (uint32_t i = 0; i < n; i++) {
-        if (!layout[i]) continue;
-        if (m->shown[i] != scene->light_revision[i]) {
-            order[i] = PC_SHADOW_MAP_WHOLE;
-            sun_whole = sun_whole || light_texels(scene, i) == SUN_TEXELS;
-        } else if (moved) {
-            order[i] = PC_SHADOW_MAP_PART;
-        }
-    }
-    /* a sun traced whole gets a new frame, and so do the other suns */
-    for (uint32_t i = 0; sun_whole && i < n; i++)
-        if (order[i] == PC_SHADOW_MAP_PART && light_texels(scene, i) == SUN_TEXELS)
-            order[i] = PC_SHADOW_MAP_WHOLE;
-    /* a partial rebuild re-traces rectangles around the moved boxes' projections */
-    uint32_t nreg = 0;
-    uint64_t rays = 0;
-    bool any = false;
-    for (uint32_t i = 0; i < n; i++) {
-        if (order[i] == PC_SHADOW_MAP_WHOLE) rays += light_texels(scene, i);
-        if (order[i] == PC_SHADOW_MAP_PART) {
-            uint32_t k = rects_of(m, scene, i, boxes, nbox, m->rects + nreg);
-            for (uint32_t j = 0; j < k; j++)
-                rays += (uint64_t)m->rects[nreg + j].w * m->rects[nreg + j].h;
-            nreg += k;
-        }
-        any = any || order[i] != PC_SHADOW_MAP_KEEP;
-    }
+    plan_stale(m, scene, &p);
     /* the updates the maps would serve: as many as the last revision lasted, or as this one
      * has lasted so far, whichever is more (a scene, new or one that stops changing, gets its
      * maps once its shadow rays have cost what a rebuild costs) */
     uint64_t serves = m->interval > m->seen_updates ? m->interval : m->seen_updates;
-    bool build = any && (forced || rays <= hits * serves);
+    bool build = p.any && (m->mode == RD_PROBE_SHADOWS_REBUILD || p.rays <= hits * serves);
     rd_vk_result r = RD_VK_OK;
     if (build && !m->build.pipeline)
         r = rd_pipeline_create(m->vk, &m->build, "shadow map", pc_spv_shadow_map,
                                sizeof pc_spv_shadow_map, sizeof(pc_push), err, errlen);
-    if (r == RD_VK_OK && build && words > m->capacity) {
+    if (r == RD_VK_OK && build && p.words > m->capacity) {
         /* probe updates are waited for (rd_world_update), so nothing in flight reads the maps;
          * a new buffer holds no map yet */
         rd_buffer_destroy(m->vk, &m->maps);
         m->capacity = 0;
         memset(m->table, 0, sizeof m->table);
-        r = rd_buffer_create(m->vk, &m->maps, words * 4, RD_MEMORY_DEVICE, err, errlen);
-        if (r == RD_VK_OK) m->capacity = words;
-        for (uint32_t i = 0; i < n; i++)
-            if (layout[i]) order[i] = PC_SHADOW_MAP_WHOLE;
-        sun_whole = suns;
-        nreg = 0;
+        r = rd_buffer_create(m->vk, &m->maps, p.words * 4, RD_MEMORY_DEVICE, err, errlen);
+        if (r == RD_VK_OK) m->capacity = p.words;
+        plan_whole(&p, scene);
     }
     if (r != RD_VK_OK) return r;
     if (!m->maps.buffer) return RD_VK_OK; /* nothing built yet: shadow rays */
-    bool local = false, sun = false;
+    if (build) accept_build(m, scene, &p);
+    m->complete = write_header(m, c, scene, &p, build);
     if (build) {
-        for (uint32_t i = 0; i < n; i++) {
-            if (order[i] == PC_SHADOW_MAP_KEEP) continue;
-            m->shown[i] = scene->light_revision[i];
-            if (order[i] != PC_SHADOW_MAP_WHOLE) continue; /* partial ones go by rectangle */
-            sun = sun || light_texels(scene, i) == SUN_TEXELS;
-            local = local || light_texels(scene, i) != SUN_TEXELS;
-        }
-        m->geometry = scene->geometry_revision;
-        if (sun_whole) { /* the scene's bounding sphere, a little wider */
-            double r2 = 0;
-            for (int a = 0; a < 3; a++) {
-                double h = 0.5 * ((double)scene->bounds[3 + a] - scene->bounds[a]);
-                m->frame[a] = 0.5f * (scene->bounds[a] + scene->bounds[3 + a]);
-                r2 += h * h;
-            }
-            m->frame[3] = (float)fmax(sqrt(r2), 1e-3) * 1.001f;
-        }
-    }
-    /* the GPU's header: offsets of the valid maps, build orders, frame, boxes */
-    uint32_t header[PC_SHADOW_MAP_HEADER_WORDS] = {0};
-    bool all = n == scene->refs.counts.y;
-    for (uint32_t i = 0; i < n; i++) {
-        bool valid = layout[i] && m->shown[i] == scene->light_revision[i] &&
-                     m->geometry == scene->geometry_revision;
-        header[i] = valid ? layout[i] : 0;
-        all = all && valid;
-    }
-    if (memcmp(header, m->table, sizeof m->table) != 0 || build) {
-        if (build) {
-            memcpy(header + PC_SHADOW_MAP_MAX_LIGHTS, order, sizeof order);
-            memcpy(header + PC_SHADOW_MAP_FRAME_WORD, m->frame, sizeof m->frame);
-            header[PC_SHADOW_MAP_FRAME_WORD + 4] = nbox;
-            memcpy(header + PC_SHADOW_MAP_BOX_WORD, boxes, sizeof(float) * 8 * nbox);
-        } else { /* the frame stays (lookups read it) */
-            memcpy(header + PC_SHADOW_MAP_FRAME_WORD, m->frame, sizeof m->frame);
-        }
-        rd_cmd_barrier(c);
-        vkCmdUpdateBuffer(c->cb, m->maps.buffer, 0, sizeof header, header);
-        rd_cmd_barrier(c);
-        memcpy(m->table, header, sizeof m->table);
-    }
-    if (build) {
-        pc_push push = {.globals = globals, .buf0 = m->maps.address, .buf1 = counters};
-        if (local)
-            rd_cmd_dispatch(c, &m->build, &push, (uint32_t)(6 * FACE_TEXELS / PC_WG_1D), 1, n);
-        push.params.x = PC_SHADOW_MAP_PASS_SUNS;
-        if (sun) rd_cmd_dispatch(c, &m->build, &push, (uint32_t)(SUN_TEXELS / PC_WG_1D), 1, n);
-        for (uint32_t k = 0; k < nreg; k++) {
-            const rd_shadow_map_rect *g = &m->rects[k];
-            push.params =
-                (pc_uvec4){PC_SHADOW_MAP_PASS_RECT, g->light, g->face, g->x0 | g->y0 << 16};
-            push.buf2 = g->w | (uint64_t)g->h << 32;
-            rd_cmd_dispatch(c, &m->build, &push, (g->w * g->h + PC_WG_1D - 1) / PC_WG_1D, 1, 1);
-        }
+        record_build(m, c, scene, &p, globals, counters);
         rd_cmd_barrier(c);
         if (timer) rd_timer_mark(c, timer, "shadow maps");
         m->builds++;
     }
-    m->complete = all;
-    *mapped = n;
+    *mapped = p.n;
     *address = m->maps.address;
     return RD_VK_OK;
 }
