@@ -197,7 +197,7 @@ rd_vk_result rd_world_update(rd_world *w, unsigned n, char *err, size_t errlen)
         }
         w->ddgi.vol.control.w = mapped;
         w->ddgi.vol.shadow_maps = maps;
-        w->ddgi.sort_hits = !(mapped && w->shadow_maps.complete); /* for shadow rays */
+        w->ddgi.sort_hits = !w->shadow_maps.complete; /* some hits trace shadow rays */
         /* the GPU reads the globals when the commands run, after this */
         pc_globals g;
         memset(&g, 0, sizeof g);
