@@ -1,6 +1,6 @@
 /* stream.c: packing of the frame header of protocol/stream.h (explicit little-endian, so the
  * layout does not depend on the host or on struct padding). */
-#include "stream.h"
+#include "protocol/stream.h"
 
 #include <string.h>
 

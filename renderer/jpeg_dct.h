@@ -3,7 +3,7 @@
  * One compute pass turns a view's tone-mapped RGBA8 image into quantised DCT coefficients:
  * JFIF colour conversion and 2x2 chroma averaging bit exact with libjpeg, the 8x8 forward DCT in
  * float, quantisation by libjpeg's own tables for the quality (rounding half away from zero).
- * The encoders then only entropy-code (server/jpeg_coefs.h), on the CPU, and the readback
+ * The encoders then only entropy-code (server/encode/jpeg_coefs.h), on the CPU, and the readback
  * carries 3 bytes a pixel instead of 4.
  *
  * Coefficient layout (the buffer, its host copy and libjpeg's coefficient arrays alike): three
@@ -21,9 +21,9 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "view.h"
-#include "vk_buffer.h"
-#include "vk_compute.h"
+#include "renderer/view.h"
+#include "renderer/vk/vk_buffer.h"
+#include "renderer/vk/vk_compute.h"
 
 #define RD_JPEG_QUALITIES 100u /* qualities 1..100 */
 #define RD_JPEG_MCU 16u        /* pixels across and down a 4:2:0 MCU */

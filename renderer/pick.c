@@ -1,5 +1,5 @@
 /* pick.c: one camera ray through a picture point (see pick.h). */
-#include "pick.h"
+#include "renderer/pick.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -10,10 +10,10 @@
 
 #include <stdbool.h>
 
-#include "camera.h"
-#include "vk_buffer.h"
-#include "vk_compute.h"
-#include "world.h"
+#include "renderer/scene/camera.h"
+#include "renderer/vk/vk_buffer.h"
+#include "renderer/vk/vk_compute.h"
+#include "renderer/world.h"
 
 typedef struct rd_pick {
     rd_vk *vk;

@@ -1,5 +1,5 @@
 /* render.c: one world and one view, advanced and rendered together. */
-#include "render.h"
+#include "renderer/render.h"
 
 #include <string.h>
 

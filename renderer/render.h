@@ -8,13 +8,13 @@
 #ifndef RD_RENDER_H
 #define RD_RENDER_H
 
-#include "camera.h"
-#include "ddgi.h"
-#include "frame_stats.h"
-#include "gpu_scene.h"
-#include "view.h"
-#include "vk_compute.h"
-#include "world.h"
+#include "renderer/scene/camera.h"
+#include "renderer/gi/ddgi.h"
+#include "renderer/vk/frame_stats.h"
+#include "renderer/accel/gpu_scene.h"
+#include "renderer/view.h"
+#include "renderer/vk/vk_compute.h"
+#include "renderer/world.h"
 
 typedef struct rd_frame_settings {
     unsigned width, height;   /* 0 = 960 x 540 */

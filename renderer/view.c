@@ -1,5 +1,5 @@
 /* view.c: one camera's frame of a world. */
-#include "view.h"
+#include "renderer/view.h"
 
 #include <math.h>
 #include <stddef.h>

@@ -9,11 +9,11 @@
 #ifndef RD_VIEW_H
 #define RD_VIEW_H
 
-#include "camera.h"
-#include "frame_stats.h"
-#include "vk_buffer.h"
-#include "vk_compute.h"
-#include "world.h"
+#include "renderer/scene/camera.h"
+#include "renderer/vk/frame_stats.h"
+#include "renderer/vk/vk_buffer.h"
+#include "renderer/vk/vk_compute.h"
+#include "renderer/world.h"
 
 typedef struct rd_view_settings { /* per frame */
     unsigned width, height;       /* 0 = 960 x 540 */
@@ -85,7 +85,7 @@ void rd_view_destroy(rd_view *v);
 rd_vk_result rd_view_render(rd_view *v, const rd_world *w, const rd_view_camera *camera,
                             const rd_view_settings *s, char *err, size_t errlen);
 /* The same frame without waiting: records it into cmd (begun by the caller, who submits it, e.g.
- * with a readback copy of rgba8 behind it: renderer/readback.h). The view must have no frame in
+ * with a readback copy of rgba8 behind it: renderer/vk/readback.h). The view must have no frame in
  * flight, since its globals, counters and timer are rewritten; path tracing is refused (it
  * submits batches of its own). After the submission has completed, rd_view_collect reads the
  * frame's GPU times and ray counts into v->stats. */

@@ -1,5 +1,5 @@
 /* world.c: the scene-wide state shared by views, and probe updates. */
-#include "world.h"
+#include "renderer/world.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -9,14 +9,14 @@
 #ifndef RD_WORLD_H
 #define RD_WORLD_H
 
-#include "camera.h"
-#include "ddgi.h"
-#include "environment.h"
-#include "frame_stats.h"
-#include "gpu_scene.h"
-#include "shadow_maps.h"
-#include "vk_buffer.h"
-#include "vk_compute.h"
+#include "renderer/scene/camera.h"
+#include "renderer/gi/ddgi.h"
+#include "renderer/env/environment.h"
+#include "renderer/vk/frame_stats.h"
+#include "renderer/accel/gpu_scene.h"
+#include "renderer/gi/shadow_maps.h"
+#include "renderer/vk/vk_buffer.h"
+#include "renderer/vk/vk_compute.h"
 
 typedef struct rd_world {
     rd_vk *vk;

@@ -4,7 +4,7 @@
  * (8x8, weights max(0, cos), perceptual encoding x^(1/5)), 1 = distance (16x16, weights cos^50,
  * mean and mean square of min(|t|, max distance)). The distance blend runs first.
  *
- * Hysteresis is per probe (renderer/ddgi.c says why): h = min(h_max, a / (a + AGE_RAMP)) for
+ * Hysteresis is per probe (renderer/gi/ddgi.c says why): h = min(h_max, a / (a + AGE_RAMP)) for
  * the probe's age a. The irradiance blend then measures the probe: its relative change this
  * update (mean fresh against mean stored encoded luminance), which feeds the drift sums the CPU turns
  * into next update's hold flag; ages advance unless the field drifts. It also classifies the

@@ -1,4 +1,4 @@
-/* environment.glsl: the light from outside the scene (renderer/environment.h): radiance toward
+/* environment.glsl: the light from outside the scene (renderer/env/environment.h): radiance toward
  * a direction for rays that escape, and irradiance from its SH9 for probe fallbacks. The CPU
  * twins are rd_env_radiance and rd_env_irradiance_eval. Included by common.glsl. */
 #ifndef PC_ENVIRONMENT_GLSL

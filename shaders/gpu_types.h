@@ -62,7 +62,7 @@ static inline float pc_u2f(uint32_t u)
 
 #define PC_ALPHA_OPAQUE 0u
 #define PC_ALPHA_MASK 1u
-#define PC_ALPHA_BLEND 2u /* drawn as opaque (no transparency): see renderer/gltf_loader.h */
+#define PC_ALPHA_BLEND 2u /* drawn as opaque (no transparency): see renderer/gltf/gltf_loader.h */
 
 #define PC_WRAP_REPEAT 0u
 #define PC_WRAP_CLAMP 1u
@@ -241,7 +241,7 @@ PC_STRUCT(pc_view)
 PC_END(pc_view);
 
 /* What the world around the scene looks like; shared by every view of a world
- * (renderer/environment.h, shaders/environment.glsl).
+ * (renderer/env/environment.h, shaders/environment.glsl).
  * sky: rgb uniform radiance, or the gradient's zenith radiance; w: image intensity;
  * ground: rgb the gradient's nadir radiance; w: image rotation about +y (radians);
  * irradiance: SH9 coefficients (rgb) of the cosine-convolved radiance, for probe fallbacks;
@@ -291,14 +291,14 @@ PC_END(pc_environment);
 /* Adaptive hysteresis: a probe of age a (updates since it was woken, counted only while the
  * awake field shows no drift) blends with h = min(h_max, a / (a + PC_DDGI_AGE_RAMP)), and
  * falls asleep PC_DDGI_SETTLE_UPDATES updates after h reached h_max. Rule and measurements:
- * renderer/ddgi.c. Wake events set the age of the probes they reach to at most: */
+ * renderer/gi/ddgi.c. Wake events set the age of the probes they reach to at most: */
 #define PC_DDGI_AGE_RAMP 4.0
 #define PC_DDGI_SETTLE_UPDATES 16u
 #define PC_DDGI_WAKE_AGE_GEOMETRY 0.0 /* a node moved: start over (h = 0) */
 #define PC_DDGI_WAKE_AGE_LIGHT 4.0    /* a light or the sky changed: h = 0.5 at first */
 #define PC_DDGI_WAKE_AGE_NUDGE 23.0   /* one small step of an animated light: h = 0.85 */
 #define PC_DDGI_WAKE_MAX 32u          /* wake boxes per update; more become "wake all" */
-/* Lights' distance maps for the direct light at probe-ray hits (renderer/shadow_maps.h,
+/* Lights' distance maps for the direct light at probe-ray hits (renderer/gi/shadow_maps.h,
  * shaders/shadow_map.glsl): a point or spot light has a cube of 6 faces of SIDE^2 float
  * texels, each the distance from the light to the first surface along the texel's centre
  * direction; a directional light has one SUN_SIDE^2 orthographic map over the scene's bounding
@@ -348,7 +348,7 @@ PC_END(pc_environment);
  * ctrl: pc_ddgi_control (host-visible: indirect dispatch sizes, census, drift sums);
  * wake: pc_ddgi_wake[control.z] boxes (host-visible);
  * order: uint[counts.w], the ray each thread of a probe traces and shades: the rays sorted so
- *   that a warp's rays point into one patch of the sphere (renderer/ddgi.c). Their hits lie
+ *   that a warp's rays point into one patch of the sphere (renderer/gi/ddgi.c). Their hits lie
  *   close together and their shadow rays toward a light run side by side, which the GPU
  *   traverses far faster than scattered rays. */
 PC_STRUCT(pc_ddgi_volume)
@@ -370,7 +370,7 @@ PC_STRUCT(pc_ddgi_volume)
     pc_u64 ctrl;
     pc_u64 wake;
     pc_u64 order;
-    pc_u64 shadow_maps; /* float[]: the lights' distance maps (renderer/shadow_maps.h); 0: none */
+    pc_u64 shadow_maps; /* float[]: the lights' distance maps (renderer/gi/shadow_maps.h); 0: none */
 }
 PC_END(pc_ddgi_volume);
 

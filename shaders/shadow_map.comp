@@ -10,7 +10,7 @@
  * WHOLE (x: groups over 6 SIDE^2 texels, z: lights [0, z)), PASS_SUNS those of directional
  * lights (x: groups over SUN_SIDE^2 texels); PASS_RECT re-traces a rectangle of a light ordered
  * PART: params.y the light, params.z the face (SUN_FACE: a sun's square), params.w
- * x0 | y0 << 16, buf2 width | height << 32 (renderer/shadow_maps.c picks rectangles around the
+ * x0 | y0 << 16, buf2 width | height << 32 (renderer/gi/shadow_maps.c picks rectangles around the
  * moved boxes' projections).
  * push: globals, buf0 = the maps buffer, buf1 = pc_counters. */
 #extension GL_GOOGLE_include_directive : require

@@ -1,7 +1,7 @@
 /* shadow_map.glsl: lights' distance maps, read for the direct light at probe-ray hits. The DDGI
  * paper shades its probe hits like the camera's G-buffer, shadow maps included (Sec. 5); here a
  * map is traced, not rasterised (shadow_map.comp: one ray per texel through the scene's BVH),
- * and rebuilt only when the lights or the geometry change (renderer/shadow_maps.h), so a probe
+ * and rebuilt only when the lights or the geometry change (renderer/gi/shadow_maps.h), so a probe
  * hit's visibility costs four texel reads instead of a shadow ray. Camera pixels keep exact
  * shadow rays.
  *

@@ -8,7 +8,7 @@
  *     index into scene.tris, u/v the barycentrics of v1/v2); returning false ignores the hit
  *     and traversal goes on. A pass without alpha-masked geometry may return true.
  *
- * Scene layout (see gpu_types.h and renderer/bvh.h): a TLAS over instances (leaves index
+ * Scene layout (see gpu_types.h and renderer/accel/bvh.h): a TLAS over instances (leaves index
  * scene.tlas_index, whose entries are instance indices) and one BLAS node array holding every
  * mesh's BVH with absolute indices (instance.info.x is the mesh's root; leaves index
  * scene.tris). Interior children are adjacent: first and first + 1.
@@ -54,7 +54,7 @@ struct pc_hit {
  * missed a ray the primary pass hit (a pick aimed at an instance's origin). With FLT_MAX the
  * plane term is 0, i.e. the ray counts as inside the slab on the side its zero's sign leans
  * to, as a ray tilted by an infinitesimal would; any other term is still beyond every tmax
- * or +-inf. (renderer/bvh.c's CPU slab test ignores the NaN instead: both sides.) */
+ * or +-inf. (renderer/accel/bvh.c's CPU slab test ignores the NaN instead: both sides.) */
 void trace_setup_box(vec3 d, out vec3 inv, out bvec3 neg)
 {
     vec3 big = uintBitsToFloat((floatBitsToUint(d) & 0x80000000u) | 0x7f7fffffu);
@@ -102,7 +102,7 @@ bool trace_box(vec4 bmin, vec4 bmax, vec3 o, vec3 inv, bvec3 neg, float tmin, fl
 
 /* Watertight ray/triangle intersection: Woop, Benthin, Wald, "Watertight Ray/Triangle
  * Intersection", JCGT 2(1), 2013. The same float arithmetic as rd_ray_triangle in
- * renderer/bvh.c (`precise` forbids fused multiply-adds, which would make the edge functions
+ * renderer/accel/bvh.c (`precise` forbids fused multiply-adds, which would make the edge functions
  * of neighbouring triangles differ); the paper's double-precision recomputation of edge
  * functions that are exactly 0 is omitted on the GPU. Accepts tmin < t < tmax; back is true
  * when det < 0, i.e. dot(d, cross(p1 - p0, p2 - p0)) > 0. */

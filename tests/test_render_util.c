@@ -3,7 +3,7 @@
 #include <math.h>
 #include <stdlib.h>
 
-#include "renderer/procedural.h"
+#include "renderer/builtin/procedural.h"
 #include "test_util.h"
 
 bool test_vk_open(rd_vk *vk)

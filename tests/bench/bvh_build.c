@@ -1,7 +1,7 @@
 /* probecast_bvhbench: BLAS build time of the reference single-threaded builder
  * (rd_bvh_build_reference) against the renderer's builder (rd_bvh_build_triangles on one mesh,
  * and rd_bvh_build_many over the scene's meshes as rd_gpu_scene_prepare calls it) at several
- * thread counts, on the builtin:spheres benchmark scene (renderer/procedural.c) of 1, 4 and
+ * thread counts, on the builtin:spheres benchmark scene (renderer/builtin/procedural.c) of 1, 4 and
  * 8 M triangles. Prints a table and writes it as CSV. A benchmark, not a test: nothing is
  * asserted about time; it exits non-zero only when a build fails or the new builder's output
  * differs between thread counts.
@@ -21,9 +21,10 @@
 #include <string.h>
 #include <time.h>
 
-#include "renderer/bvh.h"
-#include "renderer/procedural.h"
-#include "renderer/task_pool.h"
+#include "renderer/accel/bvh.h"
+#include "tests/renderer/bvh_build_ref.h"
+#include "renderer/builtin/procedural.h"
+#include "renderer/accel/task_pool.h"
 
 #define MAX_LIST 16
 

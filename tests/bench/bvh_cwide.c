@@ -7,7 +7,7 @@
 #include <string.h>
 
 #include "bvh_wide.h"
-#include "renderer/bvh.h"
+#include "renderer/accel/bvh.h"
 
 /* Makes room for need elements of size bytes in *p. Aborts when out of memory. */
 static void grow(void **p, uint32_t *capacity, uint64_t need, size_t size)

@@ -5,7 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-#include "renderer/bvh.h"
+#include "renderer/accel/bvh.h"
 
 bool rtb_bvh_box_empty(const pc_bvh_node *n)
 {

@@ -1,5 +1,5 @@
 /* probecast_jpegbench: one frame's JPEG encoded whole (tjCompress2 on one thread) and in stripes
- * over the daemon's encoder pool (server/encoder_pool.c with server/jpeg_striped.c), at several
+ * over the daemon's encoder pool (server/encode/encoder_pool.c with server/encode/jpeg_striped.c), at several
  * sizes and thread counts. Prints a table and writes it as CSV. A benchmark, not a test: nothing
  * is asserted.
  *
@@ -47,9 +47,9 @@
 
 #include "bench_frame.h"
 #include "jpeg_gpu.h"
-#include "server/clock.h"
-#include "server/encoder_pool.h"
-#include "server/jpeg_striped.h"
+#include "server/base/clock.h"
+#include "server/encode/encoder_pool.h"
+#include "server/encode/jpeg_striped.h"
 
 #define MAX_LIST 16
 

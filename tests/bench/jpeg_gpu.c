@@ -5,7 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "server/clock.h"
+#include "server/base/clock.h"
 
 srv_jpeg_coefs jpeg_gpu_coefs(const jpeg_gpu *g)
 {

@@ -4,7 +4,7 @@
  * The product's pass (renderer/jpeg_dct.h: colour conversion, chroma averaging, DCT and
  * quantisation with libjpeg's tables) runs on an uploaded RGBA8 frame; the coefficients are
  * copied to a host-visible buffer (or the pass writes that buffer itself: jpeg_gpu.direct); the
- * product's entropy coder (server/jpeg_coefs.h) codes them on the CPU, whole on one thread or in
+ * product's entropy coder (server/encode/jpeg_coefs.h) codes them on the CPU, whole on one thread or in
  * stripes of MCU rows on several threads, joined with restart markers by srv_jpeg_join.
  *
  * Use: jpeg_gpu_create, jpeg_gpu_set_frame (uploads; the renderer would have it on the GPU),
@@ -17,12 +17,12 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "renderer/task_pool.h"
-#include "renderer/vk_buffer.h"
-#include "renderer/vk_compute.h"
+#include "renderer/accel/task_pool.h"
+#include "renderer/vk/vk_buffer.h"
+#include "renderer/vk/vk_compute.h"
 #include "renderer/jpeg_dct.h"
-#include "server/jpeg_coefs.h"
-#include "server/jpeg_striped.h"
+#include "server/encode/jpeg_coefs.h"
+#include "server/encode/jpeg_striped.h"
 
 #define JPEG_GPU_MAX_THREADS 64
 
@@ -39,7 +39,7 @@ typedef struct jpeg_gpu {
     bool direct; /* the pass writes coefs_host itself over the bus (no coefs, no copy) */
 
     /* entropy coding: one libjpeg compressor per stripe (coders[0] also codes whole frames),
-     * stripes run as tasks on a pool of pool_threads threads (renderer/task_pool.h) */
+     * stripes run as tasks on a pool of pool_threads threads (renderer/accel/task_pool.h) */
     srv_jpeg_encoder *coders[JPEG_GPU_MAX_THREADS];
     unsigned coder_count;
     rd_task_pool *pool; /* NULL for one thread */
@@ -68,7 +68,7 @@ rd_vk_result jpeg_gpu_set_frame(jpeg_gpu *g, const uint8_t *rgba, unsigned width
 rd_vk_result jpeg_gpu_transform(jpeg_gpu *g, jpeg_gpu_times *times, char *err, size_t errlen);
 
 /* For comparison, what the CPU encoders' input costs instead: the frame copied to host-visible
- * memory as the renderer's readback does (renderer/readback.c). times->dct_ms is 0. */
+ * memory as the renderer's readback does (renderer/vk/readback.c). times->dct_ms is 0. */
 rd_vk_result jpeg_gpu_time_frame_copy(jpeg_gpu *g, jpeg_gpu_times *times, char *err, size_t errlen);
 
 /* GPU time (ms, from timestamps; 0 without them) of the frame's coefficients at n qualities

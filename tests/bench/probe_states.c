@@ -18,8 +18,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "renderer/mesh_builder.h"
-#include "renderer/procedural.h"
+#include "renderer/scene/mesh_builder.h"
+#include "renderer/builtin/procedural.h"
 #include "renderer/render.h"
 
 typedef struct bench_args {

@@ -11,9 +11,9 @@
 #ifndef RTB_DRIVER_H
 #define RTB_DRIVER_H
 
-#include "renderer/gpu_scene.h"
-#include "renderer/vk_buffer.h"
-#include "renderer/vk_compute.h"
+#include "renderer/accel/gpu_scene.h"
+#include "renderer/vk/vk_buffer.h"
+#include "renderer/vk/vk_compute.h"
 
 /* Extensions and feature structs to enable at device creation (rd_vk_options extra_*). */
 typedef struct rtb_driver_features {

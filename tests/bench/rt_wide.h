@@ -6,8 +6,8 @@
 #ifndef RTB_RT_WIDE_H
 #define RTB_RT_WIDE_H
 
-#include "renderer/gpu_scene.h"
-#include "renderer/vk_buffer.h"
+#include "renderer/accel/gpu_scene.h"
+#include "renderer/vk/vk_buffer.h"
 
 typedef struct rtb_wide_gpu {
     rd_buffer nodes, mesh_root, refs; /* refs: one rtb_wide_refs, the shader's buf2 */

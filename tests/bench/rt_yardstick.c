@@ -29,12 +29,12 @@
 #include <string.h>
 #include <time.h>
 
-#include "renderer/camera.h"
+#include "renderer/scene/camera.h"
 #include "renderer/world.h"
 #include "rt_driver.h"
 #include "rt_wide.h"
 #include "rtb_cwide_types.h"
-#include "server/cli.h"
+#include "server/base/args.h"
 /* after stdint.h: the generated headers declare uint32_t arrays */
 #include "bench/rtb_rays_comp.spv.h"
 #include "bench/rtb_trace_comp.spv.h"
@@ -380,7 +380,7 @@ int main(int argc, char **argv)
     options o;
     if (!parse(argc, argv, &o)) return 2;
     rd_scene scene;
-    if (!cli_load_scene(o.scene, &scene)) return 1;
+    if (!srv_arg_scene(o.scene, &scene)) return 1;
     char err[512] = "";
     rd_vk vk;
     bool has_driver = false;

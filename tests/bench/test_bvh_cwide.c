@@ -10,7 +10,7 @@
  * rank (its node or leaf entry) is the count of its kind in lower slots, and no child and slot
  * would both be cheaper together (rtb_cwide_slot_cost) than with what they got.
  * Seeded, so a failure reproduces. */
-#include "renderer/bvh.h"
+#include "renderer/accel/bvh.h"
 #include "tests/bench/bvh_cwide.h"
 #include "tests/bench/bvh_wide.h"
 #include "renderer/bvh_check.h"

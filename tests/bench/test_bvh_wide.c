@@ -2,7 +2,7 @@
  * every primitive of a hittable leaf reachable exactly once through the same leaf ranges, child
  * boxes containing their subtrees, empty trees and non-finite triangles, and closest hits over
  * the wide tree equal to rd_bvh_closest_triangle's. Seeded, so a failure reproduces. */
-#include "renderer/bvh.h"
+#include "renderer/accel/bvh.h"
 #include "tests/bench/bvh_wide.h"
 #include "renderer/bvh_check.h"
 #include "test_util.h"

@@ -3,7 +3,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "server/api_json.h"
+#include "server/api/api_json.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {

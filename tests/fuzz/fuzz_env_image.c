@@ -7,7 +7,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "renderer/environment.h"
+#include "renderer/env/environment.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {

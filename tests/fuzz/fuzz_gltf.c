@@ -3,7 +3,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "renderer/gltf_loader.h"
+#include "renderer/gltf/gltf_loader.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {

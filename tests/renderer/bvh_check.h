@@ -6,7 +6,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "renderer/bvh.h"
+#include "renderer/accel/bvh.h"
 
 void rng_seed(uint64_t s);
 uint32_t rng_u32(void);

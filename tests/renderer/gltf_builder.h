@@ -9,7 +9,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "renderer/gltf_loader.h"
+#include "renderer/gltf/gltf_loader.h"
 
 typedef struct bin {
     uint8_t *p;

@@ -1,5 +1,5 @@
-/* test_animation.c: glTF node animations, from the loader (renderer/gltf_loader.h) through
- * sampling (renderer/animation_clip.c) to node world matrices, on files built here in memory
+/* test_animation.c: glTF node animations, from the loader (renderer/gltf/gltf_loader.h) through
+ * sampling (renderer/scene/animation_clip.c) to node world matrices, on files built here in memory
  * (JSON with a base64 buffer), plus broken files and hand-built degenerate clips. Expected
  * numbers are worked out by hand in the comments. */
 #include <math.h>
@@ -9,9 +9,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "renderer/animation_clip.h"
-#include "renderer/gltf_loader.h"
-#include "renderer/xform.h"
+#include "renderer/scene/animation_clip.h"
+#include "renderer/gltf/gltf_loader.h"
+#include "renderer/scene/xform.h"
 #include "test_util.h"
 
 /* ---- building the file ------------------------------------------------------------------ */

@@ -1,7 +1,7 @@
 /* test_bvh.c: the CPU BVH against brute force, its structure, watertightness and the
  * self-intersection offset. Everything is seeded, so a failure reproduces. */
 #include "bvh_check.h"
-#include "renderer/bvh.h"
+#include "renderer/accel/bvh.h"
 #include "test_util.h"
 
 #include <float.h>

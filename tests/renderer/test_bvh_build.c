@@ -3,8 +3,9 @@
  * and 8 threads, every structural promise of bvh.h, closest hits equal to brute force, and
  * an SAH cost within 2% of the single-threaded reference builder measured here. */
 #include "bvh_check.h"
-#include "renderer/bvh.h"
-#include "renderer/procedural.h"
+#include "renderer/accel/bvh.h"
+#include "bvh_build_ref.h"
+#include "renderer/builtin/procedural.h"
 #include "test_util.h"
 
 #include <math.h>

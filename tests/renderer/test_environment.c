@@ -9,7 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "renderer/environment.h"
+#include "renderer/env/environment.h"
 #include "renderer/exr_writer.h"
 #include "renderer/hdr_writer.h"
 #include "test_util.h"

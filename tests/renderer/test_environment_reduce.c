@@ -1,5 +1,5 @@
 /* test_environment_reduce.c: environment images are reduced while they are decoded
- * (renderer/environment_reduce.c): bit for bit a full decode reduced by rd_env_image_limit, for
+ * (renderer/env/environment_reduce.c): bit for bit a full decode reduced by rd_env_image_limit, for
  * .hdr and .exr files of odd sizes, tiles and windows; the largest files a client may send hold
  * tens of MiB while they are read, not the GiB of their declared size. */
 #include <math.h>
@@ -8,7 +8,7 @@
 #include <string.h>
 #include <sys/resource.h>
 
-#include "renderer/environment.h"
+#include "renderer/env/environment.h"
 #include "renderer/exr_writer.h"
 #include "renderer/hdr_writer.h"
 #include "test_util.h"

@@ -1,11 +1,11 @@
-/* Per-pass statistics by name (renderer/frame_stats.c): rd_frame_stats_pass finds a pass or
+/* Per-pass statistics by name (renderer/vk/frame_stats.c): rd_frame_stats_pass finds a pass or
  * appends it with 0 ms and refuses past RD_TIMER_MAX; rd_frame_stats_add sums passes of the same
  * name, appends new ones in order (a distance-map rebuild that runs in some updates only) and
  * adds the ray counts. */
 #include <stdio.h>
 #include <string.h>
 
-#include "renderer/frame_stats.h"
+#include "renderer/vk/frame_stats.h"
 #include "test_util.h"
 
 int main(void)

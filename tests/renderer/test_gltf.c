@@ -1,4 +1,4 @@
-/* test_gltf.c: the glTF loader (renderer/gltf_loader.h) on files built here in memory:
+/* test_gltf.c: the glTF loader (renderer/gltf/gltf_loader.h) on files built here in memory:
  * JSON text with base64 data URIs, GLB containers, PNG textures written with libpng, and a
  * battery of broken files that must fail with a clear message, never a crash. */
 #include <math.h>
@@ -10,8 +10,8 @@
 #include <string.h>
 
 #include "gltf_builder.h"
-#include "renderer/gltf_loader.h"
-#include "renderer/xform.h"
+#include "renderer/gltf/gltf_loader.h"
+#include "renderer/scene/xform.h"
 #include "test_util.h"
 
 /* ---- tests ------------------------------------------------------------------------------ */

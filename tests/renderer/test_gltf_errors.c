@@ -9,7 +9,7 @@
 #include <string.h>
 
 #include "gltf_builder.h"
-#include "renderer/gltf_loader.h"
+#include "renderer/gltf/gltf_loader.h"
 #include "test_util.h"
 
 static void test_errors(void)

@@ -1,11 +1,11 @@
-/* Probe states and convergence (renderer/ddgi.c): a field converges by its own measure and then
+/* Probe states and convergence (renderer/gi/ddgi.c): a field converges by its own measure and then
  * does no probe work at all; moving one small object wakes only the probes around it; a light
  * change wakes every probe; the atlases stay finite throughout. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "renderer/mesh_builder.h"
+#include "renderer/scene/mesh_builder.h"
 #include "renderer/world.h"
 #include "test_render_util.h"
 #include "test_util.h"

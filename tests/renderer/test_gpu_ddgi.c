@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "renderer/procedural.h"
+#include "renderer/builtin/procedural.h"
 #include "shaders/test_ddgi_math.spv.h"
 #include "test_render_util.h"
 #include "test_util.h"

@@ -13,7 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "renderer/hard_cases.h"
+#include "renderer/builtin/hard_cases.h"
 #include "renderer/world.h"
 #include "shaders/test_direct.spv.h"
 #include "test_render_util.h"

@@ -4,8 +4,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "renderer/hard_cases.h"
-#include "renderer/image_metrics.h"
+#include "renderer/builtin/hard_cases.h"
+#include "server/cli/image_metrics.h"
 #include "test_render_util.h"
 #include "test_util.h"
 

@@ -12,7 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "renderer/mesh_builder.h"
+#include "renderer/scene/mesh_builder.h"
 #include "test_render_util.h"
 #include "test_util.h"
 

@@ -5,7 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "renderer/procedural.h"
+#include "renderer/builtin/procedural.h"
 #include "test_render_util.h"
 #include "test_util.h"
 

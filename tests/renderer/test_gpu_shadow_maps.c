@@ -1,5 +1,5 @@
 /* test_gpu_shadow_maps.c: the lights' distance maps that probe hits read for visibility
- * (renderer/shadow_maps.h, shaders/shadow_map.glsl).
+ * (renderer/gi/shadow_maps.h, shaders/shadow_map.glsl).
  *
  * 1. Against geometry: builtin:shadow's layout (a floor, a 0.5 x 0.2 x 0.5 m box above it, a
  *    point light above the box), the box its own instance, plus a slanted sun. For floor points on
@@ -24,7 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "renderer/mesh_builder.h"
+#include "renderer/scene/mesh_builder.h"
 #include "renderer/world.h"
 #include "shaders/test_shadow_map.spv.h"
 #include "test_render_util.h"

@@ -10,10 +10,10 @@
  * are traced: one built by rd_bvh_build (one instance per leaf) and a single leaf holding all four
  * instances. Each is traced with closest hit, any hit, back-face culling and both. Runs with
  * PROBECAST_VALIDATION=1 PROBECAST_DEVICE=llvmpipe under ctest. */
-#include "renderer/bvh.h"
-#include "renderer/vk_buffer.h"
-#include "renderer/vk_compute.h"
-#include "renderer/vk_context.h"
+#include "renderer/accel/bvh.h"
+#include "renderer/vk/vk_buffer.h"
+#include "renderer/vk/vk_compute.h"
+#include "renderer/vk/vk_context.h"
 #include "shaders/gpu_types.h"
 #include "shaders/test_trace.spv.h"
 #include "test_render_util.h"

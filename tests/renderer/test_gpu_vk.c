@@ -1,8 +1,8 @@
 /* test_gpu_vk.c: device creation, buffers, compute pipeline, timers and the validation counter.
  * Runs with PROBECAST_VALIDATION=1 PROBECAST_DEVICE=llvmpipe under ctest. */
-#include "renderer/vk_buffer.h"
-#include "renderer/vk_compute.h"
-#include "renderer/vk_context.h"
+#include "renderer/vk/vk_buffer.h"
+#include "renderer/vk/vk_compute.h"
+#include "renderer/vk/vk_context.h"
 #include "shaders/gpu_types.h"
 #include "shaders/test_vk_fill.spv.h"
 #include "test_util.h"

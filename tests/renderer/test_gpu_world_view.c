@@ -8,9 +8,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "renderer/mesh_builder.h"
-#include "renderer/procedural.h"
-#include "renderer/readback.h"
+#include "renderer/scene/mesh_builder.h"
+#include "renderer/builtin/procedural.h"
+#include "renderer/vk/readback.h"
 #include "renderer/view.h"
 #include "renderer/world.h"
 #include "test_render_util.h"

@@ -1,7 +1,7 @@
 /* Error metrics against hand-computed values. */
 #include <math.h>
 
-#include "renderer/image_metrics.h"
+#include "server/cli/image_metrics.h"
 #include "test_util.h"
 
 int main(void)

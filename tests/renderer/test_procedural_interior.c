@@ -1,13 +1,13 @@
-/* test_procedural_interior.c: builtin:interior[:M] (renderer/procedural_interior.c) on the CPU.
+/* test_procedural_interior.c: builtin:interior[:M] (renderer/builtin/procedural_interior.c) on the CPU.
  *
  * Checks that the triangle count follows M, that the scene lies inside the building's slabs,
  * that it has lights and cameras inside, and that every room is closed except for its openings:
  * rays from a room's centre against the building mesh (walls, floor, ceiling) all hit within
  * the room at 2.6 m (above every door and window), some escape at 1.5 m (through the door and
  * the windows), and straight up and down they meet the ceiling and the floor. */
-#include "renderer/bvh.h"
-#include "renderer/procedural.h"
-#include "renderer/procedural_interior.h"
+#include "renderer/accel/bvh.h"
+#include "renderer/builtin/procedural.h"
+#include "renderer/builtin/procedural_interior.h"
 #include "test_util.h"
 
 #include <math.h>

@@ -1,10 +1,10 @@
-/* test_scene.c: the CPU scene model (renderer/scene.c) and its matrix helpers (xform.c). */
+/* test_scene.c: the CPU scene model (renderer/scene/scene.c) and its matrix helpers (xform.c). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "renderer/scene.h"
-#include "renderer/xform.h"
+#include "renderer/scene/scene.h"
+#include "renderer/scene/xform.h"
 #include "test_util.h"
 
 static int near3(const float *a, float x, float y, float z)

@@ -1,6 +1,6 @@
 /* test_task_pool.c: every task runs exactly once, on pools of 1, 2, 3 and 8 threads and on
  * none (NULL, inline); tasks submit and wait for nested groups; shutdown drains the queue. */
-#include "renderer/task_pool.h"
+#include "renderer/accel/task_pool.h"
 #include "test_util.h"
 
 #include <pthread.h>

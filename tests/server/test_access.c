@@ -1,8 +1,8 @@
-/* Who may connect (server/access.c): constant-time token comparison, Host names, and whether a
+/* Who may connect (server/api/access.c): constant-time token comparison, Host names, and whether a
  * page's Origin may change the server. Plain CPU code. */
 #include <string.h>
 
-#include "server/access.h"
+#include "server/api/access.h"
 #include "test_util.h"
 
 int main(void)

@@ -3,8 +3,8 @@
 #include <math.h>
 #include <string.h>
 
-#include "server/api_json.h"
-#include "server/scene_state.h"
+#include "server/api/api_json.h"
+#include "server/scene/scene_state.h"
 #include "test_util.h"
 
 static bool parse_camera(const char *text, srv_camera_patch *p, srv_api_error *e)

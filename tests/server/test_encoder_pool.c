@@ -1,7 +1,7 @@
-/* The encoder pool (server/encoder_pool.h) without the daemon: large frames are encoded in
+/* The encoder pool (server/encode/encoder_pool.h) without the daemon: large frames are encoded in
  * stripes and small ones whole, both decoding to the pixels of one tjCompress2 encode at every
  * variant's quality; coefficient frames (the GPU JPEG path) are encoded at their own sets'
- * qualities, whole byte for byte as server/jpeg_coefs.c encodes them and striped to the same
+ * qualities, whole byte for byte as server/encode/jpeg_coefs.c encodes them and striped to the same
  * pixels; latest frame wins per view while many striped frames of several views race through
  * the threads; every frame ends published or dropped. */
 #include <stdlib.h>
@@ -9,9 +9,9 @@
 #include <time.h>
 #include <turbojpeg.h>
 
-#include "server/encoder_pool.h"
-#include "server/jpeg_coefs.h"
-#include "server/jpeg_striped.h"
+#include "server/encode/encoder_pool.h"
+#include "server/encode/jpeg_coefs.h"
+#include "server/encode/jpeg_striped.h"
 #include "test_util.h"
 
 static srv_image *make_image(unsigned w, unsigned h, unsigned seed)

@@ -25,7 +25,7 @@
 #include <jpeglib.h>
 
 #include "serve_util.h"
-#include "server/jpeg_coefs.h"
+#include "server/encode/jpeg_coefs.h"
 #include "test_util.h"
 
 #define W 97

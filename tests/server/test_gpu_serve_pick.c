@@ -10,12 +10,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "renderer/bvh.h"
-#include "renderer/camera.h"
-#include "renderer/gltf_loader.h"
-#include "renderer/xform.h"
+#include "renderer/accel/bvh.h"
+#include "renderer/scene/camera.h"
+#include "renderer/gltf/gltf_loader.h"
+#include "renderer/scene/xform.h"
 #include "serve_util.h"
-#include "server/commands.h"
+#include "server/api/commands.h"
 #include "test_util.h"
 
 #define GRID 6

@@ -1,4 +1,4 @@
-/* Striped JPEG (server/jpeg_striped.h): plans, joined files that decode to the full image with
+/* Striped JPEG (server/encode/jpeg_striped.h): plans, joined files that decode to the full image with
  * the pixels of one tjCompress2 encode, restart markers in order, byte identity with a whole-image
  * encode at the same restart interval, and joins that must fail (and checks that would notice a
  * wrong stripe order or offset). */
@@ -8,7 +8,7 @@
 #include <string.h>
 #include <turbojpeg.h>
 
-#include "server/jpeg_striped.h"
+#include "server/encode/jpeg_striped.h"
 #include "test_util.h"
 
 #define QUALITY 80

@@ -1,8 +1,8 @@
-/* Input-to-frame stages (server/latency_stats.c): stages add up to the total, clock steps never
+/* Input-to-frame stages (server/render/latency_stats.c): stages add up to the total, clock steps never
  * give negative stages, nearest-rank percentiles over the newest SRV_LATENCY_WINDOW samples. */
 #include <math.h>
 
-#include "server/latency_stats.h"
+#include "server/render/latency_stats.h"
 #include "test_util.h"
 
 static srv_latency_stamps stamps(uint64_t t0, unsigned q, unsigned r, unsigned e, unsigned w,

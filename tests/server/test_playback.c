@@ -5,8 +5,8 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "server/api_json.h"
-#include "server/playback.h"
+#include "server/api/api_json.h"
+#include "server/scene/playback.h"
 #include "test_util.h"
 
 static int near(double a, double b)

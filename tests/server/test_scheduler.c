@@ -4,7 +4,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "server/scheduler.h"
+#include "server/render/scheduler.h"
 #include "test_util.h"
 
 static srv_sched_state base(srv_sched_view *views, unsigned n)

@@ -1,4 +1,4 @@
-/* The settings table (server/settings.h) and what is generated from it: defaults, JSON in and
+/* The settings table (server/api/settings.h) and what is generated from it: defaults, JSON in and
  * out, range checks, the command line, scopes; and protocol/openapi.yaml's Settings schema
  * against the table (plain CPU code: no daemon, no GPU). */
 #include <math.h>
@@ -6,8 +6,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "server/api_json.h"
-#include "server/settings.h"
+#include "server/api/api_json.h"
+#include "server/api/settings.h"
 #include "test_util.h"
 
 #define ALL_BITS ((1u << SRV_SETTING_COUNT) - 1)

@@ -1,6 +1,6 @@
 // xform.js: the little linear algebra the node tree and the gizmo need, in glTF's conventions:
 // quaternions [x, y, z, w], column-major 4x4 matrices (m[col * 4 + row]), a node's local
-// matrix T * R * S, and a camera projection that matches the server's (renderer/camera.c:
+// matrix T * R * S, and a camera projection that matches the server's (renderer/scene/camera.c:
 // right = forward x up, a pixel's ray forward + ndc.x * right * tan(fov/2) * aspect +
 // ndc.y * up * tan(fov/2)). No DOM.
 

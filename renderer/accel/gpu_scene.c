@@ -1,0 +1,613 @@
+#include "renderer/accel/gpu_scene.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "renderer/accel/bvh.h"
+#include "renderer/scene/xform.h"
+
+static double now_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
+
+static void *xcalloc(size_t n, size_t size)
+{
+    void *p = calloc(n ? n : 1, size ? size : 1);
+    if (!p) {
+        fprintf(stderr, "probecast: out of memory\n");
+        abort();
+    }
+    return p;
+}
+
+static pc_vec4 v4(const float *p, float w)
+{
+    return (pc_vec4){p[0], p[1], p[2], w};
+}
+
+/* Creates a device buffer holding size bytes of data. */
+static rd_vk_result upload_new(rd_vk *vk, rd_buffer *b, const void *data, size_t size, char *err,
+                               size_t errlen)
+{
+    rd_vk_result r = rd_buffer_create(vk, b, size, RD_MEMORY_DEVICE, err, errlen);
+    if (r == RD_VK_OK && size > 0) r = rd_buffer_upload(vk, b, 0, data, size, err, errlen);
+    return r;
+}
+
+/* Texture index + 1 for the GPU (0 = none or out of range). */
+static uint32_t tex_ref(int32_t index, uint32_t texture_count)
+{
+    return index >= 0 && (uint32_t)index < texture_count ? (uint32_t)index + 1 : 0;
+}
+
+static float clamp01(float x)
+{
+    return x > 0.0f ? (x < 1.0f ? x : 1.0f) : 0.0f; /* NaN -> 0 */
+}
+
+static void fill_material(pc_material *g, const rd_material *m, uint32_t texture_count)
+{
+    memset(g, 0, sizeof *g);
+    g->base_color =
+        (pc_vec4){m->base_color[0], m->base_color[1], m->base_color[2], m->base_color[3]};
+    g->emission = (pc_vec4){m->emission[0], m->emission[1], m->emission[2], 0};
+    g->tex.x = tex_ref(m->base_color_texture, texture_count);
+    g->tex.y = tex_ref(m->emissive_texture, texture_count);
+    g->tex.z = m->alpha_mode == RD_ALPHA_MASK    ? PC_ALPHA_MASK
+               : m->alpha_mode == RD_ALPHA_BLEND ? PC_ALPHA_BLEND
+                                                 : PC_ALPHA_OPAQUE;
+    g->tex.w = m->double_sided ? 1u : 0u;
+    g->params = (pc_vec4){m->alpha_cutoff, m->normal_scale, clamp01(m->occlusion_strength),
+                          clamp01(m->specular)};
+    g->pbr = (pc_vec4){clamp01(m->metallic), clamp01(m->roughness), 0, 0};
+    g->tex2.x = tex_ref(m->metallic_roughness_texture, texture_count);
+    g->tex2.y = tex_ref(m->normal_texture, texture_count);
+    g->tex2.z = tex_ref(m->occlusion_texture, texture_count);
+}
+
+/* Octahedral encoding of a unit vector (Cigolle et al., JCGT 2014) as packSnorm2x16 bits;
+ * shaders/common.glsl decodes it. */
+static uint32_t pack_octahedral(const float v[3])
+{
+    float l1 = fabsf(v[0]) + fabsf(v[1]) + fabsf(v[2]);
+    float x = l1 > 0 ? v[0] / l1 : 0, y = l1 > 0 ? v[1] / l1 : 0;
+    if (v[2] < 0) {
+        float ox = (1.0f - fabsf(y)) * (x >= 0 ? 1.0f : -1.0f);
+        float oy = (1.0f - fabsf(x)) * (y >= 0 ? 1.0f : -1.0f);
+        x = ox, y = oy;
+    }
+    int32_t ix = (int32_t)lrintf(clamp01(x * 0.5f + 0.5f) * 65534.0f) - 32767;
+    int32_t iy = (int32_t)lrintf(clamp01(y * 0.5f + 0.5f) * 65534.0f) - 32767;
+    return ((uint32_t)ix & 0xffffu) | ((uint32_t)iy & 0xffffu) << 16;
+}
+
+/* The triangle's TANGENT attribute in pc_tri_attr.tangents form (zero when the mesh has none
+ * or a tangent is not a finite non-zero vector: the shader then derives one from the UVs). */
+static pc_uvec4 pack_tangents(const float *t)
+{
+    pc_uvec4 out = {0, 0, 0, 0};
+    if (!t) return out;
+    uint32_t packed[3], flags = PC_TANGENT_PRESENT;
+    for (int k = 0; k < 3; k++) {
+        const float *v = t + 4 * k;
+        float len = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        if (!(len > 1e-12f) || !isfinite(len)) return out;
+        const float u[3] = {v[0] / len, v[1] / len, v[2] / len};
+        packed[k] = pack_octahedral(u);
+        if (v[3] < 0) flags |= PC_TANGENT_FLIP << k;
+    }
+    out = (pc_uvec4){packed[0], packed[1], packed[2], flags};
+    return out;
+}
+
+/* Whether a surface of material g can trace reflection rays (gbuffer_traces_reflection in
+ * shaders/common.glsl): it has a specular part and a roughness that may fall below the cutoff.
+ * A metallic-roughness texture only scales the factors down, so the factors bound what the
+ * texels can give: metallic 0 stays 0, but any roughness factor may become glossy. */
+static bool material_glossy(const pc_material *g)
+{
+    bool specular = g->pbr.x > 0 || g->params.w > 0;
+    return specular && (g->pbr.y < PC_REFLECT_MAX_ROUGHNESS || g->tex2.x != 0);
+}
+
+static rd_vk_result upload_materials(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, char *err,
+                                     size_t errlen)
+{
+    pc_material *mats = xcalloc(s->material_count, sizeof *mats);
+    gs->glossy = false;
+    for (uint32_t i = 0; i < s->material_count; i++) {
+        fill_material(&mats[i], &s->materials[i], s->texture_count);
+        gs->glossy |= material_glossy(&mats[i]);
+    }
+    rd_vk_result r =
+        upload_new(vk, &gs->materials, mats, sizeof *mats * s->material_count, err, errlen);
+    free(mats);
+    if (r != RD_VK_OK) return r;
+
+    uint64_t texel_total = 0;
+    pc_texture *texs = xcalloc(s->texture_count, sizeof *texs);
+    for (uint32_t i = 0; i < s->texture_count; i++) {
+        const rd_texture *t = &s->textures[i];
+        texs[i].info = (pc_uvec4){(uint32_t)texel_total, t->width, t->height,
+                                  t->wrap_s | t->wrap_t << 4 | (t->nearest ? 0x100u : 0u)};
+        texel_total += (uint64_t)t->width * t->height;
+    }
+    if (texel_total > UINT32_MAX) {
+        free(texs);
+        snprintf(err, errlen, "textures hold %llu texels, more than the 4 Gi texel limit",
+                 (unsigned long long)texel_total);
+        return RD_VK_ERR_OUT_OF_MEMORY;
+    }
+    r = upload_new(vk, &gs->textures, texs, sizeof *texs * s->texture_count, err, errlen);
+    free(texs);
+    if (r != RD_VK_OK) return r;
+    r = rd_buffer_create(vk, &gs->texels, texel_total * 4, RD_MEMORY_DEVICE, err, errlen);
+    uint64_t offset = 0;
+    for (uint32_t i = 0; r == RD_VK_OK && i < s->texture_count; i++) {
+        const rd_texture *t = &s->textures[i];
+        uint64_t bytes = (uint64_t)t->width * t->height * 4;
+        if (bytes) r = rd_buffer_upload(vk, &gs->texels, offset, t->rgba, bytes, err, errlen);
+        offset += bytes;
+    }
+    return r;
+}
+
+rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *s, char *err, size_t errlen)
+{
+    memset(p, 0, sizeof *p);
+    double t0 = now_ms();
+    p->mesh_count = s->mesh_count;
+    p->mesh_root = xcalloc(s->mesh_count, sizeof *p->mesh_root);
+    p->mesh_bounds = xcalloc(s->mesh_count, 6 * sizeof(float));
+    rd_bvh *bvhs = xcalloc(s->mesh_count, sizeof *bvhs);
+    rd_bvh_mesh *meshes = xcalloc(s->mesh_count, sizeof *meshes);
+    for (uint32_t m = 0; m < s->mesh_count; m++)
+        meshes[m] = (rd_bvh_mesh){s->meshes[m].positions, s->meshes[m].tri_count};
+    /* Every mesh's BLAS at once, on all cores (this runs off the render thread). */
+    if (!rd_bvh_build_many(bvhs, meshes, s->mesh_count, NULL)) {
+        fprintf(stderr, "probecast: out of memory building a BVH\n");
+        abort();
+    }
+    free(meshes);
+    uint64_t tri_total = 0, node_total = 0;
+    for (uint32_t m = 0; m < s->mesh_count; m++) {
+        const rd_mesh *mesh = &s->meshes[m];
+        p->mesh_root[m] = (uint32_t)node_total;
+        const pc_bvh_node *root = &bvhs[m].nodes[0];
+        float *b = &p->mesh_bounds[m * 6];
+        b[0] = root->bmin.x, b[1] = root->bmin.y, b[2] = root->bmin.z;
+        b[3] = root->bmax.x, b[4] = root->bmax.y, b[5] = root->bmax.z;
+        if (bvhs[m].depth > p->max_blas_depth) p->max_blas_depth = bvhs[m].depth;
+        tri_total += mesh->tri_count;
+        node_total += bvhs[m].node_count;
+    }
+    p->tri_count = tri_total;
+    p->node_count = node_total;
+    if (tri_total > UINT32_MAX / 2 || node_total > UINT32_MAX / 2) {
+        for (uint32_t m = 0; m < s->mesh_count; m++)
+            rd_bvh_destroy(&bvhs[m]);
+        free(bvhs);
+        rd_gpu_scene_prep_destroy(p);
+        snprintf(err, errlen, "scene too large: %llu triangles", (unsigned long long)tri_total);
+        return RD_VK_ERR_OUT_OF_MEMORY;
+    }
+
+    p->nodes = xcalloc(node_total, sizeof *p->nodes);
+    p->tris = xcalloc(tri_total, sizeof *p->tris);
+    p->attrs = xcalloc(tri_total, sizeof *p->attrs);
+    uint32_t node_base = 0, tri_base = 0;
+    for (uint32_t m = 0; m < s->mesh_count; m++) {
+        const rd_mesh *mesh = &s->meshes[m];
+        const rd_bvh *bvh = &bvhs[m];
+        for (uint32_t i = 0; i < bvh->node_count; i++) {
+            pc_bvh_node n = bvh->nodes[i];
+            uint32_t first = rd_bvh_node_first(&n), count = rd_bvh_node_count(&n);
+            n.bmin.w = pc_u2f(first + (count ? tri_base : node_base));
+            p->nodes[node_base + i] = n;
+        }
+        for (uint32_t i = 0; i < bvh->prim_count; i++) {
+            uint32_t src = bvh->prim_index[i];
+            uint32_t mat = mesh->material[src] < s->material_count ? mesh->material[src] : 0;
+            const rd_material *mm = &s->materials[mat];
+            uint32_t flags = (mm->double_sided ? PC_TRI_DOUBLE_SIDED : 0) |
+                             (mm->alpha_mode == RD_ALPHA_MASK ? PC_TRI_ALPHA_MASK : 0);
+            const float *pos = &mesh->positions[src * 9];
+            const float *n = &mesh->normals[src * 9];
+            const float *uv = &mesh->uvs[src * 6];
+            pc_tri *t = &p->tris[tri_base + i];
+            t->v0 = v4(pos, pc_u2f(mat));
+            t->v1 = v4(pos + 3, pc_u2f(flags));
+            t->v2 = v4(pos + 6, pc_u2f(src));
+            pc_tri_attr *a = &p->attrs[tri_base + i];
+            a->n0 = v4(n, 0), a->n1 = v4(n + 3, 0), a->n2 = v4(n + 6, 0);
+            a->uv01 = (pc_vec4){uv[0], uv[1], uv[2], uv[3]};
+            a->uv2 = (pc_vec4){uv[4], uv[5], 0, 0};
+            a->tangents = pack_tangents(mesh->tangents ? &mesh->tangents[src * 12] : NULL);
+        }
+        node_base += bvh->node_count;
+        tri_base += mesh->tri_count;
+        rd_bvh_destroy(&bvhs[m]);
+    }
+    free(bvhs);
+    p->build_ms = now_ms() - t0;
+    return RD_VK_OK;
+}
+
+void rd_gpu_scene_prep_destroy(rd_gpu_scene_prep *p)
+{
+    free(p->mesh_root);
+    free(p->mesh_bounds);
+    free(p->nodes);
+    free(p->tris);
+    free(p->attrs);
+    memset(p, 0, sizeof *p);
+}
+
+/* Uploads the prepared BLAS nodes and triangle records; the mesh tables move into gs. */
+static rd_vk_result upload_blas(rd_vk *vk, rd_gpu_scene *gs, rd_gpu_scene_prep *p, char *err,
+                                size_t errlen)
+{
+    gs->mesh_count = p->mesh_count;
+    gs->mesh_root = p->mesh_root;
+    gs->mesh_bounds = p->mesh_bounds;
+    p->mesh_root = NULL;
+    p->mesh_bounds = NULL;
+    gs->blas_build_ms = p->build_ms;
+    gs->tri_count = p->tri_count;
+    gs->blas_node_count = p->node_count;
+    gs->max_blas_depth = p->max_blas_depth;
+    double t1 = now_ms();
+    rd_vk_result r =
+        upload_new(vk, &gs->blas_nodes, p->nodes, sizeof *p->nodes * p->node_count, err, errlen);
+    if (r == RD_VK_OK)
+        r = upload_new(vk, &gs->tris, p->tris, sizeof *p->tris * p->tri_count, err, errlen);
+    if (r == RD_VK_OK)
+        r = upload_new(vk, &gs->tri_attrs, p->attrs, sizeof *p->attrs * p->tri_count, err, errlen);
+    gs->upload_ms += now_ms() - t1;
+    return r;
+}
+
+/* World box of a mesh's object-space box under m (the 8 transformed corners). */
+static void world_box(const float m[16], const float *b, float *lo, float *hi)
+{
+    lo[0] = lo[1] = lo[2] = INFINITY;
+    hi[0] = hi[1] = hi[2] = -INFINITY;
+    if (!(b[0] <= b[3] && b[1] <= b[4] && b[2] <= b[5])) return; /* empty mesh */
+    for (int c = 0; c < 8; c++) {
+        float p[3] = {b[(c & 1) ? 3 : 0], b[(c & 2) ? 4 : 1], b[(c & 4) ? 5 : 2]}, w[3];
+        rd_mat4_transform_point(m, p, w);
+        for (int k = 0; k < 3; k++) {
+            if (w[k] < lo[k]) lo[k] = w[k];
+            if (w[k] > hi[k]) hi[k] = w[k];
+        }
+    }
+    /* the corners were rounded once: widen by a relative margin so no grazing hit is culled */
+    for (int k = 0; k < 3; k++) {
+        float pad = 1e-6f * fmaxf(fabsf(lo[k]), fabsf(hi[k])) + 1e-30f;
+        lo[k] -= pad;
+        hi[k] += pad;
+    }
+}
+
+static void rows3(pc_vec4 out[3], const float m[16])
+{
+    for (int r = 0; r < 3; r++)
+        out[r] = (pc_vec4){m[r], m[4 + r], m[8 + r], m[12 + r]};
+}
+
+/* Source of rd_gpu_scene.revision (render thread only, like all of Vulkan here). */
+static uint64_t last_revision;
+
+/* Do a and b light the scene from the same place, in the same way as rays see it (type,
+ * position, range; aim for spot and directional lights; the spot's cone)? Colour and intensity
+ * do not count. */
+static bool same_placement(const pc_light *a, const pc_light *b)
+{
+    if (a->info.x != b->info.x ||
+        memcmp(&a->position_range, &b->position_range, sizeof a->position_range) != 0)
+        return false;
+    if (a->info.x != PC_LIGHT_POINT && memcmp(&a->direction, &b->direction, sizeof a->direction))
+        return false;
+    return a->info.x != PC_LIGHT_SPOT || a->spot.x == b->spot.x;
+}
+
+/* Logs where the geometry changed (gs->dirty) between the instances as last placed and inst
+ * (new boxes lo, hi; n instances), under a new geometry revision when anything moved, and keeps
+ * inst as the last placed. */
+static void log_moves(rd_gpu_scene *gs, const pc_instance *inst, const float *lo, const float *hi,
+                      uint32_t n)
+{
+    if (!gs->placed) { /* a new scene: nothing before it is logged */
+        gs->placed = xcalloc(n ? n : 1, sizeof *gs->placed);
+        memcpy(gs->placed, inst, sizeof *inst * n);
+        gs->revision = gs->geometry_revision = ++last_revision;
+        gs->dirty_count = 0;
+        gs->dirty_since = gs->geometry_revision;
+        return;
+    }
+    bool moved = false;
+    for (uint32_t i = 0; i < n; i++) {
+        if (memcmp(&gs->placed[i], &inst[i], sizeof *inst) == 0) continue;
+        if (!moved) gs->revision = gs->geometry_revision = ++last_revision;
+        moved = true;
+        /* where it was (the box of its old placement) and where it is */
+        float old_lo[3], old_hi[3], m[16] = {0};
+        for (int r = 0; r < 3; r++) {
+            const float *row = &gs->placed[i].object_to_world[r].x;
+            m[r] = row[0], m[4 + r] = row[1], m[8 + r] = row[2], m[12 + r] = row[3];
+        }
+        m[15] = 1;
+        world_box(m, &gs->mesh_bounds[gs->placed[i].info.y * 6], old_lo, old_hi);
+        const float *box[2][2] = {{old_lo, old_hi}, {&lo[i * 3], &hi[i * 3]}};
+        for (int b = 0; b < 2; b++) {
+            if (!(box[b][0][0] <= box[b][1][0])) continue; /* empty (a singular transform) */
+            if (gs->dirty_count == RD_GPU_SCENE_DIRTY_MAX) {
+                /* full: the older half goes, and maps older than it rebuild whole */
+                uint32_t drop = RD_GPU_SCENE_DIRTY_MAX / 2;
+                gs->dirty_since = gs->dirty[drop - 1].revision;
+                memmove(gs->dirty, gs->dirty + drop,
+                        sizeof gs->dirty[0] * (gs->dirty_count - drop));
+                gs->dirty_count -= drop;
+                if (gs->dirty_since == gs->geometry_revision) gs->dirty_count = 0;
+            }
+            rd_gpu_scene_dirty *d = &gs->dirty[gs->dirty_count++];
+            d->revision = gs->geometry_revision;
+            memcpy(d->lo, box[b][0], sizeof d->lo);
+            memcpy(d->hi, box[b][1], sizeof d->hi);
+        }
+        gs->placed[i] = inst[i];
+    }
+}
+
+rd_vk_result rd_gpu_scene_update_instances(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
+                                           char *err, size_t errlen)
+{
+    double t0 = now_ms();
+    uint32_t n = s->instance_count;
+    if (n != gs->instance_capacity && gs->instance_capacity != 0) {
+        snprintf(err, errlen, "instance count changed from %u to %u", gs->instance_capacity, n);
+        return RD_VK_ERR_VULKAN;
+    }
+    pc_instance *inst = xcalloc(n, sizeof *inst);
+    float *lo = xcalloc(n, 3 * sizeof(float)), *hi = xcalloc(n, 3 * sizeof(float));
+    for (uint32_t i = 0; i < n; i++) {
+        const rd_instance *in = &s->instances[i];
+        /* floating origin: the GPU sees positions relative to origin_shift */
+        float world[16];
+        memcpy(world, s->nodes[in->node].world, sizeof world);
+        for (int k = 0; k < 3; k++)
+            world[12 + k] -= gs->origin_shift[k];
+        float inv[16];
+        bool invertible = rd_mat4_inverse(inv, world);
+        rows3(inst[i].object_to_world, world);
+        rows3(inst[i].world_to_object, invertible ? inv : world);
+        inst[i].info = (pc_uvec4){gs->mesh_root[in->mesh], in->mesh, 0, in->node};
+        if (invertible) {
+            world_box(world, &gs->mesh_bounds[in->mesh * 6], &lo[i * 3], &hi[i * 3]);
+        } else { /* a singular transform flattens the mesh: it cannot be hit */
+            lo[i * 3] = lo[i * 3 + 1] = lo[i * 3 + 2] = INFINITY;
+            hi[i * 3] = hi[i * 3 + 1] = hi[i * 3 + 2] = -INFINITY;
+        }
+    }
+    log_moves(gs, inst, lo, hi, n);
+    rd_bvh tlas = {0};
+    if (!rd_bvh_build(&tlas, lo, hi, n, NULL)) {
+        fprintf(stderr, "probecast: out of memory building the top-level BVH\n");
+        abort();
+    }
+    free(lo);
+    free(hi);
+    if (tlas.node_count) {
+        const pc_bvh_node *root = &tlas.nodes[0];
+        const float b[6] = {root->bmin.x, root->bmin.y, root->bmin.z,
+                            root->bmax.x, root->bmax.y, root->bmax.z};
+        memcpy(gs->bounds, b, sizeof b);
+    }
+    gs->tlas_build_ms = now_ms() - t0;
+    gs->tlas_node_count = tlas.node_count;
+
+    rd_vk_result r = RD_VK_OK;
+    if (gs->instance_capacity == 0) {
+        /* A TLAS over n boxes has at most 2n - 1 nodes: size for the worst case once. */
+        uint32_t max_nodes = n ? 2 * n : 1;
+        r = rd_buffer_create(vk, &gs->instances, sizeof(pc_instance) * n, RD_MEMORY_DEVICE, err,
+                             errlen);
+        if (r == RD_VK_OK)
+            r = rd_buffer_create(vk, &gs->tlas_nodes, sizeof(pc_bvh_node) * max_nodes,
+                                 RD_MEMORY_DEVICE, err, errlen);
+        if (r == RD_VK_OK)
+            r = rd_buffer_create(vk, &gs->tlas_index, sizeof(uint32_t) * (n ? n : 1),
+                                 RD_MEMORY_DEVICE, err, errlen);
+        gs->instance_capacity = n;
+    }
+    if (r == RD_VK_OK && n)
+        r = rd_buffer_upload(vk, &gs->instances, 0, inst, sizeof *inst * n, err, errlen);
+    if (r == RD_VK_OK)
+        r = rd_buffer_upload(vk, &gs->tlas_nodes, 0, tlas.nodes,
+                             sizeof(pc_bvh_node) * tlas.node_count, err, errlen);
+    if (r == RD_VK_OK && n)
+        r = rd_buffer_upload(vk, &gs->tlas_index, 0, tlas.prim_index, sizeof(uint32_t) * n, err,
+                             errlen);
+    rd_bvh_destroy(&tlas);
+    free(inst);
+    return r;
+}
+
+rd_vk_result rd_gpu_scene_update_lights(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, char *err,
+                                        size_t errlen)
+{
+    uint32_t n = s->light_count;
+    bool grow = n > gs->light_capacity || gs->lights.buffer == VK_NULL_HANDLE;
+    if (grow) {
+        /* frames in flight may read the old buffer */
+        if (gs->lights.buffer != VK_NULL_HANDLE) rd_vk_wait_idle(vk);
+        free(gs->lights_pending);
+        gs->lights_pending = NULL;
+        rd_buffer_destroy(vk, &gs->lights);
+        uint32_t cap = n < 16 ? 16 : n;
+        rd_vk_result r = rd_buffer_create(vk, &gs->lights, sizeof(pc_light) * cap, RD_MEMORY_DEVICE,
+                                          err, errlen);
+        if (r != RD_VK_OK) return r;
+        gs->light_capacity = cap;
+        gs->refs.lights = gs->lights.address;
+        pc_light *placed = xcalloc(cap, sizeof *placed); /* the old ones are compared below */
+        if (gs->placed_lights)
+            memcpy(placed, gs->placed_lights, sizeof *placed * gs->refs.counts.y);
+        free(gs->placed_lights);
+        gs->placed_lights = placed;
+    }
+    pc_light *lights = xcalloc(n, sizeof *lights);
+    for (uint32_t i = 0; i < n; i++) {
+        const rd_light *l = &s->lights[i];
+        float dir[3];
+        const float down[3] = {0, 0, -1};
+        rd_vec3_normalize(dir, l->direction, down);
+        const float pos[3] = {l->position[0] - gs->origin_shift[0],
+                              l->position[1] - gs->origin_shift[1],
+                              l->position[2] - gs->origin_shift[2]};
+        lights[i].position_range = v4(pos, l->range > 0 ? l->range : 0);
+        lights[i].direction = v4(dir, 0);
+        lights[i].radiance = (pc_vec4){l->color[0] * l->intensity, l->color[1] * l->intensity,
+                                       l->color[2] * l->intensity, l->intensity};
+        float outer = l->outer_cone, inner = l->inner_cone < outer ? l->inner_cone : outer;
+        lights[i].spot = (pc_vec4){cosf(outer), cosf(inner), 0, 0};
+        /* equal cones would make smoothstep undefined: keep a tiny soft edge */
+        if (lights[i].spot.y - lights[i].spot.x < 1e-4f)
+            lights[i].spot.y = lights[i].spot.x + 1e-4f;
+        lights[i].info = (pc_uvec4){l->type == RD_LIGHT_SPOT          ? PC_LIGHT_SPOT
+                                    : l->type == RD_LIGHT_DIRECTIONAL ? PC_LIGHT_DIRECTIONAL
+                                                                      : PC_LIGHT_POINT,
+                                    0, 0, 0};
+    }
+    for (uint32_t i = 0; i < n && i < PC_SHADOW_MAP_MAX_LIGHTS; i++) {
+        /* a light new at this index (the count grew) always gets a revision */
+        if (i >= gs->refs.counts.y || gs->light_revision[i] == 0 ||
+            !same_placement(&lights[i], &gs->placed_lights[i]))
+            gs->light_revision[i] = gs->revision = ++last_revision;
+    }
+    memcpy(gs->placed_lights, lights, sizeof *lights * n);
+    if (n != gs->refs.counts.y) gs->revision = ++last_revision;
+    rd_vk_result r = RD_VK_OK;
+    gs->refs.counts.y = n;
+    if (grow) { /* a new buffer: nothing reads it yet */
+        if (n) r = rd_buffer_upload(vk, &gs->lights, 0, lights, sizeof *lights * n, err, errlen);
+        free(lights);
+        return r;
+    }
+    free(gs->lights_pending);
+    gs->lights_pending = lights;
+    gs->lights_pending_count = n;
+    return r;
+}
+
+void rd_gpu_scene_record_updates(rd_gpu_scene *gs, rd_cmd *cmd)
+{
+    if (!gs || !gs->lights_pending) return;
+    /* vkCmdUpdateBuffer takes at most 65536 bytes, a multiple of 4 */
+    const VkDeviceSize chunk = 65536 / sizeof(pc_light) * sizeof(pc_light);
+    VkDeviceSize size = (VkDeviceSize)gs->lights_pending_count * sizeof(pc_light);
+    for (VkDeviceSize off = 0; off < size; off += chunk)
+        vkCmdUpdateBuffer(cmd->cb, gs->lights.buffer, off, size - off < chunk ? size - off : chunk,
+                          (const char *)gs->lights_pending + off);
+    rd_cmd_barrier(cmd);
+    free(gs->lights_pending);
+    gs->lights_pending = NULL;
+    gs->lights_pending_count = 0;
+}
+
+rd_vk_result rd_gpu_scene_upload(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
+                                 rd_gpu_scene_prep *prep, char *err, size_t errlen)
+{
+    memset(gs, 0, sizeof *gs);
+    for (int k = 0; k < 3; k++) {
+        float c = 0.5f * (s->bounds_min[k] + s->bounds_max[k]);
+        gs->origin_shift[k] = isfinite(c) ? c : 0.0f;
+    }
+    rd_vk_result r = upload_blas(vk, gs, prep, err, errlen);
+    if (r == RD_VK_OK) r = rd_gpu_scene_update_instances(vk, gs, s, err, errlen);
+    if (r == RD_VK_OK) r = upload_materials(vk, gs, s, err, errlen);
+    if (r == RD_VK_OK) r = rd_gpu_scene_update_lights(vk, gs, s, err, errlen);
+    if (r != RD_VK_OK) {
+        rd_gpu_scene_destroy(vk, gs);
+        return r;
+    }
+    gs->refs = (pc_scene_refs){
+        .tris = gs->tris.address,
+        .tri_attrs = gs->tri_attrs.address,
+        .blas_nodes = gs->blas_nodes.address,
+        .tlas_nodes = gs->tlas_nodes.address,
+        .tlas_index = gs->tlas_index.address,
+        .instances = gs->instances.address,
+        .materials = gs->materials.address,
+        .textures = gs->textures.address,
+        .texels = gs->texels.address,
+        .lights = gs->lights.address,
+        .counts = {s->instance_count, s->light_count, s->material_count, s->texture_count},
+    };
+    return RD_VK_OK;
+}
+
+rd_vk_result rd_gpu_scene_create(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, char *err,
+                                 size_t errlen)
+{
+    rd_gpu_scene_prep prep;
+    rd_vk_result r = rd_gpu_scene_prepare(&prep, s, err, errlen);
+    if (r != RD_VK_OK) {
+        memset(gs, 0, sizeof *gs);
+        return r;
+    }
+    r = rd_gpu_scene_upload(vk, gs, s, &prep, err, errlen);
+    rd_gpu_scene_prep_destroy(&prep);
+    return r;
+}
+
+void rd_gpu_scene_destroy(rd_vk *vk, rd_gpu_scene *gs)
+{
+    rd_buffer *bufs[] = {&gs->tris,       &gs->tri_attrs, &gs->blas_nodes, &gs->tlas_nodes,
+                         &gs->tlas_index, &gs->instances, &gs->materials,  &gs->textures,
+                         &gs->texels,     &gs->lights};
+    for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; i++)
+        rd_buffer_destroy(vk, bufs[i]);
+    free(gs->mesh_root);
+    free(gs->mesh_bounds);
+    free(gs->placed);
+    gs->placed = NULL;
+    free(gs->placed_lights);
+    gs->placed_lights = NULL;
+    free(gs->lights_pending);
+    gs->mesh_root = NULL;
+    gs->mesh_bounds = NULL;
+    gs->lights_pending = NULL;
+    gs->lights_pending_count = 0;
+    gs->instance_capacity = gs->light_capacity = 0;
+    memset(&gs->refs, 0, sizeof gs->refs);
+}
+
+void rd_gpu_scene_mesh_world_bounds(const rd_gpu_scene *gs, uint32_t mesh, const float m[16],
+                                    float lo[3], float hi[3])
+{
+    const float *b = &gs->mesh_bounds[6 * mesh];
+    for (int k = 0; k < 3; k++)
+        lo[k] = INFINITY, hi[k] = -INFINITY;
+    for (int c = 0; c < 8; c++) { /* the 8 corners of the mesh's box, transformed */
+        float p[3] = {b[(c & 1) ? 3 : 0], b[(c & 2) ? 4 : 1], b[(c & 4) ? 5 : 2]};
+        for (int k = 0; k < 3; k++) {
+            float w = m[k] * p[0] + m[4 + k] * p[1] + m[8 + k] * p[2] + m[12 + k];
+            lo[k] = fminf(lo[k], w);
+            hi[k] = fmaxf(hi[k], w);
+        }
+    }
+}
+
+void rd_gpu_scene_instance_bounds(const rd_gpu_scene *gs, const rd_scene *scene, uint32_t i,
+                                  float lo[3], float hi[3])
+{
+    rd_gpu_scene_mesh_world_bounds(gs, scene->instances[i].mesh,
+                                   scene->nodes[scene->instances[i].node].world, lo, hi);
+}

@@ -1,0 +1,116 @@
+/* gpu_scene.h: a scene's acceleration structures and shading data, resident on the GPU.
+ *
+ * Bottom-level BVHs are built once per mesh; the top-level BVH over instances is rebuilt
+ * when nodes move (rd_gpu_scene_update_instances), so moving an object costs one small
+ * rebuild and upload. Lights are a separate small upload.
+ */
+#ifndef RD_GPU_SCENE_H
+#define RD_GPU_SCENE_H
+
+#include "shaders/gpu_types.h"
+#include "renderer/scene/scene.h"
+#include "renderer/vk/vk_buffer.h"
+#include "renderer/vk/vk_compute.h"
+
+#define RD_GPU_SCENE_DIRTY_MAX PC_SHADOW_MAP_BOXES
+typedef struct rd_gpu_scene_dirty {
+    uint64_t revision;
+    float lo[3], hi[3];
+} rd_gpu_scene_dirty;
+
+typedef struct rd_gpu_scene {
+    rd_buffer tris, tri_attrs, blas_nodes, tlas_nodes, tlas_index, instances;
+    rd_buffer materials, textures, texels, lights;
+    pc_scene_refs refs; /* addresses and counts, ready for pc_globals */
+    /* Floating origin: the GPU holds world positions minus this (the scene's centre), so that
+     * a scene far from the origin keeps full float precision near its geometry and ray
+     * offsets stay small. Cameras and probe grids are shifted the same way when rendering. */
+    float origin_shift[3];
+    uint32_t mesh_count;
+    uint32_t *mesh_root; /* absolute BLAS root node per mesh */
+    float *mesh_bounds;  /* 6 floats per mesh: object-space min, max */
+    uint32_t instance_capacity;
+    uint32_t light_capacity;
+    /* lights changed since the last recorded command buffer: written by the next one that
+     * renders (rd_gpu_scene_record_updates), in queue order after the frames in flight */
+    pc_light *lights_pending;
+    uint32_t lights_pending_count;
+    /* some material can trace reflection rays (glossy: see PC_REFLECT_MAX_ROUGHNESS); when
+     * none can, views record no reflection pass */
+    bool glossy;
+    /* What rays see, as revisions: numbers no other state of any scene in this process has
+     * had. geometry_revision is renewed by every upload and instance update that moves an
+     * instance; light_revision[i] when light i moves, re-aims, re-ranges, changes type or
+     * appears (not its colour or intensity: placed_lights keeps the last upload to compare);
+     * revision by either. Distance maps (shadow_maps.h) built for them stay right until they
+     * change. Lights past PC_SHADOW_MAP_MAX_LIGHTS are not tracked. */
+    uint64_t revision, geometry_revision;
+    /* Where the geometry changed (GPU frame): the boxes of moved instances before and after,
+     * tagged with the geometry revision that moved them, the last RD_GPU_SCENE_DIRTY_MAX of
+     * them. Every change after geometry revision dirty_since is in the log (an upload, or a
+     * log that overflowed, moves dirty_since up): a distance map showing a revision at or
+     * after it needs only the texels whose rays cross the later boxes re-traced. */
+    rd_gpu_scene_dirty dirty[RD_GPU_SCENE_DIRTY_MAX];
+    uint32_t dirty_count; /* entries in dirty[], oldest first */
+    uint64_t dirty_since;
+    pc_instance *placed; /* the instances as last uploaded (to tell which moved) */
+    float bounds[6];     /* the top level's root box (GPU frame): min, max */
+    uint64_t light_revision[PC_SHADOW_MAP_MAX_LIGHTS];
+    pc_light *placed_lights; /* the lights as last uploaded (light_capacity of them) */
+    /* statistics */
+    double blas_build_ms, tlas_build_ms, upload_ms;
+    uint64_t tri_count, blas_node_count;
+    uint32_t tlas_node_count, max_blas_depth;
+} rd_gpu_scene;
+
+/* The CPU half of a scene's creation: every mesh's bottom-level BVH and the triangle records in
+ * leaf order. Plain CPU work with no Vulkan, so it can run on any thread (the daemon builds an
+ * upload's BVHs on the uploading connection's thread, not on the render thread). */
+typedef struct rd_gpu_scene_prep {
+    uint32_t mesh_count;
+    uint32_t *mesh_root; /* absolute BLAS root node per mesh */
+    float *mesh_bounds;  /* 6 floats per mesh */
+    pc_bvh_node *nodes;
+    pc_tri *tris;
+    pc_tri_attr *attrs;
+    uint64_t tri_count, node_count;
+    uint32_t max_blas_depth;
+    double build_ms;
+} rd_gpu_scene_prep;
+
+/* Builds the BLASes of scene. On failure (a scene too large) p is left empty. */
+rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *scene, char *err,
+                                  size_t errlen);
+void rd_gpu_scene_prep_destroy(rd_gpu_scene_prep *p); /* idempotent */
+/* The GPU half: uploads prep (its mesh tables move into gs), builds the top level, uploads
+ * materials, textures and lights. prep must come from the same scene. On failure everything is
+ * released. */
+rd_vk_result rd_gpu_scene_upload(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *scene,
+                                 rd_gpu_scene_prep *prep, char *err, size_t errlen);
+/* Both halves at once. */
+rd_vk_result rd_gpu_scene_create(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *scene, char *err,
+                                 size_t errlen);
+/* Rebuilds the top-level BVH and instance transforms from scene's current node world
+ * matrices (call rd_scene_update first). The instance count must not change. */
+rd_vk_result rd_gpu_scene_update_instances(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *scene,
+                                           char *err, size_t errlen);
+/* Re-uploads the lights (the count may change). Within the buffer's capacity nothing waits: the
+ * new values are recorded into the next command buffer that renders the scene (a light that
+ * moves every frame used to cost a staging buffer and a queue wait, 1.8 ms on an H200); growing
+ * the buffer waits for the device. */
+rd_vk_result rd_gpu_scene_update_lights(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *scene,
+                                        char *err, size_t errlen);
+/* Records pending light values at the start of cmd (vkCmdUpdateBuffer and a barrier). Every
+ * command buffer that reads the scene's lights calls it before its first dispatch: probe updates
+ * (rd_world_update) and view frames (rd_view_record, path-tracing batches). */
+void rd_gpu_scene_record_updates(rd_gpu_scene *gs, rd_cmd *cmd);
+void rd_gpu_scene_destroy(rd_vk *vk, rd_gpu_scene *gs); /* idempotent */
+/* World bounds of mesh placed by the column-major world matrix m (its box's corners moved). */
+void rd_gpu_scene_mesh_world_bounds(const rd_gpu_scene *gs, uint32_t mesh, const float m[16],
+                                    float lo[3], float hi[3]);
+/* World bounds of instance i of scene as its node places it now (the mesh's box transformed;
+ * world coordinates, not shifted by the floating origin). */
+void rd_gpu_scene_instance_bounds(const rd_gpu_scene *gs, const rd_scene *scene, uint32_t i,
+                                  float lo[3], float hi[3]);
+
+#endif

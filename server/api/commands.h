@@ -1,0 +1,212 @@
+/* commands.h: what the network threads (HTTP, WebSocket) post to the render thread.
+ *
+ * Network threads parse and type-check client input into these plain structs (api_json.h)
+ * and post them as srv_cmd (render_loop.h); only the render thread applies them to the scene
+ * and the GPU, so every mutation happens between two frames and nothing else locks the scene.
+ * A patch carries a bit set `has` naming the fields it sets; everything else is left alone.
+ */
+#ifndef SRV_COMMANDS_H
+#define SRV_COMMANDS_H
+
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "renderer/env/environment.h"
+#include "renderer/accel/gpu_scene.h"
+#include "renderer/scene/scene.h"
+
+/* ---- camera ------------------------------------------------------------------------------ */
+
+/* The shared view's camera as the API describes it. */
+/* settings.gi_mode beyond PC_GI_*: progressive reference path tracing (no probes) */
+#define SRV_GI_PATHTRACE 3u
+
+typedef struct srv_camera {
+    float position[3];
+    float forward[3];      /* unit */
+    float up[3];           /* unit, orthogonal to forward */
+    float fov_deg;         /* vertical field of view */
+    float target_distance; /* the reported target is position + forward * target_distance */
+} srv_camera;
+
+enum {
+    SRV_CAM_POSITION = 1u << 0,
+    SRV_CAM_TARGET = 1u << 1,
+    SRV_CAM_ORIENTATION = 1u << 2, /* quaternion x, y, z, w: camera looks down its -Z, up +Y */
+    SRV_CAM_FORWARD = 1u << 3,
+    SRV_CAM_UP = 1u << 4,
+    SRV_CAM_FOV = 1u << 5,
+};
+
+typedef struct srv_camera_patch {
+    unsigned has;
+    float position[3], target[3], orientation[4], forward[3], up[3];
+    float fov_deg;
+} srv_camera_patch;
+
+/* ---- lights --------------------------------------------------------------------------------- */
+
+enum {
+    SRV_LIGHT_TYPE = 1u << 0,
+    SRV_LIGHT_NAME = 1u << 1,
+    SRV_LIGHT_COLOR = 1u << 2,
+    SRV_LIGHT_INTENSITY = 1u << 3,
+    SRV_LIGHT_POSITION = 1u << 4,
+    SRV_LIGHT_DIRECTION = 1u << 5,
+    SRV_LIGHT_RANGE = 1u << 6,
+    SRV_LIGHT_INNER_CONE = 1u << 7,
+    SRV_LIGHT_OUTER_CONE = 1u << 8,
+};
+
+#define SRV_NAME_MAX 64
+/* an uploaded scene's file name (PUT /v1/scene?name=), terminator included */
+#define SRV_FILE_NAME_MAX 128
+
+typedef struct srv_light_patch {
+    unsigned has;
+    uint32_t type; /* RD_LIGHT_* */
+    char name[SRV_NAME_MAX];
+    float color[3], intensity, position[3], direction[3], range, inner_cone, outer_cone;
+} srv_light_patch;
+
+/* ---- nodes ---------------------------------------------------------------------------------- */
+
+enum {
+    SRV_NODE_TRANSLATION = 1u << 0,
+    SRV_NODE_ROTATION = 1u << 1,
+    SRV_NODE_SCALE = 1u << 2,
+};
+
+typedef struct srv_node_patch {
+    unsigned has;
+    float translation[3], rotation[4], scale[3];
+} srv_node_patch;
+
+/* ---- animation playback ----------------------------------------------------------------- */
+
+enum {
+    SRV_PLAY_PLAYING = 1u << 0,
+    SRV_PLAY_TIME = 1u << 1,
+};
+
+typedef struct srv_playback_patch {
+    unsigned has;
+    bool playing;
+    double time_s; /* finite, >= 0 (wrapped into the loop when applied) */
+} srv_playback_patch;
+
+/* ---- settings ------------------------------------------------------------------------------- */
+
+/* srv_settings, the SRV_SET_* bits and srv_settings_patch come from the settings table. */
+#include "server/api/settings.h"
+
+/* ---- viewer messages (WebSocket text frames) -------------------------------------------- */
+
+typedef enum srv_viewer_msg_type {
+    SRV_VIEWER_CAMERA = 1,
+    SRV_VIEWER_RESIZE,
+    SRV_VIEWER_ACK,
+    SRV_VIEWER_FOLLOW,  /* version 2 */
+    SRV_VIEWER_QUALITY, /* version 2 */
+} srv_viewer_msg_type;
+
+/* Per-view caps a viewer sets for its own view (quality message); 0 means no cap. */
+#define SRV_VIEW_JPEG_CAP_MAX 100u
+#define SRV_VIEW_FPS_CAP_MAX 240u
+
+typedef struct srv_viewer_msg {
+    srv_viewer_msg_type type;
+    uint32_t seq;            /* camera */
+    srv_camera_patch camera; /* camera */
+    unsigned width, height;  /* resize: CSS pixels */
+    float dpr;               /* resize: device pixel ratio (default 1) */
+    uint64_t frame;          /* ack */
+    uint32_t view;           /* follow: the view to watch */
+    bool follow_own;         /* follow: null (back to the own view) */
+    unsigned jpeg_cap;       /* quality: JPEG quality 1..100 at most (0: no cap) */
+    unsigned fps_cap;        /* quality: frames per second 1..240 at most (0: no cap) */
+} srv_viewer_msg;
+
+/* ---- errors ----------------------------------------------------------------------------- */
+
+/* An API error: HTTP status, a stable code and one sentence. */
+typedef struct srv_api_error {
+    int status;
+    const char *code; /* static string */
+    char message[256];
+} srv_api_error;
+
+#if defined(__GNUC__)
+__attribute__((format(printf, 4, 5)))
+#endif
+void srv_api_fail(srv_api_error *e, int status, const char *code, const char *fmt, ...);
+
+/* ---- commands --------------------------------------------------------------------------- */
+
+typedef enum srv_cmd_kind {
+    SRV_CMD_GET_SCENE = 1,
+    SRV_CMD_REPLACE_SCENE,
+    SRV_CMD_GET_CAMERA,
+    SRV_CMD_SET_CAMERA, /* PATCH, or PUT when replace */
+    SRV_CMD_GET_LIGHTS,
+    SRV_CMD_ADD_LIGHT,
+    SRV_CMD_GET_LIGHT,
+    SRV_CMD_PATCH_LIGHT,
+    SRV_CMD_DELETE_LIGHT,
+    SRV_CMD_GET_NODE,
+    SRV_CMD_PATCH_NODE,
+    SRV_CMD_GET_SETTINGS,
+    SRV_CMD_PATCH_SETTINGS,
+    SRV_CMD_PATCH_ANIMATION, /* play, pause, seek the scene's animations */
+    SRV_CMD_VIEWER_CAMERA,   /* from the stream; no reply */
+    SRV_CMD_VIEWER_RESIZE,   /* from the stream; no reply */
+    SRV_CMD_VIEWER_QUALITY,  /* from the stream: the own view's caps; no reply */
+    SRV_CMD_VIEW_OPEN,       /* a stream connection's own view (id chosen by the stream) */
+    SRV_CMD_VIEW_CLOSE,      /* its connection left: free the view */
+    SRV_CMD_VIEW_WATCH,      /* delta connections more (or fewer) show view `view` */
+    SRV_CMD_FRAME_REQUEST,   /* GET /v1/frame.jpg: reply {"after": frame id} to wait past */
+    SRV_CMD_SET_ENVIRONMENT, /* PUT/DELETE /v1/environment: env_image, or NULL to drop it */
+    SRV_CMD_PICK,            /* POST /v1/views/{id}/pick: what lies under pick[] in view */
+} srv_cmd_kind;
+
+/* The render thread's answer: an HTTP status and a JSON body (malloc'd, may be NULL). */
+typedef struct srv_reply {
+    int status;
+    char *body;
+    uint64_t scene_generation; /* REPLACE_SCENE: the generation the scene was given */
+} srv_reply;
+
+typedef struct srv_cmd {
+    srv_cmd_kind kind;
+    uint32_t id;   /* light or node id */
+    uint32_t view; /* the view a camera, resize, watch or frame request is for (0: default) */
+    int delta;     /* VIEW_WATCH */
+    bool replace;  /* SET_CAMERA: PUT (position and a direction are required) */
+    srv_camera_patch camera;
+    srv_light_patch light;
+    srv_node_patch node;
+    srv_settings_patch settings;
+    srv_playback_patch playback;
+    unsigned width, height;      /* VIEWER_RESIZE: device pixels */
+    unsigned jpeg_cap, fps_cap;  /* VIEWER_QUALITY: the view's caps (0: none) */
+    rd_scene *scene;             /* REPLACE_SCENE: validated scene, owned by the command */
+    rd_gpu_scene_prep *prepared; /* REPLACE_SCENE: its BVHs, built by the poster (owned) */
+    char source[128];            /* REPLACE_SCENE: where it came from ("upload", "builtin:...") */
+    char file_name[SRV_FILE_NAME_MAX]; /* REPLACE_SCENE: the uploaded file's name ("": none) */
+    float pick[2];                     /* PICK: normalised picture point (x across, y down), 0..1 */
+    rd_env_image *env_image; /* SET_ENVIRONMENT: the parsed HDR image (owned), NULL = none */
+
+    /* Owned by render_loop.c. */
+    uint64_t ticket; /* input order (see srv_render_post) */
+    srv_reply reply;
+    atomic_int refs;
+    bool done;
+    bool abandoned; /* the caller stopped waiting */
+    pthread_mutex_t mu;
+    pthread_cond_t cv;
+    struct srv_cmd *next;
+} srv_cmd;
+
+#endif

@@ -1,0 +1,214 @@
+/* settings.h: the daemon's settings, each defined once in SRV_SETTINGS below.
+ *
+ * From that one table come the srv_settings struct, the SRV_SET_* bits, the defaults, the
+ * JSON view and the strict JSON patch parser (protocol/openapi.yaml, schema Settings, which
+ * tests/server/test_settings_table.c checks against the table), the range checks of a patch,
+ * the `probecast serve` flags and their usage text, and the world/view scope of each setting.
+ * Adding a setting is one row here (plus its use and its line in openapi.yaml).
+ *
+ * Zero is a value: a setting holds what it was given (hysteresis 0 means no history); that a
+ * patch sets a value is said by its `has` bits, never by a special value. Where 0 has a
+ * meaning of its own (probe_counts 0,0,0 = fitted to the scene, probe_spacing 0 = derived)
+ * the row's description says so.
+ */
+#ifndef SRV_SETTINGS_H
+#define SRV_SETTINGS_H
+
+#include <cjson/cJSON.h>
+#include <stdbool.h>
+#include <stdio.h>
+
+#include "renderer/gi/ddgi.h"
+#include "shaders/gpu_types.h"
+
+struct srv_api_error;
+
+/* Which part of the daemon a setting changes: the shared scene and probe field, or each
+ * viewer's view. */
+enum { SRV_SCOPE_WORLD = 1, SRV_SCOPE_VIEW = 2 };
+
+/* Value types: the C member, the JSON value and the CLI syntax.
+ *   UINT   unsigned          integer                    N
+ *   FLOAT  float             number                     X
+ *   FLOAT3 float[3]          array of 3 numbers         X,Y,Z
+ *   UINT3  unsigned[3]       array of 3 integers        X,Y,Z
+ *   ENUM   unsigned (index)  string, one of its names   NAME
+ *   BOOL   bool              true or false              (no value) */
+typedef enum srv_setting_type {
+    SRV_TYPE_UINT = 1,
+    SRV_TYPE_FLOAT,
+    SRV_TYPE_FLOAT3,
+    SRV_TYPE_UINT3,
+    SRV_TYPE_ENUM,
+    SRV_TYPE_BOOL,
+} srv_setting_type;
+
+/* Names of the enumerations, index = value (PC_TONEMAP_*, PC_VIEW_*, PC_GI_* and
+ * SRV_GI_PATHTRACE, PC_ENV_*; settings.c checks them). */
+#define SRV_TONEMAP_NAMES "aces", "clamp"
+#define SRV_VIEW_NAMES "final", "irradiance", "probes"
+#define SRV_GI_NAMES "off", "classic", "ddgi", "pathtrace"
+#define SRV_SKY_MODE_NAMES "uniform", "gradient", "image"
+
+/* The table. X(ID, field, TYPE, "json", "--flag" or NULL, "ARG", min, max, default, SCOPE,
+ *              (enum names) or (NULL), "description")
+ * ID names the bit SRV_SET_<ID> (bit = row index: keep the order, append new rows);
+ * min, max and default apply to every component of FLOAT3 and UINT3; ENUM ranges over its
+ * names and BOOL over false/true (their min and max columns are unused: 0, 0). The
+ * description is the flag's usage line; the default is printed after it from this table. */
+/* clang-format off */
+#define SRV_SETTINGS(X)                                                                            \
+    X(WIDTH, width, UINT, "width", "--width", "W", 16, 4096, 960, VIEW, (NULL),                    \
+      "render width in pixels")                                                                    \
+    X(HEIGHT, height, UINT, "height", "--height", "H", 16, 4096, 540, VIEW, (NULL),                \
+      "render height in pixels")                                                                   \
+    X(MAX_PIXELS, max_pixels, UINT, "max_pixels", NULL, "N", 256, 4096 * 4096, 1920 * 1080, VIEW,  \
+      (NULL), "cap on width x height; viewer resize requests are scaled down to it")               \
+    X(MAX_FPS, max_fps, UINT, "max_fps", "--max-fps", "N", 1, 240, 30, VIEW, (NULL),               \
+      "frame rate cap while something changes")                                                    \
+    X(QUALITY_INTERACTIVE, quality_interactive, UINT, "quality_interactive",                       \
+      "--quality-interactive", "Q", 1, 100, 60, VIEW, (NULL),                                      \
+      "JPEG quality while input arrives")                                                          \
+    X(QUALITY_STILL, quality_still, UINT, "quality_still", "--quality-still", "Q", 1, 100, 90,     \
+      VIEW, (NULL), "JPEG quality of the still frame after input stops")                           \
+    X(STILL_DELAY, still_delay_ms, UINT, "still_delay_ms", NULL, "MS", 0, 10000, 150, VIEW,        \
+      (NULL), "quiet time after the last input before the still frame")                            \
+    X(EXPOSURE, exposure_ev, FLOAT, "exposure", "--exposure", "EV", -20, 20, 0, VIEW, (NULL),      \
+      "exposure in stops")                                                                         \
+    X(TONEMAP, tonemap, ENUM, "tonemap", NULL, "", 0, 0, PC_TONEMAP_ACES, VIEW,                    \
+      (SRV_TONEMAP_NAMES), "tone curve")                                                           \
+    X(SKY, sky, FLOAT3, "sky", "--sky", "R,G,B", 0, 1000000, 0, WORLD, (NULL),                     \
+      "sky radiance")                                                                              \
+    X(VIEW, view, ENUM, "view", NULL, "", 0, 0, PC_VIEW_FINAL, VIEW, (SRV_VIEW_NAMES),             \
+      "debug views: indirect irradiance only, or probe spheres (need gi classic or ddgi)")         \
+    X(GI_MODE, gi_mode, ENUM, "gi_mode", "--gi", "", 0, 0, PC_GI_DDGI, WORLD, (SRV_GI_NAMES),      \
+      "global illumination; pathtrace accumulates reference samples while nothing changes")        \
+    X(PROBE_COUNTS, probe_counts, UINT3, "probe_counts", "--probes", "X,Y,Z", 0, 256, 0, WORLD,    \
+      (NULL), "probes per axis; 0,0,0 = fitted to the scene")                                      \
+    X(PROBE_SPACING, probe_spacing, FLOAT, "probe_spacing", "--probe-spacing", "S", 0, 1000000, 0, \
+      WORLD, (NULL), "probe spacing in metres; 0 = derived")                                       \
+    X(RAYS, rays_per_probe, UINT, "rays_per_probe", "--rays", "N", 1, PC_DDGI_MAX_RAYS,            \
+      RD_DDGI_DEFAULT_RAYS, WORLD, (NULL), "rays per probe per update")                            \
+    X(HYSTERESIS, hysteresis, FLOAT, "hysteresis", "--hysteresis", "H", 0, 0.999,                  \
+      RD_DDGI_DEFAULT_HYSTERESIS, WORLD, (NULL),                                                   \
+      "probe blend weight of the old value; 0 keeps no history")                                   \
+    X(ANIMATE, animate, BOOL, "animate", NULL, "", 0, 0, false, WORLD, (NULL),                     \
+      "circle the first light slowly while viewers watch (the demo)")                              \
+    X(SKY_MODE, sky_mode, ENUM, "sky_mode", "--sky-mode", "", 0, 0, PC_ENV_UNIFORM, WORLD,         \
+      (SRV_SKY_MODE_NAMES),                                                                        \
+      "environment: sky everywhere, a gradient from sky_ground (nadir) to sky (zenith), or the "  \
+      "HDR image of PUT /v1/environment (sky where there is none)")                               \
+    X(SKY_GROUND, sky_ground, FLOAT3, "sky_ground", "--sky-ground", "R,G,B", 0, 1000000, 0, WORLD, \
+      (NULL), "radiance toward the nadir (gradient)")                                             \
+    X(SKY_INTENSITY, sky_intensity, FLOAT, "sky_intensity", "--sky-intensity", "X", 0, 1000000, 1, \
+      WORLD, (NULL), "scale of the HDR image's radiance")                                         \
+    X(SKY_ROTATION, sky_rotation, FLOAT, "sky_rotation", "--sky-rotation", "DEG", -360, 360, 0,    \
+      WORLD, (NULL), "turn of the HDR image about the vertical axis, degrees")
+/* clang-format on */
+
+/* Values a CPU device (lavapipe) starts with for the settings the command line did not give:
+ * X(ID, value). */
+#define SRV_SETTINGS_CPU(X) X(WIDTH, 512) X(HEIGHT, 288) X(MAX_FPS, 15) X(RAYS, 64)
+
+/* ---- generated ------------------------------------------------------------------------------ */
+
+#define SRV_SETTING_CTYPE_UINT unsigned
+#define SRV_SETTING_CTYPE_FLOAT float
+#define SRV_SETTING_CTYPE_FLOAT3 float
+#define SRV_SETTING_CTYPE_UINT3 unsigned
+#define SRV_SETTING_CTYPE_ENUM unsigned
+#define SRV_SETTING_CTYPE_BOOL bool
+#define SRV_SETTING_DIM_UINT
+#define SRV_SETTING_DIM_FLOAT
+#define SRV_SETTING_DIM_FLOAT3 [3]
+#define SRV_SETTING_DIM_UINT3 [3]
+#define SRV_SETTING_DIM_ENUM
+#define SRV_SETTING_DIM_BOOL
+
+#define SRV_SETTING_MEMBER_(ID, field, TYPE, ...)                                                  \
+    SRV_SETTING_CTYPE_##TYPE field SRV_SETTING_DIM_##TYPE;
+typedef struct srv_settings {
+    SRV_SETTINGS(SRV_SETTING_MEMBER_)
+} srv_settings;
+
+#define SRV_SETTING_INDEX_(ID, ...) SRV_SETTING_INDEX_##ID,
+enum { SRV_SETTINGS(SRV_SETTING_INDEX_) SRV_SETTING_COUNT };
+
+#define SRV_SETTING_BIT_(ID, ...) SRV_SET_##ID = 1u << SRV_SETTING_INDEX_##ID,
+enum { SRV_SETTINGS(SRV_SETTING_BIT_) };
+
+/* The settings whose change restarts the probe field. */
+#define SRV_SET_GI_FIELDS                                                                          \
+    (SRV_SET_GI_MODE | SRV_SET_PROBE_COUNTS | SRV_SET_PROBE_SPACING | SRV_SET_RAYS |               \
+     SRV_SET_HYSTERESIS)
+/* The settings of the environment (a change relights everything). */
+#define SRV_SET_ENV_FIELDS                                                                         \
+    (SRV_SET_SKY | SRV_SET_SKY_MODE | SRV_SET_SKY_GROUND | SRV_SET_SKY_INTENSITY |                 \
+     SRV_SET_SKY_ROTATION)
+
+typedef struct srv_settings_patch {
+    unsigned has;   /* SRV_SET_* */
+    srv_settings v; /* the fields named in has */
+} srv_settings_patch;
+
+/* One row of the table as data. */
+typedef struct srv_setting_info {
+    unsigned bit;      /* SRV_SET_* */
+    const char *field; /* member of srv_settings */
+    size_t offset;     /* offsetof(srv_settings, field) */
+    srv_setting_type type;
+    const char *json;         /* API name */
+    const char *flag;         /* `probecast serve` flag, or NULL */
+    const char *arg;          /* the flag's value in the usage text */
+    double min, max, def;     /* per component */
+    int scope;                /* SRV_SCOPE_* */
+    const char *const *names; /* ENUM: names[value] */
+    unsigned name_count;
+    const char *desc;
+} srv_setting_info;
+
+/* Row i (0 <= i < SRV_SETTING_COUNT) of the table. */
+const srv_setting_info *srv_setting_at(unsigned i);
+/* The row of an API name, or NULL. */
+const srv_setting_info *srv_setting_by_json(const char *json);
+
+/* ---- values ----------------------------------------------------------------------------- */
+
+/* Every setting at its default. */
+void srv_settings_defaults(srv_settings *s);
+/* The SRV_SET_* bits of the settings of scope SRV_SCOPE_WORLD or SRV_SCOPE_VIEW. */
+unsigned srv_settings_scope_mask(int scope);
+/* Sets the SRV_SETTINGS_CPU values of the settings not in `given` (SRV_SET_* bits). */
+void srv_settings_adapt_to_cpu(srv_settings *s, unsigned given);
+/* The API name of a gi_mode value ("unknown" beyond them). */
+const char *srv_gi_mode_name(unsigned mode);
+
+/* Applies the fields p->has names to *s, all or nothing: each value must be in its range, and
+ * the result must hold together (width x height <= max_pixels, the irradiance and probes views
+ * need gi_mode classic or ddgi, at most 65535 probes). Else *s is untouched and e says why
+ * (400 invalid_field). */
+bool srv_state_settings_apply(srv_settings *s, const srv_settings_patch *p,
+                              struct srv_api_error *e);
+/* The renderer's GI settings for s (every value passed as set: hysteresis 0 stays 0). */
+void srv_settings_to_gi(const srv_settings *s, rd_ddgi_settings *gi);
+
+/* ---- JSON (protocol/openapi.yaml, Settings) --------------------------------------------- */
+
+/* A settings patch from a JSON object: every member must be a known setting, given once, of
+ * its type and in its range; else false with a 400 srv_api_error naming the member. */
+bool srv_json_settings_patch(const cJSON *obj, srv_settings_patch *out, struct srv_api_error *e);
+/* All settings as a new JSON object (the caller owns it). */
+cJSON *srv_json_settings(const srv_settings *s);
+
+/* ---- command line ------------------------------------------------------------------------ */
+
+/* When argv[*i] is a setting's flag, reads its value (argv[*i + 1], advancing *i) into *s and
+ * adds the setting's bit to *given: returns 1. Returns 0 when argv[*i] is no setting flag, and
+ * -1 after printing one message to stderr (prefixed with cmd, e.g. "probecast serve") when
+ * the value is missing or not valid. */
+int srv_settings_parse_flag(const char *cmd, int argc, char **argv, int *i, srv_settings *s,
+                            unsigned *given);
+/* Prints the usage lines of the setting flags, with their defaults (and CPU defaults). */
+void srv_settings_print_usage(FILE *f);
+
+#endif

@@ -1,0 +1,539 @@
+/* probecast eval: speed against error. For each scene of the hard-case suite, a converged
+ * path-traced reference is rendered once (cached by a hash of the scene and settings); then
+ * DDGI settings (probe density, rays per probe, updates), classic probes and direct light are
+ * swept, timing one steady-state frame with GPU timestamps and measuring the error against
+ * the reference. Writes CSV, JSON and an SVG chart, and prints a table. */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "server/cli/cli.h"
+#include "server/cli/eval_report.h"
+#include "renderer/builtin/hard_cases.h"
+#include "server/cli/image_io.h"
+#include "renderer/builtin/procedural.h"
+#include "renderer/render.h"
+#include "server/cli/eval_internal.h"
+
+static void eval_usage(FILE *f)
+{
+    fprintf(
+        f, "usage: probecast eval [OPTIONS]\n"
+           "\n"
+           "Renders each scene of the hard-case suite with a path-traced reference and a sweep of\n"
+           "GI settings, and reports GPU time per frame against the error.\n"
+           "\n"
+           "Options:\n"
+           "  --cases A,B,...        scenes of the suite (default: all; --list shows them)\n"
+           "  --width W, --height H  image size (default 320 x 180)\n"
+           "  --ref-spp N            reference samples per pixel (default 1024)\n"
+           "  --rays A,B,...         rays per probe to sweep (default 64,128,256)\n"
+           "  --updates A,B,...      probe updates before the image (default 8,32)\n"
+           "  --density A,B,...      probe density factors over the fitted grid (default 0.5,1,2)\n"
+           "  --hysteresis A,B,...   probe hysteresis values (default 0.85,0.97)\n"
+           "  --probes X,Y,Z[;...]   explicit probe grids instead of densities\n"
+           "  --no-noise-floor       skip the second reference (seed 2) that measures its noise\n"
+           "  --timing-frames N      steady-state frames timed per setting, after two warm-up\n"
+           "                         frames; the median is reported (default 7)\n"
+           "  --out DIR              where eval.csv, eval.json, eval.svg go (default eval-out)\n"
+           "  --cache DIR            reference cache (default DIR-of-out/cache)\n"
+           "  --device INDEX|NAME    Vulkan device\n"
+           "  --list                 list the suite with each case's expectation\n"
+           "  --dynamic              instead of the suite: a light and an object move in a\n"
+           "                         converged field; reports updates, GPU ms and error at\n"
+           "                         fixed update counts after the change (eval-dynamic.csv)\n"
+           "  --replot DIR           redraw DIR/eval.svg and the table from DIR/eval.csv\n");
+}
+
+static bool parse_uint_list(const char *opt, const char *s, unsigned *out, unsigned *n)
+{
+    *n = 0;
+    char buf[256];
+    snprintf(buf, sizeof buf, "%s", s);
+    for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
+        if (*n == 8 || !srv_arg_uint(opt, tok, 1, 100000, &out[*n])) return false;
+        (*n)++;
+    }
+    return *n > 0;
+}
+
+static int parse(int argc, char **argv, eval_args *a)
+{
+    memset(a, 0, sizeof *a);
+    a->width = 320, a->height = 180, a->ref_spp = 1024, a->timing_frames = 7;
+    a->hysteresis[0] = 0.85f, a->hysteresis[1] = 0.97f, a->nhysteresis = 2;
+    a->rays[0] = 64, a->rays[1] = 128, a->rays[2] = 256, a->nrays = 3;
+    a->updates[0] = 8, a->updates[1] = 32, a->nupdates = 2;
+    a->density[0] = 0.5f, a->density[1] = 1, a->density[2] = 2, a->ndensity = 3;
+    a->out_dir = "eval-out";
+    a->noise_floor = true;
+    for (int i = 1; i < argc; i++) {
+        const char *o = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        bool takes = strcmp(o, "--help") && strcmp(o, "-h") && strcmp(o, "--list") &&
+                     strcmp(o, "--no-noise-floor") && strcmp(o, "--dynamic");
+        if (takes && !v) {
+            fprintf(stderr, "probecast eval: %s needs a value\n", o);
+            return 2;
+        }
+        if (strcmp(o, "--help") == 0 || strcmp(o, "-h") == 0) {
+            eval_usage(stdout);
+            return 0;
+        } else if (strcmp(o, "--list") == 0) {
+            a->list = true;
+        } else if (strcmp(o, "--dynamic") == 0) {
+            a->dynamic = true;
+        } else if (strcmp(o, "--no-noise-floor") == 0) {
+            a->noise_floor = false;
+        } else if (strcmp(o, "--cases") == 0) {
+            a->cases = v, i++;
+        } else if (strcmp(o, "--replot") == 0) {
+            a->replot = v, i++;
+        } else if (strcmp(o, "--out") == 0) {
+            a->out_dir = v, i++;
+        } else if (strcmp(o, "--cache") == 0) {
+            a->cache_dir = v, i++;
+        } else if (strcmp(o, "--device") == 0) {
+            a->device = v, i++;
+        } else if (strcmp(o, "--width") == 0) {
+            if (!srv_arg_uint(o, v, 8, 8192, &a->width)) return 2;
+            i++;
+        } else if (strcmp(o, "--height") == 0) {
+            if (!srv_arg_uint(o, v, 8, 8192, &a->height)) return 2;
+            i++;
+        } else if (strcmp(o, "--ref-spp") == 0) {
+            if (!srv_arg_uint(o, v, 1, 1u << 20, &a->ref_spp)) return 2;
+            i++;
+        } else if (strcmp(o, "--timing-frames") == 0) {
+            if (!srv_arg_uint(o, v, 1, 100, &a->timing_frames)) return 2;
+            i++;
+        } else if (strcmp(o, "--rays") == 0) {
+            if (!parse_uint_list(o, v, a->rays, &a->nrays)) return 2;
+            i++;
+        } else if (strcmp(o, "--updates") == 0) {
+            if (!parse_uint_list(o, v, a->updates, &a->nupdates)) return 2;
+            i++;
+        } else if (strcmp(o, "--density") == 0) {
+            a->ndensity = 0;
+            char buf[256];
+            snprintf(buf, sizeof buf, "%s", v);
+            for (char *t = strtok(buf, ","); t; t = strtok(NULL, ",")) {
+                if (a->ndensity == 8 || !srv_arg_float(o, t, &a->density[a->ndensity]) ||
+                    !(a->density[a->ndensity] > 0)) {
+                    fprintf(stderr, "probecast eval: --density expects positive factors\n");
+                    return 2;
+                }
+                a->ndensity++;
+            }
+            i++;
+        } else if (strcmp(o, "--hysteresis") == 0) {
+            a->nhysteresis = 0;
+            char buf[256];
+            snprintf(buf, sizeof buf, "%s", v);
+            for (char *t = strtok(buf, ","); t; t = strtok(NULL, ",")) {
+                float h;
+                if (a->nhysteresis == 8 || !srv_arg_float(o, t, &h) || !(h > 0 && h < 1)) {
+                    fprintf(stderr, "probecast eval: --hysteresis expects values in (0, 1)\n");
+                    return 2;
+                }
+                a->hysteresis[a->nhysteresis++] = h;
+            }
+            i++;
+        } else if (strcmp(o, "--probes") == 0) {
+            char buf[256];
+            snprintf(buf, sizeof buf, "%s", v);
+            a->nprobes = 0;
+            for (char *t = strtok(buf, ";"); t; t = strtok(NULL, ";")) {
+                float c[3];
+                if (a->nprobes == 8 || !srv_arg_floats(o, t, c, 3)) return 2;
+                for (int k = 0; k < 3; k++) {
+                    if (c[k] < 1 || c[k] > 256) {
+                        fprintf(stderr, "probecast eval: probe counts must be in 1..256\n");
+                        return 2;
+                    }
+                    a->probes[a->nprobes][k] = (unsigned)c[k];
+                }
+                a->nprobes++;
+            }
+            i++;
+        } else {
+            fprintf(stderr, "probecast eval: unknown option '%s' (see --help)\n", o);
+            return 2;
+        }
+    }
+    return -1;
+}
+
+/* FNV-1a over the bytes that decide a reference image. */
+static uint64_t fnv(uint64_t h, const void *data, size_t n)
+{
+    const unsigned char *p = data;
+    for (size_t i = 0; i < n; i++)
+        h = (h ^ p[i]) * 0x100000001b3ull;
+    return h;
+}
+
+static uint64_t scene_hash(const rd_scene *s, const eval_args *a, unsigned seed)
+{
+    uint64_t h = 0xcbf29ce484222325ull;
+    for (uint32_t m = 0; m < s->mesh_count; m++) {
+        h = fnv(h, s->meshes[m].positions, sizeof(float) * 9 * s->meshes[m].tri_count);
+        h = fnv(h, s->meshes[m].material, sizeof(uint32_t) * s->meshes[m].tri_count);
+    }
+    for (uint32_t i = 0; i < s->node_count; i++)
+        h = fnv(h, s->nodes[i].world, sizeof(float) * 16);
+    for (uint32_t i = 0; i < s->material_count; i++) {
+        const rd_material *m = &s->materials[i];
+        h = fnv(h, m->base_color, sizeof m->base_color);
+        h = fnv(h, m->emission, sizeof m->emission);
+        const float f[5] = {m->metallic, m->roughness, m->specular, m->normal_scale,
+                            m->occlusion_strength};
+        const int32_t t[7] = {m->base_color_texture, m->emissive_texture,
+                              m->metallic_roughness_texture, m->normal_texture,
+                              m->occlusion_texture, (int32_t)m->alpha_mode, m->double_sided};
+        h = fnv(h, f, sizeof f);
+        h = fnv(h, t, sizeof t);
+        h = fnv(h, &m->alpha_cutoff, sizeof m->alpha_cutoff);
+    }
+    for (uint32_t i = 0; i < s->texture_count; i++)
+        h = fnv(h, s->textures[i].rgba, (size_t)s->textures[i].width * s->textures[i].height * 4);
+    for (uint32_t i = 0; i < s->light_count; i++) {
+        const rd_light *l = &s->lights[i];
+        h = fnv(h, l->position, sizeof l->position);
+        h = fnv(h, l->direction, sizeof l->direction);
+        h = fnv(h, l->color, sizeof l->color);
+        h = fnv(h, &l->intensity, sizeof l->intensity);
+        h = fnv(h, &l->type, sizeof l->type);
+    }
+    unsigned key[4] = {a->width, a->height, a->ref_spp, seed};
+    h = fnv(h, key, sizeof key);
+    return fnv(h, PROBECAST_VERSION, strlen(PROBECAST_VERSION));
+}
+
+static void progress(unsigned done, unsigned total, const char *what)
+{
+    if (!isatty(2)) return;
+    int width = 30, fill = total ? (int)(width * done / total) : width;
+    fprintf(stderr, "\r[%.*s%*s] %3u/%u %-40.40s", fill, "##############################",
+            width - fill, "", done, total, what);
+    if (done == total) fputc('\n', stderr);
+    fflush(stderr);
+}
+
+float *eval_reference(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene *gs,
+                      const rd_view_camera *cam, unsigned seed, double *ms)
+{
+    const eval_args *a = c->a;
+    char path[1024];
+    snprintf(path, sizeof path, "%s/%s-%016llx.pfm", a->cache_dir, name,
+             (unsigned long long)scene_hash(s, a, seed));
+    float *rgb = NULL;
+    unsigned w, h;
+    *ms = 0;
+    if (rd_image_read_pfm(path, &rgb, &w, &h, c->err, sizeof c->err) == RD_IMAGE_OK &&
+        w == a->width && h == a->height)
+        return rgb;
+    free(rgb);
+    rd_frame_settings fs = {
+        .width = a->width, .height = a->height, .pathtrace_spp = a->ref_spp, .seed = seed};
+    rd_ddgi_settings off = {0};
+    if (rd_renderer_configure_gi(&c->r, s->bounds_min, s->bounds_max, &off, c->err,
+                                 sizeof c->err) != RD_VK_OK ||
+        rd_renderer_render(&c->r, gs, cam, &fs, c->err, sizeof c->err) != RD_VK_OK)
+        return NULL;
+    *ms = rd_frame_stats_total_ms(&c->r.stats);
+    rgb = malloc(sizeof(float) * 3 * a->width * a->height);
+    if (!rgb) abort();
+    if (rd_renderer_read_hdr(&c->r, rgb, c->err, sizeof c->err) != RD_VK_OK) {
+        free(rgb);
+        return NULL;
+    }
+    if (rd_image_write_pfm(path, rgb, a->width, a->height, c->err, sizeof c->err) != RD_IMAGE_OK)
+        fprintf(stderr, "probecast eval: warning: cannot cache the reference: %s\n", c->err);
+    return rgb;
+}
+
+/* One GI setting: converge for `updates` (the moving case moves half way through), measure
+ * the error, then time steady-state frames of one update each. */
+static bool run_setting(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene *gs,
+                        const rd_view_camera *cam, const rd_ddgi_settings *gi, unsigned updates,
+                        const float *ref, eval_row *row)
+{
+    const eval_args *a = c->a;
+    bool moving = rd_hard_case_pose(name, s, 0);
+    if (moving && rd_gpu_scene_update_instances(&c->vk, gs, s, c->err, sizeof c->err) != RD_VK_OK)
+        return false;
+    if (rd_renderer_configure_gi(&c->r, s->bounds_min, s->bounds_max, gi, c->err, sizeof c->err) !=
+        RD_VK_OK)
+        return false;
+    rd_frame_settings fs = {.width = a->width, .height = a->height, .seed = gi->seed};
+    if (moving) {
+        fs.gi_updates = updates / 2 ? updates / 2 : 1;
+        if (rd_renderer_render(&c->r, gs, cam, &fs, c->err, sizeof c->err) != RD_VK_OK)
+            return false;
+        rd_hard_case_pose(name, s, 4);
+        if (rd_gpu_scene_update_instances(&c->vk, gs, s, c->err, sizeof c->err) != RD_VK_OK)
+            return false;
+        fs.gi_updates = updates - fs.gi_updates ? updates - fs.gi_updates : 1;
+    } else {
+        fs.gi_updates = updates;
+    }
+    if (rd_renderer_render(&c->r, gs, cam, &fs, c->err, sizeof c->err) != RD_VK_OK) return false;
+    size_t px = (size_t)a->width * a->height;
+    float *img = malloc(px * 12);
+    if (!img) abort();
+    if (rd_renderer_read_hdr(&c->r, img, c->err, sizeof c->err) != RD_VK_OK) {
+        free(img);
+        return false;
+    }
+    rd_image_compare(img, ref, px, &row->err);
+    free(img);
+    /* GPU clocks ramp up under load: two warm-up frames, then the median frame */
+    fs.gi_updates = 1;
+    double times[100];
+    for (unsigned f = 0; f < a->timing_frames + 2; f++) {
+        if (rd_renderer_render(&c->r, gs, cam, &fs, c->err, sizeof c->err) != RD_VK_OK)
+            return false;
+        if (f >= 2) times[f - 2] = rd_frame_stats_total_ms(&c->r.stats);
+    }
+    for (unsigned i = 1; i < a->timing_frames; i++) /* insertion sort: a handful of values */
+        for (unsigned j = i; j > 0 && times[j] < times[j - 1]; j--) {
+            double t = times[j];
+            times[j] = times[j - 1], times[j - 1] = t;
+        }
+    row->gpu_ms = times[a->timing_frames / 2];
+    if (gi->mode != PC_GI_OFF) {
+        row->probes[0] = c->r.world.ddgi.vol.counts.x;
+        row->probes[1] = c->r.world.ddgi.vol.counts.y;
+        row->probes[2] = c->r.world.ddgi.vol.counts.z;
+        row->rays = c->r.world.ddgi.vol.counts.w;
+    }
+    row->updates = gi->mode != PC_GI_OFF ? updates : 0;
+    return true;
+}
+
+static bool case_selected(const char *list, const char *name)
+{
+    if (!list) return true;
+    size_t n = strlen(name);
+    for (const char *p = list; (p = strstr(p, name)) != NULL; p += n)
+        if ((p == list || p[-1] == ',') && (p[n] == '\0' || p[n] == ',')) return true;
+    return false;
+}
+
+int cli_eval(int argc, char **argv)
+{
+    eval_args a;
+    int status = parse(argc, argv, &a);
+    if (status >= 0) return status;
+    unsigned ncases;
+    const rd_hard_case *cases = rd_hard_cases(&ncases);
+    if (a.replot) {
+        char path[1024];
+        eval_row *rows = NULL;
+        unsigned n = 0;
+        snprintf(path, sizeof path, "%s/eval.csv", a.replot);
+        if (!eval_read_csv(path, &rows, &n)) {
+            fprintf(stderr, "probecast eval: cannot read '%s'\n", path);
+            return 1;
+        }
+        eval_print_table(stdout, rows, n);
+        snprintf(path, sizeof path, "%s/eval.svg", a.replot);
+        char device[128] = "unknown device";
+        snprintf(path, sizeof path, "%s/eval.json", a.replot);
+        FILE *jf = fopen(path, "r");
+        char head[512] = "";
+        if (jf) {
+            size_t got = fread(head, 1, sizeof head - 1, jf);
+            head[got] = '\0';
+            fclose(jf);
+            const char *d = strstr(head, "\"device\": \"");
+            if (d) sscanf(d + 11, "%127[^\"]", device);
+        }
+        snprintf(path, sizeof path, "%s/eval.svg", a.replot);
+        bool ok = eval_write_svg(path, rows, n, device);
+        free(rows);
+        return ok ? 0 : 1;
+    }
+    if (a.list) {
+        for (unsigned i = 0; i < ncases; i++)
+            printf("%-14s %s\n", cases[i].name, cases[i].expect);
+        return 0;
+    }
+    char cache[1024];
+    if (!a.cache_dir) {
+        snprintf(cache, sizeof cache, "%s/cache", a.out_dir);
+        a.cache_dir = cache;
+    }
+    if ((mkdir(a.out_dir, 0755) != 0 && errno != EEXIST) ||
+        (mkdir(a.cache_dir, 0755) != 0 && errno != EEXIST)) {
+        fprintf(stderr, "probecast eval: cannot create '%s': %s\n", a.out_dir, strerror(errno));
+        return 1;
+    }
+    for (const char *p = a.cases; p && *p;) { /* every named case must exist */
+        size_t len = strcspn(p, ",");
+        bool found = false;
+        for (unsigned i = 0; i < ncases; i++)
+            if (strlen(cases[i].name) == len && strncmp(cases[i].name, p, len) == 0) found = true;
+        if (!found) {
+            fprintf(stderr, "probecast eval: unknown case '%.*s' (see --list)\n", (int)len, p);
+            return 2;
+        }
+        p += len + (p[len] == ',');
+    }
+
+    eval_ctx c = {.a = &a};
+    rd_vk_options vo = {.device = a.device};
+    if (rd_vk_create(&c.vk, &vo, c.err, sizeof c.err) != RD_VK_OK) {
+        fprintf(stderr, "probecast: %s\n", c.err);
+        return 1;
+    }
+    if (rd_renderer_create(&c.vk, &c.r, c.err, sizeof c.err) != RD_VK_OK) {
+        fprintf(stderr, "probecast: %s\n", c.err);
+        rd_vk_destroy(&c.vk);
+        return 1;
+    }
+    if (a.dynamic) {
+        int drc = eval_dynamic_run(&c);
+        rd_renderer_destroy(&c.r);
+        unsigned validation = rd_vk_validation_messages(&c.vk);
+        rd_vk_destroy(&c.vk);
+        if (drc == 0 && validation) {
+            fprintf(stderr, "probecast eval: %u Vulkan validation message(s)\n", validation);
+            drc = 1;
+        }
+        return drc;
+    }
+    unsigned ngrids = a.nprobes ? a.nprobes : a.ndensity;
+    unsigned sweep = ngrids * a.nrays * a.nupdates * a.nhysteresis;
+    unsigned per_case = 2 + sweep + (a.noise_floor ? 1 : 0) + 1;
+    unsigned selected = 0;
+    for (unsigned i = 0; i < ncases; i++)
+        selected += case_selected(a.cases, cases[i].name);
+    unsigned total = selected * per_case, done = 0, nrows = 0;
+    eval_row *rows = calloc((size_t)selected * per_case, sizeof *rows);
+    if (!rows) abort();
+    int rc = 0;
+    for (unsigned ci = 0; ci < ncases && rc == 0; ci++) {
+        const char *name = cases[ci].name;
+        if (!case_selected(a.cases, name)) continue;
+        rd_scene s;
+        rd_gpu_scene gs;
+        rd_view_camera cam;
+        if (!rd_hard_case_build(name, &s, c.err, sizeof c.err) ||
+            !rd_camera_for_scene(&s, -1, &cam, c.err, sizeof c.err)) {
+            fprintf(stderr, "probecast eval: %s: %s\n", name, c.err);
+            rc = 1;
+            break;
+        }
+        if (rd_gpu_scene_create(&c.vk, &gs, &s, c.err, sizeof c.err) != RD_VK_OK) {
+            fprintf(stderr, "probecast eval: %s: %s\n", name, c.err);
+            rd_scene_destroy(&s);
+            rc = 1;
+            break;
+        }
+        rd_hard_case_pose(name, &s, 4); /* the reference shows the final pose */
+        if (rd_gpu_scene_update_instances(&c.vk, &gs, &s, c.err, sizeof c.err) != RD_VK_OK) rc = 1;
+        progress(done, total, name);
+        double ref_ms = 0, noise_ms = 0, noise = 0;
+        float *ref = rc ? NULL : eval_reference(&c, name, &s, &gs, &cam, 1, &ref_ms);
+        progress(++done, total, name);
+        if (ref && a.noise_floor) {
+            float *ref2 = eval_reference(&c, name, &s, &gs, &cam, 2, &noise_ms);
+            if (ref2) {
+                rd_image_error e;
+                rd_image_compare(ref2, ref, (size_t)a.width * a.height, &e);
+                noise = e.rel_mse;
+                free(ref2);
+            }
+            progress(++done, total, name);
+        }
+        if (!ref) {
+            fprintf(stderr, "probecast eval: %s: reference failed: %s\n", name, c.err);
+            rc = 1;
+        }
+        /* the fitted grid, for density factors */
+        rd_ddgi_settings fit = {.mode = PC_GI_DDGI};
+        unsigned fitted[3] = {1, 1, 1};
+        if (rc == 0 && rd_renderer_configure_gi(&c.r, s.bounds_min, s.bounds_max, &fit, c.err,
+                                                sizeof c.err) == RD_VK_OK) {
+            fitted[0] = c.r.world.ddgi.vol.counts.x, fitted[1] = c.r.world.ddgi.vol.counts.y,
+            fitted[2] = c.r.world.ddgi.vol.counts.z;
+        }
+        for (unsigned k = 0; rc == 0 && k < 2 + sweep; k++) {
+            eval_row *row = &rows[nrows];
+            memset(row, 0, sizeof *row);
+            snprintf(row->scene, sizeof row->scene, "%s", name);
+            snprintf(row->expect, sizeof row->expect, "%s", cases[ci].expect);
+            rd_ddgi_settings gi = {.seed = 1};
+            unsigned updates = a.updates[a.nupdates - 1];
+            if (k == 0) {
+                snprintf(row->mode, sizeof row->mode, "direct");
+                snprintf(row->config, sizeof row->config, "direct light only");
+            } else if (k == 1) {
+                gi.mode = PC_GI_CLASSIC;
+                gi.rays = a.rays[a.nrays - 1];
+                snprintf(row->mode, sizeof row->mode, "classic");
+            } else {
+                unsigned j = k - 2, g = j / (a.nrays * a.nupdates * a.nhysteresis);
+                gi.mode = PC_GI_DDGI;
+                gi.rays = a.rays[(j / (a.nupdates * a.nhysteresis)) % a.nrays];
+                updates = a.updates[(j / a.nhysteresis) % a.nupdates];
+                gi.hysteresis = a.hysteresis[j % a.nhysteresis];
+                for (int ax = 0; ax < 3; ax++) {
+                    double n =
+                        a.nprobes ? a.probes[g][ax] : fmax(1.0, round(fitted[ax] * a.density[g]));
+                    gi.counts[ax] = (unsigned)fmin(n, 256.0);
+                }
+                snprintf(row->mode, sizeof row->mode, "ddgi");
+            }
+            if (!run_setting(&c, name, &s, &gs, &cam, &gi, updates, ref, row)) {
+                fprintf(stderr, "\nprobecast eval: %s: %s\n", name, c.err);
+                rc = 1;
+                break;
+            }
+            row->hysteresis = gi.hysteresis > 0 ? gi.hysteresis : 0.97f;
+            if (k >= 1)
+                snprintf(row->config, sizeof row->config, "%s %ux%ux%u r%u u%u h%.2f", row->mode,
+                         row->probes[0], row->probes[1], row->probes[2], row->rays, row->updates,
+                         row->hysteresis);
+            row->ref_ms = ref_ms;
+            row->noise_rel_mse = noise;
+            nrows++;
+            progress(++done, total, row->config);
+        }
+        free(ref);
+        rd_gpu_scene_destroy(&c.vk, &gs);
+        rd_scene_destroy(&s);
+    }
+    if (rc == 0) {
+        char path[1024];
+        eval_mark_pareto(rows, nrows);
+        eval_print_table(stdout, rows, nrows);
+        snprintf(path, sizeof path, "%s/eval.csv", a.out_dir);
+        bool ok = eval_write_csv(path, rows, nrows);
+        snprintf(path, sizeof path, "%s/eval.json", a.out_dir);
+        ok = ok &&
+             eval_write_json(path, rows, nrows, c.vk.device_name, a.width, a.height, a.ref_spp);
+        snprintf(path, sizeof path, "%s/eval.svg", a.out_dir);
+        ok = ok && eval_write_svg(path, rows, nrows, c.vk.device_name);
+        if (!ok) {
+            fprintf(stderr, "probecast eval: cannot write results to '%s'\n", a.out_dir);
+            rc = 1;
+        } else {
+            printf("wrote %s/eval.csv, eval.json, eval.svg (%s)\n", a.out_dir, c.vk.device_name);
+        }
+    }
+    free(rows);
+    rd_renderer_destroy(&c.r);
+    unsigned validation = rd_vk_validation_messages(&c.vk);
+    rd_vk_destroy(&c.vk);
+    if (rc == 0 && validation) {
+        fprintf(stderr, "probecast eval: %u Vulkan validation message(s)\n", validation);
+        rc = 1;
+    }
+    return rc;
+}
