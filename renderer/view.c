@@ -7,7 +7,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "shaders/brdf_albedo.spv.h"
 #include "shaders/ddgi_sample.spv.h"
 #include "shaders/pathtrace.spv.h"
 #include "shaders/primary.spv.h"
@@ -18,28 +17,6 @@
 
 #define DEFAULT_WIDTH 960
 #define DEFAULT_HEIGHT 540
-
-/* Fills p->brdf_albedo with brdf_albedo.comp (blocking; a one-off pipeline). */
-static rd_vk_result compute_brdf_albedo(rd_vk *vk, rd_view_passes *p, char *err, size_t errlen)
-{
-    const uint32_t entries = PC_BRDF_ALBEDO_SIDE * PC_BRDF_ALBEDO_SIDE;
-    rd_pipeline gen = {0};
-    rd_vk_result res = rd_buffer_create(vk, &p->brdf_albedo, entries * 2 * sizeof(float),
-                                        RD_MEMORY_DEVICE, err, errlen);
-    if (res == RD_VK_OK)
-        res = rd_pipeline_create(vk, &gen, "brdf albedo", pc_spv_brdf_albedo,
-                                 sizeof pc_spv_brdf_albedo, sizeof(pc_push), err, errlen);
-    rd_cmd cmd;
-    if (res == RD_VK_OK) res = rd_cmd_begin(vk, &cmd, err, errlen);
-    if (res == RD_VK_OK) {
-        pc_push push = {.buf0 = p->brdf_albedo.address};
-        rd_cmd_dispatch(&cmd, &gen, &push, (entries + PC_WG_1D - 1) / PC_WG_1D, 1, 1);
-        rd_cmd_barrier(&cmd);
-        res = rd_cmd_submit_wait(vk, &cmd, err, errlen);
-    }
-    rd_pipeline_destroy(vk, &gen);
-    return res;
-}
 
 rd_vk_result rd_view_passes_create(rd_vk *vk, rd_view_passes *p, char *err, size_t errlen)
 {
@@ -64,14 +41,12 @@ rd_vk_result rd_view_passes_create(rd_vk *vk, rd_view_passes *p, char *err, size
     if (res == RD_VK_OK)
         res = rd_pipeline_create(vk, &p->reflect_filter, "reflect filter", pc_spv_reflect_filter,
                                  sizeof pc_spv_reflect_filter, sizeof(pc_push), err, errlen);
-    if (res == RD_VK_OK) res = compute_brdf_albedo(vk, p, err, errlen);
     if (res != RD_VK_OK) rd_view_passes_destroy(vk, p);
     return res;
 }
 
 void rd_view_passes_destroy(rd_vk *vk, rd_view_passes *p)
 {
-    rd_buffer_destroy(vk, &p->brdf_albedo);
     rd_pipeline_destroy(vk, &p->reflect_filter);
     rd_pipeline_destroy(vk, &p->reflect);
     rd_pipeline_destroy(vk, &p->pathtrace);
@@ -229,7 +204,6 @@ static rd_vk_result prepare(rd_view *v, const rd_world *w, const rd_view_camera 
     rd_world_fill_camera(w, camera, width, height, &g);
     g.view.size = (pc_uvec4){width, height, v->frame_index, s->seed};
     g.view.tonemap = (pc_vec4){exp2f(s->exposure_ev), (float)s->tonemap, (float)s->view, 0};
-    g.brdf_albedo = v->passes->brdf_albedo.address;
     memcpy(v->globals.mapped, &g, sizeof g);
     memset(v->counters.mapped, 0, sizeof(pc_counters));
     if (out) *out = g;

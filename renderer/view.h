@@ -29,12 +29,9 @@ typedef struct rd_view_settings { /* per frame */
     unsigned reflections;         /* PC_REFLECT_* (0 = auto): indirect specular with GI on */
 } rd_view_settings;
 
-/* The pipelines of a view's frame and the data they share; created once per device, shared by
- * all views. brdf_albedo: the specular albedo table (shaders/brdf_albedo.comp), computed by
- * rd_view_passes_create. */
+/* The pipelines of a view's frame; created once per device, shared by all views. */
 typedef struct rd_view_passes {
     rd_pipeline primary, shade, tonemap, gi_sample, pathtrace, reflect, reflect_filter;
-    rd_buffer brdf_albedo;
 } rd_view_passes;
 
 rd_vk_result rd_view_passes_create(rd_vk *vk, rd_view_passes *p, char *err, size_t errlen);

@@ -6,6 +6,30 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "shaders/brdf_albedo.spv.h"
+
+/* Fills *table with brdf_albedo.comp (blocking; a one-off pipeline). */
+static rd_vk_result compute_brdf_albedo(rd_vk *vk, rd_buffer *table, char *err, size_t errlen)
+{
+    const uint32_t entries = PC_BRDF_ALBEDO_SIDE * PC_BRDF_ALBEDO_SIDE;
+    rd_pipeline gen = {0};
+    rd_vk_result res = rd_buffer_create(vk, table, entries * 2 * sizeof(float),
+                                        RD_MEMORY_DEVICE, err, errlen);
+    if (res == RD_VK_OK)
+        res = rd_pipeline_create(vk, &gen, "brdf albedo", pc_spv_brdf_albedo,
+                                 sizeof pc_spv_brdf_albedo, sizeof(pc_push), err, errlen);
+    rd_cmd cmd;
+    if (res == RD_VK_OK) res = rd_cmd_begin(vk, &cmd, err, errlen);
+    if (res == RD_VK_OK) {
+        pc_push push = {.buf0 = table->address};
+        rd_cmd_dispatch(&cmd, &gen, &push, (entries + PC_WG_1D - 1) / PC_WG_1D, 1, 1);
+        rd_cmd_barrier(&cmd);
+        res = rd_cmd_submit_wait(vk, &cmd, err, errlen);
+    }
+    rd_pipeline_destroy(vk, &gen);
+    return res;
+}
+
 rd_vk_result rd_world_create(rd_vk *vk, rd_world *w, char *err, size_t errlen)
 {
     memset(w, 0, sizeof *w);
@@ -16,6 +40,7 @@ rd_vk_result rd_world_create(rd_vk *vk, rd_world *w, char *err, size_t errlen)
         res = rd_buffer_create(vk, &w->counters, sizeof(pc_counters), RD_MEMORY_READBACK, err,
                                errlen);
     if (res == RD_VK_OK) res = rd_timer_create(vk, &w->timer, err, errlen);
+    if (res == RD_VK_OK) res = compute_brdf_albedo(vk, &w->brdf_albedo, err, errlen);
     rd_shadow_maps_init(vk, &w->shadow_maps);
     if (res != RD_VK_OK) rd_world_destroy(w);
     const float black[3] = {0, 0, 0};
@@ -30,6 +55,7 @@ void rd_world_destroy(rd_world *w)
     w->gi = false;
     rd_shadow_maps_destroy(&w->shadow_maps);
     rd_timer_destroy(w->vk, &w->timer);
+    rd_buffer_destroy(w->vk, &w->brdf_albedo);
     rd_buffer_destroy(w->vk, &w->counters);
     rd_buffer_destroy(w->vk, &w->globals);
     rd_buffer_destroy(w->vk, &w->env_texels);
@@ -146,6 +172,7 @@ void rd_world_fill_globals(const rd_world *w, pc_globals *g)
     }
     rd_env_fill_gpu(&w->env, w->env_sh, &g->env);
     if (g->env.mode == PC_ENV_IMAGE) g->env.image = w->env_texels.address;
+    g->brdf_albedo = w->brdf_albedo.address;
 }
 
 void rd_world_fill_camera(const rd_world *w, const rd_view_camera *camera, unsigned width,

@@ -32,6 +32,9 @@ typedef struct rd_world {
     rd_shadow_maps shadow_maps;  /* the lights' distance maps its updates shade hits with */
     bool gi;                     /* a GI mode other than off is configured */
     rd_buffer globals, counters; /* for probe updates */
+    /* the specular albedo table (shaders/brdf_albedo.comp, computed once at creation) that
+     * camera pixels, probe-ray hits and reflection hits reflect with (brdf_hit_albedo) */
+    rd_buffer brdf_albedo;
     rd_timer timer;
     uint64_t updates_total; /* probe updates run since creation (never reset; for stats) */
     /* in-place changes of what the world looks like (wake events: nodes or lights changed;

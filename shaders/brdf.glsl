@@ -18,6 +18,25 @@
  * PC_BRDF_MIN_ROUGHNESS (a perfect mirror would make D a delta no punctual light can hit), and
  * the dielectric Fresnel weight is scaled by `specular` (1 for glTF; 0 makes a pure
  * Lambertian, which procedural scenes and the analytic tests use).
+ *
+ * One energy budget for every shading path. Radiance leaving a surface toward v is
+ *   L(v) = Le + sum over lights f(v, l) E_light(l) + integral of f(v, l) L_i(l) (N.L) dl.
+ * The direct term is always evaluated with the full f (brdf_eval), at camera pixels, probe-ray
+ * hits and reflection hits alike. Appendix B's f = f_d + f_s splits into a diffuse part
+ *   f_d = (1 - metallic) (1 - s F(V.H)) baseColor / pi
+ * and a specular part f_s = F D Vis (F: the dielectric's s (0.04 + 0.96 w), the metal's
+ * baseColor + (1 - baseColor) w, mixed by metallic; w = (1 - V.H)^5). The indirect integral is
+ * carried in two parts and each part once:
+ *   diffuse:  A_d(N.V) E(P, N) / pi, with A_d = brdf_diffuse_albedo_indirect (the directional
+ *             albedo of f_d) and E the probe field's irradiance (DDGI);
+ *   specular: camera pixels: reflect.comp (one GGX-sampled ray, unbiased) below
+ *             PC_REFLECT_MAX_ROUGHNESS, else A_s(N.V) E(P, d) / pi (ddgi_sample.comp, d the
+ *             lobe's dominant direction); probe-ray and reflection hits (secondary vertices):
+ *             A_s(N.V) E(P, N) / pi, with A_s = brdf_specular_albedo, the directional albedo
+ *             of f_s (single scattering, integrated by brdf_albedo.comp).
+ * So a secondary hit reflects (A_d + A_s)(N.V) = brdf_hit_albedo of uniform light, exactly the
+ * albedo the path tracer's f has at that view (at roughness 1, F0 0.04: A_s 0.012-0.021 and
+ * A_d = 0.955-0.960 baseColor over N.V 1..0.5), and no Fresnel average is folded in twice.
  */
 #ifndef PC_BRDF_GLSL
 #define PC_BRDF_GLSL
@@ -96,14 +115,13 @@ vec3 brdf_eval(pc_brdf b, vec3 n, vec3 v, vec3 l)
     return mix(dielectric, metal, b.metallic);
 }
 
-/* The Lambertian stand-in for the whole BRDF at DDGI probe-ray hits (paper Sec. 4.1 shades
- * probe hits as diffuse; the specular energy is folded into the albedo instead of dropped):
+/* A rough estimate of the whole BRDF's albedo for the path tracer's choice of lobe only
+ * (brdf_specular_probability; it changes variance, never the expected value):
  *   A = (1 - metallic) ((1 - s F_d) baseColor + s F_d) + metallic (baseColor + (1 - baseColor)/21)
  * with s = specular and F_d = 0.04 + 0.96/21, where 1/21 is the cosine-weighted hemispherical
- * average of (1 - cos)^5 (so F_d and the metal term are Schlick's Fresnel averaged over a
- * Lambertian distribution of directions). Each part is a convex mix of values <= 1, so A <= 1
- * per channel: energy is conserved at probe hits. GGX's single-scattering loss of rough
- * surfaces is not subtracted (the fold-in slightly overestimates rough metals). */
+ * average of (1 - cos)^5. It is NOT the energy a surface reflects: it counts the Fresnel
+ * average as reflected although GGX at roughness 1 returns far less (0.012-0.021 against
+ * F_d = 0.086). Shading uses brdf_hit_albedo (see the header). */
 #define PC_BRDF_SCHLICK_AVG (1.0 / 21.0) /* 2 * integral of (1 - mu)^5 mu over [0, 1] */
 
 /* s F_d: the dielectric lobe's Fresnel weight averaged over a Lambertian distribution. */
@@ -269,6 +287,15 @@ vec3 brdf_diffuse_albedo_indirect(pc_brdf b, float nv)
     float phi = 0.0271 * pow(clamp(1.0 - nv, 0.0, 1.0), 2.44);
     float f = b.specular * (PC_BRDF_DIELECTRIC_F0 + (1.0 - PC_BRDF_DIELECTRIC_F0) * phi);
     return brdf_diffuse_albedo(b) * (1.0 - f);
+}
+
+/* The directional albedo of the whole f for view N.V = nv, split into its diffuse part
+ * (brdf_diffuse_albedo_indirect) and its specular part (brdf_specular_albedo, tabulated): what a
+ * secondary hit (probe ray, reflection ray) reflects of the irradiance around it. Equals
+ * brdf_diffuse_albedo for a pure Lambertian (s = 0, metallic = 0). See the header. */
+vec3 brdf_hit_albedo(uint64_t table, pc_brdf b, float nv)
+{
+    return brdf_diffuse_albedo_indirect(b, nv) + brdf_specular_albedo(table, b, nv);
 }
 
 /* Samples the specular part of f alone by GGX visible normals (Heitz 2018): l = reflect(-v)

@@ -1,14 +1,16 @@
 #version 460
 /* DDGI probe-ray shading (paper Sec. 4.1 and 5): radiance leaving each probe ray's hit toward
- * the probe = emission + A/pi * direct irradiance + occlusion * min(A, 0.9)/pi * the previous
- * update's irradiance at the hit, where A = brdf_lambert_albedo. The direct term comes from one
+ * the probe (v = -ray direction) = emission + f(v, l) * direct irradiance + occlusion *
+ * min(A(N.V), 0.9)/pi * the previous update's irradiance at the hit, where f is the hit's full
+ * BRDF (brdf_eval) and A = brdf_hit_albedo, the directional albedo of that same f (diffuse part
+ * with its (1 - F), plus the specular part's tabulated albedo: brdf.glsl's header gives the
+ * split), so a hit reflects what the path tracer's next vertex would. The direct term comes from one
  * light per hit, chosen by its unshadowed contribution and divided by the choice's probability
  * (choose_light, unbiased); its visibility is read from the light's distance map where the
  * update has one (lights [0, vol.control.w): shadow_map.glsl) and the map covers the hit, else
- * traced by one shadow ray. The hit is
- * shaded as a Lambertian whose albedo folds in the specular lobe's Fresnel-averaged energy
- * (paper: probe hits are shaded diffusely; folding keeps the metals' energy instead of
- * dropping it, and A <= 1 keeps energy conserved). The last term carries light across updates,
+ * traced by one shadow ray. The paper shades probe hits diffusely; here the indirect light
+ * arriving at a hit is still taken as diffuse (the irradiance around its normal), but its
+ * reflected energy is the BRDF's own at this view (A <= 1). The last term carries light across updates,
  * one more bounce per update; the 0.9 cap guards energy (production practice).
  * Two orders (rd_ddgi.sort_hits):
  * - params.z = 1, sorted: one thread per hit of the update's binned list (ddgi_bin.comp, which
@@ -67,12 +69,12 @@ void main()
         hit.backface = false; /* a front hit, or a back hit of a double-sided surface */
         vec3 dir = ddgi_ray_dir(vol, ray);
         pc_surface sf = surface_at(g.scene, hit, dir);
-        vec3 albedo = brdf_lambert_albedo(surface_brdf(sf));
-        pc_brdf lambert = brdf_make(albedo, 0.0, 1.0, 0.0); /* f = albedo / pi */
+        pc_brdf b = surface_brdf(sf);
+        vec3 albedo = brdf_hit_albedo(g.brdf_albedo, b, clamp(dot(sf.normal, -dir), 0.0, 1.0));
         uint seed = pcg(slot ^ pcg(vol.info.y * 0x9E3779B9u + 0x632BE5ABu));
         vec3 term, wi;
         float dist;
-        uint light = choose_light(g.scene, sf.position, sf.normal, sf.geom_normal, -dir, lambert,
+        uint light = choose_light(g.scene, sf.position, sf.normal, sf.geom_normal, -dir, b,
                                   rnd(seed), term, wi, dist);
         vec3 direct = vec3(0.0);
         if (light != PC_INVALID)

@@ -8,9 +8,10 @@
  * L is what the path tracer's next vertex would return, minus its further paths:
  *   miss: env_radiance(l);
  *   hit:  emission + direct light with the hit's full BRDF toward -l (shadow rays)
- *         + occlusion * A / pi * E(hit), with E the probe field's irradiance (env_irradiance
- *         outside the volume) and A = brdf_lambert_albedo: the hit's indirect light is taken
- *         as diffuse, the specular energy folded into its albedo (as at probe-ray hits);
+ *         + occlusion * A(N.V) / pi * E(hit), with E the probe field's irradiance
+ *         (env_irradiance outside the volume) and A = brdf_hit_albedo toward -l: the hit's
+ *         indirect light is taken as diffuse, reflected with the BRDF's own albedo (as at
+ *         probe-ray hits; brdf.glsl's header);
  *   a back face of a single-sided surface absorbs, and a direction below the geometric
  *   surface gets nothing (both as in pathtrace.comp).
  * The estimate is demodulated (divided by the pixel's specular albedo, brdf_specular_albedo)
@@ -44,7 +45,8 @@ vec3 incoming(pc_globals g, vec3 origin, vec3 l, inout uint rays)
     pc_brdf b = surface_brdf(sf);
     vec3 direct = direct_radiance(g.scene, sf.position, sf.normal, sf.geom_normal, -l, b, rays);
     vec3 e = ddgi_irradiance(g.ddgi, env_irradiance(g.env, sf.normal), sf.position, sf.normal, -l);
-    return sf.emission + direct + sf.occlusion * brdf_lambert_albedo(b) / PC_PI * e;
+    vec3 a = brdf_hit_albedo(g.brdf_albedo, b, clamp(dot(sf.normal, -l), 0.0, 1.0));
+    return sf.emission + direct + sf.occlusion * a / PC_PI * e;
 }
 
 void main()
