@@ -2,8 +2,10 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "renderer/builtin/procedural.h"
+#include "renderer/gltf/gltf_loader.h"
 #include "test_util.h"
 
 bool test_vk_open(rd_vk *vk)
@@ -30,7 +32,13 @@ float *test_render(rd_vk *vk, const test_render_desc *d, pc_view *view_out,
 {
     char err[512] = "";
     rd_scene s;
-    if (!rd_procedural_build(d->scene, &s, err, sizeof err)) {
+    if (d->gltf) {
+        if (rd_gltf_load_memory(d->gltf, strlen(d->gltf), NULL, NULL, &s, err, sizeof err) !=
+            RD_GLTF_OK) {
+            CHECKF(0, "glTF: %s", err);
+            return NULL;
+        }
+    } else if (!rd_procedural_build(d->scene, &s, err, sizeof err)) {
         CHECKF(0, "%s", err);
         return NULL;
     }

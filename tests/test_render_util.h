@@ -6,7 +6,8 @@
 #include "renderer/render.h"
 
 typedef struct test_render_desc {
-    const char *scene; /* builtin scene name */
+    const char *scene; /* builtin scene name (NAME, NAME+gltf, ...), or NULL with gltf */
+    const char *gltf;  /* a glTF JSON text to load instead of a builtin scene */
     unsigned width, height;
     rd_ddgi_settings gi;        /* mode 0 = no GI */
     unsigned updates;           /* probe updates before the image */

@@ -185,3 +185,52 @@ void expect_error(const char *json, rd_gltf_result code, const char *needle, int
     CHECKF(scene_is_empty(&s), "line %d: scene not empty after an error", line);
     rd_scene_destroy(&s);
 }
+
+/* ---- whole test scenes ------------------------------------------------------------------ */
+
+char *gltf_furnace(float base, float emission, float metallic, float roughness)
+{
+    /* six inward faces of the cube [-1, 1]^3, four vertices each, normals toward the centre */
+    float pos[24 * 3], nrm[24 * 3];
+    uint16_t idx[36];
+    for (int f = 0; f < 6; f++) {
+        int axis = f / 2;
+        float side = f % 2 ? 1.0f : -1.0f; /* the face lies at axis = side, faces -side */
+        int u = (axis + 1) % 3, v = (axis + 2) % 3;
+        const float cu[4] = {-1, 1, 1, -1}, cv[4] = {-1, -1, 1, 1};
+        for (int k = 0; k < 4; k++) {
+            float *p = pos + 3 * (4 * f + k), *n = nrm + 3 * (4 * f + k);
+            p[axis] = side, p[u] = cu[k], p[v] = cv[k];
+            n[0] = n[1] = n[2] = 0, n[axis] = -side;
+        }
+        /* (u, v) is counter-clockwise seen from +axis: flip the winding for the +side face so
+         * every triangle's front faces the centre */
+        static const uint16_t ccw[6] = {0, 1, 2, 0, 2, 3}, cw[6] = {0, 2, 1, 0, 3, 2};
+        for (int k = 0; k < 6; k++) idx[6 * f + k] = (uint16_t)(4 * f + (side > 0 ? cw : ccw)[k]);
+    }
+    bin b = {0};
+    size_t op = bin_put(&b, pos, sizeof pos), on = bin_put(&b, nrm, sizeof nrm),
+           oi = bin_put(&b, idx, sizeof idx);
+    char *views = test_xprintf("{'buffer':0,'byteOffset':%zu,'byteLength':%zu},"
+                               "{'buffer':0,'byteOffset':%zu,'byteLength':%zu},"
+                               "{'buffer':0,'byteOffset':%zu,'byteLength':%zu}",
+                               op, sizeof pos, on, sizeof nrm, oi, sizeof idx);
+    const char *acc = "{'bufferView':0,'componentType':5126,'count':24,'type':'VEC3',"
+                      "'min':[-1,-1,-1],'max':[1,1,1]},"
+                      "{'bufferView':1,'componentType':5126,'count':24,'type':'VEC3'},"
+                      "{'bufferView':2,'componentType':5123,'count':36,'type':'SCALAR'}";
+    char *rest = test_xprintf(
+        "'materials':[{'pbrMetallicRoughness':{'baseColorFactor':[%g,%g,%g,1],"
+        "'metallicFactor':%g,'roughnessFactor':%g},'emissiveFactor':[%g,%g,%g]}],"
+        "'meshes':[{'primitives':[{'attributes':{'POSITION':0,'NORMAL':1},'indices':2,"
+        "'material':0}]}],"
+        "'cameras':[{'type':'perspective','perspective':{'yfov':1.0472,'znear':0.01}}],"
+        "'nodes':[{'mesh':0},{'camera':0,'translation':[0,0,0.5]}],"
+        "'scenes':[{'nodes':[0,1]}],'scene':0",
+        base, base, base, metallic, roughness, emission, emission, emission);
+    char *j = gltf_json(&b, 0, views, acc, rest);
+    free(views);
+    free(rest);
+    free(b.p);
+    return j;
+}

@@ -54,6 +54,13 @@ void make_png(bin *out, int w, int h, int color_type, int depth, const uint8_t *
 /* "data:image/png;base64,..." */
 char *png_data_uri(const bin *png);
 
+/* ---- whole test scenes ---- */
+/* A closed furnace written as glTF: the inside of the cube [-1, 1]^3 (inward normals, single
+ * sided), one metallic-roughness material of grey base colour `base` emitting `emission` (no
+ * KHR extensions, so the dielectric specular of Appendix B applies), no lights, and a camera at
+ * (0, 0, 0.5) looking down -Z. */
+char *gltf_furnace(float base, float emission, float metallic, float roughness);
+
 /* ---- loading and checking ---- */
 extern char gltf_err[512]; /* the message of the last load_text */
 /* Loads JSON text from memory (no base folder). */
