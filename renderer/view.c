@@ -18,42 +18,30 @@
 #define DEFAULT_WIDTH 960
 #define DEFAULT_HEIGHT 540
 
+/* The per-view passes, one line each (the world's passes are in renderer/gi). */
+static const rd_pipeline_desc pipelines[] = {
+    RD_PIPELINE_DESC(rd_view_passes, primary, "primary", pc_spv_primary, sizeof(pc_push)),
+    RD_PIPELINE_DESC(rd_view_passes, shade, "shade", pc_spv_shade, sizeof(pc_push)),
+    RD_PIPELINE_DESC(rd_view_passes, tonemap, "tonemap", pc_spv_tonemap, sizeof(pc_push)),
+    RD_PIPELINE_DESC(rd_view_passes, gi_sample, "gi sample", pc_spv_ddgi_sample, sizeof(pc_push)),
+    RD_PIPELINE_DESC(rd_view_passes, pathtrace, "path trace", pc_spv_pathtrace, sizeof(pc_push)),
+    RD_PIPELINE_DESC(rd_view_passes, reflect, "reflect", pc_spv_reflect, sizeof(pc_push)),
+    RD_PIPELINE_DESC(rd_view_passes, reflect_filter, "reflect filter", pc_spv_reflect_filter,
+                     sizeof(pc_push)),
+};
+#define PIPELINE_COUNT (sizeof pipelines / sizeof pipelines[0])
+
 rd_vk_result rd_view_passes_create(rd_vk *vk, rd_view_passes *p, char *err, size_t errlen)
 {
     memset(p, 0, sizeof *p);
-    rd_vk_result res = rd_pipeline_create(vk, &p->primary, "primary", pc_spv_primary,
-                                          sizeof pc_spv_primary, sizeof(pc_push), err, errlen);
-    if (res == RD_VK_OK)
-        res = rd_pipeline_create(vk, &p->shade, "shade", pc_spv_shade, sizeof pc_spv_shade,
-                                 sizeof(pc_push), err, errlen);
-    if (res == RD_VK_OK)
-        res = rd_pipeline_create(vk, &p->tonemap, "tonemap", pc_spv_tonemap, sizeof pc_spv_tonemap,
-                                 sizeof(pc_push), err, errlen);
-    if (res == RD_VK_OK)
-        res = rd_pipeline_create(vk, &p->gi_sample, "gi sample", pc_spv_ddgi_sample,
-                                 sizeof pc_spv_ddgi_sample, sizeof(pc_push), err, errlen);
-    if (res == RD_VK_OK)
-        res = rd_pipeline_create(vk, &p->pathtrace, "path trace", pc_spv_pathtrace,
-                                 sizeof pc_spv_pathtrace, sizeof(pc_push), err, errlen);
-    if (res == RD_VK_OK)
-        res = rd_pipeline_create(vk, &p->reflect, "reflect", pc_spv_reflect, sizeof pc_spv_reflect,
-                                 sizeof(pc_push), err, errlen);
-    if (res == RD_VK_OK)
-        res = rd_pipeline_create(vk, &p->reflect_filter, "reflect filter", pc_spv_reflect_filter,
-                                 sizeof pc_spv_reflect_filter, sizeof(pc_push), err, errlen);
+    rd_vk_result res = rd_pipelines_create(vk, p, pipelines, PIPELINE_COUNT, err, errlen);
     if (res != RD_VK_OK) rd_view_passes_destroy(vk, p);
     return res;
 }
 
 void rd_view_passes_destroy(rd_vk *vk, rd_view_passes *p)
 {
-    rd_pipeline_destroy(vk, &p->reflect_filter);
-    rd_pipeline_destroy(vk, &p->reflect);
-    rd_pipeline_destroy(vk, &p->pathtrace);
-    rd_pipeline_destroy(vk, &p->gi_sample);
-    rd_pipeline_destroy(vk, &p->tonemap);
-    rd_pipeline_destroy(vk, &p->shade);
-    rd_pipeline_destroy(vk, &p->primary);
+    rd_pipelines_destroy(vk, p, pipelines, PIPELINE_COUNT);
 }
 
 rd_vk_result rd_view_create(rd_vk *vk, const rd_view_passes *passes, rd_view *v, char *err,

@@ -19,33 +19,24 @@
 #define DIST_SIDE (PC_DDGI_DIST_INTERIOR + 2)
 #define MAX_PROBES 65535u /* one workgroup row per probe: the guaranteed dispatch limit */
 
+/* The probe passes, one line each (rd_ddgi_update dispatches them). */
+static const rd_pipeline_desc pipelines[] = {
+    RD_PIPELINE_DESC(rd_ddgi, trace, "probe trace", pc_spv_ddgi_trace, sizeof(pc_push)),
+    RD_PIPELINE_DESC(rd_ddgi, shade, "probe shade", pc_spv_ddgi_shade, sizeof(pc_push)),
+    RD_PIPELINE_DESC(rd_ddgi, blend, "probe blend", pc_spv_ddgi_blend, sizeof(pc_push)),
+    RD_PIPELINE_DESC(rd_ddgi, border, "probe borders", pc_spv_ddgi_border, sizeof(pc_push)),
+    RD_PIPELINE_DESC(rd_ddgi, select, "probe select", pc_spv_ddgi_select, sizeof(pc_push)),
+    RD_PIPELINE_DESC(rd_ddgi, wake, "probe wake", pc_spv_ddgi_wake, sizeof(pc_push)),
+    RD_PIPELINE_DESC(rd_ddgi, bin, "probe bin", pc_spv_ddgi_bin, sizeof(pc_push)),
+    RD_PIPELINE_DESC(rd_ddgi, scan, "probe bin scan", pc_spv_ddgi_scan, sizeof(pc_push)),
+};
+#define PIPELINE_COUNT (sizeof pipelines / sizeof pipelines[0])
+
 rd_vk_result rd_ddgi_create(rd_vk *vk, rd_ddgi *d, char *err, size_t errlen)
 {
     memset(d, 0, sizeof *d);
     d->vk = vk;
-    rd_vk_result r = rd_pipeline_create(vk, &d->trace, "probe trace", pc_spv_ddgi_trace,
-                                        sizeof pc_spv_ddgi_trace, sizeof(pc_push), err, errlen);
-    if (r == RD_VK_OK)
-        r = rd_pipeline_create(vk, &d->shade, "probe shade", pc_spv_ddgi_shade,
-                               sizeof pc_spv_ddgi_shade, sizeof(pc_push), err, errlen);
-    if (r == RD_VK_OK)
-        r = rd_pipeline_create(vk, &d->blend, "probe blend", pc_spv_ddgi_blend,
-                               sizeof pc_spv_ddgi_blend, sizeof(pc_push), err, errlen);
-    if (r == RD_VK_OK)
-        r = rd_pipeline_create(vk, &d->border, "probe borders", pc_spv_ddgi_border,
-                               sizeof pc_spv_ddgi_border, sizeof(pc_push), err, errlen);
-    if (r == RD_VK_OK)
-        r = rd_pipeline_create(vk, &d->select, "probe select", pc_spv_ddgi_select,
-                               sizeof pc_spv_ddgi_select, sizeof(pc_push), err, errlen);
-    if (r == RD_VK_OK)
-        r = rd_pipeline_create(vk, &d->wake, "probe wake", pc_spv_ddgi_wake,
-                               sizeof pc_spv_ddgi_wake, sizeof(pc_push), err, errlen);
-    if (r == RD_VK_OK)
-        r = rd_pipeline_create(vk, &d->bin, "probe bin", pc_spv_ddgi_bin, sizeof pc_spv_ddgi_bin,
-                               sizeof(pc_push), err, errlen);
-    if (r == RD_VK_OK)
-        r = rd_pipeline_create(vk, &d->scan, "probe bin scan", pc_spv_ddgi_scan,
-                               sizeof pc_spv_ddgi_scan, sizeof(pc_push), err, errlen);
+    rd_vk_result r = rd_pipelines_create(vk, d, pipelines, PIPELINE_COUNT, err, errlen);
     if (r == RD_VK_OK)
         r = rd_buffer_create(vk, &d->bins, PC_DDGI_BINS * 4, RD_MEMORY_DEVICE, err, errlen);
     if (r == RD_VK_OK)
@@ -77,14 +68,7 @@ void rd_ddgi_destroy(rd_ddgi *d)
     rd_buffer_destroy(d->vk, &d->ctrl);
     rd_buffer_destroy(d->vk, &d->wake_boxes);
     rd_buffer_destroy(d->vk, &d->bins);
-    rd_pipeline_destroy(d->vk, &d->scan);
-    rd_pipeline_destroy(d->vk, &d->bin);
-    rd_pipeline_destroy(d->vk, &d->wake);
-    rd_pipeline_destroy(d->vk, &d->select);
-    rd_pipeline_destroy(d->vk, &d->border);
-    rd_pipeline_destroy(d->vk, &d->blend);
-    rd_pipeline_destroy(d->vk, &d->shade);
-    rd_pipeline_destroy(d->vk, &d->trace);
+    rd_pipelines_destroy(d->vk, d, pipelines, PIPELINE_COUNT);
     d->configured = false;
     d->vk = NULL; /* destroyed: rd_ddgi_create must run again before use */
 }

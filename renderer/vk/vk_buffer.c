@@ -250,6 +250,33 @@ static rd_vk_result copy_wait(rd_vk *vk, VkBuffer src, VkDeviceSize src_off, VkB
     return rd_cmd_submit_wait(vk, &c, err, errlen);
 }
 
+/* Moves size bytes between host memory and device buffer gpu at offset through a host-visible
+ * staging buffer, one chunk at a time: from `up` into gpu when up is given, else from gpu into
+ * `down`. */
+static rd_vk_result staged(rd_vk *vk, VkBuffer gpu, VkDeviceSize offset, const void *up, void *down,
+                           VkDeviceSize size, char *err, size_t errlen)
+{
+    rd_buffer staging;
+    VkDeviceSize chunk = size < STAGING_CHUNK ? size : STAGING_CHUNK;
+    rd_vk_result rc = rd_buffer_create(vk, &staging, chunk,
+                                       up ? RD_MEMORY_UPLOAD : RD_MEMORY_READBACK, err, errlen);
+    if (rc != RD_VK_OK) return rc;
+    for (VkDeviceSize done = 0; done < size && rc == RD_VK_OK; done += chunk) {
+        VkDeviceSize n = size - done < chunk ? size - done : chunk;
+        if (up) {
+            rc = rd_buffer_upload(vk, &staging, 0, (const char *)up + done, n, err, errlen);
+            if (rc == RD_VK_OK)
+                rc = copy_wait(vk, staging.buffer, 0, gpu, offset + done, n, err, errlen);
+        } else {
+            rc = copy_wait(vk, gpu, offset + done, staging.buffer, 0, n, err, errlen);
+            if (rc == RD_VK_OK)
+                rc = rd_buffer_download(vk, &staging, 0, (char *)down + done, n, err, errlen);
+        }
+    }
+    rd_buffer_destroy(vk, &staging);
+    return rc;
+}
+
 rd_vk_result rd_buffer_upload(rd_vk *vk, rd_buffer *dst, VkDeviceSize offset, const void *src,
                               VkDeviceSize size, char *err, size_t errlen)
 {
@@ -266,18 +293,7 @@ rd_vk_result rd_buffer_upload(rd_vk *vk, rd_buffer *dst, VkDeviceSize offset, co
         return RD_VK_OK;
     }
 
-    rd_buffer staging;
-    VkDeviceSize chunk = size < STAGING_CHUNK ? size : STAGING_CHUNK;
-    rc = rd_buffer_create(vk, &staging, chunk, RD_MEMORY_UPLOAD, err, errlen);
-    if (rc != RD_VK_OK) return rc;
-    for (VkDeviceSize done = 0; done < size && rc == RD_VK_OK; done += chunk) {
-        VkDeviceSize n = size - done < chunk ? size - done : chunk;
-        rc = rd_buffer_upload(vk, &staging, 0, (const char *)src + done, n, err, errlen);
-        if (rc == RD_VK_OK)
-            rc = copy_wait(vk, staging.buffer, 0, dst->buffer, offset + done, n, err, errlen);
-    }
-    rd_buffer_destroy(vk, &staging);
-    return rc;
+    return staged(vk, dst->buffer, offset, src, NULL, size, err, errlen);
 }
 
 rd_vk_result rd_buffer_download(rd_vk *vk, const rd_buffer *src, VkDeviceSize offset, void *dst,
@@ -297,18 +313,7 @@ rd_vk_result rd_buffer_download(rd_vk *vk, const rd_buffer *src, VkDeviceSize of
         return RD_VK_OK;
     }
 
-    rd_buffer staging;
-    VkDeviceSize chunk = size < STAGING_CHUNK ? size : STAGING_CHUNK;
-    rc = rd_buffer_create(vk, &staging, chunk, RD_MEMORY_READBACK, err, errlen);
-    if (rc != RD_VK_OK) return rc;
-    for (VkDeviceSize done = 0; done < size && rc == RD_VK_OK; done += chunk) {
-        VkDeviceSize n = size - done < chunk ? size - done : chunk;
-        rc = copy_wait(vk, src->buffer, offset + done, staging.buffer, 0, n, err, errlen);
-        if (rc == RD_VK_OK)
-            rc = rd_buffer_download(vk, &staging, 0, (char *)dst + done, n, err, errlen);
-    }
-    rd_buffer_destroy(vk, &staging);
-    return rc;
+    return staged(vk, src->buffer, offset, NULL, dst, size, err, errlen);
 }
 
 rd_vk_result rd_buffer_fill(rd_vk *vk, rd_buffer *b, uint32_t word, char *err, size_t errlen)

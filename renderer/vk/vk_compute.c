@@ -98,6 +98,32 @@ void rd_pipeline_destroy(rd_vk *vk, rd_pipeline *p)
     p->push_size = 0;
 }
 
+static rd_pipeline *member(void *owner, const rd_pipeline_desc *d)
+{
+    return (rd_pipeline *)((char *)owner + d->offset);
+}
+
+rd_vk_result rd_pipelines_create(rd_vk *vk, void *owner, const rd_pipeline_desc *table,
+                                 size_t count, char *err, size_t errlen)
+{
+    for (size_t i = 0; i < count; i++) {
+        const rd_pipeline_desc *d = &table[i];
+        rd_vk_result r = rd_pipeline_create(vk, member(owner, d), d->name, d->spirv, d->spirv_bytes,
+                                            d->push_size, err, errlen);
+        if (r != RD_VK_OK) {
+            rd_pipelines_destroy(vk, owner, table, i);
+            return r;
+        }
+    }
+    return RD_VK_OK;
+}
+
+void rd_pipelines_destroy(rd_vk *vk, void *owner, const rd_pipeline_desc *table, size_t count)
+{
+    for (size_t i = count; i-- > 0;)
+        rd_pipeline_destroy(vk, member(owner, &table[i]));
+}
+
 /* ---- one-shot command buffers ------------------------------------------------------------- */
 
 /* A finished (or never submitted) command buffer and its fence go back to the spares. */

@@ -6,6 +6,8 @@
 #ifndef RD_VK_COMPUTE_H
 #define RD_VK_COMPUTE_H
 
+#include <stddef.h>
+
 #include "renderer/vk/vk_buffer.h"
 #include "renderer/vk/vk_context.h"
 
@@ -20,6 +22,32 @@ typedef struct rd_pipeline {
 rd_vk_result rd_pipeline_create(rd_vk *vk, rd_pipeline *p, const char *name, const uint32_t *spirv,
                                 size_t spirv_bytes, uint32_t push_size, char *err, size_t errlen);
 void rd_pipeline_destroy(rd_vk *vk, rd_pipeline *p); /* idempotent */
+
+/* One line of a pipeline table: which rd_pipeline member of the owner struct, its name (in
+ * error messages), its SPIR-V and its push-constant size. */
+typedef struct rd_pipeline_desc {
+    size_t offset; /* of the rd_pipeline inside the owner */
+    const char *name;
+    const uint32_t *spirv;
+    size_t spirv_bytes;
+    uint32_t push_size;
+} rd_pipeline_desc;
+
+/* A table line for member `member` of `type`, made from the embedded SPIR-V array `spv`. */
+#define RD_PIPELINE_DESC(type, member, name, spv, push_size)                                       \
+    {                                                                                              \
+        RD_PIPELINE_OFFSET(type, member), (name), (spv), sizeof(spv), (push_size)                  \
+    }
+/* offsetof that compiles only for an rd_pipeline member */
+#define RD_PIPELINE_OFFSET(type, member)                                                           \
+    _Generic(((type *)0)->member, rd_pipeline : offsetof(type, member))
+
+/* Creates the table's pipelines inside owner in order. On failure err names the pipeline that
+ * failed, and those created before it are destroyed again. */
+rd_vk_result rd_pipelines_create(rd_vk *vk, void *owner, const rd_pipeline_desc *table,
+                                 size_t count, char *err, size_t errlen);
+/* Destroys the table's pipelines inside owner in reverse order (idempotent). */
+void rd_pipelines_destroy(rd_vk *vk, void *owner, const rd_pipeline_desc *table, size_t count);
 
 /* A one-shot command buffer with its fence. */
 typedef struct rd_cmd {

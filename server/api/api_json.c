@@ -5,23 +5,11 @@
 
 #include <ctype.h>
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "shaders/gpu_types.h"
-
-void srv_api_fail(srv_api_error *e, int status, const char *code, const char *fmt, ...)
-{
-    if (!e) return;
-    e->status = status;
-    e->code = code;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(e->message, sizeof e->message, fmt, ap);
-    va_end(ap);
-}
 
 #define BAD(...) (srv_api_fail(e, 400, SRV_ERR_INVALID_FIELD, __VA_ARGS__), false)
 
@@ -543,12 +531,4 @@ char *srv_json_print_delete(cJSON *j)
     cJSON_Delete(j);
     if (!s) abort(); /* out of memory */
     return s;
-}
-
-char *srv_json_error_body(const char *code, const char *message)
-{
-    cJSON *j = cJSON_CreateObject();
-    cJSON_AddStringToObject(j, "error", code);
-    cJSON_AddStringToObject(j, "message", message);
-    return srv_json_print_delete(j);
 }

@@ -13,22 +13,8 @@
 #include <cjson/cJSON.h>
 #include <stddef.h>
 
+#include "server/api/api_error.h"
 #include "server/api/commands.h"
-
-/* Error codes (the "error" member of every error body). */
-#define SRV_ERR_MALFORMED_JSON "malformed_json"
-#define SRV_ERR_INVALID_FIELD "invalid_field"
-#define SRV_ERR_NOT_FOUND "not_found"
-#define SRV_ERR_METHOD "method_not_allowed"
-#define SRV_ERR_UNAUTHORIZED "unauthorized"
-#define SRV_ERR_FORBIDDEN "forbidden"
-#define SRV_ERR_TOO_LARGE "payload_too_large"
-#define SRV_ERR_MEDIA_TYPE "unsupported_media_type"
-#define SRV_ERR_INVALID_GLTF "invalid_gltf"
-#define SRV_ERR_INVALID_IMAGE "invalid_image"
-#define SRV_ERR_UNAVAILABLE "unavailable"
-#define SRV_ERR_GPU "gpu_error"
-#define SRV_ERR_INTERNAL "internal_error"
 
 /* Longest JSON body or viewer message accepted. */
 #define SRV_JSON_BODY_MAX (64 * 1024)
@@ -53,8 +39,6 @@ cJSON *srv_json_light(uint32_t id, const rd_light *l);
 cJSON *srv_json_node(uint32_t id, const rd_node *n);
 /* GET /v1/animation: {"count", "duration", "playing", "time"}, the time as of now_ms. */
 
-/* {"error": code, "message": message} as malloc'd text. */
-char *srv_json_error_body(const char *code, const char *message);
 /* Prints j compactly (malloc'd text) and deletes it. */
 char *srv_json_print_delete(cJSON *j);
 /* Adds an array of n floats (printed with float precision) to obj. */

@@ -1,21 +1,24 @@
 /* commands.h: what the network threads (HTTP, WebSocket) post to the render thread.
  *
  * Network threads parse and type-check client input into these plain structs (api_json.h)
- * and post them as srv_cmd (render_loop.h); only the render thread applies them to the scene
- * and the GPU, so every mutation happens between two frames and nothing else locks the scene.
- * A patch carries a bit set `has` naming the fields it sets; everything else is left alone.
+ * and post them as srv_cmd through the render loop's mailbox (render_loop.h); only the render
+ * thread applies them to the scene and the GPU, so every mutation happens between two frames and
+ * nothing else locks the scene. A patch carries a bit set `has` naming the fields it sets;
+ * everything else is left alone.
  */
 #ifndef SRV_COMMANDS_H
 #define SRV_COMMANDS_H
 
-#include <pthread.h>
-#include <stdatomic.h>
+#include <cjson/cJSON.h>
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 
 #include "renderer/env/environment.h"
 #include "renderer/accel/gpu_scene.h"
 #include "renderer/scene/scene.h"
+#include "server/api/api_error.h"
+#include "server/api/mailbox.h"
 
 /* ---- camera ------------------------------------------------------------------------------ */
 
@@ -129,20 +132,6 @@ typedef struct srv_viewer_msg {
     unsigned fps_cap;        /* quality: frames per second 1..240 at most (0: no cap) */
 } srv_viewer_msg;
 
-/* ---- errors ----------------------------------------------------------------------------- */
-
-/* An API error: HTTP status, a stable code and one sentence. */
-typedef struct srv_api_error {
-    int status;
-    const char *code; /* static string */
-    char message[256];
-} srv_api_error;
-
-#if defined(__GNUC__)
-__attribute__((format(printf, 4, 5)))
-#endif
-void srv_api_fail(srv_api_error *e, int status, const char *code, const char *fmt, ...);
-
 /* ---- commands --------------------------------------------------------------------------- */
 
 typedef enum srv_cmd_kind {
@@ -171,14 +160,8 @@ typedef enum srv_cmd_kind {
     SRV_CMD_PICK,            /* POST /v1/views/{id}/pick: what lies under pick[] in view */
 } srv_cmd_kind;
 
-/* The render thread's answer: an HTTP status and a JSON body (malloc'd, may be NULL). */
-typedef struct srv_reply {
-    int status;
-    char *body;
-    uint64_t scene_generation; /* REPLACE_SCENE: the generation the scene was given */
-} srv_reply;
-
 typedef struct srv_cmd {
+    srv_mail mail; /* the mailbox's part: ticket, reply, references (mailbox.h) */
     srv_cmd_kind kind;
     uint32_t id;   /* light or node id */
     uint32_t view; /* the view a camera, resize, watch or frame request is for (0: default) */
@@ -196,17 +179,23 @@ typedef struct srv_cmd {
     char source[128];            /* REPLACE_SCENE: where it came from ("upload", "builtin:...") */
     char file_name[SRV_FILE_NAME_MAX]; /* REPLACE_SCENE: the uploaded file's name ("": none) */
     float pick[2];                     /* PICK: normalised picture point (x across, y down), 0..1 */
-    rd_env_image *env_image; /* SET_ENVIRONMENT: the parsed HDR image (owned), NULL = none */
-
-    /* Owned by render_loop.c. */
-    uint64_t ticket; /* input order (see srv_render_post) */
-    srv_reply reply;
-    atomic_int refs;
-    bool done;
-    bool abandoned; /* the caller stopped waiting */
-    pthread_mutex_t mu;
-    pthread_cond_t cv;
-    struct srv_cmd *next;
+    rd_env_image *env_image;   /* SET_ENVIRONMENT: the parsed HDR image (owned), NULL = none */
+    uint64_t scene_generation; /* REPLACE_SCENE, set before a 200 reply: the scene's generation */
 } srv_cmd;
+
+/* A new command with one reference (the caller's); the last srv_cmd_unref frees what it owns. */
+srv_cmd *srv_cmd_new(srv_cmd_kind kind);
+void srv_cmd_unref(srv_cmd *c);
+/* The command holding m (all mail of the render loop's mailbox is commands). */
+static inline srv_cmd *srv_cmd_of(srv_mail *m)
+{
+    return (srv_cmd *)((char *)m - offsetof(srv_cmd, mail));
+}
+
+/* Render thread: hands the reply (body malloc'd or NULL, taken) to the waiting thread. */
+void srv_cmd_complete(srv_cmd *c, int status, char *body);
+void srv_cmd_complete_json(srv_cmd *c, int status, cJSON *j); /* j is deleted */
+void srv_cmd_complete_error(srv_cmd *c, const srv_api_error *e);
+void srv_cmd_fail(srv_cmd *c, int status, const char *code, const char *message);
 
 #endif

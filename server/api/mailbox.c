@@ -1,4 +1,4 @@
-/* mailbox.c: the render thread's command queue. */
+/* mailbox.c: the render thread's queue of mail (generic: it knows no payload). */
 #include "server/api/mailbox.h"
 #include "server/base/clock.h"
 
@@ -6,9 +6,9 @@
 #include <stdlib.h>
 #include <time.h>
 
-#include "server/api/api_json.h"
+#include "server/api/api_error.h"
 
-#define QUEUE_MAX 4096 /* commands waiting; viewers posting faster are refused */
+#define QUEUE_MAX 4096 /* pieces waiting; viewers posting faster are refused */
 
 void srv_mailbox_init(srv_mailbox *m)
 {
@@ -25,23 +25,30 @@ void srv_mailbox_close(srv_mailbox *m)
     pthread_mutex_unlock(&m->mu);
 }
 
+/* The 503 of a closed mailbox. */
+static void refuse(srv_mail *c)
+{
+    srv_mail_complete(c, 503,
+                      srv_json_error_body(SRV_ERR_UNAVAILABLE, "The server is shutting down."));
+}
+
 void srv_mailbox_dispose(srv_mailbox *m)
 {
     srv_mailbox_close(m);
     bool closed;
-    srv_cmd *rest = srv_mailbox_take(m, &closed);
+    srv_mail *rest = srv_mailbox_take(m, &closed);
     while (rest) {
-        srv_cmd *c = rest;
+        srv_mail *c = rest;
         rest = c->next;
-        srv_cmd_fail(c, 503, SRV_ERR_UNAVAILABLE, "The server is shutting down.");
-        srv_cmd_unref(c);
+        refuse(c);
+        srv_mail_unref(c);
     }
     pthread_cond_destroy(&m->cv);
     pthread_mutex_destroy(&m->mu);
 }
 
 /* Appends c with the next ticket; false when closed or full. Lock held. */
-static bool enqueue_locked(srv_mailbox *m, srv_cmd *c, bool bounded)
+static bool enqueue_locked(srv_mailbox *m, srv_mail *c, bool bounded)
 {
     if (m->closed || (bounded && m->queued >= QUEUE_MAX)) return false;
     c->ticket = ++m->next_ticket;
@@ -56,15 +63,15 @@ static bool enqueue_locked(srv_mailbox *m, srv_cmd *c, bool bounded)
     return true;
 }
 
-bool srv_mailbox_call(srv_mailbox *m, srv_cmd *c, unsigned timeout_ms)
+bool srv_mailbox_call(srv_mailbox *m, srv_mail *c, unsigned timeout_ms)
 {
     atomic_fetch_add(&c->refs, 1); /* the queue's reference */
     pthread_mutex_lock(&m->mu);
     bool queued = enqueue_locked(m, c, false);
     pthread_mutex_unlock(&m->mu);
     if (!queued) {
-        srv_cmd_unref(c);
-        srv_cmd_fail(c, 503, SRV_ERR_UNAVAILABLE, "The server is shutting down.");
+        srv_mail_unref(c);
+        refuse(c);
         return false;
     }
     struct timespec deadline;
@@ -87,20 +94,20 @@ bool srv_mailbox_call(srv_mailbox *m, srv_cmd *c, unsigned timeout_ms)
     return ok;
 }
 
-uint64_t srv_mailbox_post(srv_mailbox *m, srv_cmd *c)
+uint64_t srv_mailbox_post(srv_mailbox *m, srv_mail *c)
 {
     pthread_mutex_lock(&m->mu);
     bool queued = enqueue_locked(m, c, true);
     uint64_t ticket = queued ? c->ticket : 0;
     pthread_mutex_unlock(&m->mu);
-    if (!queued) srv_cmd_unref(c);
+    if (!queued) srv_mail_unref(c);
     return ticket;
 }
 
-srv_cmd *srv_mailbox_take(srv_mailbox *m, bool *closed)
+srv_mail *srv_mailbox_take(srv_mailbox *m, bool *closed)
 {
     pthread_mutex_lock(&m->mu);
-    srv_cmd *batch = m->head;
+    srv_mail *batch = m->head;
     m->head = m->tail = NULL;
     m->queued = 0;
     *closed = m->closed;
@@ -136,66 +143,37 @@ void srv_mailbox_wake(srv_mailbox *m)
     pthread_mutex_unlock(&m->mu);
 }
 
-/* ---- commands ------------------------------------------------------------------------------- */
+/* ---- mail ------------------------------------------------------------------------------------ */
 
-srv_cmd *srv_cmd_new(srv_cmd_kind kind)
+void srv_mail_init(srv_mail *m, srv_mail_destroy_fn *destroy)
 {
-    srv_cmd *c = calloc(1, sizeof *c);
-    if (!c) abort();
-    c->kind = kind;
-    atomic_init(&c->refs, 1);
-    pthread_mutex_init(&c->mu, NULL);
-    pthread_cond_init(&c->cv, NULL);
-    return c;
+    *m = (srv_mail){.destroy = destroy};
+    atomic_init(&m->refs, 1);
+    pthread_mutex_init(&m->mu, NULL);
+    pthread_cond_init(&m->cv, NULL);
 }
 
-void srv_cmd_unref(srv_cmd *c)
+void srv_mail_unref(srv_mail *m)
 {
-    if (!c || atomic_fetch_sub(&c->refs, 1) != 1) return;
-    if (c->scene) {
-        rd_scene_destroy(c->scene);
-        free(c->scene);
-    }
-    if (c->prepared) {
-        rd_gpu_scene_prep_destroy(c->prepared);
-        free(c->prepared);
-    }
-    if (c->env_image) {
-        rd_env_image_free(c->env_image);
-        free(c->env_image);
-    }
-    free(c->reply.body);
-    pthread_cond_destroy(&c->cv);
-    pthread_mutex_destroy(&c->mu);
-    free(c);
+    if (!m || atomic_fetch_sub(&m->refs, 1) != 1) return;
+    free(m->reply.body);
+    m->reply.body = NULL;
+    pthread_cond_destroy(&m->cv);
+    pthread_mutex_destroy(&m->mu);
+    if (m->destroy) m->destroy(m);
 }
 
-void srv_cmd_complete(srv_cmd *c, int status, char *body)
+void srv_mail_complete(srv_mail *m, int status, char *body)
 {
-    pthread_mutex_lock(&c->mu);
-    if (c->abandoned) {
+    pthread_mutex_lock(&m->mu);
+    if (m->abandoned) {
         free(body);
     } else {
-        free(c->reply.body);
-        c->reply.status = status;
-        c->reply.body = body;
+        free(m->reply.body);
+        m->reply.status = status;
+        m->reply.body = body;
     }
-    c->done = true;
-    pthread_cond_broadcast(&c->cv);
-    pthread_mutex_unlock(&c->mu);
-}
-
-void srv_cmd_complete_json(srv_cmd *c, int status, cJSON *j)
-{
-    srv_cmd_complete(c, status, srv_json_print_delete(j));
-}
-
-void srv_cmd_complete_error(srv_cmd *c, const srv_api_error *e)
-{
-    srv_cmd_complete(c, e->status, srv_json_error_body(e->code, e->message));
-}
-
-void srv_cmd_fail(srv_cmd *c, int status, const char *code, const char *message)
-{
-    srv_cmd_complete(c, status, srv_json_error_body(code, message));
+    m->done = true;
+    pthread_cond_broadcast(&m->cv);
+    pthread_mutex_unlock(&m->mu);
 }

@@ -134,9 +134,9 @@ enum MHD_Result srv_http_respond_api_error(srv_http *h, struct MHD_Connection *c
 enum MHD_Result srv_http_respond_reply(srv_http *h, struct MHD_Connection *conn, request *rq,
                                        srv_cmd *c)
 {
-    char *body = c->reply.body;
-    c->reply.body = NULL;
-    return srv_http_respond(h, conn, rq, c->reply.status ? c->reply.status : 500,
+    char *body = c->mail.reply.body;
+    c->mail.reply.body = NULL;
+    return srv_http_respond(h, conn, rq, c->mail.reply.status ? c->mail.reply.status : 500,
                             body ? "application/json" : NULL, body, body ? strlen(body) : 0);
 }
 

@@ -97,12 +97,12 @@ enum MHD_Result srv_http_handle_frame(srv_http *h, struct MHD_Connection *conn, 
     srv_cmd *c = srv_cmd_new(SRV_CMD_FRAME_REQUEST);
     c->view = view;
     srv_render_call(h->cfg.loop, c, CALL_TIMEOUT_MS);
-    if (c->reply.status != 200) {
+    if (c->mail.reply.status != 200) {
         enum MHD_Result r = srv_http_respond_reply(h, conn, rq, c);
         srv_cmd_unref(c);
         return r;
     }
-    cJSON *j = cJSON_Parse(c->reply.body ? c->reply.body : "");
+    cJSON *j = cJSON_Parse(c->mail.reply.body ? c->mail.reply.body : "");
     double after = frame_after(j);
     cJSON_Delete(j);
     srv_cmd_unref(c);
@@ -180,13 +180,13 @@ enum MHD_Result srv_http_handle_upload(srv_http *h, struct MHD_Connection *conn,
     memcpy(c->file_name, file_name, sizeof c->file_name);
     srv_render_call(h->cfg.loop, c, SCENE_TIMEOUT_MS);
     pthread_mutex_lock(&h->counters_mu);
-    if (c->reply.status == 200)
+    if (c->mail.reply.status == 200)
         h->counters.uploads_accepted++;
     else
         h->counters.uploads_rejected++;
     pthread_mutex_unlock(&h->counters_mu);
-    if (c->reply.status == 200 && h->cfg.persist) {
-        srv_persist_post_scene(h->cfg.persist, c->reply.scene_generation, rq->data, rq->len);
+    if (c->mail.reply.status == 200 && h->cfg.persist) {
+        srv_persist_post_scene(h->cfg.persist, c->scene_generation, rq->data, rq->len);
         rq->data = NULL;
         rq->len = rq->cap = 0;
     }
@@ -214,7 +214,7 @@ enum MHD_Result srv_http_handle_environment(srv_http *h, struct MHD_Connection *
         c->env_image = img;
     }
     srv_render_call(h->cfg.loop, c, SCENE_TIMEOUT_MS);
-    bool ok = c->reply.status == 200 || c->reply.status == 204;
+    bool ok = c->mail.reply.status == 200 || c->mail.reply.status == 204;
     if (ok && h->cfg.persist) {
         srv_persist_post_environment(h->cfg.persist, rq->method == M_PUT ? rq->data : NULL,
                                      rq->method == M_PUT ? rq->len : 0);

@@ -140,7 +140,7 @@ static void apply_view_cmd(srv_render_loop *l, srv_cmd *c, double now)
             srv_debug("render", "viewer camera ignored: %s", e.message);
             return;
         }
-        v->input_ticket = c->ticket;
+        v->input_ticket = c->mail.ticket;
         touch_view(v, now, true);
         publish_view(l, v, false);
         if (v->id == SRV_DEFAULT_VIEW) l->persist_dirty = true;
@@ -408,10 +408,10 @@ static void *render_main(void *arg)
     srv_sched_view sv[256];
     for (;;) {
         bool closed;
-        srv_cmd *batch = srv_mailbox_take(&l->mb, &closed);
+        srv_mail *batch = srv_mailbox_take(&l->mb, &closed);
         while (batch) {
-            srv_cmd *c = batch;
-            batch = c->next;
+            srv_cmd *c = srv_cmd_of(batch);
+            batch = batch->next;
             apply(l, c);
             srv_cmd_unref(c);
         }
@@ -599,12 +599,12 @@ void srv_render_loop_destroy(srv_render_loop *l)
 
 bool srv_render_call(srv_render_loop *l, srv_cmd *c, unsigned timeout_ms)
 {
-    return srv_mailbox_call(&l->mb, c, timeout_ms);
+    return srv_mailbox_call(&l->mb, &c->mail, timeout_ms);
 }
 
 uint64_t srv_render_post(srv_render_loop *l, srv_cmd *c)
 {
-    return srv_mailbox_post(&l->mb, c);
+    return srv_mailbox_post(&l->mb, &c->mail);
 }
 
 uint32_t srv_render_new_view_id(srv_render_loop *l)

@@ -180,9 +180,9 @@ static unsigned replace_scene(srv_scene_service *svc, srv_cmd *c)
              (unsigned long long)svc->st.generation, (unsigned long long)svc->st.scene.tri_total,
              srv_mono_ms() - t0);
     srv_scene_publish_scene(svc);
-    pthread_mutex_lock(&c->mu);
-    c->reply.scene_generation = svc->st.generation;
-    pthread_mutex_unlock(&c->mu);
+    pthread_mutex_lock(&c->mail.mu);
+    c->scene_generation = svc->st.generation;
+    pthread_mutex_unlock(&c->mail.mu);
     srv_cmd_complete_json(c, 200, srv_scene_json(svc));
     return SRV_CHANGE_VIEWS | SRV_CHANGE_SCENE | SRV_CHANGE_PERSIST;
 }
