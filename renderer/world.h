@@ -69,6 +69,9 @@ rd_vk_result rd_world_configure_gi(rd_world *w, const float bmin[3], const float
  * n == 0. Fills w->stats with the summed pass times ("probe trace", "probe shade", ...) and
  * rays. Needs a scene. */
 rd_vk_result rd_world_update(rd_world *w, unsigned n, char *err, size_t errlen);
+/* The cap of the offline tools' default convergence (`probecast render` without --frames,
+ * eval's default row, the tests): a field still awake after this many updates is reported. */
+#define RD_WORLD_CONVERGE_CAP 2000u
 /* Runs probe updates until the field has converged (rd_ddgi_converged) or `cap` updates ran;
  * *done gets the number run. OK with *done = 0 when GI is off or the field is converged. */
 rd_vk_result rd_world_converge(rd_world *w, unsigned cap, unsigned *done, char *err, size_t errlen);

@@ -65,7 +65,7 @@ float *test_render(rd_vk *vk, const test_render_desc *d, pc_view *view_out,
     if (res == RD_VK_OK && d->converge && r.world.gi) {
         unsigned done = 0;
         rd_world_set_scene(&r.world, &gs);
-        res = rd_world_converge(&r.world, 2000, &done, err, sizeof err);
+        res = rd_world_converge(&r.world, RD_WORLD_CONVERGE_CAP, &done, err, sizeof err);
         CHECKF(res == RD_VK_OK, "%s", err);
         CHECKF(rd_world_converged(&r.world), "%s: not converged after %u updates", d->scene, done);
         printf("%s: converged after %u probe updates\n", d->scene, done);

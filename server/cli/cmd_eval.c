@@ -25,10 +25,16 @@ static void eval_usage(FILE *f)
         f, "usage: probecast eval [OPTIONS]\n"
            "\n"
            "Renders each scene of the hard-case suite with a path-traced reference and a sweep of\n"
-           "GI settings, and reports GPU time per frame against the error.\n"
+           "GI settings, and reports GPU time per frame against the error. Every case also gets\n"
+           "the row a user gets without flags (mode default: the default probe grid converged by\n"
+           "the default rule until it sleeps, with its updates and GPU ms to sleep).\n"
            "\n"
            "Options:\n"
            "  --cases A,B,...        scenes of the suite (default: all; --list shows them)\n"
+           "  --materials A,B,...    material families: lambert (the builtin's own), gltf (its\n"
+           "                         glTF twin: the default dielectric, Appendix B's specular),\n"
+           "                         metal (metallic 0.5, roughness 0.5) (default lambert,gltf);\n"
+           "                         twins only for cases whose materials are all Lambertian\n"
            "  --width W, --height H  image size (default 320 x 180)\n"
            "  --ref-spp N            reference samples per pixel (default 1024)\n"
            "  --rays A,B,...         rays per probe to sweep (default 64,128,256)\n"
@@ -61,6 +67,28 @@ static bool parse_uint_list(const char *opt, const char *s, unsigned *out, unsig
     return *n > 0;
 }
 
+/* --materials: a comma-separated subset of lambert, gltf, metal. */
+static bool parse_families(const char *s, unsigned *out)
+{
+    static const char *names[] = {"lambert", "gltf", "metal"};
+    *out = 0;
+    for (const char *p = s; *p;) {
+        size_t len = strcspn(p, ",");
+        unsigned bit = 0;
+        for (unsigned k = 0; k < 3; k++)
+            if (strlen(names[k]) == len && strncmp(names[k], p, len) == 0) bit = 1u << k;
+        if (!bit) {
+            fprintf(stderr, "probecast eval: --materials: unknown family '%.*s' (lambert, gltf, "
+                            "metal)\n", (int)len, p);
+            return false;
+        }
+        *out |= bit;
+        p += len + (p[len] == ',');
+    }
+    if (!*out) fprintf(stderr, "probecast eval: --materials needs at least one family\n");
+    return *out != 0;
+}
+
 static int parse(int argc, char **argv, eval_args *a)
 {
     memset(a, 0, sizeof *a);
@@ -71,6 +99,7 @@ static int parse(int argc, char **argv, eval_args *a)
     a->density[0] = 0.5f, a->density[1] = 1, a->density[2] = 2, a->ndensity = 3;
     a->out_dir = "eval-out";
     a->noise_floor = true;
+    a->families = EVAL_LAMBERT | EVAL_GLTF;
     for (int i = 1; i < argc; i++) {
         const char *o = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         bool takes = strcmp(o, "--help") && strcmp(o, "-h") && strcmp(o, "--list") &&
@@ -90,6 +119,9 @@ static int parse(int argc, char **argv, eval_args *a)
             a->noise_floor = false;
         } else if (strcmp(o, "--cases") == 0) {
             a->cases = v, i++;
+        } else if (strcmp(o, "--materials") == 0) {
+            if (!parse_families(v, &a->families)) return 2;
+            i++;
         } else if (strcmp(o, "--replot") == 0) {
             a->replot = v, i++;
         } else if (strcmp(o, "--out") == 0) {
@@ -256,6 +288,17 @@ float *eval_reference(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene *
     return rgb;
 }
 
+/* The median of n values (sorted in place; a handful of values: insertion sort). */
+static double median(double *v, unsigned n)
+{
+    for (unsigned i = 1; i < n; i++)
+        for (unsigned j = i; j > 0 && v[j] < v[j - 1]; j--) {
+            double t = v[j];
+            v[j] = v[j - 1], v[j - 1] = t;
+        }
+    return v[n / 2];
+}
+
 /* One GI setting: converge for `updates` (the moving case moves half way through), measure
  * the error, then time steady-state frames of one update each. */
 static bool run_setting(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene *gs,
@@ -299,12 +342,7 @@ static bool run_setting(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene
             return false;
         if (f >= 2) times[f - 2] = rd_frame_stats_total_ms(&c->r.stats);
     }
-    for (unsigned i = 1; i < a->timing_frames; i++) /* insertion sort: a handful of values */
-        for (unsigned j = i; j > 0 && times[j] < times[j - 1]; j--) {
-            double t = times[j];
-            times[j] = times[j - 1], times[j - 1] = t;
-        }
-    row->gpu_ms = times[a->timing_frames / 2];
+    row->gpu_ms = median(times, a->timing_frames);
     if (gi->mode != PC_GI_OFF) {
         row->probes[0] = c->r.world.ddgi.vol.counts.x;
         row->probes[1] = c->r.world.ddgi.vol.counts.y;
@@ -313,6 +351,184 @@ static bool run_setting(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene
     }
     row->updates = gi->mode != PC_GI_OFF ? updates : 0;
     return true;
+}
+
+/* The row a user gets without flags: the default probe grid and rays, converged by the default
+ * rule until the field sleeps (at most RD_WORLD_CONVERGE_CAP updates), then the image; GPU ms of a
+ * steady-state frame after that (probes asleep: shading only), the updates and GPU ms it took
+ * to fall asleep. The moving case is measured in its final pose. */
+static bool run_default(eval_ctx *c, rd_scene *s, rd_gpu_scene *gs, const rd_view_camera *cam,
+                        const float *ref, eval_row *row)
+{
+    const eval_args *a = c->a;
+    rd_ddgi_settings gi = {.mode = PC_GI_DDGI, .seed = 1};
+    if (rd_renderer_configure_gi(&c->r, s->bounds_min, s->bounds_max, &gi, c->err,
+                                 sizeof c->err) != RD_VK_OK)
+        return false;
+    rd_world_set_scene(&c->r.world, gs);
+    unsigned done = 0;
+    if (rd_world_converge(&c->r.world, RD_WORLD_CONVERGE_CAP, &done, c->err, sizeof c->err) !=
+        RD_VK_OK)
+        return false;
+    row->sleep_ms = rd_frame_stats_total_ms(&c->r.world.stats);
+    row->slept = rd_world_converged(&c->r.world);
+    row->updates = done;
+    rd_frame_settings fs = {.width = a->width, .height = a->height, .seed = 1};
+    if (rd_renderer_render(&c->r, gs, cam, &fs, c->err, sizeof c->err) != RD_VK_OK) return false;
+    size_t px = (size_t)a->width * a->height;
+    float *img = malloc(px * 12);
+    if (!img) abort();
+    if (rd_renderer_read_hdr(&c->r, img, c->err, sizeof c->err) != RD_VK_OK) {
+        free(img);
+        return false;
+    }
+    rd_image_compare(img, ref, px, &row->err);
+    free(img);
+    fs.gi_updates = 1;
+    double times[100];
+    for (unsigned f = 0; f < a->timing_frames + 2; f++) {
+        if (rd_renderer_render(&c->r, gs, cam, &fs, c->err, sizeof c->err) != RD_VK_OK)
+            return false;
+        if (f >= 2) times[f - 2] = rd_frame_stats_total_ms(&c->r.stats);
+    }
+    row->gpu_ms = median(times, a->timing_frames);
+    row->probes[0] = c->r.world.ddgi.vol.counts.x;
+    row->probes[1] = c->r.world.ddgi.vol.counts.y;
+    row->probes[2] = c->r.world.ddgi.vol.counts.z;
+    row->rays = c->r.world.ddgi.vol.counts.w;
+    row->hysteresis = 0.97f;
+    snprintf(row->mode, sizeof row->mode, "default");
+    snprintf(row->config, sizeof row->config, "default %ux%ux%u r%u %s%u", row->probes[0],
+             row->probes[1], row->probes[2], row->rays, row->slept ? "sleeps@" : "awake@",
+             row->updates);
+    return true;
+}
+
+/* True when every material of s is Lambertian (no specular lobe, not metallic): the cases that
+ * get glTF-material twins. */
+static bool all_lambertian(const rd_scene *s)
+{
+    for (uint32_t m = 0; m < s->material_count; m++)
+        if (s->materials[m].specular > 0 || s->materials[m].metallic > 0) return false;
+    return true;
+}
+
+/* One case of the suite in one material family (bit index f of eval_args.families): its
+ * references, the direct, classic and default rows and the sweep, appended at rows[*nrows]. A
+ * twin (f > 0) of a case that is not all Lambertian is skipped. False after an error (printed). */
+static bool run_case(eval_ctx *c, const rd_hard_case *hc, unsigned f, eval_row *rows,
+                     unsigned *nrows, unsigned *done, unsigned total)
+{
+    static const char *suffix[3] = {"", "+gltf", "+metal"};
+    const eval_args *a = c->a;
+    const char *name = hc->name;
+    char label[48], spec[64];
+    snprintf(label, sizeof label, "%s%s", name, suffix[f]);
+    snprintf(spec, sizeof spec, "hard:%s%s", name, suffix[f]);
+    unsigned ngrids = a->nprobes ? a->nprobes : a->ndensity;
+    unsigned sweep = ngrids * a->nrays * a->nupdates * a->nhysteresis;
+    rd_scene s;
+    rd_gpu_scene gs;
+    rd_view_camera cam;
+    if (f > 0) {
+        bool lambertian = rd_hard_case_build(name, &s, c->err, sizeof c->err) && all_lambertian(&s);
+        rd_scene_destroy(&s);
+        if (!lambertian) {
+            *done += 3 + sweep + (a->noise_floor ? 1 : 0) + 1;
+            progress(*done, total, label);
+            return true;
+        }
+    }
+    if (!rd_procedural_build(spec, &s, c->err, sizeof c->err) ||
+        !rd_camera_for_scene(&s, -1, &cam, c->err, sizeof c->err)) {
+        fprintf(stderr, "probecast eval: %s: %s\n", label, c->err);
+        return false;
+    }
+    if (rd_gpu_scene_create(&c->vk, &gs, &s, c->err, sizeof c->err) != RD_VK_OK) {
+        fprintf(stderr, "probecast eval: %s: %s\n", label, c->err);
+        rd_scene_destroy(&s);
+        return false;
+    }
+    bool ok = true;
+    rd_hard_case_pose(name, &s, 4); /* the reference shows the final pose */
+    if (rd_gpu_scene_update_instances(&c->vk, &gs, &s, c->err, sizeof c->err) != RD_VK_OK)
+        ok = false;
+    progress(*done, total, label);
+    double ref_ms = 0, noise_ms = 0, noise = 0;
+    float *ref = ok ? eval_reference(c, label, &s, &gs, &cam, 1, &ref_ms) : NULL;
+    progress(++*done, total, label);
+    if (ref && a->noise_floor) {
+        float *ref2 = eval_reference(c, label, &s, &gs, &cam, 2, &noise_ms);
+        if (ref2) {
+            rd_image_error e;
+            rd_image_compare(ref2, ref, (size_t)a->width * a->height, &e);
+            noise = e.rel_mse;
+            free(ref2);
+        }
+        progress(++*done, total, label);
+    }
+    if (!ref) {
+        fprintf(stderr, "probecast eval: %s: reference failed: %s\n", label, c->err);
+        ok = false;
+    }
+    /* the fitted grid, for density factors */
+    rd_ddgi_settings fit = {.mode = PC_GI_DDGI};
+    unsigned fitted[3] = {1, 1, 1};
+    if (ok && rd_renderer_configure_gi(&c->r, s.bounds_min, s.bounds_max, &fit, c->err,
+                                       sizeof c->err) == RD_VK_OK) {
+        fitted[0] = c->r.world.ddgi.vol.counts.x, fitted[1] = c->r.world.ddgi.vol.counts.y,
+        fitted[2] = c->r.world.ddgi.vol.counts.z;
+    }
+    for (unsigned k = 0; ok && k < 3 + sweep; k++) {
+        eval_row *row = &rows[*nrows];
+        memset(row, 0, sizeof *row);
+        snprintf(row->scene, sizeof row->scene, "%s", label);
+        snprintf(row->expect, sizeof row->expect, "%s", hc->expect);
+        rd_ddgi_settings gi = {.seed = 1};
+        unsigned updates = a->updates[a->nupdates - 1];
+        if (k == 2) {
+            ok = run_default(c, &s, &gs, &cam, ref, row);
+        } else {
+            if (k == 0) {
+                snprintf(row->mode, sizeof row->mode, "direct");
+                snprintf(row->config, sizeof row->config, "direct light only");
+            } else if (k == 1) {
+                gi.mode = PC_GI_CLASSIC;
+                gi.rays = a->rays[a->nrays - 1];
+                snprintf(row->mode, sizeof row->mode, "classic");
+            } else {
+                unsigned j = k - 3, g = j / (a->nrays * a->nupdates * a->nhysteresis);
+                gi.mode = PC_GI_DDGI;
+                gi.rays = a->rays[(j / (a->nupdates * a->nhysteresis)) % a->nrays];
+                updates = a->updates[(j / a->nhysteresis) % a->nupdates];
+                gi.hysteresis = a->hysteresis[j % a->nhysteresis];
+                for (int ax = 0; ax < 3; ax++) {
+                    double n = a->nprobes ? a->probes[g][ax]
+                                          : fmax(1.0, round(fitted[ax] * a->density[g]));
+                    gi.counts[ax] = (unsigned)fmin(n, 256.0);
+                }
+                snprintf(row->mode, sizeof row->mode, "ddgi");
+            }
+            ok = run_setting(c, name, &s, &gs, &cam, &gi, updates, ref, row);
+            row->hysteresis = gi.hysteresis > 0 ? gi.hysteresis : 0.97f;
+            if (k >= 1)
+                snprintf(row->config, sizeof row->config, "%s %ux%ux%u r%u u%u h%.2f",
+                         row->mode, row->probes[0], row->probes[1], row->probes[2], row->rays,
+                         row->updates, row->hysteresis);
+        }
+        if (!ok) {
+            fprintf(stderr, "\nprobecast eval: %s: %s\n", label, c->err);
+            break;
+        }
+        row->ref_ms = ref_ms;
+        row->noise_rel_mse = noise;
+        (*nrows)++;
+        progress(++*done, total, row->config);
+    }
+    free(ref);
+    rd_gpu_scene_destroy(&c->vk, &gs);
+    rd_scene_destroy(&s);
+    return ok;
 }
 
 static bool case_selected(const char *list, const char *name)
@@ -409,105 +625,21 @@ int cli_eval(int argc, char **argv)
     }
     unsigned ngrids = a.nprobes ? a.nprobes : a.ndensity;
     unsigned sweep = ngrids * a.nrays * a.nupdates * a.nhysteresis;
-    unsigned per_case = 2 + sweep + (a.noise_floor ? 1 : 0) + 1;
-    unsigned selected = 0;
+    unsigned per_case = 3 + sweep + (a.noise_floor ? 1 : 0) + 1;
+    unsigned selected = 0, nfamilies = 0;
+    for (unsigned f = 0; f < 3; f++)
+        nfamilies += (a.families >> f) & 1u;
     for (unsigned i = 0; i < ncases; i++)
-        selected += case_selected(a.cases, cases[i].name);
+        selected += case_selected(a.cases, cases[i].name) * nfamilies;
     unsigned total = selected * per_case, done = 0, nrows = 0;
     eval_row *rows = calloc((size_t)selected * per_case, sizeof *rows);
     if (!rows) abort();
     int rc = 0;
     for (unsigned ci = 0; ci < ncases && rc == 0; ci++) {
-        const char *name = cases[ci].name;
-        if (!case_selected(a.cases, name)) continue;
-        rd_scene s;
-        rd_gpu_scene gs;
-        rd_view_camera cam;
-        if (!rd_hard_case_build(name, &s, c.err, sizeof c.err) ||
-            !rd_camera_for_scene(&s, -1, &cam, c.err, sizeof c.err)) {
-            fprintf(stderr, "probecast eval: %s: %s\n", name, c.err);
-            rc = 1;
-            break;
-        }
-        if (rd_gpu_scene_create(&c.vk, &gs, &s, c.err, sizeof c.err) != RD_VK_OK) {
-            fprintf(stderr, "probecast eval: %s: %s\n", name, c.err);
-            rd_scene_destroy(&s);
-            rc = 1;
-            break;
-        }
-        rd_hard_case_pose(name, &s, 4); /* the reference shows the final pose */
-        if (rd_gpu_scene_update_instances(&c.vk, &gs, &s, c.err, sizeof c.err) != RD_VK_OK) rc = 1;
-        progress(done, total, name);
-        double ref_ms = 0, noise_ms = 0, noise = 0;
-        float *ref = rc ? NULL : eval_reference(&c, name, &s, &gs, &cam, 1, &ref_ms);
-        progress(++done, total, name);
-        if (ref && a.noise_floor) {
-            float *ref2 = eval_reference(&c, name, &s, &gs, &cam, 2, &noise_ms);
-            if (ref2) {
-                rd_image_error e;
-                rd_image_compare(ref2, ref, (size_t)a.width * a.height, &e);
-                noise = e.rel_mse;
-                free(ref2);
-            }
-            progress(++done, total, name);
-        }
-        if (!ref) {
-            fprintf(stderr, "probecast eval: %s: reference failed: %s\n", name, c.err);
-            rc = 1;
-        }
-        /* the fitted grid, for density factors */
-        rd_ddgi_settings fit = {.mode = PC_GI_DDGI};
-        unsigned fitted[3] = {1, 1, 1};
-        if (rc == 0 && rd_renderer_configure_gi(&c.r, s.bounds_min, s.bounds_max, &fit, c.err,
-                                                sizeof c.err) == RD_VK_OK) {
-            fitted[0] = c.r.world.ddgi.vol.counts.x, fitted[1] = c.r.world.ddgi.vol.counts.y,
-            fitted[2] = c.r.world.ddgi.vol.counts.z;
-        }
-        for (unsigned k = 0; rc == 0 && k < 2 + sweep; k++) {
-            eval_row *row = &rows[nrows];
-            memset(row, 0, sizeof *row);
-            snprintf(row->scene, sizeof row->scene, "%s", name);
-            snprintf(row->expect, sizeof row->expect, "%s", cases[ci].expect);
-            rd_ddgi_settings gi = {.seed = 1};
-            unsigned updates = a.updates[a.nupdates - 1];
-            if (k == 0) {
-                snprintf(row->mode, sizeof row->mode, "direct");
-                snprintf(row->config, sizeof row->config, "direct light only");
-            } else if (k == 1) {
-                gi.mode = PC_GI_CLASSIC;
-                gi.rays = a.rays[a.nrays - 1];
-                snprintf(row->mode, sizeof row->mode, "classic");
-            } else {
-                unsigned j = k - 2, g = j / (a.nrays * a.nupdates * a.nhysteresis);
-                gi.mode = PC_GI_DDGI;
-                gi.rays = a.rays[(j / (a.nupdates * a.nhysteresis)) % a.nrays];
-                updates = a.updates[(j / a.nhysteresis) % a.nupdates];
-                gi.hysteresis = a.hysteresis[j % a.nhysteresis];
-                for (int ax = 0; ax < 3; ax++) {
-                    double n =
-                        a.nprobes ? a.probes[g][ax] : fmax(1.0, round(fitted[ax] * a.density[g]));
-                    gi.counts[ax] = (unsigned)fmin(n, 256.0);
-                }
-                snprintf(row->mode, sizeof row->mode, "ddgi");
-            }
-            if (!run_setting(&c, name, &s, &gs, &cam, &gi, updates, ref, row)) {
-                fprintf(stderr, "\nprobecast eval: %s: %s\n", name, c.err);
-                rc = 1;
-                break;
-            }
-            row->hysteresis = gi.hysteresis > 0 ? gi.hysteresis : 0.97f;
-            if (k >= 1)
-                snprintf(row->config, sizeof row->config, "%s %ux%ux%u r%u u%u h%.2f", row->mode,
-                         row->probes[0], row->probes[1], row->probes[2], row->rays, row->updates,
-                         row->hysteresis);
-            row->ref_ms = ref_ms;
-            row->noise_rel_mse = noise;
-            nrows++;
-            progress(++done, total, row->config);
-        }
-        free(ref);
-        rd_gpu_scene_destroy(&c.vk, &gs);
-        rd_scene_destroy(&s);
+        if (!case_selected(a.cases, cases[ci].name)) continue;
+        for (unsigned f = 0; f < 3 && rc == 0; f++)
+            if (a.families & (1u << f))
+                rc = run_case(&c, &cases[ci], f, rows, &nrows, &done, total) ? 0 : 1;
     }
     if (rc == 0) {
         char path[1024];

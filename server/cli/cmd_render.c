@@ -13,7 +13,6 @@
 #include "renderer/builtin/procedural.h"
 #include "renderer/render.h"
 
-#define RENDER_MAX_UPDATES 2000u /* default cap of the convergence without --frames */
 #define RENDER_WARMUP_MS 500.0   /* --timings renders untimed frames this long first */
 
 static void render_usage(FILE *f)
@@ -68,7 +67,7 @@ static void render_usage(FILE *f)
             "                         GPU, else lavapipe)\n"
             "  --list-devices         list the Vulkan devices and exit\n"
             "  --help                 this text\n",
-            rd_procedural_names(), RD_DDGI_DEFAULT_RAYS, RENDER_MAX_UPDATES,
+            rd_procedural_names(), RD_DDGI_DEFAULT_RAYS, RD_WORLD_CONVERGE_CAP,
             (double)RD_DDGI_DEFAULT_HYSTERESIS);
 }
 
@@ -97,7 +96,7 @@ static int parse(int argc, char **argv, render_args *a)
     a->fs.height = 540;
     a->gi.mode = PC_GI_DDGI;
     a->frames = 0;
-    a->max_updates = RENDER_MAX_UPDATES;
+    a->max_updates = RD_WORLD_CONVERGE_CAP;
     a->spp = 256;
     for (int i = 1; i < argc; i++) {
         const char *o = argv[i];

@@ -7,6 +7,10 @@
 
 #include "renderer/render.h"
 
+/* The material families eval renders each case in (--materials): the builtin's own Lambertian
+ * materials, and its glTF twins NAME+gltf and NAME+metal (renderer/builtin/procedural.h). */
+enum { EVAL_LAMBERT = 1, EVAL_GLTF = 2, EVAL_METAL = 4 };
+
 typedef struct eval_args {
     const char *cases, *out_dir, *cache_dir, *device;
     unsigned width, height, ref_spp, timing_frames;
@@ -17,6 +21,7 @@ typedef struct eval_args {
     unsigned probes[8][3], nprobes; /* explicit probe counts (replace densities) */
     float hysteresis[8];
     unsigned nhysteresis;
+    unsigned families; /* bit per material family: EVAL_LAMBERT, EVAL_GLTF, EVAL_METAL */
     bool noise_floor, list;
     bool dynamic; /* --dynamic: the dynamic cases instead of the static suite */
     const char *replot;

@@ -26,14 +26,17 @@ bool eval_write_csv(const char *path, const eval_row *rows, unsigned n)
     fprintf(
         f,
         "scene,config,mode,probes_x,probes_y,probes_z,rays,updates,hysteresis,gpu_ms,rmse,rel_mse,"
-        "smape,mean_lum_bias,p99_abs,non_finite,reference_noise_rel_mse,reference_ms,pareto\n");
+        "smape,mean_lum_bias,p99_abs,non_finite,reference_noise_rel_mse,reference_ms,pareto,"
+        "sleep_ms,slept\n");
     for (unsigned i = 0; i < n; i++) {
         const eval_row *r = &rows[i];
-        fprintf(f, "%s,%s,%s,%u,%u,%u,%u,%u,%.2f,%.4f,%.6g,%.6g,%.6g,%.6g,%.6g,%zu,%.6g,%.3f,%d\n",
+        fprintf(f,
+                "%s,%s,%s,%u,%u,%u,%u,%u,%.2f,%.4f,%.6g,%.6g,%.6g,%.6g,%.6g,%zu,%.6g,%.3f,%d,%.3f,"
+                "%d\n",
                 r->scene, r->config, r->mode, r->probes[0], r->probes[1], r->probes[2], r->rays,
                 r->updates, r->hysteresis, r->gpu_ms, r->err.rmse, r->err.rel_mse, r->err.smape,
                 r->err.mean_lum_bias, r->err.p99_abs, r->err.non_finite, r->noise_rel_mse,
-                r->ref_ms, r->pareto ? 1 : 0);
+                r->ref_ms, r->pareto ? 1 : 0, r->sleep_ms, r->slept ? 1 : 0);
     }
     return fclose(f) == 0;
 }
@@ -84,17 +87,19 @@ bool eval_write_json(const char *path, const eval_row *rows, unsigned n, const c
                 "\"hysteresis\": %.2f, \"gpu_ms\": ",
                 r->probes[0], r->probes[1], r->probes[2], r->rays, r->updates, r->hysteresis);
         json_num(f, r->gpu_ms);
-        const double vals[] = {r->err.rmse,    r->err.rel_mse,   r->err.smape, r->err.mean_lum_bias,
-                               r->err.p99_abs, r->noise_rel_mse, r->ref_ms};
+        const double vals[] = {r->err.rmse,    r->err.rel_mse,   r->err.smape,
+                               r->err.mean_lum_bias, r->err.p99_abs, r->noise_rel_mse,
+                               r->ref_ms,      r->sleep_ms};
         const char *names[] = {"rmse",          "rel_mse", "smape",
                                "mean_lum_bias", "p99_abs", "reference_noise_rel_mse",
-                               "reference_ms"};
-        for (int k = 0; k < 7; k++) {
+                               "reference_ms",  "sleep_ms"};
+        for (int k = 0; k < 8; k++) {
             fprintf(f, ", \"%s\": ", names[k]);
             json_num(f, vals[k]);
         }
-        fprintf(f, ", \"non_finite\": %zu, \"pareto\": %s}%s\n", r->err.non_finite,
-                r->pareto ? "true" : "false", i + 1 < n ? "," : "");
+        fprintf(f, ", \"slept\": %s, \"non_finite\": %zu, \"pareto\": %s}%s\n",
+                r->slept ? "true" : "false", r->err.non_finite, r->pareto ? "true" : "false",
+                i + 1 < n ? "," : "");
     }
     fprintf(f, "  ]\n}\n");
     return fclose(f) == 0;
@@ -102,13 +107,17 @@ bool eval_write_json(const char *path, const eval_row *rows, unsigned n, const c
 
 void eval_print_table(FILE *f, const eval_row *rows, unsigned n)
 {
-    fprintf(f, "%-14s %-30s %9s %11s %10s %9s %9s %6s\n", "scene", "config", "GPU ms", "relMSE",
-            "RMSE", "bias", "p99", "front");
+    fprintf(f, "%-20s %-34s %9s %11s %10s %9s %9s %6s %s\n", "scene", "config", "GPU ms",
+            "relMSE", "RMSE", "bias", "p99", "front", "to sleep");
     for (unsigned i = 0; i < n; i++) {
         const eval_row *r = &rows[i];
-        fprintf(f, "%-14s %-30s %9.3f %11.4g %10.4g %+8.1f%% %9.4g %6s\n", r->scene, r->config,
+        char sleep[48] = "";
+        if (strcmp(r->mode, "default") == 0)
+            snprintf(sleep, sizeof sleep, "%s%u updates, %.1f GPU ms", r->slept ? "" : "NOT: ",
+                     r->updates, r->sleep_ms);
+        fprintf(f, "%-20s %-34s %9.3f %11.4g %10.4g %+8.1f%% %9.4g %6s %s\n", r->scene, r->config,
                 r->gpu_ms, r->err.rel_mse, r->err.rmse, 100 * r->err.mean_lum_bias, r->err.p99_abs,
-                r->pareto ? "*" : "");
+                r->pareto ? "*" : "", sleep);
     }
 }
 
@@ -116,6 +125,7 @@ static const char *mode_colour(const char *mode)
 {
     if (strcmp(mode, "ddgi") == 0) return "#1f77b4";
     if (strcmp(mode, "classic") == 0) return "#ff7f0e";
+    if (strcmp(mode, "default") == 0) return "#2ca02c";
     return "#7f7f7f";
 }
 
@@ -240,16 +250,18 @@ bool eval_read_csv(const char *path, eval_row **rows_out, unsigned *n_out)
         }
         eval_row *r = &rows[n];
         memset(r, 0, sizeof *r);
-        int pareto = 0;
-        int got = sscanf(
-            line,
-            "%47[^,],%63[^,],%15[^,],%u,%u,%u,%u,%u,%f,%lf,%lf,%lf,%lf,%lf,%lf,%zu,%lf,%lf,%d",
-            r->scene, r->config, r->mode, &r->probes[0], &r->probes[1], &r->probes[2], &r->rays,
-            &r->updates, &r->hysteresis, &r->gpu_ms, &r->err.rmse, &r->err.rel_mse, &r->err.smape,
-            &r->err.mean_lum_bias, &r->err.p99_abs, &r->err.non_finite, &r->noise_rel_mse,
-            &r->ref_ms, &pareto);
-        if (got != 19) ok = false;
+        int pareto = 0, slept = 0;
+        int got = sscanf(line,
+                         "%47[^,],%63[^,],%15[^,],%u,%u,%u,%u,%u,%f,%lf,%lf,%lf,%lf,%lf,%lf,%zu,%lf,"
+                         "%lf,%d,%lf,%d",
+                         r->scene, r->config, r->mode, &r->probes[0], &r->probes[1],
+                         &r->probes[2], &r->rays, &r->updates, &r->hysteresis, &r->gpu_ms,
+                         &r->err.rmse, &r->err.rel_mse, &r->err.smape, &r->err.mean_lum_bias,
+                         &r->err.p99_abs, &r->err.non_finite, &r->noise_rel_mse, &r->ref_ms,
+                         &pareto, &r->sleep_ms, &slept);
+        if (got != 19 && got != 21) ok = false; /* 19: written before the default row */
         r->pareto = pareto != 0;
+        r->slept = slept != 0;
         n++;
     }
     fclose(f);

@@ -12,10 +12,12 @@ typedef struct eval_row {
     char scene[48];
     char expect[256];
     char config[64]; /* e.g. "ddgi 8x8x8 r128 u32" */
-    char mode[16];   /* direct, classic, ddgi */
-    unsigned probes[3], rays, updates;
+    char mode[16];   /* direct, classic, default (what a user gets without flags), ddgi */
+    unsigned probes[3], rays, updates; /* default: the updates it took to fall asleep */
     float hysteresis;
     double gpu_ms;        /* GPU time of one steady-state frame (one probe update + shading) */
+    double sleep_ms;      /* default: GPU time of the updates until the field slept (else 0) */
+    bool slept;           /* default: the field fell asleep within the cap */
     double ref_ms;        /* GPU time of the reference render */
     double noise_rel_mse; /* relMSE between two references of different seeds */
     rd_image_error err;
