@@ -18,6 +18,7 @@
 #include "renderer/builtin/procedural.h"
 #include "renderer/render.h"
 #include "server/cli/eval_internal.h"
+#include "renderer/scene/default_lighting.h"
 
 static void eval_usage(FILE *f)
 {
@@ -42,6 +43,8 @@ static void eval_usage(FILE *f)
            "  --out DIR              where eval.csv, eval.json, eval.svg go (default eval-out)\n"
            "  --cache DIR            reference cache (default DIR-of-out/cache)\n"
            "  --device INDEX|NAME    Vulkan device\n"
+           "  --default-lighting on|off  light scenes without lights, sky or strong emitters\n"
+           "                         as `probecast render` does (default on)\n"
            "  --list                 list the suite with each case's expectation\n"
            "  --dynamic              instead of the suite: a light and an object move in a\n"
            "                         converged field; reports updates, GPU ms and error at\n"
@@ -98,6 +101,12 @@ static int parse(int argc, char **argv, eval_args *a)
             a->cache_dir = v, i++;
         } else if (strcmp(o, "--device") == 0) {
             a->device = v, i++;
+        } else if (strcmp(o, "--default-lighting") == 0) {
+            if (strcmp(v, "on") != 0 && strcmp(v, "off") != 0) {
+                fprintf(stderr, "probecast eval: --default-lighting expects on or off\n");
+                return 2;
+            }
+            a->no_default_lighting = strcmp(v, "off") == 0, i++;
         } else if (strcmp(o, "--width") == 0) {
             if (!srv_arg_uint(o, v, 8, 8192, &a->width)) return 2;
             i++;
@@ -239,6 +248,7 @@ float *eval_reference(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene *
     free(rgb);
     rd_frame_settings fs = {
         .width = a->width, .height = a->height, .pathtrace_spp = a->ref_spp, .seed = seed};
+    fs.env = &c->env;
     rd_ddgi_settings off = {0};
     if (rd_renderer_configure_gi(&c->r, s->bounds_min, s->bounds_max, &off, c->err,
                                  sizeof c->err) != RD_VK_OK ||
@@ -256,6 +266,16 @@ float *eval_reference(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene *
     return rgb;
 }
 
+void eval_default_lighting(eval_ctx *c, const char *name, rd_scene *s, const rd_view_camera *cam)
+{
+    c->env = (rd_environment){.mode = RD_ENV_UNIFORM, .intensity = 1};
+    rd_default_lighting_check check;
+    if (c->a->no_default_lighting || !rd_default_lighting_apply(s, cam, &c->env, &check)) return;
+    char why[160];
+    rd_default_lighting_describe(&check, why, sizeof why);
+    fprintf(stderr, "probecast eval: %s: default lighting added (%s)\n", name, why);
+}
+
 /* One GI setting: converge for `updates` (the moving case moves half way through), measure
  * the error, then time steady-state frames of one update each. */
 static bool run_setting(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene *gs,
@@ -270,6 +290,7 @@ static bool run_setting(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene
         RD_VK_OK)
         return false;
     rd_frame_settings fs = {.width = a->width, .height = a->height, .seed = gi->seed};
+    fs.env = &c->env;
     if (moving) {
         fs.gi_updates = updates / 2 ? updates / 2 : 1;
         if (rd_renderer_render(&c->r, gs, cam, &fs, c->err, sizeof c->err) != RD_VK_OK)
@@ -429,6 +450,7 @@ int cli_eval(int argc, char **argv)
             rc = 1;
             break;
         }
+        eval_default_lighting(&c, name, &s, &cam);
         if (rd_gpu_scene_create(&c.vk, &gs, &s, c.err, sizeof c.err) != RD_VK_OK) {
             fprintf(stderr, "probecast eval: %s: %s\n", name, c.err);
             rd_scene_destroy(&s);
