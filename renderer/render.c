@@ -35,7 +35,10 @@ rd_vk_result rd_renderer_render(rd_renderer *r, rd_gpu_scene *scene,
 {
     memset(&r->stats, 0, sizeof r->stats);
     rd_world_set_scene(&r->world, scene);
-    rd_world_set_sky(&r->world, fs->sky);
+    if (fs->env)
+        rd_world_set_environment(&r->world, fs->env);
+    else
+        rd_world_set_sky(&r->world, fs->sky);
     unsigned updates = 0;
     if (r->world.gi && fs->pathtrace_spp == 0) updates = fs->gi_updates ? fs->gi_updates : 1;
     rd_vk_result res = rd_world_update(&r->world, updates, err, errlen);

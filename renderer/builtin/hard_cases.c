@@ -23,7 +23,8 @@ static const rd_hard_case CASES[] = {
     {"tiny-emitter", "a 1 cm emitter of 1e5 nits is the only light: every output finite (no NaN, "
                      "Inf or half-float overflow) at any sample count; sampling finds it rarely "
                      "(fireflies in the path tracer, DDGI may miss it entirely)"},
-    {"no-lights", "no lights, no emission, black sky: every output value is exactly zero"},
+    {"no-lights", "no lights, no emission, black sky: every output value is exactly zero "
+                  "(probecast eval gives it default lighting unless --default-lighting off)"},
     {"degenerate",
      "zero-area triangles and NaN or zero normals: output finite and the floor still lit"},
     {"mirrored",

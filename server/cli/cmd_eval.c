@@ -18,6 +18,7 @@
 #include "renderer/builtin/procedural.h"
 #include "renderer/render.h"
 #include "server/cli/eval_internal.h"
+#include "renderer/scene/default_lighting.h"
 
 static void eval_usage(FILE *f)
 {
@@ -48,6 +49,8 @@ static void eval_usage(FILE *f)
            "  --out DIR              where eval.csv, eval.json, eval.svg go (default eval-out)\n"
            "  --cache DIR            reference cache (default DIR-of-out/cache)\n"
            "  --device INDEX|NAME    Vulkan device\n"
+           "  --default-lighting on|off  light scenes without lights, sky or strong emitters\n"
+           "                         as `probecast render` does (default on)\n"
            "  --list                 list the suite with each case's expectation\n"
            "  --dynamic              instead of the suite: a light and an object move in a\n"
            "                         converged field; reports updates, GPU ms and error at\n"
@@ -130,6 +133,12 @@ static int parse(int argc, char **argv, eval_args *a)
             a->cache_dir = v, i++;
         } else if (strcmp(o, "--device") == 0) {
             a->device = v, i++;
+        } else if (strcmp(o, "--default-lighting") == 0) {
+            if (strcmp(v, "on") != 0 && strcmp(v, "off") != 0) {
+                fprintf(stderr, "probecast eval: --default-lighting expects on or off\n");
+                return 2;
+            }
+            a->no_default_lighting = strcmp(v, "off") == 0, i++;
         } else if (strcmp(o, "--width") == 0) {
             if (!srv_arg_uint(o, v, 8, 8192, &a->width)) return 2;
             i++;
@@ -271,6 +280,7 @@ float *eval_reference(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene *
     free(rgb);
     rd_frame_settings fs = {
         .width = a->width, .height = a->height, .pathtrace_spp = a->ref_spp, .seed = seed};
+    fs.env = &c->env;
     rd_ddgi_settings off = {0};
     if (rd_renderer_configure_gi(&c->r, s->bounds_min, s->bounds_max, &off, c->err,
                                  sizeof c->err) != RD_VK_OK ||
@@ -299,6 +309,16 @@ static double median(double *v, unsigned n)
     return v[n / 2];
 }
 
+void eval_default_lighting(eval_ctx *c, const char *name, rd_scene *s, const rd_view_camera *cam)
+{
+    c->env = (rd_environment){.mode = RD_ENV_UNIFORM, .intensity = 1};
+    rd_default_lighting_check check;
+    if (c->a->no_default_lighting || !rd_default_lighting_apply(s, cam, &c->env, &check)) return;
+    char why[160];
+    rd_default_lighting_describe(&check, why, sizeof why);
+    fprintf(stderr, "probecast eval: %s: default lighting added (%s)\n", name, why);
+}
+
 /* One GI setting: converge for `updates` (the moving case moves half way through), measure
  * the error, then time steady-state frames of one update each. */
 static bool run_setting(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene *gs,
@@ -313,6 +333,7 @@ static bool run_setting(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene
         RD_VK_OK)
         return false;
     rd_frame_settings fs = {.width = a->width, .height = a->height, .seed = gi->seed};
+    fs.env = &c->env;
     if (moving) {
         fs.gi_updates = updates / 2 ? updates / 2 : 1;
         if (rd_renderer_render(&c->r, gs, cam, &fs, c->err, sizeof c->err) != RD_VK_OK)
@@ -366,6 +387,7 @@ static bool run_default(eval_ctx *c, rd_scene *s, rd_gpu_scene *gs, const rd_vie
                                  sizeof c->err) != RD_VK_OK)
         return false;
     rd_world_set_scene(&c->r.world, gs);
+    rd_world_set_environment(&c->r.world, &c->env);
     unsigned done = 0;
     if (rd_world_converge(&c->r.world, RD_WORLD_CONVERGE_CAP, &done, c->err, sizeof c->err) !=
         RD_VK_OK)
@@ -373,7 +395,7 @@ static bool run_default(eval_ctx *c, rd_scene *s, rd_gpu_scene *gs, const rd_vie
     row->sleep_ms = rd_frame_stats_total_ms(&c->r.world.stats);
     row->slept = rd_world_converged(&c->r.world);
     row->updates = done;
-    rd_frame_settings fs = {.width = a->width, .height = a->height, .seed = 1};
+    rd_frame_settings fs = {.width = a->width, .height = a->height, .seed = 1, .env = &c->env};
     if (rd_renderer_render(&c->r, gs, cam, &fs, c->err, sizeof c->err) != RD_VK_OK) return false;
     size_t px = (size_t)a->width * a->height;
     float *img = malloc(px * 12);
@@ -444,6 +466,7 @@ static bool run_case(eval_ctx *c, const rd_hard_case *hc, unsigned f, eval_row *
         fprintf(stderr, "probecast eval: %s: %s\n", label, c->err);
         return false;
     }
+    eval_default_lighting(c, label, &s, &cam);
     if (rd_gpu_scene_create(&c->vk, &gs, &s, c->err, sizeof c->err) != RD_VK_OK) {
         fprintf(stderr, "probecast eval: %s: %s\n", label, c->err);
         rd_scene_destroy(&s);

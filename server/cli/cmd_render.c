@@ -12,6 +12,7 @@
 #include "server/cli/image_io.h"
 #include "renderer/builtin/procedural.h"
 #include "renderer/render.h"
+#include "renderer/scene/default_lighting.h"
 
 #define RENDER_WARMUP_MS 500.0   /* --timings renders untimed frames this long first */
 
@@ -37,6 +38,10 @@ static void render_usage(FILE *f)
             "  --reflections on|off   ray-traced reflections of glossy materials (default on;\n"
             "                         off: no indirect specular, for comparisons)\n"
             "  --sky R,G,B            radiance of rays that leave the scene (default 0,0,0)\n"
+            "  --default-lighting on|off  a scene without lights, sky or emitters strong\n"
+            "                         enough to light it gets a key light and a soft sky, as\n"
+            "                         the daemon gives it (default on; a line says when, and\n"
+            "                         why)\n"
             "  --quality Q            JPEG quality 1..100 (default 92)\n"
             "  --gi off|classic|ddgi|pathtrace  global illumination (default ddgi); classic =\n"
             "                         irradiance probes without visibility (the paper's\n"
@@ -83,6 +88,7 @@ typedef struct render_args {
     double time;
     unsigned quality, repeat;
     bool timings, list_devices;
+    bool no_default_lighting;
 } render_args;
 
 /* Returns -1 when parsing succeeded, else the exit status to use. */
@@ -167,6 +173,14 @@ static int parse(int argc, char **argv, render_args *a)
         } else if (strcmp(o, "--sky") == 0) {
             NEED_VALUE
             if (!srv_arg_floats(o, v, a->fs.sky, 3)) return 2;
+        } else if (strcmp(o, "--default-lighting") == 0) {
+            NEED_VALUE
+            if (strcmp(v, "on") == 0 || strcmp(v, "off") == 0) {
+                a->no_default_lighting = strcmp(v, "off") == 0;
+            } else {
+                fprintf(stderr, "probecast render: --default-lighting expects on or off\n");
+                return 2;
+            }
         } else if (strcmp(o, "--quality") == 0) {
             NEED_VALUE
             if (!srv_arg_uint(o, v, 1, 100, &a->quality)) return 2;
@@ -417,6 +431,18 @@ int cli_render(int argc, char **argv)
         return 1;
     }
 
+    /* --sky, or the default lighting (default_lighting.h), which adds its key light to the
+     * scene before the GPU gets it */
+    rd_environment env = {.mode = RD_ENV_UNIFORM, .intensity = 1};
+    memcpy(env.sky, a.fs.sky, sizeof env.sky);
+    a.fs.env = &env;
+    rd_default_lighting_check lighting;
+    if (!a.no_default_lighting && rd_default_lighting_apply(&scene, &cam, &env, &lighting)) {
+        char why[160];
+        rd_default_lighting_describe(&lighting, why, sizeof why);
+        fprintf(stderr, "probecast: default lighting added (%s)\n", why);
+    }
+
     rd_vk vk;
     rd_gpu_scene gs;
     rd_renderer r;
@@ -439,7 +465,7 @@ int cli_render(int argc, char **argv)
         /* no --frames: update until every probe has converged (they then sleep) */
         unsigned done = 0;
         rd_world_set_scene(&r.world, &gs);
-        rd_world_set_sky(&r.world, a.fs.sky);
+        rd_world_set_environment(&r.world, &env);
         vr = rd_world_converge(&r.world, a.max_updates, &done, err, sizeof err);
         const rd_ddgi_census *c = &r.world.ddgi.census;
         if (vr == RD_VK_OK && !rd_world_converged(&r.world))

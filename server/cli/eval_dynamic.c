@@ -102,14 +102,19 @@ static bool change(eval_ctx *c, const dyn_case *dc, rd_scene *s, rd_gpu_scene *g
     return ok;
 }
 
-/* Builds the case's scene in its first state (gs uploaded). */
+/* Builds the case's scene in its first state (gs uploaded), with its default lighting. */
 static bool build(eval_ctx *c, const dyn_case *dc, rd_scene *s, rd_gpu_scene *gs,
                   rd_view_camera *cam)
 {
     if (!rd_procedural_build(dc->scene, s, c->err, sizeof c->err)) return false;
     if (strcmp(dc->name, "object-move") == 0) rd_hard_case_pose("moving", s, 0);
-    if (!rd_camera_for_scene(s, -1, cam, c->err, sizeof c->err) ||
-        rd_gpu_scene_create(&c->vk, gs, s, c->err, sizeof c->err) != RD_VK_OK) {
+    if (!rd_camera_for_scene(s, -1, cam, c->err, sizeof c->err)) {
+        rd_scene_destroy(s);
+        return false;
+    }
+    eval_default_lighting(c, dc->name, s, cam);
+    rd_world_set_environment(&c->r.world, &c->env); /* the field converges under it */
+    if (rd_gpu_scene_create(&c->vk, gs, s, c->err, sizeof c->err) != RD_VK_OK) {
         rd_scene_destroy(s);
         return false;
     }

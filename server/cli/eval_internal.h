@@ -24,6 +24,7 @@ typedef struct eval_args {
     unsigned families; /* bit per material family: EVAL_LAMBERT, EVAL_GLTF, EVAL_METAL */
     bool noise_floor, list;
     bool dynamic; /* --dynamic: the dynamic cases instead of the static suite */
+    bool no_default_lighting;
     const char *replot;
 } eval_args;
 
@@ -31,8 +32,14 @@ typedef struct eval_ctx {
     rd_vk vk;
     rd_renderer r;
     const eval_args *a;
+    rd_environment env; /* the current scene's: black, or the default lighting's */
     char err[512];
 } eval_ctx;
+
+/* The renderer's default lighting (renderer/scene/default_lighting.h) for scene s of case name,
+ * as `probecast render` applies it: c->env becomes black or the default environment, and a
+ * scene that needs it gets the key light for cam (before its GPU scene is built). */
+void eval_default_lighting(eval_ctx *c, const char *name, rd_scene *s, const rd_view_camera *cam);
 
 /* Renders (or loads from the cache in a->cache_dir, keyed by a hash of the scene as it is
  * now, the image size, the sample count and seed) the path-traced reference of scene; name

@@ -88,6 +88,9 @@ cJSON *srv_scene_json(const srv_scene_service *svc)
         rd_environment env;
         srv_state_environment(&svc->st, &env);
         srv_json_add_floats(dl, "sky", env.sky, 3);
+        char why[160];
+        rd_default_lighting_describe(&svc->st.lighting, why, sizeof why);
+        cJSON_AddStringToObject(dl, "reason", why);
     } else {
         cJSON_AddFalseToObject(j, "default_lighting");
     }

@@ -121,6 +121,15 @@ static void apply_sky(srv_scene_service *svc)
     rd_world_set_environment(&svc->world, &e);
 }
 
+/* Says in the log when a scene arriving got default lighting, and why. */
+static void log_default_lighting(const srv_scene_service *svc)
+{
+    if (!svc->st.default_lighting) return;
+    char why[160];
+    rd_default_lighting_describe(&svc->st.lighting, why, sizeof why);
+    srv_info("render", "default lighting added (%s)", why);
+}
+
 /* Default lighting ended (the user added a light, or took the key light over): the default
  * environment goes too; GET /v1/scene says so. */
 static void default_lighting_ended(srv_scene_service *svc)
@@ -165,6 +174,7 @@ static unsigned replace_scene(srv_scene_service *svc, srv_cmd *c)
     memcpy(svc->st.file_name, c->file_name, sizeof svc->st.file_name);
     free(c->scene);
     c->scene = NULL;
+    log_default_lighting(svc);
     /* a scene without light got the default key light (scene_state.h), which the GPU scene,
      * built from the upload, does not have yet */
     if (svc->st.default_lighting &&
@@ -409,6 +419,7 @@ rd_vk_result srv_scene_service_init(srv_scene_service *svc, rd_vk *vk, srv_snaps
         else
             srv_info("render", "restored camera, lights, nodes and settings");
     }
+    log_default_lighting(svc);
     rd_vk_result vr = rd_gpu_scene_create(vk, &svc->gs, &svc->st.scene, err, errlen);
     svc->gs_ok = vr == RD_VK_OK;
     if (vr == RD_VK_OK) vr = rd_world_create(vk, &svc->world, err, errlen);

@@ -38,57 +38,38 @@ static void *xcalloc(size_t n, size_t size)
 
 /* ---- default lighting ------------------------------------------------------------------- */
 
-bool srv_scene_brings_light(const rd_scene *s)
+/* The environment the settings ask for. */
+static void settings_environment(const srv_settings *s, rd_environment *e)
 {
-    if (s->light_count > 0) return true;
-    for (uint32_t i = 0; i < s->material_count; i++) {
-        const float *e = s->materials[i].emission;
-        if (e[0] > 0 || e[1] > 0 || e[2] > 0) return true;
-    }
-    return false;
-}
-
-bool srv_settings_light_the_scene(const srv_settings *s)
-{
-    bool sky = s->sky[0] > 0 || s->sky[1] > 0 || s->sky[2] > 0;
-    bool ground = s->sky_ground[0] > 0 || s->sky_ground[1] > 0 || s->sky_ground[2] > 0;
-    return sky || (s->sky_mode == PC_ENV_GRADIENT && ground) || s->sky_mode == PC_ENV_IMAGE;
-}
-
-void srv_state_environment(const srv_scene_state *st, rd_environment *e)
-{
-    const srv_settings *s = &st->settings;
     memset(e, 0, sizeof *e);
     e->mode = (rd_env_mode)s->sky_mode;
     memcpy(e->sky, s->sky, sizeof e->sky);
     memcpy(e->ground, s->sky_ground, sizeof e->ground);
     e->intensity = s->sky_intensity;
     e->rotation = s->sky_rotation * 3.14159265358979323846f / 180.0f;
-    if (st->default_lighting && !srv_settings_light_the_scene(s)) {
-        e->mode = RD_ENV_UNIFORM;
-        e->sky[0] = SRV_DEFAULT_SKY_R, e->sky[1] = SRV_DEFAULT_SKY_G, e->sky[2] = SRV_DEFAULT_SKY_B;
-    }
 }
 
-/* A directional key light from above, behind and left of the default camera (a photographer's
- * 45-degree key), so that the side of the model the camera sees is lit. */
+void srv_state_environment(const srv_scene_state *st, rd_environment *e)
+{
+    settings_environment(&st->settings, e);
+    if (st->default_lighting && !rd_default_lighting_env_lights(e))
+        rd_default_lighting_environment(e);
+}
+
+/* The renderer's key light for the default camera, added through the API's path (an id). */
 static void add_default_key_light(srv_scene_state *st)
 {
     rd_view_camera v;
     srv_camera_to_view(&st->camera, &v);
-    const float up[3] = {0, 1, 0}, fallback[3] = {1, 0, 0};
-    float right[3], d[3];
-    rd_vec3_cross(right, v.forward, up);
-    rd_vec3_normalize(right, right, fallback);
-    for (int i = 0; i < 3; i++)
-        d[i] = v.forward[i] - 0.9f * up[i] + 0.5f * right[i];
-    const float down[3] = {0, -1, 0};
-    srv_light_patch p = {.has = SRV_LIGHT_TYPE | SRV_LIGHT_INTENSITY | SRV_LIGHT_DIRECTION |
-                                SRV_LIGHT_NAME,
-                         .type = RD_LIGHT_DIRECTIONAL,
-                         .intensity = SRV_DEFAULT_KEY_INTENSITY};
-    rd_vec3_normalize(p.direction, d, down);
-    snprintf(p.name, sizeof p.name, "default key light");
+    rd_light key;
+    rd_default_lighting_key(&v, &key);
+    srv_light_patch p = {.has = SRV_LIGHT_TYPE | SRV_LIGHT_COLOR | SRV_LIGHT_INTENSITY |
+                                SRV_LIGHT_DIRECTION | SRV_LIGHT_NAME,
+                         .type = key.type,
+                         .intensity = key.intensity};
+    memcpy(p.color, key.color, sizeof p.color);
+    memcpy(p.direction, key.direction, sizeof p.direction);
+    snprintf(p.name, sizeof p.name, "%s", key.name);
     srv_api_error e;
     uint32_t id;
     if (srv_state_light_add(st, &p, &id, &e)) {
@@ -97,15 +78,18 @@ static void add_default_key_light(srv_scene_state *st)
     }
 }
 
-/* After a scene or a saved state arrived: default lighting on when the scene brings no light
- * and no sky is set; off when its key light is gone (a saved state replaced the lights). */
+/* After a scene or a saved state arrived: default lighting on when the renderer's rule asks
+ * for it under the settings' environment; off when its key light is gone (a saved state
+ * replaced the lights). */
 static void settle_default_lighting(srv_scene_state *st)
 {
     if (st->default_lighting && srv_state_light_index(st, st->default_light_id) < 0)
         st->default_lighting = false;
-    if (!st->default_lighting && !srv_scene_brings_light(&st->scene) &&
-        !srv_settings_light_the_scene(&st->settings))
-        add_default_key_light(st);
+    if (st->default_lighting) return;
+    rd_environment env;
+    settings_environment(&st->settings, &env);
+    rd_default_lighting_decide(&st->scene, &env, &st->lighting);
+    if (st->lighting.needed) add_default_key_light(st);
 }
 
 bool srv_state_drop_default_lighting(srv_scene_state *st)

@@ -15,6 +15,7 @@
 #include "renderer/scene/camera.h"
 #include "renderer/gi/ddgi.h"
 #include "renderer/env/environment.h"
+#include "renderer/scene/default_lighting.h"
 
 typedef struct srv_scene_state {
     rd_scene scene;
@@ -27,19 +28,15 @@ typedef struct srv_scene_state {
     bool *node_moved; /* parallel to scene.nodes: changed through the API */
     srv_camera camera;
     srv_settings settings;
-    /* Default lighting: a scene that brings no light, no emission (and has no sky set) gets a
-     * key light framed to its default camera plus an environment, until the user adds a light
-     * (srv_state_drop_default_lighting) or takes the key light over (patch, delete). */
+    /* Default lighting (the renderer's rule, renderer/scene/default_lighting.h): a scene that
+     * brings no light, no environment and no emitter strong enough gets the key light framed to
+     * its default camera plus the default environment, until the user adds a light
+     * (srv_state_drop_default_lighting) or takes the key light over (patch, delete); a sky the
+     * user sets replaces the default environment. */
     bool default_lighting;
     uint32_t default_light_id;
+    rd_default_lighting_check lighting; /* the rule's last check (at the scene's arrival) */
 } srv_scene_state;
-
-/* The default environment's radiance and the key light's illuminance (lux-like units of the
- * renderer: a white diffuse surface facing the light reflects intensity / pi). */
-#define SRV_DEFAULT_SKY_R 0.20f
-#define SRV_DEFAULT_SKY_G 0.22f
-#define SRV_DEFAULT_SKY_B 0.26f
-#define SRV_DEFAULT_KEY_INTENSITY 2.5f
 
 /* Empty state with default settings. */
 void srv_state_init(srv_scene_state *st);
@@ -56,13 +53,9 @@ void srv_state_set_scene(srv_scene_state *st, rd_scene *scene, const char *sourc
  * (out empty) when nothing is left. */
 bool srv_state_clean_file_name(const char *raw, char out[SRV_FILE_NAME_MAX]);
 
-/* Whether the scene lights itself: a light, or a material that emits. */
-bool srv_scene_brings_light(const rd_scene *s);
-/* Whether the settings give the scene an environment that lights it (a sky that is not black,
- * a gradient that is not, or the HDR image mode). */
-bool srv_settings_light_the_scene(const srv_settings *s);
 /* The environment the world renders with (e->image left NULL: the world owns the image): the
- * settings', or the default environment while default lighting is on. */
+ * settings', or the default environment while default lighting is on and the settings' does not
+ * light the scene. */
 void srv_state_environment(const srv_scene_state *st, rd_environment *e);
 /* Ends default lighting: removes the key light. False when it was off. */
 bool srv_state_drop_default_lighting(srv_scene_state *st);

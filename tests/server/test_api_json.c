@@ -5,6 +5,7 @@
 
 #include "server/api/api_json.h"
 #include "server/scene/scene_state.h"
+#include "renderer/scene/mesh_builder.h"
 #include "test_util.h"
 
 static bool parse_camera(const char *text, srv_camera_patch *p, srv_api_error *e)
@@ -239,8 +240,8 @@ static void test_state(void)
 }
 
 /* Default lighting: a scene without lights or emission gets a key light (lit from the camera's
- * side) and the default sky; an emitting scene does not; the saved state keeps which light it is.
- */
+ * side) and the default sky; a scene lit by a large emitter does not, one with a small glowing
+ * detail does; the saved state keeps which light it is. */
 static void test_default_lighting(void)
 {
     srv_scene_state st;
@@ -260,8 +261,9 @@ static void test_default_lighting(void)
     CHECK(along > 0.3f && key->direction[1] < -0.3f);
     rd_environment env;
     srv_state_environment(&st, &env);
-    CHECK(env.mode == RD_ENV_UNIFORM && env.sky[0] == SRV_DEFAULT_SKY_R &&
-          env.sky[2] == SRV_DEFAULT_SKY_B);
+    CHECK(env.mode == RD_ENV_UNIFORM && env.sky[0] == RD_DEFAULT_SKY_R &&
+          env.sky[2] == RD_DEFAULT_SKY_B);
+    CHECK(st.lighting.needed && st.lighting.emitted_w == 0);
     /* an environment set by the user wins */
     st.settings.sky[1] = 0.5f;
     srv_state_environment(&st, &env);
@@ -294,14 +296,28 @@ static void test_default_lighting(void)
     CHECK(!srv_state_drop_default_lighting(&st2));
     srv_state_dispose(&st2);
 
-    /* an emitting material lights the scene itself */
-    rd_scene s3;
-    rd_scene_init(&s3);
-    rd_material glow = m;
-    glow.emission[0] = 2;
-    rd_scene_add_material(&s3, &glow);
-    srv_state_set_scene(&st, &s3, "test", 2);
-    CHECK(!st.default_lighting && st.scene.light_count == 0);
+    /* a 2 x 2 m emitting panel lights the scene itself; a 1 cm one on a 1 m box does not */
+    for (int big = 1; big >= 0; big--) {
+        rd_scene s3;
+        rd_scene_init(&s3);
+        rd_tri_list t = {0};
+        uint32_t glow = rd_build_material(&s3, "glow", 0, 0, 0, 2, 2, 2);
+        float h = big ? 1.0f : 0.005f;
+        const float a[3] = {-h, -h, 1}, b[3] = {h, -h, 1}, c[3] = {h, h, 1}, d[3] = {-h, h, 1};
+        rd_tris_quad(&t, a, b, c, d, glow);
+        if (!big) {
+            const float lo[3] = {-0.5f, -0.5f, 0}, hi[3] = {0.5f, 0.5f, 1};
+            rd_tris_box(&t, lo, hi, 0);
+        }
+        rd_tris_commit(&t, &s3, "panel");
+        char err[128];
+        CHECK(rd_scene_update(&s3, err, sizeof err));
+        srv_state_set_scene(&st, &s3, "test", 2);
+        CHECKF(st.default_lighting == !big && st.scene.light_count == (big ? 0u : 1u),
+               "%s emitter: default lighting %d", big ? "large" : "small", st.default_lighting);
+        CHECK(st.lighting.emitted_w > 0 &&
+              (st.lighting.emitted_w >= st.lighting.threshold_w) == big);
+    }
     srv_state_dispose(&st);
 }
 

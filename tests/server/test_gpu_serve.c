@@ -86,6 +86,10 @@ static void test_default_lighting(pc_daemon *d)
     CHECK(cJSON_IsString(type) && strcmp(type->valuestring, "directional") == 0);
     const cJSON *sky = cJSON_GetObjectItemCaseSensitive(dl, "sky");
     CHECK(cJSON_GetArraySize(sky) == 3 && cJSON_GetArrayItem(sky, 0)->valuedouble > 0);
+    const cJSON *reason = cJSON_GetObjectItemCaseSensitive(dl, "reason");
+    CHECKF(cJSON_IsString(reason) &&
+               strncmp(reason->valuestring, "no lights, no environment", 25) == 0,
+           "why: %s", cJSON_IsString(reason) ? reason->valuestring : "(none)");
     cJSON_Delete(scene);
 
     pc_ws ws;
