@@ -21,6 +21,7 @@
 #include "server/api/api_json.h"
 #include "server/base/clock.h"
 #include "server/base/log.h"
+#include "server/scene/documents_json.h"
 #include "server/scene/scene_state.h"
 #include "server/http/stats_report.h"
 #include "renderer/gltf/gltf_loader.h"
