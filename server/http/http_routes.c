@@ -1,6 +1,7 @@
 /* http_routes.c: the API's resources (protocol/openapi.yaml): health, frames, uploads, and the
  * JSON resources — GETs from the published snapshot, changes as commands to the render thread. */
 #include "server/http/http_internal.h"
+#include "server/http/http_response.h"
 
 #include <arpa/inet.h>
 #include <errno.h>
