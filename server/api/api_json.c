@@ -1,7 +1,7 @@
-/* api_json.c: strict JSON parsing of API bodies and viewer messages, and JSON views of the
- * scene state. See api_json.h for the contract and protocol/openapi.yaml for the documents. */
+/* api_json.c: strict JSON parsing of API bodies, the typed field readers it is made of, and the
+ * number printing every document shares. See api_json.h for the contract and
+ * protocol/openapi.yaml for the documents. */
 #include "server/api/api_json.h"
-#include "renderer/scene/xform.h"
 
 #include <ctype.h>
 #include <math.h>
@@ -47,7 +47,7 @@ cJSON *srv_json_parse_object(const char *text, size_t len, srv_api_error *e)
 
 /* ---- typed field readers ------------------------------------------------------------------ */
 
-static bool get_number(const cJSON *it, double lo, double hi, double *out, srv_api_error *e)
+bool srv_json_get_number(const cJSON *it, double lo, double hi, double *out, srv_api_error *e)
 {
     if (!cJSON_IsNumber(it)) return BAD("Field '%s' must be a number.", it->string);
     double v = it->valuedouble;
@@ -57,20 +57,11 @@ static bool get_number(const cJSON *it, double lo, double hi, double *out, srv_a
     return true;
 }
 
-static bool get_float(const cJSON *it, double lo, double hi, float *out, srv_api_error *e)
+bool srv_json_get_float(const cJSON *it, double lo, double hi, float *out, srv_api_error *e)
 {
     double v;
-    if (!get_number(it, lo, hi, &v, e)) return false;
+    if (!srv_json_get_number(it, lo, hi, &v, e)) return false;
     *out = (float)v;
-    return true;
-}
-
-static bool get_uint(const cJSON *it, double lo, double hi, unsigned *out, srv_api_error *e)
-{
-    if (!cJSON_IsNumber(it) || !isfinite(it->valuedouble) ||
-        it->valuedouble != floor(it->valuedouble) || it->valuedouble < lo || it->valuedouble > hi)
-        return BAD("Field '%s' must be an integer in %.0f..%.0f.", it->string, lo, hi);
-    *out = (unsigned)it->valuedouble;
     return true;
 }
 
@@ -118,8 +109,7 @@ static bool get_enum(const cJSON *it, const char *const *names, unsigned count, 
     return BAD("Field '%s' must be one of: %s.", it->string, list);
 }
 
-/* Each field may appear once: cJSON keeps duplicate keys, so they are caught here. */
-static bool once(unsigned *has, unsigned bit, const cJSON *it, srv_api_error *e)
+bool srv_json_once(unsigned *has, unsigned bit, const cJSON *it, srv_api_error *e)
 {
     if (*has & bit) return BAD("Field '%s' appears more than once.", it->string);
     *has |= bit;
@@ -131,40 +121,42 @@ static bool once(unsigned *has, unsigned bit, const cJSON *it, srv_api_error *e)
 /* ---- camera -----------------------------------------------------------------------------------
  */
 
-/* Reads one camera member; *known = false when the name is not a camera field. */
-static bool camera_member(const cJSON *it, srv_camera_patch *p, bool *known, srv_api_error *e)
+bool srv_json_camera_member(const cJSON *it, srv_camera_patch *p, bool *known, srv_api_error *e)
 {
     const char *k = it->string;
     *known = true;
     if (strcmp(k, "position") == 0)
-        return once(&p->has, SRV_CAM_POSITION, it, e) &&
+        return srv_json_once(&p->has, SRV_CAM_POSITION, it, e) &&
                get_vec(it, 3, -LIMIT_COORD, LIMIT_COORD, p->position, e);
     if (strcmp(k, "target") == 0)
-        return once(&p->has, SRV_CAM_TARGET, it, e) &&
+        return srv_json_once(&p->has, SRV_CAM_TARGET, it, e) &&
                get_vec(it, 3, -LIMIT_COORD, LIMIT_COORD, p->target, e);
     if (strcmp(k, "forward") == 0) {
-        if (!once(&p->has, SRV_CAM_FORWARD, it, e) || !get_vec(it, 3, -1e6, 1e6, p->forward, e))
+        if (!srv_json_once(&p->has, SRV_CAM_FORWARD, it, e) ||
+            !get_vec(it, 3, -1e6, 1e6, p->forward, e))
             return false;
         return nonzero(p->forward, 3) || BAD("Field 'forward' must not be the zero vector.");
     }
     if (strcmp(k, "up") == 0) {
-        if (!once(&p->has, SRV_CAM_UP, it, e) || !get_vec(it, 3, -1e6, 1e6, p->up, e)) return false;
+        if (!srv_json_once(&p->has, SRV_CAM_UP, it, e) || !get_vec(it, 3, -1e6, 1e6, p->up, e))
+            return false;
         return nonzero(p->up, 3) || BAD("Field 'up' must not be the zero vector.");
     }
     if (strcmp(k, "orientation") == 0) {
-        if (!once(&p->has, SRV_CAM_ORIENTATION, it, e) ||
+        if (!srv_json_once(&p->has, SRV_CAM_ORIENTATION, it, e) ||
             !get_vec(it, 4, -1e6, 1e6, p->orientation, e))
             return false;
         return nonzero(p->orientation, 4) ||
                BAD("Field 'orientation' must be a non-zero quaternion.");
     }
     if (strcmp(k, "fov") == 0)
-        return once(&p->has, SRV_CAM_FOV, it, e) && get_float(it, 1, 170, &p->fov_deg, e);
+        return srv_json_once(&p->has, SRV_CAM_FOV, it, e) &&
+               srv_json_get_float(it, 1, 170, &p->fov_deg, e);
     *known = false;
     return true;
 }
 
-static bool camera_consistent(const srv_camera_patch *p, srv_api_error *e)
+bool srv_json_camera_consistent(const srv_camera_patch *p, srv_api_error *e)
 {
     unsigned dirs = p->has & (SRV_CAM_TARGET | SRV_CAM_FORWARD | SRV_CAM_ORIENTATION);
     if (dirs & (dirs - 1)) return BAD("Give at most one of 'target', 'forward' and 'orientation'.");
@@ -180,10 +172,10 @@ bool srv_json_camera_patch(const cJSON *obj, srv_camera_patch *out, srv_api_erro
     cJSON_ArrayForEach(it, obj)
     {
         bool known;
-        if (!camera_member(it, out, &known, e)) return false;
+        if (!srv_json_camera_member(it, out, &known, e)) return false;
         if (!known) return BAD("Unknown camera field '%s'.", it->string);
     }
-    return camera_consistent(out, e);
+    return srv_json_camera_consistent(out, e);
 }
 
 /* ---- lights --------------------------------------------------------------------------------- */
@@ -205,38 +197,40 @@ bool srv_json_light_patch(const cJSON *obj, srv_light_patch *p, srv_api_error *e
         bool ok;
         if (strcmp(k, "type") == 0) {
             unsigned t = 0;
-            ok = once(&p->has, SRV_LIGHT_TYPE, it, e) && get_enum(it, light_types, 3, &t, e);
+            ok = srv_json_once(&p->has, SRV_LIGHT_TYPE, it, e) &&
+                 get_enum(it, light_types, 3, &t, e);
             p->type = t;
         } else if (strcmp(k, "name") == 0) {
-            ok = once(&p->has, SRV_LIGHT_NAME, it, e);
+            ok = srv_json_once(&p->has, SRV_LIGHT_NAME, it, e);
             if (ok && (!cJSON_IsString(it) || strlen(it->valuestring) >= SRV_NAME_MAX))
                 ok = BAD("Field 'name' must be a string of at most %d bytes.", SRV_NAME_MAX - 1);
             if (ok) snprintf(p->name, sizeof p->name, "%s", it->valuestring);
         } else if (strcmp(k, "color") == 0) {
-            ok = once(&p->has, SRV_LIGHT_COLOR, it, e) && get_vec(it, 3, 0, 1e6, p->color, e);
+            ok = srv_json_once(&p->has, SRV_LIGHT_COLOR, it, e) &&
+                 get_vec(it, 3, 0, 1e6, p->color, e);
         } else if (strcmp(k, "intensity") == 0) {
-            ok = once(&p->has, SRV_LIGHT_INTENSITY, it, e) &&
-                 get_float(it, 0, 1e9, &p->intensity, e);
+            ok = srv_json_once(&p->has, SRV_LIGHT_INTENSITY, it, e) &&
+                 srv_json_get_float(it, 0, 1e9, &p->intensity, e);
         } else if (strcmp(k, "position") == 0) {
-            ok = once(&p->has, SRV_LIGHT_POSITION, it, e) &&
+            ok = srv_json_once(&p->has, SRV_LIGHT_POSITION, it, e) &&
                  get_vec(it, 3, -LIMIT_COORD, LIMIT_COORD, p->position, e);
         } else if (strcmp(k, "direction") == 0) {
-            ok = once(&p->has, SRV_LIGHT_DIRECTION, it, e) &&
+            ok = srv_json_once(&p->has, SRV_LIGHT_DIRECTION, it, e) &&
                  get_vec(it, 3, -1e6, 1e6, p->direction, e);
             if (ok && !nonzero(p->direction, 3))
                 ok = BAD("Field 'direction' must not be the zero vector.");
         } else if (strcmp(k, "range") == 0) {
-            ok = once(&p->has, SRV_LIGHT_RANGE, it, e);
+            ok = srv_json_once(&p->has, SRV_LIGHT_RANGE, it, e);
             if (ok && cJSON_IsNull(it))
                 p->range = 0; /* unlimited */
             else if (ok)
-                ok = get_float(it, 0, 1e9, &p->range, e);
+                ok = srv_json_get_float(it, 0, 1e9, &p->range, e);
         } else if (strcmp(k, "inner_cone_angle") == 0) {
-            ok = once(&p->has, SRV_LIGHT_INNER_CONE, it, e) &&
-                 get_float(it, 0, M_PI / 2, &p->inner_cone, e);
+            ok = srv_json_once(&p->has, SRV_LIGHT_INNER_CONE, it, e) &&
+                 srv_json_get_float(it, 0, M_PI / 2, &p->inner_cone, e);
         } else if (strcmp(k, "outer_cone_angle") == 0) {
-            ok = once(&p->has, SRV_LIGHT_OUTER_CONE, it, e) &&
-                 get_float(it, 0, M_PI / 2, &p->outer_cone, e);
+            ok = srv_json_once(&p->has, SRV_LIGHT_OUTER_CONE, it, e) &&
+                 srv_json_get_float(it, 0, M_PI / 2, &p->outer_cone, e);
         } else if (strcmp(k, "id") == 0 || strcmp(k, "node") == 0) {
             ok = BAD("Field '%s' is read-only.", k);
         } else {
@@ -258,15 +252,16 @@ bool srv_json_node_patch(const cJSON *obj, srv_node_patch *p, srv_api_error *e)
         const char *k = it->string;
         bool ok;
         if (strcmp(k, "translation") == 0) {
-            ok = once(&p->has, SRV_NODE_TRANSLATION, it, e) &&
+            ok = srv_json_once(&p->has, SRV_NODE_TRANSLATION, it, e) &&
                  get_vec(it, 3, -LIMIT_COORD, LIMIT_COORD, p->translation, e);
         } else if (strcmp(k, "rotation") == 0) {
-            ok = once(&p->has, SRV_NODE_ROTATION, it, e) &&
+            ok = srv_json_once(&p->has, SRV_NODE_ROTATION, it, e) &&
                  get_vec(it, 4, -1e6, 1e6, p->rotation, e);
             if (ok && !nonzero(p->rotation, 4))
                 ok = BAD("Field 'rotation' must be a non-zero quaternion.");
         } else if (strcmp(k, "scale") == 0) {
-            ok = once(&p->has, SRV_NODE_SCALE, it, e) && get_vec(it, 3, -1e6, 1e6, p->scale, e);
+            ok = srv_json_once(&p->has, SRV_NODE_SCALE, it, e) &&
+                 get_vec(it, 3, -1e6, 1e6, p->scale, e);
             for (int i = 0; ok && i < 3; i++)
                 if (fabsf(p->scale[i]) < 1e-6f)
                     ok = BAD("Field 'scale' must not have zero components.");
@@ -291,11 +286,11 @@ bool srv_json_playback_patch(const cJSON *obj, srv_playback_patch *p, srv_api_er
         const char *k = it->string;
         bool ok;
         if (strcmp(k, "playing") == 0) {
-            ok = once(&p->has, SRV_PLAY_PLAYING, it, e) &&
+            ok = srv_json_once(&p->has, SRV_PLAY_PLAYING, it, e) &&
                  (cJSON_IsBool(it) || BAD("Field 'playing' must be true or false."));
             p->playing = cJSON_IsTrue(it);
         } else if (strcmp(k, "time") == 0) {
-            ok = once(&p->has, SRV_PLAY_TIME, it, e) &&
+            ok = srv_json_once(&p->has, SRV_PLAY_TIME, it, e) &&
                  ((cJSON_IsNumber(it) && isfinite(it->valuedouble) && it->valuedouble >= 0) ||
                   BAD("Field 'time' must be a finite number of seconds, 0 or more."));
             p->time_s = ok ? it->valuedouble : 0;
@@ -319,9 +314,9 @@ bool srv_json_pick_request(const cJSON *obj, float point[2], srv_api_error *e)
         const char *k = it->string;
         bool ok;
         if (strcmp(k, "x") == 0)
-            ok = once(&has, 1u, it, e) && get_float(it, 0, 1, &point[0], e);
+            ok = srv_json_once(&has, 1u, it, e) && srv_json_get_float(it, 0, 1, &point[0], e);
         else if (strcmp(k, "y") == 0)
-            ok = once(&has, 2u, it, e) && get_float(it, 0, 1, &point[1], e);
+            ok = srv_json_once(&has, 2u, it, e) && srv_json_get_float(it, 0, 1, &point[1], e);
         else
             ok = BAD("Unknown pick field '%s' (x and y, 0..1 across and down the picture).", k);
         if (!ok) return false;
@@ -331,127 +326,7 @@ bool srv_json_pick_request(const cJSON *obj, float point[2], srv_api_error *e)
     return true;
 }
 
-/* ---- viewer messages ------------------------------------------------------------------------ */
-
-bool srv_json_viewer_msg(const char *text, size_t len, srv_viewer_msg *out, srv_api_error *e)
-{
-    memset(out, 0, sizeof *out);
-    if (len > SRV_VIEWER_MSG_MAX) {
-        srv_api_fail(e, 400, SRV_ERR_TOO_LARGE, "Message of %zu bytes exceeds %d.", len,
-                     SRV_VIEWER_MSG_MAX);
-        return false;
-    }
-    cJSON *j = srv_json_parse_object(text, len, e);
-    if (!j) return false;
-    bool ok = true;
-    const cJSON *type = cJSON_GetObjectItemCaseSensitive(j, "type");
-    if (!cJSON_IsString(type)) {
-        ok = BAD("A message needs a string 'type' (camera, resize, follow, ack or quality).");
-    } else if (strcmp(type->valuestring, "camera") == 0) {
-        out->type = SRV_VIEWER_CAMERA;
-        bool have_seq = false;
-        const cJSON *it;
-        cJSON_ArrayForEach(it, j)
-        {
-            bool known;
-            if (it == type) continue;
-            if (strcmp(it->string, "seq") == 0) {
-                if (have_seq)
-                    ok = BAD("Field 'seq' appears more than once.");
-                else
-                    ok = get_uint(it, 0, 4294967295.0, &out->seq, e);
-                have_seq = true;
-            } else {
-                ok = camera_member(it, &out->camera, &known, e);
-                if (ok && !known) ok = BAD("Unknown camera message field '%s'.", it->string);
-            }
-            if (!ok) break;
-        }
-        if (ok && !have_seq) ok = BAD("A camera message needs 'seq'.");
-        if (ok) ok = camera_consistent(&out->camera, e);
-    } else if (strcmp(type->valuestring, "resize") == 0) {
-        out->type = SRV_VIEWER_RESIZE;
-        out->dpr = 1;
-        unsigned has = 0;
-        const cJSON *it;
-        cJSON_ArrayForEach(it, j)
-        {
-            if (it == type) continue;
-            if (strcmp(it->string, "width") == 0)
-                ok = once(&has, 1, it, e) && get_uint(it, 1, 16384, &out->width, e);
-            else if (strcmp(it->string, "height") == 0)
-                ok = once(&has, 2, it, e) && get_uint(it, 1, 16384, &out->height, e);
-            else if (strcmp(it->string, "dpr") == 0)
-                ok = once(&has, 4, it, e) && get_float(it, 0.25, 8, &out->dpr, e);
-            else
-                ok = BAD("Unknown resize message field '%s'.", it->string);
-            if (!ok) break;
-        }
-        if (ok && (has & 3) != 3) ok = BAD("A resize message needs 'width' and 'height'.");
-    } else if (strcmp(type->valuestring, "follow") == 0) {
-        out->type = SRV_VIEWER_FOLLOW;
-        bool have = false;
-        const cJSON *it;
-        cJSON_ArrayForEach(it, j)
-        {
-            if (it == type) continue;
-            if (strcmp(it->string, "view") == 0 && !have) {
-                have = true;
-                if (cJSON_IsNull(it))
-                    out->follow_own = true;
-                else
-                    ok = get_uint(it, 0, 4294967295.0, &out->view, e);
-            } else
-                ok = BAD("Unexpected follow message field '%s'.", it->string);
-            if (!ok) break;
-        }
-        if (ok && !have) ok = BAD("A follow message needs 'view' (a view id, or null).");
-    } else if (strcmp(type->valuestring, "ack") == 0) {
-        out->type = SRV_VIEWER_ACK;
-        bool have = false;
-        const cJSON *it;
-        cJSON_ArrayForEach(it, j)
-        {
-            if (it == type) continue;
-            if (strcmp(it->string, "frame") == 0 && !have) {
-                double v = 0;
-                ok = get_number(it, 0, 9007199254740991.0, &v, e);
-                if (ok && v != floor(v)) ok = BAD("Field 'frame' must be an integer.");
-                out->frame = (uint64_t)v;
-                have = true;
-            } else
-                ok = BAD("Unexpected ack message field '%s'.", it->string);
-            if (!ok) break;
-        }
-        if (ok && !have) ok = BAD("An ack message needs 'frame'.");
-    } else if (strcmp(type->valuestring, "quality") == 0) {
-        out->type = SRV_VIEWER_QUALITY;
-        unsigned has = 0;
-        const cJSON *it;
-        cJSON_ArrayForEach(it, j)
-        {
-            if (it == type) continue;
-            bool jpeg = strcmp(it->string, "jpeg") == 0;
-            if (jpeg || strcmp(it->string, "max_fps") == 0) {
-                ok = once(&has, jpeg ? 1 : 2, it, e);
-                if (ok && !cJSON_IsNull(it))
-                    ok = get_uint(it, 1, jpeg ? SRV_VIEW_JPEG_CAP_MAX : SRV_VIEW_FPS_CAP_MAX,
-                                  jpeg ? &out->jpeg_cap : &out->fps_cap, e);
-            } else
-                ok = BAD("Unknown quality message field '%s'.", it->string);
-            if (!ok) break;
-        }
-        if (ok && has != 3)
-            ok = BAD("A quality message needs 'jpeg' and 'max_fps' (a number, or null).");
-    } else {
-        ok = BAD("Unknown message type '%.40s' (camera, resize, follow, ack or quality).",
-                 type->valuestring);
-    }
-    cJSON_Delete(j);
-    return ok;
-}
-
-/* ---- builders ------------------------------------------------------------------------------- */
+/* ---- printing ------------------------------------------------------------------------------- */
 
 double srv_json_float(float f)
 {
@@ -465,64 +340,6 @@ void srv_json_add_floats(cJSON *obj, const char *name, const float *v, int n)
     cJSON *a = cJSON_AddArrayToObject(obj, name);
     for (int i = 0; i < n; i++)
         cJSON_AddItemToArray(a, cJSON_CreateNumber(srv_json_float(v[i])));
-}
-
-/* Quaternion (x, y, z, w) of the rotation whose columns are the camera axes. */
-static void basis_to_quat(const float fwd[3], const float up[3], float q[4])
-{
-    float z[3] = {-fwd[0], -fwd[1], -fwd[2]};
-    float x[3] = {up[1] * z[2] - up[2] * z[1], up[2] * z[0] - up[0] * z[2],
-                  up[0] * z[1] - up[1] * z[0]};
-    const float cols[3][3] = {{x[0], x[1], x[2]}, {up[0], up[1], up[2]}, {z[0], z[1], z[2]}};
-    rd_mat3_cols_to_quat(cols, q);
-}
-
-cJSON *srv_json_camera(const srv_camera *c)
-{
-    cJSON *j = cJSON_CreateObject();
-    float target[3], q[4];
-    for (int i = 0; i < 3; i++)
-        target[i] = c->position[i] + c->forward[i] * c->target_distance;
-    basis_to_quat(c->forward, c->up, q);
-    srv_json_add_floats(j, "position", c->position, 3);
-    srv_json_add_floats(j, "target", target, 3);
-    srv_json_add_floats(j, "forward", c->forward, 3);
-    srv_json_add_floats(j, "up", c->up, 3);
-    srv_json_add_floats(j, "orientation", q, 4);
-    cJSON_AddNumberToObject(j, "fov", srv_json_float(c->fov_deg));
-    return j;
-}
-
-cJSON *srv_json_light(uint32_t id, const rd_light *l)
-{
-    cJSON *j = cJSON_CreateObject();
-    cJSON_AddNumberToObject(j, "id", id);
-    cJSON_AddStringToObject(j, "name", l->name ? l->name : "");
-    cJSON_AddStringToObject(j, "type", srv_light_type_name(l->type));
-    srv_json_add_floats(j, "color", l->color, 3);
-    cJSON_AddNumberToObject(j, "intensity", srv_json_float(l->intensity));
-    srv_json_add_floats(j, "position", l->position, 3);
-    srv_json_add_floats(j, "direction", l->direction, 3);
-    cJSON_AddNumberToObject(j, "range", srv_json_float(l->range));
-    cJSON_AddNumberToObject(j, "inner_cone_angle", srv_json_float(l->inner_cone));
-    cJSON_AddNumberToObject(j, "outer_cone_angle", srv_json_float(l->outer_cone));
-    cJSON_AddNumberToObject(j, "node", l->node);
-    return j;
-}
-
-cJSON *srv_json_node(uint32_t id, const rd_node *n)
-{
-    cJSON *j = cJSON_CreateObject();
-    cJSON_AddNumberToObject(j, "id", id);
-    cJSON_AddStringToObject(j, "name", n->name ? n->name : "");
-    cJSON_AddNumberToObject(j, "parent", n->parent);
-    cJSON_AddNumberToObject(j, "mesh", n->mesh);
-    srv_json_add_floats(j, "translation", n->translation, 3);
-    srv_json_add_floats(j, "rotation", n->rotation, 4);
-    srv_json_add_floats(j, "scale", n->scale, 3);
-    float wt[3] = {n->world[12], n->world[13], n->world[14]};
-    srv_json_add_floats(j, "world_translation", wt, 3);
-    return j;
 }
 
 char *srv_json_print_delete(cJSON *j)

@@ -105,33 +105,6 @@ typedef struct srv_playback_patch {
 /* srv_settings, the SRV_SET_* bits and srv_settings_patch come from the settings table. */
 #include "server/api/settings.h"
 
-/* ---- viewer messages (WebSocket text frames) -------------------------------------------- */
-
-typedef enum srv_viewer_msg_type {
-    SRV_VIEWER_CAMERA = 1,
-    SRV_VIEWER_RESIZE,
-    SRV_VIEWER_ACK,
-    SRV_VIEWER_FOLLOW,  /* version 2 */
-    SRV_VIEWER_QUALITY, /* version 2 */
-} srv_viewer_msg_type;
-
-/* Per-view caps a viewer sets for its own view (quality message); 0 means no cap. */
-#define SRV_VIEW_JPEG_CAP_MAX 100u
-#define SRV_VIEW_FPS_CAP_MAX 240u
-
-typedef struct srv_viewer_msg {
-    srv_viewer_msg_type type;
-    uint32_t seq;            /* camera */
-    srv_camera_patch camera; /* camera */
-    unsigned width, height;  /* resize: CSS pixels */
-    float dpr;               /* resize: device pixel ratio (default 1) */
-    uint64_t frame;          /* ack */
-    uint32_t view;           /* follow: the view to watch */
-    bool follow_own;         /* follow: null (back to the own view) */
-    unsigned jpeg_cap;       /* quality: JPEG quality 1..100 at most (0: no cap) */
-    unsigned fps_cap;        /* quality: frames per second 1..240 at most (0: no cap) */
-} srv_viewer_msg;
-
 /* ---- commands --------------------------------------------------------------------------- */
 
 typedef enum srv_cmd_kind {

@@ -24,40 +24,11 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#define SRV_MAX_VARIANTS 8
+#include "server/encode/image_pool.h"
+
 /* Lag-driven quality caps are multiples of ten in [30, 90]: bit i of a cap mask is 30 + 10 i. */
 #define SRV_CAP_MIN 30u
 #define SRV_CAP_STEPS 7u
-
-/* A frame's image on the CPU, shared read-only (reference counted): its tone-mapped RGBA8
- * pixels, or the JPEG coefficients the GPU computed of them (renderer/jpeg_dct.h). */
-typedef struct srv_image {
-    atomic_int refs;
-    unsigned width, height;
-    /* coef_sets 0: width * height * 4 bytes of RGBA8, top row first; else coef_sets sets of
-     * coefficients end to end (rd_jpeg_coef_bytes each), set i quantised at coef_quality[i],
-     * ascending: the qualities its frame is encoded at */
-    uint8_t *data;
-    unsigned coef_sets;
-    unsigned coef_quality[SRV_MAX_VARIANTS];
-    size_t cap; /* bytes allocated (buffers are recycled) */
-    /* pixels the image does not own (srv_image_wrap): release(ctx, token) when the last reference
-     * goes */
-    void (*release)(void *ctx, unsigned token);
-    void *release_ctx;
-    unsigned release_token;
-} srv_image;
-
-srv_image *srv_image_new(unsigned width, unsigned height); /* RGBA8 */
-srv_image *srv_image_alloc(unsigned width, unsigned height, size_t bytes);
-/* An image over bytes owned elsewhere (a leased readback slot): release(ctx, token) runs, on
- * whichever thread drops the last reference, when nobody reads them any more. */
-srv_image *srv_image_wrap(unsigned width, unsigned height, uint8_t *data,
-                          void (*release)(void *ctx, unsigned token), void *ctx, unsigned token);
-srv_image *srv_image_ref(srv_image *img);
-void srv_image_unref(srv_image *img); /* NULL is fine */
-/* Frees the recycled pixel buffers (srv_encoder_pool_destroy does this). */
-void srv_image_pool_drain(void);
 
 typedef struct srv_frame_info {
     uint64_t frame_id;

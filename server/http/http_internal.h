@@ -1,6 +1,8 @@
-/* http_internal.h: what the HTTP API's files share (http_api.c: responses, routing, limits and
- * the libmicrohttpd handler; http_routes.c: the API resources; http_static.c: the viewer's files).
- * Not for use outside the HTTP API. */
+/* http_internal.h: what the HTTP API's files share: the server and request state, and the
+ * handlers the dispatcher calls (http_api.c: routing, limits and the libmicrohttpd handler;
+ * http_routes.c: the API resources; http_static.c: the viewer's files; http_stream.c: the relay
+ * of /v1/stream). Responses are queued through http_response.h. Not for use outside the HTTP API.
+ */
 #ifndef SRV_HTTP_INTERNAL_H
 #define SRV_HTTP_INTERNAL_H
 
@@ -72,28 +74,14 @@ typedef struct request {
     bool too_large;
     bool responded; /* a response was queued before the body was read */
     bool is_upload; /* counted in uploads_in_progress */
+    unsigned allow; /* the M_* methods its route allows (the Allow header of a 405) */
     int status;     /* of the response queued */
     int stream_fd;  /* R_STREAM: our end of the pair until the relay takes it; else -1 */
     double start_ms;
 } request;
 
-/* ---- responses (http_api.c): each counts the status and marks the request answered ---------- */
-void srv_http_count_status(srv_http *h, request *rq, int status);
-enum MHD_Result srv_http_respond(srv_http *h, struct MHD_Connection *conn, request *rq, int status,
-                                 const char *type, char *body, size_t len);
-enum MHD_Result srv_http_respond_json(srv_http *h, struct MHD_Connection *conn, request *rq,
-                                      int status, cJSON *j);
-#if defined(__GNUC__)
-__attribute__((format(printf, 6, 7)))
-#endif
-enum MHD_Result
-srv_http_respond_error(srv_http *h, struct MHD_Connection *conn, request *rq, int status,
-                       const char *code, const char *fmt, ...);
-enum MHD_Result srv_http_respond_api_error(srv_http *h, struct MHD_Connection *conn, request *rq,
-                                           const srv_api_error *e);
-enum MHD_Result srv_http_respond_reply(srv_http *h, struct MHD_Connection *conn, request *rq,
-                                       srv_cmd *c);
-bool srv_http_parse_id(const char *s, uint32_t *out);
+/* ---- what the dispatcher (http_api.c) calls; the handlers answer through http_response.h ---- */
+/* ---- the API's resources (http_routes.c) ---- */
 void srv_http_stats_snapshot(srv_http *h, srv_stats_snapshot *s);
 enum MHD_Result srv_http_handle_health(srv_http *h, struct MHD_Connection *conn, request *rq);
 enum MHD_Result srv_http_handle_frame(srv_http *h, struct MHD_Connection *conn, request *rq);
@@ -105,6 +93,7 @@ enum MHD_Result srv_http_handle_stream(srv_http *h, struct MHD_Connection *conn,
 bool srv_http_stream_init(srv_http *h);    /* false: no eventfd */
 void srv_http_stream_stop(srv_http *h);    /* ends the relays and waits for them */
 void srv_http_stream_destroy(srv_http *h); /* after MHD stopped */
+/* ---- the viewer's files (http_static.c) ---- */
 enum MHD_Result srv_http_handle_static(srv_http *h, struct MHD_Connection *conn, request *rq,
                                        const char *url);
 

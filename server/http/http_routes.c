@@ -1,6 +1,7 @@
 /* http_routes.c: the API's resources (protocol/openapi.yaml): health, frames, uploads, and the
  * JSON resources — GETs from the published snapshot, changes as commands to the render thread. */
 #include "server/http/http_internal.h"
+#include "server/http/http_response.h"
 
 #include <arpa/inet.h>
 #include <errno.h>
@@ -21,6 +22,7 @@
 #include "server/api/api_json.h"
 #include "server/base/clock.h"
 #include "server/base/log.h"
+#include "server/scene/documents_json.h"
 #include "server/scene/scene_state.h"
 #include "server/http/stats_report.h"
 #include "renderer/gltf/gltf_loader.h"

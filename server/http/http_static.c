@@ -1,5 +1,6 @@
 /* http_static.c: the viewer's files (web/) served at /, or a built-in page without them. */
 #include "server/http/http_internal.h"
+#include "server/http/http_response.h"
 
 #include <arpa/inet.h>
 #include <errno.h>

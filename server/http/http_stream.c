@@ -19,6 +19,7 @@
  * The relays end before MHD stops (srv_http_stream_stop), since MHD waits for upgraded
  * connections. */
 #include "server/http/http_internal.h"
+#include "server/http/http_response.h"
 
 #include <arpa/inet.h>
 #include <errno.h>

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "server/api/api_json.h"
+#include "server/scene/documents_json.h"
 #include "server/render/frame_output.h"
 #include "server/base/log.h"
 #include "renderer/view.h"

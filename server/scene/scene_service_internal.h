@@ -5,6 +5,7 @@
 #ifndef SRV_SCENE_SERVICE_INTERNAL_H
 #define SRV_SCENE_SERVICE_INTERNAL_H
 
+#include "server/scene/documents_json.h"
 #include "server/scene/scene_service.h"
 
 /* ---- documents (scene_documents.c) ---------------------------------------------------------- */

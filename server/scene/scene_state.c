@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "server/api/api_json.h"
+#include "server/scene/documents_json.h"
 #include "renderer/scene/xform.h"
 
 #define BAD(...) (srv_api_fail(e, 400, SRV_ERR_INVALID_FIELD, __VA_ARGS__), false)

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "server/api/api_json.h"
+#include "server/scene/documents_json.h"
 #include "server/base/clock.h"
 
 typedef struct node_doc {

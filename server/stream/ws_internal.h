@@ -8,7 +8,7 @@
 #include <pthread.h>
 #include <stdatomic.h>
 
-#include "server/api/api_json.h"
+#include "server/stream/viewer_msg.h"
 #include "protocol/stream.h"
 #include "server/stream/ws_stream.h"
 

@@ -4,6 +4,7 @@
 #include <stdint.h>
 
 #include "server/api/api_json.h"
+#include "server/stream/viewer_msg.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {

@@ -1,9 +1,10 @@
 // animation.js: the animation panel — play / pause and a time slider for the scene's glTF
-// animations (PATCH /v1/animation), shown only when the scene has some. Like the panels of
-// panels.js it owns its DOM subtree (index.html), talks to the server only through an Api and
-// takes the body of GET /v1/animation from the stream's 'animation' events (applyEvent).
+// animations (PATCH /v1/animation), shown only when the scene has some. Like the other panels
+// (lights_panel.js, render_panel.js) it owns its DOM subtree (index.html), talks to the server
+// only through an Api and takes the body of GET /v1/animation from the stream's 'animation'
+// events (applyEvent).
 
-import { Coalescer } from './panels.js';
+import { Coalescer } from './coalescer.js';
 
 const $ = (id) => document.getElementById(id);
 

@@ -1,5 +1,5 @@
-// dom.js: small DOM and number-formatting helpers shared by the panels (panels.js, stats.js,
-// layout.js, quality.js). No state.
+// dom.js: small DOM and number-formatting helpers shared by the panels (lights_panel.js,
+// render_panel.js, views_panel.js, toasts.js, stats.js, layout.js, quality.js). No state.
 
 /* h('div', { class: 'x', onclick: f }, child, 'text') */
 export function h(tag, attrs = {}, ...children) {

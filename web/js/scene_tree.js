@@ -7,7 +7,7 @@
 // patch().
 
 import { h } from './dom.js';
-import { Coalescer } from './panels.js';
+import { Coalescer } from './coalescer.js';
 import { IDENTITY, eulerToQuat, mat4FromTrs, mat4Mul, quatToEuler } from './xform.js';
 
 const $ = (id) => document.getElementById(id);

@@ -10,8 +10,9 @@ test('the viewer page loads from the daemon', { timeout: 30000 }, async () => {
   const res = await fetch(BASE + '/');
   assert.equal(res.status, 200);
   assert.match(res.headers.get('content-type'), /^text\/html/);
-  for (const f of ['/viewer.css', '/js/main.js', '/js/stream.js', '/js/camera.js', '/js/api.js', '/js/panels.js', '/js/scene_panel.js', '/js/animation.js',
-    '/js/dom.js', '/js/stats.js', '/js/graphs.js', '/js/layout.js', '/js/quality.js']) {
+  for (const f of ['/viewer.css', '/js/main.js', '/js/stream.js', '/js/camera.js', '/js/api.js', '/js/coalescer.js', '/js/colour.js',
+    '/js/toasts.js', '/js/token_prompt.js', '/js/render_panel.js', '/js/lights_panel.js', '/js/views_panel.js', '/js/scene_panel.js',
+    '/js/animation.js', '/js/dom.js', '/js/stats.js', '/js/graphs.js', '/js/layout.js', '/js/quality.js']) {
     const r = await fetch(BASE + f);
     assert.equal(r.status, 200, f);
     assert.match(r.headers.get('content-type'), f.endsWith('.css') ? /^text\/css/ : /^text\/javascript/, f);
