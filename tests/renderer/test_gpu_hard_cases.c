@@ -4,6 +4,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "brdf_reference.h"
+#include "gltf_builder.h"
 #include "renderer/builtin/hard_cases.h"
 #include "server/cli/image_metrics.h"
 #include "test_render_util.h"
@@ -75,6 +77,27 @@ static void test_pathtracer_analytic(void)
         CHECK(count_non_finite(furnace) == 0);
     }
     free(furnace);
+    /* glTF materials: closed furnaces written as glTF (base 0.5 and 0.9, emission 0.1, the
+     * dielectric lobe of Appendix B) against the radiance that Appendix B's albedo, integrated
+     * here in C apart from the shaders, allows (brdf_reference.h); 1% for the samples' noise */
+    const double bases[2] = {0.5, 0.9};
+    for (int k = 0; k < 2; k++) {
+        char *gltf = gltf_furnace((float)bases[k], 0.1f, 0.0f, 1.0f);
+        test_render_desc g = {
+            .gltf = gltf, .width = W, .height = H, .pathtrace_spp = 256, .max_bounces = 256};
+        float *img = test_render(&vk, &g, NULL, NULL);
+        double lo, hi;
+        test_furnace_bounds(bases[k], 0, 1, 0.1, &lo, &hi);
+        if (img) {
+            double mean = test_image_mean(img, PX * 3, NULL);
+            printf("path-traced glTF furnace base %.1f: %.5f (Appendix B: %.5f..%.5f)\n", bases[k],
+                   mean, lo, hi);
+            CHECKF(mean >= 0.99 * lo && mean <= 1.01 * hi,
+                   "path-traced glTF furnace base %.1f: %g outside %g..%g", bases[k], mean, lo, hi);
+        }
+        free(img);
+        free(gltf);
+    }
 }
 
 /* DDGI on the Cornell box against the reference. The threshold comes from the reference's
