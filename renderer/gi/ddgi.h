@@ -10,10 +10,14 @@
 #include "renderer/vk/vk_buffer.h"
 #include "renderer/vk/vk_compute.h"
 
-/* What a zero rays or an unset hysteresis in rd_ddgi_settings stands for (the server's
- * settings table takes its defaults from here too). */
+/* The probe field's defaults (what zero rays or an unset hysteresis in rd_ddgi_settings stand
+ * for) and limits (rd_ddgi_configure refuses settings beyond them). The server's settings table
+ * (server/api/settings.h) takes its defaults and ranges from here. */
 #define RD_DDGI_DEFAULT_HYSTERESIS 0.97f
-#define RD_DDGI_DEFAULT_RAYS 256u
+#define RD_DDGI_MAX_HYSTERESIS 0.999f /* hysteresis in [0, this]; 1 would never change */
+#define RD_DDGI_DEFAULT_RAYS 256u     /* rays in 1..PC_DDGI_MAX_RAYS (shaders/gpu_types.h) */
+#define RD_DDGI_MAX_AXIS_PROBES 256u  /* probes per axis */
+#define RD_DDGI_MAX_PROBES 65535u     /* in all: a workgroup row each, the dispatch limit */
 
 typedef struct rd_ddgi_settings {
     unsigned mode;      /* PC_GI_OFF, PC_GI_CLASSIC or PC_GI_DDGI */
