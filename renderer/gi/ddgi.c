@@ -203,8 +203,7 @@ rd_vk_result rd_ddgi_configure(rd_ddgi *d, const float bmin[3], const float bmax
     float origin[3], spacing[3];
     unsigned counts[3];
     unsigned rays = s->rays ? s->rays : RD_DDGI_DEFAULT_RAYS;
-    float hysteresis =
-        s->has_hysteresis || s->hysteresis != 0 ? s->hysteresis : RD_DDGI_DEFAULT_HYSTERESIS;
+    float hysteresis = s->has_hysteresis ? s->hysteresis : RD_DDGI_DEFAULT_HYSTERESIS;
     if (rays > PC_DDGI_MAX_RAYS) {
         snprintf(err, errlen, "at most %u rays per probe (got %u)", PC_DDGI_MAX_RAYS, rays);
         return RD_VK_ERR_UNSUPPORTED;

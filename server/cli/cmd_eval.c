@@ -418,7 +418,7 @@ static bool run_default(eval_ctx *c, rd_scene *s, rd_gpu_scene *gs, const rd_vie
     row->probes[1] = c->r.world.ddgi.vol.counts.y;
     row->probes[2] = c->r.world.ddgi.vol.counts.z;
     row->rays = c->r.world.ddgi.vol.counts.w;
-    row->hysteresis = 0.97f;
+    row->hysteresis = RD_DDGI_DEFAULT_HYSTERESIS;
     snprintf(row->mode, sizeof row->mode, "default");
     snprintf(row->config, sizeof row->config, "default %ux%ux%u r%u %s%u", row->probes[0],
              row->probes[1], row->probes[2], row->rays, row->slept ? "sleeps@" : "awake@",
@@ -525,6 +525,7 @@ static bool run_case(eval_ctx *c, const rd_hard_case *hc, unsigned f, eval_row *
                 gi.rays = a->rays[(j / (a->nupdates * a->nhysteresis)) % a->nrays];
                 updates = a->updates[(j / a->nhysteresis) % a->nupdates];
                 gi.hysteresis = a->hysteresis[j % a->nhysteresis];
+                gi.has_hysteresis = true; /* 0 too: no history */
                 for (int ax = 0; ax < 3; ax++) {
                     double n = a->nprobes ? a->probes[g][ax]
                                           : fmax(1.0, round(fitted[ax] * a->density[g]));
@@ -533,7 +534,7 @@ static bool run_case(eval_ctx *c, const rd_hard_case *hc, unsigned f, eval_row *
                 snprintf(row->mode, sizeof row->mode, "ddgi");
             }
             ok = run_setting(c, name, &s, &gs, &cam, &gi, updates, ref, row);
-            row->hysteresis = gi.hysteresis > 0 ? gi.hysteresis : 0.97f;
+            row->hysteresis = gi.has_hysteresis ? gi.hysteresis : RD_DDGI_DEFAULT_HYSTERESIS;
             if (k >= 1)
                 snprintf(row->config, sizeof row->config, "%s %ux%ux%u r%u u%u h%.2f",
                          row->mode, row->probes[0], row->probes[1], row->probes[2], row->rays,
