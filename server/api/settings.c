@@ -8,7 +8,7 @@
 #include <string.h>
 
 #include "server/api/api_json.h"
-#include "server/api/commands.h"
+#include "server/api/api_error.h"
 
 _Static_assert(PC_TONEMAP_ACES == 0 && PC_TONEMAP_CLAMP == 1, "SRV_TONEMAP_NAMES order");
 _Static_assert(PC_VIEW_FINAL == 0 && PC_VIEW_IRRADIANCE == 1 && PC_VIEW_PROBES == 2,
@@ -134,11 +134,11 @@ static void describe(const srv_setting_info *d, bool json, char *buf, size_t len
     case SRV_TYPE_UINT:
         snprintf(buf, len, "an integer in %.0f..%.0f", d->min, d->max);
         break;
-    case SRV_TYPE_FLOAT:
-        snprintf(buf, len, "a number in [%.10g, %.10g]", d->min, d->max);
+    case SRV_TYPE_FLOAT: /* the bounds as floats print (0.999f as 0.999) */
+        snprintf(buf, len, "a number in [%.7g, %.7g]", d->min, d->max);
         break;
     case SRV_TYPE_FLOAT3:
-        snprintf(buf, len, "%s numbers in [%.10g, %.10g]", list, d->min, d->max);
+        snprintf(buf, len, "%s numbers in [%.7g, %.7g]", list, d->min, d->max);
         break;
     case SRV_TYPE_UINT3:
         snprintf(buf, len, "%s integers in %.0f..%.0f%s", list, d->min, d->max,
@@ -208,8 +208,9 @@ bool srv_state_settings_apply(srv_settings *s, const srv_settings_patch *p, srv_
     if (n.view != PC_VIEW_FINAL && n.gi_mode != PC_GI_CLASSIC && n.gi_mode != PC_GI_DDGI)
         return BAD("The irradiance and probes views need gi_mode classic or ddgi.");
     uint64_t probes = (uint64_t)n.probe_counts[0] * n.probe_counts[1] * n.probe_counts[2];
-    if (probes > 65535)
-        return BAD("At most 65535 probes (probe_counts give %llu).", (unsigned long long)probes);
+    if (probes > RD_DDGI_MAX_PROBES)
+        return BAD("At most %u probes (probe_counts give %llu).", RD_DDGI_MAX_PROBES,
+                   (unsigned long long)probes);
     *s = n;
     return true;
 }

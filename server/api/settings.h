@@ -19,6 +19,7 @@
 #include <stdio.h>
 
 #include "renderer/gi/ddgi.h"
+#include "renderer/view.h"
 #include "shaders/gpu_types.h"
 
 struct srv_api_error;
@@ -49,6 +50,14 @@ typedef enum srv_setting_type {
 #define SRV_VIEW_NAMES "final", "irradiance", "probes"
 #define SRV_GI_NAMES "off", "classic", "ddgi", "pathtrace"
 #define SRV_SKY_MODE_NAMES "uniform", "gradient", "image"
+/* gi_mode beyond PC_GI_*: reference path tracing, no probes (srv_settings_to_gi maps it to
+ * PC_GI_OFF) */
+#define SRV_GI_PATHTRACE 3u
+
+/* Sides of an image, in pixels: of the settings width and height, and of any view the daemon
+ * opens for a viewer (server/render/views.c). */
+#define SRV_SIDE_MIN 16u
+#define SRV_SIDE_MAX 4096u
 
 /* The table. X(ID, field, TYPE, "json", "--flag" or NULL, "ARG", min, max, default, SCOPE,
  *              (enum names) or (NULL), "description")
@@ -58,12 +67,13 @@ typedef enum srv_setting_type {
  * description is the flag's usage line; the default is printed after it from this table. */
 /* clang-format off */
 #define SRV_SETTINGS(X)                                                                            \
-    X(WIDTH, width, UINT, "width", "--width", "W", 16, 4096, 960, VIEW, (NULL),                    \
-      "render width in pixels")                                                                    \
-    X(HEIGHT, height, UINT, "height", "--height", "H", 16, 4096, 540, VIEW, (NULL),                \
-      "render height in pixels")                                                                   \
-    X(MAX_PIXELS, max_pixels, UINT, "max_pixels", NULL, "N", 256, 4096 * 4096, 1920 * 1080, VIEW,  \
-      (NULL), "cap on width x height; viewer resize requests are scaled down to it")               \
+    X(WIDTH, width, UINT, "width", "--width", "W", SRV_SIDE_MIN, SRV_SIDE_MAX,                     \
+      RD_VIEW_DEFAULT_WIDTH, VIEW, (NULL), "render width in pixels")                               \
+    X(HEIGHT, height, UINT, "height", "--height", "H", SRV_SIDE_MIN, SRV_SIDE_MAX,                 \
+      RD_VIEW_DEFAULT_HEIGHT, VIEW, (NULL), "render height in pixels")                             \
+    X(MAX_PIXELS, max_pixels, UINT, "max_pixels", NULL, "N", SRV_SIDE_MIN * SRV_SIDE_MIN,          \
+      SRV_SIDE_MAX * SRV_SIDE_MAX, 1920 * 1080, VIEW, (NULL),                                      \
+      "cap on width x height; viewer resize requests are scaled down to it")                       \
     X(MAX_FPS, max_fps, UINT, "max_fps", "--max-fps", "N", 1, 240, 30, VIEW, (NULL),               \
       "frame rate cap while something changes")                                                    \
     X(QUALITY_INTERACTIVE, quality_interactive, UINT, "quality_interactive",                       \
@@ -83,13 +93,13 @@ typedef enum srv_setting_type {
       "debug views: indirect irradiance only, or probe spheres (need gi classic or ddgi)")         \
     X(GI_MODE, gi_mode, ENUM, "gi_mode", "--gi", "", 0, 0, PC_GI_DDGI, WORLD, (SRV_GI_NAMES),      \
       "global illumination; pathtrace accumulates reference samples while nothing changes")        \
-    X(PROBE_COUNTS, probe_counts, UINT3, "probe_counts", "--probes", "X,Y,Z", 0, 256, 0, WORLD,    \
-      (NULL), "probes per axis; 0,0,0 = fitted to the scene")                                      \
+    X(PROBE_COUNTS, probe_counts, UINT3, "probe_counts", "--probes", "X,Y,Z", 0,                   \
+      RD_DDGI_MAX_AXIS_PROBES, 0, WORLD, (NULL), "probes per axis; 0,0,0 = fitted to the scene")  \
     X(PROBE_SPACING, probe_spacing, FLOAT, "probe_spacing", "--probe-spacing", "S", 0, 1000000, 0, \
       WORLD, (NULL), "probe spacing in metres; 0 = derived")                                       \
     X(RAYS, rays_per_probe, UINT, "rays_per_probe", "--rays", "N", 1, PC_DDGI_MAX_RAYS,            \
       RD_DDGI_DEFAULT_RAYS, WORLD, (NULL), "rays per probe per update")                            \
-    X(HYSTERESIS, hysteresis, FLOAT, "hysteresis", "--hysteresis", "H", 0, 0.999,                  \
+    X(HYSTERESIS, hysteresis, FLOAT, "hysteresis", "--hysteresis", "H", 0, RD_DDGI_MAX_HYSTERESIS, \
       RD_DDGI_DEFAULT_HYSTERESIS, WORLD, (NULL),                                                   \
       "probe blend weight of the old value; 0 keeps no history")                                   \
     X(ANIMATE, animate, BOOL, "animate", NULL, "", 0, 0, false, WORLD, (NULL),                     \
@@ -189,7 +199,9 @@ const char *srv_gi_mode_name(unsigned mode);
  * (400 invalid_field). */
 bool srv_state_settings_apply(srv_settings *s, const srv_settings_patch *p,
                               struct srv_api_error *e);
-/* The renderer's GI settings for s (every value passed as set: hysteresis 0 stays 0). */
+/* The renderer's GI settings for s: gi_mode pathtrace becomes PC_GI_OFF (the path tracer needs
+ * no probes; the one place that says so), every value is passed as set (hysteresis 0 stays 0: no
+ * history), seed 0. */
 void srv_settings_to_gi(const srv_settings *s, rd_ddgi_settings *gi);
 
 /* ---- JSON (protocol/openapi.yaml, Settings) --------------------------------------------- */

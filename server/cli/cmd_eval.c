@@ -529,7 +529,7 @@ static bool run_case(eval_ctx *c, const rd_hard_case *hc, unsigned f, eval_row *
                 for (int ax = 0; ax < 3; ax++) {
                     double n = a->nprobes ? a->probes[g][ax]
                                           : fmax(1.0, round(fitted[ax] * a->density[g]));
-                    gi.counts[ax] = (unsigned)fmin(n, 256.0);
+                    gi.counts[ax] = (unsigned)fmin(n, RD_DDGI_MAX_AXIS_PROBES);
                 }
                 snprintf(row->mode, sizeof row->mode, "ddgi");
             }
