@@ -455,7 +455,7 @@ static void test_rejects(void)
 static int run_flags(char **argv, int argc, srv_settings *s, unsigned *given)
 {
     for (int i = 0; i < argc; i++) {
-        int r = srv_settings_parse_flag("test", argc, argv, &i, s, given);
+        int r = srv_settings_parse_flag("test", SRV_CLI_SERVE, argc, argv, &i, s, given);
         if (r <= 0) return r;
     }
     return 1;
@@ -504,7 +504,7 @@ static void test_cli(void)
     /* not a setting flag: left to the caller */
     char *other[] = {"--token", "x"};
     int i = 0;
-    CHECK(srv_settings_parse_flag("test", 2, other, &i, &s, &given) == 0 && i == 0);
+    CHECK(srv_settings_parse_flag("test", SRV_CLI_SERVE, 2, other, &i, &s, &given) == 0 && i == 0);
 
     fprintf(stderr, "(the messages below are expected)\n");
     const char *bad[][2] = {
@@ -517,23 +517,23 @@ static void test_cli(void)
         unsigned g = 0;
         char *argv[] = {(char *)bad[k][0], (char *)bad[k][1]};
         i = 0;
-        CHECKF(srv_settings_parse_flag("test", 2, argv, &i, &t, &g) == -1 && g == 0 &&
-                   memcmp(&t, &s, sizeof t) == 0,
+        CHECKF(srv_settings_parse_flag("test", SRV_CLI_SERVE, 2, argv, &i, &t, &g) == -1 &&
+                   g == 0 && memcmp(&t, &s, sizeof t) == 0,
                "%s %s accepted", bad[k][0], bad[k][1]);
     }
     char *missing[] = {"--rays"};
     i = 0;
-    CHECK(srv_settings_parse_flag("test", 1, missing, &i, &s, &given) == -1);
+    CHECK(srv_settings_parse_flag("test", SRV_CLI_SERVE, 1, missing, &i, &s, &given) == -1);
 
     /* the usage lines: every flag once, defaults from the table */
     char *text = NULL;
     size_t len = 0;
     FILE *f = open_memstream(&text, &len);
-    srv_settings_print_usage(f);
+    srv_settings_print_usage(f, SRV_CLI_SERVE);
     fclose(f);
     for (unsigned k = 0; k < SRV_SETTING_COUNT; k++) {
         const srv_setting_info *d = srv_setting_at(k);
-        if (!d->flag) continue;
+        if (!(d->cli & SRV_CLI_SERVE)) continue;
         char head[64];
         snprintf(head, sizeof head, "  %s ", d->flag);
         CHECKF(strstr(text, head) != NULL, "usage lacks %s", d->flag);
