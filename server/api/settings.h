@@ -219,9 +219,9 @@ const char *srv_gi_mode_name(unsigned mode);
  * (400 invalid_field). */
 bool srv_state_settings_apply(srv_settings *s, const srv_settings_patch *p,
                               struct srv_api_error *e);
-/* The renderer's GI settings for s: gi_mode pathtrace becomes PC_GI_OFF (the path tracer needs
- * no probes; the one place that says so), every value is passed as set (hysteresis 0 stays 0: no
- * history), seed 0. */
+/* The renderer's GI settings for s, for the daemon and `probecast render` alike: gi_mode
+ * pathtrace becomes PC_GI_OFF (the path tracer needs no probes), every value is passed as set
+ * (hysteresis 0 stays 0: no history), seed 0. */
 void srv_settings_to_gi(const srv_settings *s, rd_ddgi_settings *gi);
 
 /* ---- JSON (protocol/openapi.yaml, Settings) --------------------------------------------- */
