@@ -215,8 +215,8 @@ const char *srv_gi_mode_name(unsigned mode);
 
 /* Applies the fields p->has names to *s, all or nothing: each value must be in its range, and
  * the result must hold together (width x height <= max_pixels, the irradiance and probes views
- * need gi_mode classic or ddgi, at most 65535 probes). Else *s is untouched and e says why
- * (400 invalid_field). */
+ * need gi_mode classic or ddgi, at most RD_DDGI_MAX_PROBES probes). Else *s is untouched and e
+ * says why (400 invalid_field). */
 bool srv_state_settings_apply(srv_settings *s, const srv_settings_patch *p,
                               struct srv_api_error *e);
 /* The renderer's GI settings for s, for the daemon and `probecast render` alike: gi_mode
