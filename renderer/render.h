@@ -17,7 +17,7 @@
 #include "renderer/world.h"
 
 typedef struct rd_frame_settings {
-    unsigned width, height;   /* 0 = 960 x 540 */
+    unsigned width, height;   /* 0 = RD_VIEW_DEFAULT_WIDTH x _HEIGHT (view.h) */
     float sky[3];             /* radiance of rays that escape (default black) */
     float exposure_ev;        /* exposure in stops: radiance * 2^ev before tone mapping */
     unsigned tonemap;         /* PC_TONEMAP_* (0 = ACES fit) */

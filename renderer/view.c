@@ -15,9 +15,6 @@
 #include "shaders/shade.spv.h"
 #include "shaders/tonemap.spv.h"
 
-#define DEFAULT_WIDTH 960
-#define DEFAULT_HEIGHT 540
-
 /* The per-view passes, one line each (the world's passes are in renderer/gi). */
 static const rd_pipeline_desc pipelines[] = {
     RD_PIPELINE_DESC(rd_view_passes, primary, "primary", pc_spv_primary, sizeof(pc_push)),
@@ -174,8 +171,8 @@ static rd_vk_result prepare(rd_view *v, const rd_world *w, const rd_view_camera 
         snprintf(err, errlen, "rendering a world without a scene");
         return RD_VK_ERR_UNSUPPORTED;
     }
-    unsigned width = s->width ? s->width : DEFAULT_WIDTH;
-    unsigned height = s->height ? s->height : DEFAULT_HEIGHT;
+    unsigned width = s->width ? s->width : RD_VIEW_DEFAULT_WIDTH;
+    unsigned height = s->height ? s->height : RD_VIEW_DEFAULT_HEIGHT;
     if (width > 16384 || height > 16384) {
         snprintf(err, errlen, "resolution %ux%u exceeds 16384 in a dimension", width, height);
         return RD_VK_ERR_UNSUPPORTED;

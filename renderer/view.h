@@ -15,8 +15,13 @@
 #include "renderer/vk/vk_compute.h"
 #include "renderer/world.h"
 
+/* A view's size when its settings give none (the server's settings table takes its width and
+ * height defaults from here). */
+#define RD_VIEW_DEFAULT_WIDTH 960u
+#define RD_VIEW_DEFAULT_HEIGHT 540u
+
 typedef struct rd_view_settings { /* per frame */
-    unsigned width, height;       /* 0 = 960 x 540 */
+    unsigned width, height;       /* 0 = RD_VIEW_DEFAULT_WIDTH x RD_VIEW_DEFAULT_HEIGHT */
     float exposure_ev;            /* exposure in stops: radiance * 2^ev before tone mapping */
     unsigned tonemap;             /* PC_TONEMAP_* (0 = ACES fit) */
     unsigned seed;                /* random streams of stochastic passes */

@@ -75,7 +75,7 @@ static void serve_usage(FILE *f)
         "  --help                 this text\n"
         "\n"
         "Settings at start-up (GET and PATCH /v1/settings while it runs):\n");
-    srv_settings_print_usage(f);
+    srv_settings_print_usage(f, SRV_CLI_SERVE);
     fprintf(f, "  --animate, --no-animate  the light animation (default: on for the demo scene "
                "only)\n");
 }
@@ -167,7 +167,8 @@ static int parse(int argc, char **argv, serve_args *a)
     srv_settings_defaults(&a->settings);
     srv_settings *s = &a->settings;
     for (int i = 1; i < argc; i++) {
-        int setting = srv_settings_parse_flag("probecast serve", argc, argv, &i, s, &a->given);
+        int setting =
+            srv_settings_parse_flag("probecast serve", SRV_CLI_SERVE, argc, argv, &i, s, &a->given);
         if (setting < 0) return 2;
         if (setting > 0) continue;
         const char *o = argv[i];

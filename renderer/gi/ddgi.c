@@ -17,7 +17,6 @@
 
 #define IRR_SIDE (PC_DDGI_IRR_INTERIOR + 2)
 #define DIST_SIDE (PC_DDGI_DIST_INTERIOR + 2)
-#define MAX_PROBES 65535u /* one workgroup row per probe: the guaranteed dispatch limit */
 
 /* The probe passes, one line each (rd_ddgi_update dispatches them). */
 static const rd_pipeline_desc pipelines[] = {
@@ -111,10 +110,13 @@ static bool place_grid(const float bmin[3], const float bmax[3], const rd_ddgi_s
         } else {
             float target = s->spacing[k] > 0 ? s->spacing[k] : default_spacing;
             double n = span > 0 ? floor(span / target + 0.999) + 1 : 1;
-            counts[k] = n < 1 ? 1 : n > 256 ? 256 : (unsigned)n;
+            counts[k] = n < 1                         ? 1
+                        : n > RD_DDGI_MAX_AXIS_PROBES ? RD_DDGI_MAX_AXIS_PROBES
+                                                      : (unsigned)n;
         }
-        if (counts[k] > 256) {
-            snprintf(err, errlen, "at most 256 probes per axis (got %u)", counts[k]);
+        if (counts[k] > RD_DDGI_MAX_AXIS_PROBES) {
+            snprintf(err, errlen, "at most %u probes per axis (got %u)", RD_DDGI_MAX_AXIS_PROBES,
+                     counts[k]);
             return false;
         }
         if (s->spacing[k] > 0)
@@ -127,9 +129,9 @@ static bool place_grid(const float bmin[3], const float bmax[3], const rd_ddgi_s
         origin[k] =
             s->has_origin ? s->origin[k] : centre - 0.5f * spacing[k] * (float)(counts[k] - 1);
     }
-    if ((uint64_t)counts[0] * counts[1] * counts[2] > MAX_PROBES) {
+    if ((uint64_t)counts[0] * counts[1] * counts[2] > RD_DDGI_MAX_PROBES) {
         snprintf(err, errlen, "%u x %u x %u probes exceed the limit of %u", counts[0], counts[1],
-                 counts[2], MAX_PROBES);
+                 counts[2], RD_DDGI_MAX_PROBES);
         return false;
     }
     return true;
@@ -201,14 +203,14 @@ rd_vk_result rd_ddgi_configure(rd_ddgi *d, const float bmin[3], const float bmax
     float origin[3], spacing[3];
     unsigned counts[3];
     unsigned rays = s->rays ? s->rays : RD_DDGI_DEFAULT_RAYS;
-    float hysteresis =
-        s->has_hysteresis || s->hysteresis != 0 ? s->hysteresis : RD_DDGI_DEFAULT_HYSTERESIS;
+    float hysteresis = s->has_hysteresis ? s->hysteresis : RD_DDGI_DEFAULT_HYSTERESIS;
     if (rays > PC_DDGI_MAX_RAYS) {
         snprintf(err, errlen, "at most %u rays per probe (got %u)", PC_DDGI_MAX_RAYS, rays);
         return RD_VK_ERR_UNSUPPORTED;
     }
-    if (!(hysteresis >= 0 && hysteresis < 1)) {
-        snprintf(err, errlen, "hysteresis must be in [0, 1) (got %g)", hysteresis);
+    if (!(hysteresis >= 0 && hysteresis <= RD_DDGI_MAX_HYSTERESIS)) {
+        snprintf(err, errlen, "hysteresis must be in [0, %g] (got %g)",
+                 (double)RD_DDGI_MAX_HYSTERESIS, hysteresis);
         return RD_VK_ERR_UNSUPPORTED;
     }
     if (!place_grid(bmin, bmax, s, origin, spacing, counts, err, errlen))

@@ -10,10 +10,14 @@
 #include "renderer/vk/vk_buffer.h"
 #include "renderer/vk/vk_compute.h"
 
-/* What a zero rays or an unset hysteresis in rd_ddgi_settings stands for (the server's
- * settings table takes its defaults from here too). */
+/* The probe field's defaults (what zero rays or an unset has_hysteresis in rd_ddgi_settings stand
+ * for) and limits (rd_ddgi_configure refuses settings beyond them). The server's settings table
+ * (server/api/settings.h) takes its defaults and ranges from here. */
 #define RD_DDGI_DEFAULT_HYSTERESIS 0.97f
-#define RD_DDGI_DEFAULT_RAYS 256u
+#define RD_DDGI_MAX_HYSTERESIS 0.999f /* hysteresis in [0, this]; 1 would never change */
+#define RD_DDGI_DEFAULT_RAYS 256u     /* rays in 1..PC_DDGI_MAX_RAYS (shaders/gpu_types.h) */
+#define RD_DDGI_MAX_AXIS_PROBES 256u  /* probes per axis */
+#define RD_DDGI_MAX_PROBES 65535u     /* in all: a workgroup row each, the dispatch limit */
 
 typedef struct rd_ddgi_settings {
     unsigned mode;      /* PC_GI_OFF, PC_GI_CLASSIC or PC_GI_DDGI */
@@ -22,8 +26,8 @@ typedef struct rd_ddgi_settings {
     float origin[3];    /* position of probe (0,0,0), used when has_origin */
     bool has_origin;
     unsigned rays;       /* rays per probe per update; 0 = RD_DDGI_DEFAULT_RAYS */
-    float hysteresis;    /* weight of the old value; 0 = RD_DDGI_DEFAULT_HYSTERESIS unless... */
-    bool has_hysteresis; /* ...this is set: then hysteresis is used as given, 0 included */
+    float hysteresis;    /* maximum weight of the old value, used when has_hysteresis is set */
+    bool has_hysteresis; /* (0 too: no history); unset = RD_DDGI_DEFAULT_HYSTERESIS */
     unsigned seed;       /* ray rotations are a deterministic function of seed and update */
 } rd_ddgi_settings;
 

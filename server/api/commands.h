@@ -23,9 +23,6 @@
 /* ---- camera ------------------------------------------------------------------------------ */
 
 /* The shared view's camera as the API describes it. */
-/* settings.gi_mode beyond PC_GI_*: progressive reference path tracing (no probes) */
-#define SRV_GI_PATHTRACE 3u
-
 typedef struct srv_camera {
     float position[3];
     float forward[3];      /* unit */

@@ -8,7 +8,7 @@
 #include <string.h>
 
 #include "server/api/api_json.h"
-#include "server/api/commands.h"
+#include "server/api/api_error.h"
 
 _Static_assert(PC_TONEMAP_ACES == 0 && PC_TONEMAP_CLAMP == 1, "SRV_TONEMAP_NAMES order");
 _Static_assert(PC_VIEW_FINAL == 0 && PC_VIEW_IRRADIANCE == 1 && PC_VIEW_PROBES == 2,
@@ -27,18 +27,19 @@ _Static_assert(SRV_SETTING_COUNT <= 31, "SRV_SET_* bits fit an int enum");
 #define UNPAREN(x) UNPAREN_ x
 #define COUNT(a) (sizeof(a) / sizeof(a)[0])
 
-#define NAMES_(ID, f, TYPE, json_, flag_, arg_, min_, max_, def_, scope_, names_, desc_)           \
+#define NAMES_(ID, f, TYPE, json_, flag_, cli_, arg_, min_, max_, def_, scope_, names_, desc_)     \
     static const char *const enum_names_##ID[] = {UNPAREN(names_)};
 SRV_SETTINGS(NAMES_)
 
 #define IS_(TYPE, T) (SRV_TYPE_##TYPE == SRV_TYPE_##T)
-#define INFO_(ID, f, TYPE, json_, flag_, arg_, min_, max_, def_, scope_, names_, desc_)            \
+#define INFO_(ID, f, TYPE, json_, flag_, cli_, arg_, min_, max_, def_, scope_, names_, desc_)      \
     {.bit = SRV_SET_##ID,                                                                          \
      .field = #f,                                                                                  \
      .offset = offsetof(srv_settings, f),                                                          \
      .type = SRV_TYPE_##TYPE,                                                                      \
      .json = json_,                                                                                \
      .flag = flag_,                                                                                \
+     .cli = SRV_CLI_##cli_,                                                                        \
      .arg = arg_,                                                                                  \
      .min = IS_(TYPE, ENUM) || IS_(TYPE, BOOL) ? 0 : (min_),                                       \
      .max = IS_(TYPE, ENUM)   ? COUNT(enum_names_##ID) - 1.0                                       \
@@ -66,6 +67,13 @@ const srv_setting_info *srv_setting_by_json(const char *json)
 {
     for (unsigned i = 0; json && i < SRV_SETTING_COUNT; i++)
         if (strcmp(table[i].json, json) == 0) return &table[i];
+    return NULL;
+}
+
+const srv_setting_info *srv_setting_by_flag(const char *flag, unsigned cli)
+{
+    for (unsigned i = 0; flag && i < SRV_SETTING_COUNT; i++)
+        if ((table[i].cli & cli) && strcmp(table[i].flag, flag) == 0) return &table[i];
     return NULL;
 }
 
@@ -134,11 +142,11 @@ static void describe(const srv_setting_info *d, bool json, char *buf, size_t len
     case SRV_TYPE_UINT:
         snprintf(buf, len, "an integer in %.0f..%.0f", d->min, d->max);
         break;
-    case SRV_TYPE_FLOAT:
-        snprintf(buf, len, "a number in [%.10g, %.10g]", d->min, d->max);
+    case SRV_TYPE_FLOAT: /* the bounds as floats print (0.999f as 0.999) */
+        snprintf(buf, len, "a number in [%.7g, %.7g]", d->min, d->max);
         break;
     case SRV_TYPE_FLOAT3:
-        snprintf(buf, len, "%s numbers in [%.10g, %.10g]", list, d->min, d->max);
+        snprintf(buf, len, "%s numbers in [%.7g, %.7g]", list, d->min, d->max);
         break;
     case SRV_TYPE_UINT3:
         snprintf(buf, len, "%s integers in %.0f..%.0f%s", list, d->min, d->max,
@@ -208,8 +216,9 @@ bool srv_state_settings_apply(srv_settings *s, const srv_settings_patch *p, srv_
     if (n.view != PC_VIEW_FINAL && n.gi_mode != PC_GI_CLASSIC && n.gi_mode != PC_GI_DDGI)
         return BAD("The irradiance and probes views need gi_mode classic or ddgi.");
     uint64_t probes = (uint64_t)n.probe_counts[0] * n.probe_counts[1] * n.probe_counts[2];
-    if (probes > 65535)
-        return BAD("At most 65535 probes (probe_counts give %llu).", (unsigned long long)probes);
+    if (probes > RD_DDGI_MAX_PROBES)
+        return BAD("At most %u probes (probe_counts give %llu).", RD_DDGI_MAX_PROBES,
+                   (unsigned long long)probes);
     *s = n;
     return true;
 }
@@ -343,31 +352,66 @@ static bool cli_value(const srv_setting_info *d, const char *text, double v[3])
     return true;
 }
 
-int srv_settings_parse_flag(const char *cmd, int argc, char **argv, int *i, srv_settings *s,
-                            unsigned *given)
+bool srv_setting_parse(const char *cmd, const srv_setting_info *d, const char *text,
+                       srv_settings *s)
 {
-    const char *o = argv[*i];
-    const srv_setting_info *d = NULL;
-    for (unsigned k = 0; k < SRV_SETTING_COUNT && !d; k++)
-        if (table[k].flag && strcmp(table[k].flag, o) == 0) d = &table[k];
-    if (!d) return 0;
     double v[3] = {1, 1, 1}; /* a BOOL flag sets true */
-    if (d->type != SRV_TYPE_BOOL) {
-        if (*i + 1 >= argc) {
-            fprintf(stderr, "%s: %s needs a value\n", cmd, o);
-            return -1;
-        }
-        const char *text = argv[++*i];
-        if (!cli_value(d, text, v) || !value_ok(d, v)) {
-            char what[160];
-            describe(d, false, what, sizeof what);
-            fprintf(stderr, "%s: %s expects %s, got '%s'\n", cmd, o, what, text);
-            return -1;
-        }
+    if (d->type != SRV_TYPE_BOOL && (!cli_value(d, text, v) || !value_ok(d, v))) {
+        char what[160];
+        describe(d, false, what, sizeof what);
+        fprintf(stderr, "%s: %s expects %s, got '%s'\n", cmd, d->flag, what, text);
+        return false;
     }
     store(d, s, v);
+    return true;
+}
+
+int srv_settings_parse_flag(const char *cmd, unsigned cli, int argc, char **argv, int *i,
+                            srv_settings *s, unsigned *given)
+{
+    const srv_setting_info *d = srv_setting_by_flag(argv[*i], cli);
+    if (!d) return 0;
+    const char *text = "";
+    if (d->type != SRV_TYPE_BOOL) {
+        if (*i + 1 >= argc) {
+            fprintf(stderr, "%s: %s needs a value\n", cmd, d->flag);
+            return -1;
+        }
+        text = argv[++*i];
+    }
+    if (!srv_setting_parse(cmd, d, text, s)) return -1;
     *given |= d->bit;
     return 1;
+}
+
+/* The separator of a list of d's values: ';' where a value is itself X,Y,Z. */
+static char list_separator(const srv_setting_info *d)
+{
+    return dims(d) == 3 ? ';' : ',';
+}
+
+bool srv_setting_parse_list(const char *cmd, const srv_setting_info *d, const char *text,
+                            srv_settings *out, unsigned max, unsigned *n)
+{
+    char sep = list_separator(d), item[256];
+    *n = 0;
+    for (const char *p = text;; p++) {
+        size_t len = strcspn(p, (char[]){sep, '\0'});
+        if (*n == max) {
+            fprintf(stderr, "%s: %s takes at most %u value%s, got '%s'\n", cmd, d->flag, max,
+                    max == 1 ? "" : "s", text);
+            return false;
+        }
+        if (len >= sizeof item) {
+            fprintf(stderr, "%s: %s: a value of '%s' is too long\n", cmd, d->flag, text);
+            return false;
+        }
+        snprintf(item, sizeof item, "%.*s", (int)len, p);
+        if (!srv_setting_parse(cmd, d, item, &out[*n])) return false;
+        ++*n;
+        p += len;
+        if (!*p) return true;
+    }
 }
 
 /* "  HEAD  text", the text wrapped at column WIDTH and indented to column COL. */
@@ -411,27 +455,43 @@ static void format_value(const srv_setting_info *d, double x, char *buf, size_t 
         snprintf(buf, len, "%g", is_float(d) ? (double)(float)x : x);
 }
 
-void srv_settings_print_usage(FILE *f)
+void srv_setting_print_usage(FILE *f, const srv_setting_info *d, bool list, const char *def)
+{
+    char head[96], text[400], table_def[48];
+    size_t n;
+    if (d->type == SRV_TYPE_ENUM) {
+        n = (size_t)snprintf(head, sizeof head, "%s ", d->flag);
+        for (unsigned k = 0; k < d->name_count && n < sizeof head; k++)
+            n += (size_t)snprintf(head + n, sizeof head - n, "%s%s", k ? "|" : "", d->names[k]);
+    } else {
+        n = (size_t)snprintf(head, sizeof head, "%s%s%s", d->flag, d->arg[0] ? " " : "", d->arg);
+    }
+    if (list && n < sizeof head)
+        snprintf(head + n, sizeof head - n, "[%c%s...]", list_separator(d),
+                 d->type == SRV_TYPE_ENUM ? "NAME" : d->arg);
+    if (!def) {
+        format_value(d, d->def, table_def, sizeof table_def);
+        def = table_def;
+    }
+    snprintf(text, sizeof text, "%s (default %s)", d->desc, def);
+    print_option(f, head, text);
+}
+
+void srv_settings_print_usage(FILE *f, unsigned cli)
 {
     for (unsigned i = 0; i < SRV_SETTING_COUNT; i++) {
         const srv_setting_info *d = &table[i];
-        if (!d->flag) continue;
-        char head[96], text[320], def[48], cpu[80] = "";
-        if (d->type == SRV_TYPE_ENUM) {
-            size_t n = (size_t)snprintf(head, sizeof head, "%s ", d->flag);
-            for (unsigned k = 0; k < d->name_count && n < sizeof head; k++)
-                n += (size_t)snprintf(head + n, sizeof head - n, "%s%s", k ? "|" : "", d->names[k]);
-        } else {
-            snprintf(head, sizeof head, "%s%s%s", d->flag, d->arg[0] ? " " : "", d->arg);
-        }
+        if (!(d->cli & cli)) continue;
+        char def[96];
         format_value(d, d->def, def, sizeof def);
-        for (size_t k = 0; k < COUNT(cpu_defaults); k++) {
+        for (size_t k = 0; (cli & SRV_CLI_SERVE) && k < COUNT(cpu_defaults); k++) {
             if (cpu_defaults[k].index != i) continue;
-            char c[48];
-            format_value(d, cpu_defaults[k].value, c, sizeof c);
-            snprintf(cpu, sizeof cpu, "; %s on a CPU device", c);
+            size_t n = strlen(def);
+            snprintf(def + n, sizeof def - n, "; ");
+            format_value(d, cpu_defaults[k].value, def + n + 2, sizeof def - n - 2);
+            n = strlen(def);
+            snprintf(def + n, sizeof def - n, " on a CPU device");
         }
-        snprintf(text, sizeof text, "%s (default %s%s)", d->desc, def, cpu);
-        print_option(f, head, text);
+        srv_setting_print_usage(f, d, false, def);
     }
 }

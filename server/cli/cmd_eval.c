@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "server/cli/cli.h"
+#include "server/api/settings.h"
 #include "server/cli/eval_report.h"
 #include "renderer/builtin/hard_cases.h"
 #include "server/cli/image_io.h"
@@ -19,6 +20,37 @@
 #include "renderer/render.h"
 #include "server/cli/eval_internal.h"
 #include "renderer/scene/default_lighting.h"
+
+/* The settings eval sweeps: each flag takes a list, and every combination is rendered. */
+#define EVAL_SWEEPS (SRV_SET_RAYS | SRV_SET_HYSTERESIS | SRV_SET_PROBE_COUNTS)
+#define EVAL_LIST_MAX 8 /* values per list */
+
+static void eval_defaults(eval_args *a)
+{
+    memset(a, 0, sizeof *a);
+    a->width = 320, a->height = 180, a->ref_spp = 1024, a->timing_frames = 7;
+    a->hysteresis[0] = 0.85f, a->hysteresis[1] = RD_DDGI_DEFAULT_HYSTERESIS, a->nhysteresis = 2;
+    a->rays[0] = 64, a->rays[1] = 128, a->rays[2] = 256, a->nrays = 3;
+    a->updates[0] = 8, a->updates[1] = 32, a->nupdates = 2;
+    a->density[0] = 0.5f, a->density[1] = 1, a->density[2] = 2, a->ndensity = 3;
+    a->out_dir = "eval-out";
+    a->noise_floor = true;
+    a->families = EVAL_LAMBERT | EVAL_GLTF;
+}
+
+/* The default of a setting flag as eval's usage shows it (a list for a sweep). */
+static void eval_default_text(const eval_args *a, const srv_setting_info *d, char *buf, size_t len)
+{
+    size_t n = 0;
+    buf[0] = '\0';
+    if (d->bit == SRV_SET_WIDTH) snprintf(buf, len, "%u", a->width);
+    if (d->bit == SRV_SET_HEIGHT) snprintf(buf, len, "%u", a->height);
+    if (d->bit == SRV_SET_PROBE_COUNTS) snprintf(buf, len, "none: the grids of --density");
+    for (unsigned k = 0; d->bit == SRV_SET_RAYS && k < a->nrays && n < len; k++)
+        n += (size_t)snprintf(buf + n, len - n, "%s%u", k ? "," : "", a->rays[k]);
+    for (unsigned k = 0; d->bit == SRV_SET_HYSTERESIS && k < a->nhysteresis && n < len; k++)
+        n += (size_t)snprintf(buf + n, len - n, "%s%g", k ? "," : "", (double)a->hysteresis[k]);
+}
 
 static void eval_usage(FILE *f)
 {
@@ -36,13 +68,9 @@ static void eval_usage(FILE *f)
            "                         glTF twin: the default dielectric, Appendix B's specular),\n"
            "                         metal (metallic 0.5, roughness 0.5) (default lambert,gltf);\n"
            "                         twins only for cases whose materials are all Lambertian\n"
-           "  --width W, --height H  image size (default 320 x 180)\n"
            "  --ref-spp N            reference samples per pixel (default 1024)\n"
-           "  --rays A,B,...         rays per probe to sweep (default 64,128,256)\n"
            "  --updates A,B,...      probe updates before the image (default 8,32)\n"
            "  --density A,B,...      probe density factors over the fitted grid (default 0.5,1,2)\n"
-           "  --hysteresis A,B,...   probe hysteresis values (default 0.85,0.97)\n"
-           "  --probes X,Y,Z[;...]   explicit probe grids instead of densities\n"
            "  --no-noise-floor       skip the second reference (seed 2) that measures its noise\n"
            "  --timing-frames N      steady-state frames timed per setting, after two warm-up\n"
            "                         frames; the median is reported (default 7)\n"
@@ -55,7 +83,20 @@ static void eval_usage(FILE *f)
            "  --dynamic              instead of the suite: a light and an object move in a\n"
            "                         converged field; reports updates, GPU ms and error at\n"
            "                         fixed update counts after the change (eval-dynamic.csv)\n"
-           "  --replot DIR           redraw DIR/eval.svg and the table from DIR/eval.csv\n");
+           "  --replot DIR           redraw DIR/eval.svg and the table from DIR/eval.csv\n"
+           "\n"
+           "Settings (the daemon's, as GET and PATCH /v1/settings name them; a list of up to %u\n"
+           "values is swept, each combination a row):\n",
+        EVAL_LIST_MAX);
+    eval_args a;
+    eval_defaults(&a);
+    for (unsigned i = 0; i < SRV_SETTING_COUNT; i++) {
+        const srv_setting_info *d = srv_setting_at(i);
+        if (!(d->cli & SRV_CLI_EVAL)) continue;
+        char def[96];
+        eval_default_text(&a, d, def, sizeof def);
+        srv_setting_print_usage(f, d, (d->bit & EVAL_SWEEPS) != 0, def);
+    }
 }
 
 static bool parse_uint_list(const char *opt, const char *s, unsigned *out, unsigned *n)
@@ -64,7 +105,7 @@ static bool parse_uint_list(const char *opt, const char *s, unsigned *out, unsig
     char buf[256];
     snprintf(buf, sizeof buf, "%s", s);
     for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
-        if (*n == 8 || !srv_arg_uint(opt, tok, 1, 100000, &out[*n])) return false;
+        if (*n == EVAL_LIST_MAX || !srv_arg_uint(opt, tok, 1, 100000, &out[*n])) return false;
         (*n)++;
     }
     return *n > 0;
@@ -92,17 +133,35 @@ static bool parse_families(const char *s, unsigned *out)
     return *out != 0;
 }
 
+/* A setting flag of eval (the settings table's rows for eval): one value, or a list of them for a
+ * sweep, each checked against the table's range. */
+static bool parse_setting(const srv_setting_info *d, const char *v, eval_args *a)
+{
+    static const char cmd[] = "probecast eval";
+    srv_settings vals[EVAL_LIST_MAX];
+    unsigned n = 1;
+    if (d->bit & EVAL_SWEEPS) {
+        if (!srv_setting_parse_list(cmd, d, v, vals, EVAL_LIST_MAX, &n)) return false;
+    } else if (!srv_setting_parse(cmd, d, v, &vals[0])) {
+        return false;
+    }
+    for (unsigned k = 0; k < n; k++) {
+        if (d->bit == SRV_SET_WIDTH) a->width = vals[k].width;
+        if (d->bit == SRV_SET_HEIGHT) a->height = vals[k].height;
+        if (d->bit == SRV_SET_RAYS) a->rays[k] = vals[k].rays_per_probe;
+        if (d->bit == SRV_SET_HYSTERESIS) a->hysteresis[k] = vals[k].hysteresis;
+        if (d->bit == SRV_SET_PROBE_COUNTS)
+            memcpy(a->probes[k], vals[k].probe_counts, sizeof a->probes[k]);
+    }
+    if (d->bit == SRV_SET_RAYS) a->nrays = n;
+    if (d->bit == SRV_SET_HYSTERESIS) a->nhysteresis = n;
+    if (d->bit == SRV_SET_PROBE_COUNTS) a->nprobes = n;
+    return true;
+}
+
 static int parse(int argc, char **argv, eval_args *a)
 {
-    memset(a, 0, sizeof *a);
-    a->width = 320, a->height = 180, a->ref_spp = 1024, a->timing_frames = 7;
-    a->hysteresis[0] = 0.85f, a->hysteresis[1] = 0.97f, a->nhysteresis = 2;
-    a->rays[0] = 64, a->rays[1] = 128, a->rays[2] = 256, a->nrays = 3;
-    a->updates[0] = 8, a->updates[1] = 32, a->nupdates = 2;
-    a->density[0] = 0.5f, a->density[1] = 1, a->density[2] = 2, a->ndensity = 3;
-    a->out_dir = "eval-out";
-    a->noise_floor = true;
-    a->families = EVAL_LAMBERT | EVAL_GLTF;
+    eval_defaults(a);
     for (int i = 1; i < argc; i++) {
         const char *o = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         bool takes = strcmp(o, "--help") && strcmp(o, "-h") && strcmp(o, "--list") &&
@@ -111,7 +170,11 @@ static int parse(int argc, char **argv, eval_args *a)
             fprintf(stderr, "probecast eval: %s needs a value\n", o);
             return 2;
         }
-        if (strcmp(o, "--help") == 0 || strcmp(o, "-h") == 0) {
+        const srv_setting_info *d = srv_setting_by_flag(o, SRV_CLI_EVAL);
+        if (d) {
+            if (!parse_setting(d, v, a)) return 2;
+            i++;
+        } else if (strcmp(o, "--help") == 0 || strcmp(o, "-h") == 0) {
             eval_usage(stdout);
             return 0;
         } else if (strcmp(o, "--list") == 0) {
@@ -139,20 +202,11 @@ static int parse(int argc, char **argv, eval_args *a)
                 return 2;
             }
             a->no_default_lighting = strcmp(v, "off") == 0, i++;
-        } else if (strcmp(o, "--width") == 0) {
-            if (!srv_arg_uint(o, v, 8, 8192, &a->width)) return 2;
-            i++;
-        } else if (strcmp(o, "--height") == 0) {
-            if (!srv_arg_uint(o, v, 8, 8192, &a->height)) return 2;
-            i++;
         } else if (strcmp(o, "--ref-spp") == 0) {
             if (!srv_arg_uint(o, v, 1, 1u << 20, &a->ref_spp)) return 2;
             i++;
         } else if (strcmp(o, "--timing-frames") == 0) {
             if (!srv_arg_uint(o, v, 1, 100, &a->timing_frames)) return 2;
-            i++;
-        } else if (strcmp(o, "--rays") == 0) {
-            if (!parse_uint_list(o, v, a->rays, &a->nrays)) return 2;
             i++;
         } else if (strcmp(o, "--updates") == 0) {
             if (!parse_uint_list(o, v, a->updates, &a->nupdates)) return 2;
@@ -162,42 +216,13 @@ static int parse(int argc, char **argv, eval_args *a)
             char buf[256];
             snprintf(buf, sizeof buf, "%s", v);
             for (char *t = strtok(buf, ","); t; t = strtok(NULL, ",")) {
-                if (a->ndensity == 8 || !srv_arg_float(o, t, &a->density[a->ndensity]) ||
+                if (a->ndensity == EVAL_LIST_MAX ||
+                    !srv_arg_float(o, t, &a->density[a->ndensity]) ||
                     !(a->density[a->ndensity] > 0)) {
                     fprintf(stderr, "probecast eval: --density expects positive factors\n");
                     return 2;
                 }
                 a->ndensity++;
-            }
-            i++;
-        } else if (strcmp(o, "--hysteresis") == 0) {
-            a->nhysteresis = 0;
-            char buf[256];
-            snprintf(buf, sizeof buf, "%s", v);
-            for (char *t = strtok(buf, ","); t; t = strtok(NULL, ",")) {
-                float h;
-                if (a->nhysteresis == 8 || !srv_arg_float(o, t, &h) || !(h > 0 && h < 1)) {
-                    fprintf(stderr, "probecast eval: --hysteresis expects values in (0, 1)\n");
-                    return 2;
-                }
-                a->hysteresis[a->nhysteresis++] = h;
-            }
-            i++;
-        } else if (strcmp(o, "--probes") == 0) {
-            char buf[256];
-            snprintf(buf, sizeof buf, "%s", v);
-            a->nprobes = 0;
-            for (char *t = strtok(buf, ";"); t; t = strtok(NULL, ";")) {
-                float c[3];
-                if (a->nprobes == 8 || !srv_arg_floats(o, t, c, 3)) return 2;
-                for (int k = 0; k < 3; k++) {
-                    if (c[k] < 1 || c[k] > 256) {
-                        fprintf(stderr, "probecast eval: probe counts must be in 1..256\n");
-                        return 2;
-                    }
-                    a->probes[a->nprobes][k] = (unsigned)c[k];
-                }
-                a->nprobes++;
             }
             i++;
         } else {
@@ -328,7 +353,7 @@ static bool run_default(eval_ctx *c, rd_scene *s, rd_gpu_scene *gs, const rd_vie
     row->probes[1] = c->r.world.ddgi.vol.counts.y;
     row->probes[2] = c->r.world.ddgi.vol.counts.z;
     row->rays = c->r.world.ddgi.vol.counts.w;
-    row->hysteresis = 0.97f;
+    row->hysteresis = RD_DDGI_DEFAULT_HYSTERESIS;
     snprintf(row->mode, sizeof row->mode, "default");
     snprintf(row->config, sizeof row->config, "default %ux%ux%u r%u %s%u", row->probes[0],
              row->probes[1], row->probes[2], row->rays, row->slept ? "sleeps@" : "awake@",
@@ -435,15 +460,16 @@ static bool run_case(eval_ctx *c, const rd_hard_case *hc, unsigned f, eval_row *
                 gi.rays = a->rays[(j / (a->nupdates * a->nhysteresis)) % a->nrays];
                 updates = a->updates[(j / a->nhysteresis) % a->nupdates];
                 gi.hysteresis = a->hysteresis[j % a->nhysteresis];
+                gi.has_hysteresis = true; /* 0 too: no history */
                 for (int ax = 0; ax < 3; ax++) {
                     double n = a->nprobes ? a->probes[g][ax]
                                           : fmax(1.0, round(fitted[ax] * a->density[g]));
-                    gi.counts[ax] = (unsigned)fmin(n, 256.0);
+                    gi.counts[ax] = (unsigned)fmin(n, RD_DDGI_MAX_AXIS_PROBES);
                 }
                 snprintf(row->mode, sizeof row->mode, "ddgi");
             }
             ok = run_setting(c, name, &s, &gs, &cam, &gi, updates, ref, row);
-            row->hysteresis = gi.hysteresis > 0 ? gi.hysteresis : 0.97f;
+            row->hysteresis = gi.has_hysteresis ? gi.hysteresis : RD_DDGI_DEFAULT_HYSTERESIS;
             if (k >= 1)
                 snprintf(row->config, sizeof row->config, "%s %ux%ux%u r%u u%u h%.2f",
                          row->mode, row->probes[0], row->probes[1], row->probes[2], row->rays,

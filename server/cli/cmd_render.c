@@ -7,6 +7,7 @@
 #include <time.h>
 
 #include "server/cli/cli.h"
+#include "server/api/settings.h"
 #include "server/base/clock.h"
 #include "renderer/scene/animation_clip.h"
 #include "server/cli/image_io.h"
@@ -25,7 +26,6 @@ static void render_usage(FILE *f)
             "Builtin scenes: %s\n"
             "\n"
             "Options:\n"
-            "  --width W, --height H  image size in pixels (default 960 x 540)\n"
             "  --camera INDEX         the scene's camera to use (default: the first, else one\n"
             "                         framing the scene bounds)\n"
             "  --time T               pose the scene's glTF animations at T seconds (T >= 0;\n"
@@ -33,24 +33,16 @@ static void render_usage(FILE *f)
             "                         nodes keep the file's static transforms\n"
             "  -o FILE                tone-mapped output, .png or .jpg (default render.png)\n"
             "  --hdr FILE             linear un-tonemapped radiance as little-endian PFM\n"
-            "  --exposure EV          exposure in stops before tone mapping (default 0)\n"
-            "  --tonemap aces|clamp   tone curve (default aces)\n"
             "  --reflections on|off   ray-traced reflections of glossy materials (default on;\n"
             "                         off: no indirect specular, for comparisons)\n"
-            "  --sky R,G,B            radiance of rays that leave the scene (default 0,0,0)\n"
             "  --default-lighting on|off  a scene without lights, sky or emitters strong\n"
             "                         enough to light it gets a key light and a soft sky, as\n"
             "                         the daemon gives it (default on; a line says when, and\n"
             "                         why)\n"
             "  --quality Q            JPEG quality 1..100 (default 92)\n"
-            "  --gi off|classic|ddgi|pathtrace  global illumination (default ddgi); classic =\n"
-            "                         irradiance probes without visibility (the paper's\n"
-            "                         baseline); pathtrace = unbiased reference path tracer\n"
-            "  --spp N                path-traced samples per pixel (default 256)\n"
+            "  --spp N                path-traced samples per pixel of --gi pathtrace (default\n"
+            "                         256)\n"
             "  --max-bounces N        path length limit (default 64; Russian roulette after 3)\n"
-            "  --probes X,Y,Z         probe counts (default: fitted to the scene bounds)\n"
-            "  --probe-spacing S      probe spacing in metres (default: from the scene size)\n"
-            "  --rays N               rays per probe per update (default %u)\n"
             "  --frames N             probe updates before the image is taken (default: until\n"
             "                         every probe has converged, at most --max-updates)\n"
             "  --max-updates N        cap of the default convergence (default %u)\n"
@@ -58,11 +50,7 @@ static void render_usage(FILE *f)
             "                         point and spot lights' distance maps, rebuilt when the\n"
             "                         scene changes (default); a shadow ray per hit (exact);\n"
             "                         or maps rebuilt every update (benchmarks)\n"
-            "  --hysteresis H         maximum temporal blend weight of the old probe value\n"
-            "                         (default %g; each probe ramps up to it as it settles)\n"
             "  --seed S               seed of the probe ray rotations (same seed, same image)\n"
-            "  --view final|irradiance|probes  debug views: indirect irradiance only, or probe\n"
-            "                         spheres shaded with their stored irradiance\n"
             "  --dump-probes PREFIX   write the probe atlases as PREFIX-irradiance.{pfm,png}\n"
             "                         and PREFIX-distance.pfm\n"
             "  --timings              print BVH build time, per-pass GPU times and rays/s\n"
@@ -71,22 +59,25 @@ static void render_usage(FILE *f)
             "  --device INDEX|NAME    GPU to use (default: $PROBECAST_DEVICE, else a discrete\n"
             "                         GPU, else lavapipe)\n"
             "  --list-devices         list the Vulkan devices and exit\n"
-            "  --help                 this text\n",
-            rd_procedural_names(), RD_DDGI_DEFAULT_RAYS, RD_WORLD_CONVERGE_CAP,
-            (double)RD_DDGI_DEFAULT_HYSTERESIS);
+            "  --help                 this text\n"
+            "\n"
+            "Settings (the daemon's, as GET and PATCH /v1/settings name them):\n",
+            rd_procedural_names(), RD_WORLD_CONVERGE_CAP);
+    srv_settings_print_usage(f, SRV_CLI_RENDER);
 }
 
 typedef struct render_args {
     const char *scene, *out, *hdr, *device, *dump;
-    rd_frame_settings fs;
-    rd_ddgi_settings gi;
+    srv_settings set;     /* the settings flags (the settings table's rows for render) */
+    rd_frame_settings fs; /* set's view settings, and the options of the frame */
+    rd_ddgi_settings gi;  /* set's GI settings (srv_settings_to_gi), and the seed */
     unsigned frames, max_updates, spp; /* frames 0: converge (at most max_updates) */
     rd_probe_shadows probe_shadows;
-    bool pathtrace;
+    bool pathtrace; /* --gi pathtrace */
     int camera;
     bool has_time;
     double time;
-    unsigned quality, repeat;
+    unsigned quality, repeat, seed;
     bool timings, list_devices;
     bool no_default_lighting;
 } render_args;
@@ -95,16 +86,19 @@ typedef struct render_args {
 static int parse(int argc, char **argv, render_args *a)
 {
     memset(a, 0, sizeof *a);
+    srv_settings_defaults(&a->set);
+    unsigned given = 0;
     a->camera = -1;
     a->quality = 92;
     a->repeat = 5;
-    a->fs.width = 960;
-    a->fs.height = 540;
-    a->gi.mode = PC_GI_DDGI;
     a->frames = 0;
     a->max_updates = RD_WORLD_CONVERGE_CAP;
     a->spp = 256;
     for (int i = 1; i < argc; i++) {
+        int setting = srv_settings_parse_flag("probecast render", SRV_CLI_RENDER, argc, argv, &i,
+                                              &a->set, &given);
+        if (setting < 0) return 2;
+        if (setting > 0) continue;
         const char *o = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
 #define NEED_VALUE                                                                                 \
@@ -120,12 +114,6 @@ static int parse(int argc, char **argv, render_args *a)
             a->timings = true;
         } else if (strcmp(o, "--list-devices") == 0) {
             a->list_devices = true;
-        } else if (strcmp(o, "--width") == 0) {
-            NEED_VALUE
-            if (!srv_arg_uint(o, v, 1, 16384, &a->fs.width)) return 2;
-        } else if (strcmp(o, "--height") == 0) {
-            NEED_VALUE
-            if (!srv_arg_uint(o, v, 1, 16384, &a->fs.height)) return 2;
         } else if (strcmp(o, "--camera") == 0) {
             NEED_VALUE
             unsigned c;
@@ -147,19 +135,6 @@ static int parse(int argc, char **argv, render_args *a)
         } else if (strcmp(o, "--hdr") == 0) {
             NEED_VALUE
             a->hdr = v;
-        } else if (strcmp(o, "--exposure") == 0) {
-            NEED_VALUE
-            if (!srv_arg_float(o, v, &a->fs.exposure_ev)) return 2;
-        } else if (strcmp(o, "--tonemap") == 0) {
-            NEED_VALUE
-            if (strcmp(v, "aces") == 0)
-                a->fs.tonemap = PC_TONEMAP_ACES;
-            else if (strcmp(v, "clamp") == 0)
-                a->fs.tonemap = PC_TONEMAP_CLAMP;
-            else {
-                fprintf(stderr, "probecast render: --tonemap expects aces or clamp\n");
-                return 2;
-            }
         } else if (strcmp(o, "--reflections") == 0) {
             NEED_VALUE
             if (strcmp(v, "on") == 0)
@@ -170,9 +145,6 @@ static int parse(int argc, char **argv, render_args *a)
                 fprintf(stderr, "probecast render: --reflections expects on or off\n");
                 return 2;
             }
-        } else if (strcmp(o, "--sky") == 0) {
-            NEED_VALUE
-            if (!srv_arg_floats(o, v, a->fs.sky, 3)) return 2;
         } else if (strcmp(o, "--default-lighting") == 0) {
             NEED_VALUE
             if (strcmp(v, "on") == 0 || strcmp(v, "off") == 0) {
@@ -187,50 +159,12 @@ static int parse(int argc, char **argv, render_args *a)
         } else if (strcmp(o, "--repeat") == 0) {
             NEED_VALUE
             if (!srv_arg_uint(o, v, 1, 1000, &a->repeat)) return 2;
-        } else if (strcmp(o, "--gi") == 0) {
-            NEED_VALUE
-            if (strcmp(v, "off") == 0)
-                a->gi.mode = PC_GI_OFF;
-            else if (strcmp(v, "classic") == 0)
-                a->gi.mode = PC_GI_CLASSIC;
-            else if (strcmp(v, "ddgi") == 0)
-                a->gi.mode = PC_GI_DDGI;
-            else if (strcmp(v, "pathtrace") == 0)
-                a->pathtrace = true;
-            else {
-                fprintf(stderr, "probecast render: --gi expects off, classic, ddgi or pathtrace\n");
-                return 2;
-            }
-        } else if (strcmp(o, "--probes") == 0) {
-            NEED_VALUE
-            float c[3];
-            if (!srv_arg_floats(o, v, c, 3)) return 2;
-            for (int k = 0; k < 3; k++) {
-                if (c[k] < 1 || c[k] > 256 || c[k] != (float)(unsigned)c[k]) {
-                    fprintf(stderr,
-                            "probecast render: --probes expects three integers in 1..256\n");
-                    return 2;
-                }
-                a->gi.counts[k] = (unsigned)c[k];
-            }
-        } else if (strcmp(o, "--probe-spacing") == 0) {
-            NEED_VALUE
-            float sp;
-            if (!srv_arg_float(o, v, &sp)) return 2;
-            if (!(sp > 0)) {
-                fprintf(stderr, "probecast render: --probe-spacing must be positive\n");
-                return 2;
-            }
-            a->gi.spacing[0] = a->gi.spacing[1] = a->gi.spacing[2] = sp;
         } else if (strcmp(o, "--spp") == 0) {
             NEED_VALUE
             if (!srv_arg_uint(o, v, 1, 1u << 20, &a->spp)) return 2;
         } else if (strcmp(o, "--max-bounces") == 0) {
             NEED_VALUE
             if (!srv_arg_uint(o, v, 1, 1024, &a->fs.max_bounces)) return 2;
-        } else if (strcmp(o, "--rays") == 0) {
-            NEED_VALUE
-            if (!srv_arg_uint(o, v, 1, PC_DDGI_MAX_RAYS, &a->gi.rays)) return 2;
         } else if (strcmp(o, "--frames") == 0) {
             NEED_VALUE
             if (!srv_arg_uint(o, v, 1, 100000, &a->frames)) return 2;
@@ -250,30 +184,9 @@ static int parse(int argc, char **argv, render_args *a)
         } else if (strcmp(o, "--max-updates") == 0) {
             NEED_VALUE
             if (!srv_arg_uint(o, v, 1, 100000, &a->max_updates)) return 2;
-        } else if (strcmp(o, "--hysteresis") == 0) {
-            NEED_VALUE
-            if (!srv_arg_float(o, v, &a->gi.hysteresis)) return 2;
-            if (!(a->gi.hysteresis >= 0 && a->gi.hysteresis < 1)) {
-                fprintf(stderr, "probecast render: --hysteresis expects a value in [0, 1)\n");
-                return 2;
-            }
-            a->gi.has_hysteresis = true; /* 0 too is a value: no history */
         } else if (strcmp(o, "--seed") == 0) {
             NEED_VALUE
-            if (!srv_arg_uint(o, v, 0, 0xffffffffu, &a->gi.seed)) return 2;
-            a->fs.seed = a->gi.seed;
-        } else if (strcmp(o, "--view") == 0) {
-            NEED_VALUE
-            if (strcmp(v, "final") == 0)
-                a->fs.view = PC_VIEW_FINAL;
-            else if (strcmp(v, "irradiance") == 0)
-                a->fs.view = PC_VIEW_IRRADIANCE;
-            else if (strcmp(v, "probes") == 0)
-                a->fs.view = PC_VIEW_PROBES;
-            else {
-                fprintf(stderr, "probecast render: --view expects final, irradiance or probes\n");
-                return 2;
-            }
+            if (!srv_arg_uint(o, v, 0, 0xffffffffu, &a->seed)) return 2;
         } else if (strcmp(o, "--dump-probes") == 0) {
             NEED_VALUE
             a->dump = v;
@@ -296,10 +209,17 @@ static int parse(int argc, char **argv, render_args *a)
         return 2;
     }
     if (!a->out && !a->hdr) a->out = "render.png";
-    if (a->pathtrace) {
-        a->gi.mode = PC_GI_OFF;
-        a->fs.pathtrace_spp = a->spp;
-    }
+    /* the settings as the daemon hands them to the renderer */
+    srv_settings_to_gi(&a->set, &a->gi);
+    a->gi.seed = a->fs.seed = a->seed;
+    a->pathtrace = a->set.gi_mode == SRV_GI_PATHTRACE;
+    if (a->pathtrace) a->fs.pathtrace_spp = a->spp;
+    a->fs.width = a->set.width;
+    a->fs.height = a->set.height;
+    a->fs.exposure_ev = a->set.exposure_ev;
+    a->fs.tonemap = a->set.tonemap;
+    a->fs.view = a->set.view;
+    memcpy(a->fs.sky, a->set.sky, sizeof a->fs.sky);
     if (a->gi.mode == PC_GI_OFF && (a->fs.view != PC_VIEW_FINAL || a->dump)) {
         fprintf(stderr, "probecast render: --view and --dump-probes need --gi classic or ddgi\n");
         return 2;

@@ -6,9 +6,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define SIDE_MIN 16u
-#define SIDE_MAX 4096u
-
 void srv_views_init(srv_views *vs, unsigned max_views, unsigned max_pixels,
                     uint64_t max_total_pixels)
 {
@@ -54,14 +51,14 @@ void srv_views_fit(const srv_views *vs, uint32_t id, unsigned want_w, unsigned w
     double cap = vs->max_pixels;
     double left = vs->max_total_pixels > others ? (double)(vs->max_total_pixels - others) : 0;
     if (left < cap) cap = left;
-    if (cap < SIDE_MIN * SIDE_MIN) cap = SIDE_MIN * SIDE_MIN;
+    if (cap < SRV_SIDE_MIN * SRV_SIDE_MIN) cap = SRV_SIDE_MIN * SRV_SIDE_MIN;
     double fw = want_w ? want_w : 1, fh = want_h ? want_h : 1;
     if (fw * fh > cap) {
         double k = sqrt(cap / (fw * fh));
         fw = floor(fw * k), fh = floor(fh * k);
     }
-    *w = fw < SIDE_MIN ? SIDE_MIN : fw > SIDE_MAX ? SIDE_MAX : (unsigned)fw;
-    *h = fh < SIDE_MIN ? SIDE_MIN : fh > SIDE_MAX ? SIDE_MAX : (unsigned)fh;
+    *w = fw < SRV_SIDE_MIN ? SRV_SIDE_MIN : fw > SRV_SIDE_MAX ? SRV_SIDE_MAX : (unsigned)fw;
+    *h = fh < SRV_SIDE_MIN ? SRV_SIDE_MIN : fh > SRV_SIDE_MAX ? SRV_SIDE_MAX : (unsigned)fh;
 }
 
 srv_view *srv_views_add(srv_views *vs, uint32_t id, unsigned width, unsigned height,

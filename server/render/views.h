@@ -61,7 +61,7 @@ srv_view *srv_views_add(srv_views *vs, uint32_t id, unsigned width, unsigned hei
                         const srv_camera *camera);
 void srv_views_remove(srv_views *vs, uint32_t id);
 /* Clamps a requested size for view id (0 when new): scaled down to max_pixels and to the pixels
- * the other views leave under max_total_pixels, then to 16..4096 per side. */
+ * the other views leave under max_total_pixels, then to SRV_SIDE_MIN..SRV_SIDE_MAX per side. */
 void srv_views_fit(const srv_views *vs, uint32_t id, unsigned want_w, unsigned want_h, unsigned *w,
                    unsigned *h);
 /* Marks every view dirty (the world changed); world_tick: they now show an older tick. */

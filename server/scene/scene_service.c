@@ -14,8 +14,7 @@
 static rd_vk_result configure_gi(srv_scene_service *svc, char *err, size_t errlen)
 {
     rd_ddgi_settings gi;
-    srv_settings_to_gi(&svc->st.settings, &gi);
-    if (svc->st.settings.gi_mode == SRV_GI_PATHTRACE) gi.mode = PC_GI_OFF;
+    srv_settings_to_gi(&svc->st.settings, &gi); /* pathtrace: no probes */
     rd_vk_result vr = rd_world_configure_gi(&svc->world, svc->st.scene.bounds_min,
                                             svc->st.scene.bounds_max, &gi, err, errlen);
     svc->gi_updates = 0;

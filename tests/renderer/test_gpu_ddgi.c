@@ -207,7 +207,7 @@ static void test_furnace(void)
 {
     test_render_desc d = {.scene = "furnace", .width = 24, .height = 16, .updates = 40,
                           .gi = {.mode = PC_GI_DDGI, .counts = {2, 2, 2}, .rays = 96,
-                                 .hysteresis = 0.7f, .seed = 1}};
+                                 .hysteresis = 0.7f, .has_hysteresis = true, .seed = 1}};
     float *img = test_render(&vk, &d, NULL, NULL);
     if (!img) return;
     size_t n = (size_t)d.width * d.height * 3, bad;
@@ -228,7 +228,7 @@ static void test_thin_wall(void)
     /* 8 x 4 x 4 probes over the two rooms: cages at the shared wall straddle it */
     test_render_desc d = {.scene = "two-rooms", .width = 24, .height = 16, .updates = 12,
                           .gi = {.mode = PC_GI_CLASSIC, .counts = {8, 4, 4}, .rays = 64,
-                                 .hysteresis = 0.5f, .seed = 3}};
+                                 .hysteresis = 0.5f, .has_hysteresis = true, .seed = 3}};
     float *classic = test_render(&vk, &d, NULL, NULL);
     d.gi.mode = PC_GI_DDGI;
     float *ddgi = test_render(&vk, &d, NULL, NULL);
