@@ -88,7 +88,7 @@ static void build_tiny_emitter(rd_scene *s)
 {
     char err[8];
     rd_scene_destroy(s);
-    rd_procedural_build("cornell", s, err, sizeof err);
+    rd_procedural_scene("cornell", s, err, sizeof err);
     for (uint32_t i = 0; i < s->light_count; i++)
         s->lights[i].intensity = 0; /* lights off */
     for (uint32_t i = 0; i < s->material_count; i++)
@@ -120,7 +120,7 @@ static void build_degenerate(rd_scene *s)
 {
     char err[8];
     rd_scene_destroy(s);
-    rd_procedural_build("plane-point", s, err, sizeof err);
+    rd_procedural_scene("plane-point", s, err, sizeof err);
     rd_tri_list t = {0};
     uint32_t grey = rd_build_material(s, "grey2", 0.5f, 0.5f, 0.5f, 0, 0, 0);
     for (int i = 0; i < 50; i++) {
@@ -157,7 +157,7 @@ static void build_mirrored(rd_scene *s)
 {
     char err[8];
     rd_scene_destroy(s);
-    rd_procedural_build("plane-point", s, err, sizeof err);
+    rd_procedural_scene("plane-point", s, err, sizeof err);
     s->nodes[0].scale[0] = -1; /* glTF: the winding flips with the determinant */
 }
 
@@ -192,7 +192,7 @@ bool rd_hard_case_build(const char *name, rd_scene *s, char *err, size_t errlen)
              strcmp(name, "many-lights") == 0)
         base = "cornell";
     if (base) {
-        if (!rd_procedural_build(base, s, err, errlen)) return false;
+        if (!rd_procedural_scene(base, s, err, errlen)) return false;
     } else {
         rd_scene_init(s);
     }

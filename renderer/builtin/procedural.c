@@ -5,7 +5,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "renderer/builtin/hard_cases.h"
 #include "renderer/scene/mesh_builder.h"
 #include "renderer/builtin/procedural_interior.h"
 #include "renderer/scene/xform.h"
@@ -211,65 +210,8 @@ const char *rd_procedural_names(void)
            "eval --list); each as NAME+gltf or NAME+metal with glTF materials";
 }
 
-/* The material families a builtin scene can be asked in (NAME+FAMILY). Builtins are written
- * Lambertian (specular 0); uploads are glTF metallic-roughness with the dielectric lobe of
- * Appendix B (specular 1): "gltf" is the glTF default dielectric at roughness 1 (what a plain
- * uploaded material is), "metal" a half-metallic, mid-rough variant that has both lobes and
- * reflection rays (roughness 0.5 < PC_REFLECT_MAX_ROUGHNESS). Base colour and emission stay. */
-static const struct {
-    const char *name;
-    float metallic, roughness, specular;
-} families[] = {{"gltf", 0.0f, 1.0f, 1.0f}, {"metal", 0.5f, 0.5f, 1.0f}};
-
-static void set_family(rd_scene *s, int family)
+bool rd_procedural_scene(const char *name, rd_scene *s, char *err, size_t errlen)
 {
-    for (uint32_t m = 0; m < s->material_count; m++) {
-        s->materials[m].metallic = families[family].metallic;
-        s->materials[m].roughness = families[family].roughness;
-        s->materials[m].specular = families[family].specular;
-    }
-}
-
-/* Splits "NAME+FAMILY": the family's index (-1 without a suffix) and NAME's length; false for an
- * unknown family. */
-static bool split_family(const char *name, size_t *len, int *family, char *err, size_t errlen)
-{
-    const char *plus = strrchr(name, '+');
-    *family = -1;
-    *len = strlen(name);
-    if (!plus) return true;
-    for (int f = 0; f < (int)(sizeof families / sizeof families[0]); f++)
-        if (strcmp(plus + 1, families[f].name) == 0) {
-            *family = f;
-            *len = (size_t)(plus - name);
-            return true;
-        }
-    snprintf(err, errlen, "unknown material family '+%s' (known: +gltf, +metal)", plus + 1);
-    return false;
-}
-
-static bool build_named(const char *name, rd_scene *s, char *err, size_t errlen);
-
-bool rd_procedural_build(const char *spec, rd_scene *s, char *err, size_t errlen)
-{
-    size_t len;
-    int family;
-    if (!split_family(spec, &len, &family, err, errlen)) return false;
-    char name[256];
-    if (len >= sizeof name) {
-        snprintf(err, errlen, "builtin scene name too long");
-        return false;
-    }
-    memcpy(name, spec, len);
-    name[len] = 0;
-    if (!build_named(name, s, err, errlen)) return false;
-    if (family >= 0) set_family(s, family);
-    return true;
-}
-
-static bool build_named(const char *name, rd_scene *s, char *err, size_t errlen)
-{
-    if (strncmp(name, "hard:", 5) == 0) return rd_hard_case_build(name + 5, s, err, errlen);
     rd_scene_init(s);
     const char *colon = strchr(name, ':');
     size_t len = colon ? (size_t)(colon - name) : strlen(name);

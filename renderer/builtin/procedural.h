@@ -9,6 +9,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 
+#include "renderer/builtin/builtin.h" /* rd_procedural_build: every builtin by spec */
 #include "renderer/scene/scene.h"
 
 /* Builds the named scene into s (initialised here). Names:
@@ -30,11 +31,9 @@
  *                     least N triangles in all (default 1000000).
  *   interior[:M]      benchmark: a furnished building of about M million triangles over all
  *                     instances (default RD_INTERIOR_DEFAULT_MILLIONS; procedural_interior.h).
- * NAME+gltf and NAME+metal build the same scene with glTF materials instead of Lambertian ones
- *: the default dielectric (metallic 0, roughness 1, specular 1) or a
- * half-metallic variant (metallic 0.5, roughness 0.5), base colours and emission kept.
- * Returns false with a message for an unknown name, family or bad argument. */
-bool rd_procedural_build(const char *name, rd_scene *s, char *err, size_t errlen);
+ * Returns false with a message for an unknown name or bad argument. Callers name builtins by
+ * spec with rd_procedural_build (builtin.h: hard cases and material families too). */
+bool rd_procedural_scene(const char *name, rd_scene *s, char *err, size_t errlen);
 
 /* Comma-separated list of the names above (for --help). */
 const char *rd_procedural_names(void);
