@@ -105,7 +105,6 @@ int main(int argc, char **argv)
         {"two-rooms lit (Lambertian)", "two-rooms", NULL, 1, 0, 0.05, 0},
     };
     const accuracy_case twins[] = {
-        {"furnace+gltf (base 0.5)", "furnace+gltf", NULL, 0, 0, 0.02, 0},
         {"glTF file furnace base 0.9", NULL, furnace_09, 0, 0, 0.02, 0.9},
         {"cornell+gltf", "cornell+gltf", NULL, 0, 0, 0.03, 0},
         {"two-rooms+gltf lit", "two-rooms+gltf", NULL, 1, 0, 0.03, 0},
