@@ -246,10 +246,10 @@ int main(void)
     /* a viewer that leaves frees its view; B, following it, goes back to its own */
     snprintf(msg, sizeof msg, "{\"type\":\"follow\",\"view\":%u}", a.view);
     send(&b, msg);
-    fol = pc_stream_next_text(&b.ws, 10000, "following");
+    fol = pc_stream_next_text(&b.ws, 30000, "following"); /* generous: lavapipe on shared cores */
     cJSON_Delete(fol);
     pc_ws_close(&a.ws);
-    fol = pc_stream_next_text(&b.ws, 10000, "following");
+    fol = pc_stream_next_text(&b.ws, 30000, "following");
     CHECKF(pc_json_number(fol, "view") == b.view, "back to its own view when A left");
     cJSON_Delete(fol);
     for (int i = 0; i < 3; i++)
