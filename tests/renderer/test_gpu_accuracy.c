@@ -93,7 +93,7 @@ static void check_case(const accuracy_case *c)
 }
 
 /* argv[1] "gltf" runs the glTF-material twins (ctest: test_gpu_accuracy_gltf), else the
- * Lambertian cases: two ctest entries, so that the two halves run side by side. */
+ * Lambertian cases: two ctest entries, each reported and timed apart. */
 int main(int argc, char **argv)
 {
     if (!test_vk_open(&vk)) return test_finish();
