@@ -220,10 +220,33 @@ float ray_offset_scale(pc_instance inst, pc_tri t, vec3 p)
     return norm * max3(v) + max(r0.w, max(r1.w, r2.w)) + max3(abs(p));
 }
 
+/* Moves p_obj, the hit at barycentrics (u, v) of triangle t (local frame), into the triangle
+ * where it lies nearer than `offset` (world) to an edge: at least that far from each edge (or to
+ * the centroid, for a triangle too small for it); returns whether it moved. A hit on the edge
+ * where two walls meet at a concave corner lies on (or rounds past) the other wall's plane, and
+ * the ray offset along its own normal keeps it there: rays from it would leave the room through
+ * the corner. Moved inward by the offset, it lies that far inside both walls. Points away from
+ * the edges keep their exact barycentric position. */
+bool keep_off_edges(pc_tri t, pc_instance inst, float u, float v, float offset, inout vec3 p_obj)
+{
+    vec3 b = vec3(1.0 - u - v, u, v);
+    vec3 e1 = xform_vector(inst.object_to_world, t.v1.xyz - t.v0.xyz);
+    vec3 e2 = xform_vector(inst.object_to_world, t.v2.xyz - t.v0.xyz);
+    float area2 = length(cross(e1, e2));
+    /* the barycentric of `offset` from the edge opposite each vertex: offset / height */
+    vec3 margin = offset * vec3(length(e2 - e1), length(e2), length(e1)) / area2;
+    if (!(area2 > 0.0) || isinf(area2) || !any(lessThan(b, margin))) return false;
+    b = max(b, min(margin, vec3(1.0 / 3.0)));
+    b /= b.x + b.y + b.z;
+    p_obj = t.v0.xyz * b.x + t.v1.xyz * b.y + t.v2.xyz * b.z;
+    return true;
+}
+
 /* Rebuilds the surface at a hit. The geometric normal is the object-space front normal
  * carried by the inverse transpose, so a mirroring node (negative determinant) keeps the
  * front side glTF gives it (the winding flips with the determinant); both normals are then
- * turned toward the side the ray came from. */
+ * turned toward the side the ray came from. The position keeps off the triangle's edges by the
+ * ray offset (keep_off_edges). */
 pc_surface surface_at(pc_scene_refs s, pc_hit hit, vec3 ray_dir)
 {
     pc_surface sf;
@@ -234,6 +257,8 @@ pc_surface surface_at(pc_scene_refs s, pc_hit hit, vec3 ray_dir)
     vec3 p_obj = t.v0.xyz * w + t.v1.xyz * hit.u + t.v2.xyz * hit.v;
     sf.position = xform_point(inst.object_to_world, p_obj);
     sf.offset = ray_offset_distance(ray_offset_scale(inst, t, sf.position));
+    if (keep_off_edges(t, inst, hit.u, hit.v, sf.offset, p_obj))
+        sf.position = xform_point(inst.object_to_world, p_obj);
 
     vec3 ng = xform_normal(inst.world_to_object, cross(t.v1.xyz - t.v0.xyz, t.v2.xyz - t.v0.xyz));
     float ng_len = length(ng);
