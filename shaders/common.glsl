@@ -122,6 +122,7 @@ struct pc_surface {
     float roughness;  /* perceptual, 0..1 */
     float specular;   /* weight of the dielectric specular lobe (pc_material.params.w) */
     float occlusion;  /* ambient occlusion of indirect light, 1 = none */
+    float offset;     /* rays leaving position move this far along geom_normal (trace.glsl) */
 };
 
 /* The surface's BRDF (brdf.glsl). */
@@ -204,10 +205,48 @@ vec3 xform_normal(vec4 inv_rows[3], vec3 n)
     return inv_rows[0].xyz * n.x + inv_rows[1].xyz * n.y + inv_rows[2].xyz * n.z;
 }
 
+float max3(vec3 v) { return max(v.x, max(v.y, v.z)); }
+
+/* The magnitudes a ray leaving a point p (world) of triangle t of instance inst meets
+ * (trace.glsl, ray_offset_distance): the triangle's local vertices scaled by the transform's
+ * norm (the rebuilt position, and the triangle test's vertices minus origin), the transform's
+ * translation (the way into the world and back) and p itself. */
+float ray_offset_scale(pc_instance inst, pc_tri t, vec3 p)
+{
+    vec3 v = max(abs(t.v0.xyz), max(abs(t.v1.xyz), abs(t.v2.xyz)));
+    vec4 r0 = abs(inst.object_to_world[0]), r1 = abs(inst.object_to_world[1]);
+    vec4 r2 = abs(inst.object_to_world[2]);
+    float norm = max(r0.x + r0.y + r0.z, max(r1.x + r1.y + r1.z, r2.x + r2.y + r2.z));
+    return norm * max3(v) + max(r0.w, max(r1.w, r2.w)) + max3(abs(p));
+}
+
+/* Moves p_obj, the hit at barycentrics (u, v) of triangle t (local frame), into the triangle
+ * where it lies nearer than `offset` (world) to an edge: at least that far from each edge (or to
+ * the centroid, for a triangle too small for it); returns whether it moved. A hit on the edge
+ * where two walls meet at a concave corner lies on (or rounds past) the other wall's plane, and
+ * the ray offset along its own normal keeps it there: rays from it would leave the room through
+ * the corner. Moved inward by the offset, it lies that far inside both walls. Points away from
+ * the edges keep their exact barycentric position. */
+bool keep_off_edges(pc_tri t, pc_instance inst, float u, float v, float offset, inout vec3 p_obj)
+{
+    vec3 b = vec3(1.0 - u - v, u, v);
+    vec3 e1 = xform_vector(inst.object_to_world, t.v1.xyz - t.v0.xyz);
+    vec3 e2 = xform_vector(inst.object_to_world, t.v2.xyz - t.v0.xyz);
+    float area2 = length(cross(e1, e2));
+    /* the barycentric of `offset` from the edge opposite each vertex: offset / height */
+    vec3 margin = offset * vec3(length(e2 - e1), length(e2), length(e1)) / area2;
+    if (!(area2 > 0.0) || isinf(area2) || !any(lessThan(b, margin))) return false;
+    b = max(b, min(margin, vec3(1.0 / 3.0)));
+    b /= b.x + b.y + b.z;
+    p_obj = t.v0.xyz * b.x + t.v1.xyz * b.y + t.v2.xyz * b.z;
+    return true;
+}
+
 /* Rebuilds the surface at a hit. The geometric normal is the object-space front normal
  * carried by the inverse transpose, so a mirroring node (negative determinant) keeps the
  * front side glTF gives it (the winding flips with the determinant); both normals are then
- * turned toward the side the ray came from. */
+ * turned toward the side the ray came from. The position keeps off the triangle's edges by the
+ * ray offset (keep_off_edges). */
 pc_surface surface_at(pc_scene_refs s, pc_hit hit, vec3 ray_dir)
 {
     pc_surface sf;
@@ -217,6 +256,9 @@ pc_surface surface_at(pc_scene_refs s, pc_hit hit, vec3 ray_dir)
     float w = 1.0 - hit.u - hit.v;
     vec3 p_obj = t.v0.xyz * w + t.v1.xyz * hit.u + t.v2.xyz * hit.v;
     sf.position = xform_point(inst.object_to_world, p_obj);
+    sf.offset = ray_offset_distance(ray_offset_scale(inst, t, sf.position));
+    if (keep_off_edges(t, inst, hit.u, hit.v, sf.offset, p_obj))
+        sf.position = xform_point(inst.object_to_world, p_obj);
 
     vec3 ng = xform_normal(inst.world_to_object, cross(t.v1.xyz - t.v0.xyz, t.v2.xyz - t.v0.xyz));
     float ng_len = length(ng);
@@ -335,12 +377,13 @@ bool shadow_ray_clear(pc_scene_refs s, vec3 origin, vec3 wi, float dist, inout u
 
 /* Radiance reflected toward v by a surface with BRDF b from all punctual lights:
  * sum over lights of f(v, l) * E_i * cos * visibility, with ray-traced hard shadows (shadow
- * rays start on the geometric side; lights below the shading or the geometric surface give
- * nothing). Counts the shadow rays it traces into *rays. */
-vec3 direct_radiance(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, vec3 v, pc_brdf b, inout uint rays)
+ * rays start on the geometric side, moved by the surface's ray offset; lights below the shading
+ * or the geometric surface give nothing). Counts the shadow rays it traces into *rays. */
+vec3 direct_radiance(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, float offset, vec3 v, pc_brdf b,
+                     inout uint rays)
 {
     vec3 sum = vec3(0.0);
-    vec3 origin = offset_ray_origin(p, ng);
+    vec3 origin = offset_ray_origin(p, ng, offset);
     for (uint i = 0u; i < s.counts.y; i++) {
         vec3 wi;
         float dist;
@@ -403,13 +446,14 @@ uint choose_light(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, vec3 v, pc_brdf b, f
  * the choice (ddgi_shade.comp): their shadow rays are most of an update's cost and grow with the
  * light count, while a probe texel averages hundreds of rays over many updates, which absorbs
  * the selection noise. */
-vec3 direct_radiance_sampled(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, vec3 v, pc_brdf b,
-                             float u, inout uint rays)
+vec3 direct_radiance_sampled(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, float offset, vec3 v,
+                             pc_brdf b, float u, inout uint rays)
 {
     vec3 term, wi;
     float dist;
     if (choose_light(s, p, n, ng, v, b, u, term, wi, dist) == PC_INVALID) return vec3(0.0);
-    return shadow_ray_clear(s, offset_ray_origin(p, ng), wi, dist, rays) ? term : vec3(0.0);
+    return shadow_ray_clear(s, offset_ray_origin(p, ng, offset), wi, dist, rays) ? term
+                                                                                  : vec3(0.0);
 }
 
 /* Ray counting with one global atomic per workgroup. Every invocation of the workgroup must

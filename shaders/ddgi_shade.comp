@@ -79,8 +79,8 @@ void main()
         vec3 direct = vec3(0.0);
         if (light != PC_INVALID)
             direct = term * probe_light_visibility(g.scene, vol.shadow_maps, vol.control.w, light,
-                                                   sf.position, sf.geom_normal, wi, dist,
-                                                   shadow_rays);
+                                                   sf.position, sf.geom_normal, sf.offset, wi,
+                                                   dist, shadow_rays);
         vec3 indirect = vec3(0.0);
         if (pc.params.y != 0u)
             indirect = ddgi_irradiance(vol, env_irradiance(g.env, sf.normal), sf.position,

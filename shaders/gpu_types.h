@@ -107,6 +107,12 @@ static inline float pc_u2f(uint32_t u)
 /* Spatial filter radius in pixels at roughness PC_REFLECT_MAX_ROUGHNESS (none below 0.1). */
 #define PC_REFLECT_FILTER_RADIUS 3
 
+/* Rays leave surfaces moved along the geometric normal by PC_RAY_OFFSET_REL times the
+ * magnitudes the hit's arithmetic met (shaders/trace.glsl, ray_offset_distance): with their sum
+ * about twice the largest, that is 2^-15 of it, Wächter and Binder's 256 ulps. */
+#define PC_RAY_OFFSET_REL (1.0 / 65536.0)
+#define PC_RAY_OFFSET_MIN 1.0e-30
+
 #define PC_BVH_STACK_SIZE 64
 #define PC_INVALID 0xffffffffu
 
@@ -415,7 +421,8 @@ PC_END(pc_globals);
  * position: xyz world position, w = hit distance (< 0: miss);
  * normal: xyz shading normal facing the viewer, w = instance index (uint bits);
  * geom_normal: xyz geometric normal facing the viewer, w = triangle index (uint bits);
- * albedo: rgb base colour (linear); emission: rgb emitted radiance;
+ * albedo: rgb base colour (linear), w = the ray offset of the hit (pc_surface.offset: how far
+ * rays leaving it move along geom_normal; 0 for a miss); emission: rgb emitted radiance;
  * material: x metallic, y roughness (perceptual), z ambient occlusion (1 = none), w weight of
  * the dielectric specular lobe (pc_material.params.w). The shading normal is normal-mapped. */
 PC_STRUCT(pc_gbuffer_texel)

@@ -51,7 +51,7 @@ void main()
             pc_brdf b = surface_brdf(sf);
             vec3 v = -dir;
             radiance += throughput * direct_radiance(g.scene, sf.position, sf.normal,
-                                                     sf.geom_normal, v, b, shadow);
+                                                     sf.geom_normal, sf.offset, v, b, shadow);
             rays += shadow;
             if (bounce == max_bounces) break;
             /* random numbers in the order of the Lambertian-only tracer: roulette, then the
@@ -70,7 +70,7 @@ void main()
             }
             if (all(equal(throughput, vec3(0.0)))) break;
             if (dot(dir, sf.geom_normal) <= 0.0) break; /* below the true surface */
-            org = offset_ray_origin(sf.position, sf.geom_normal);
+            org = offset_ray_origin(sf.position, sf.geom_normal, sf.offset);
         }
         AccumRef acc = AccumRef(pc.buf0);
         acc.v[pixel] = (pc.params.x == 0u ? vec4(0.0) : acc.v[pixel]) + vec4(radiance, 1.0);

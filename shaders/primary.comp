@@ -35,7 +35,7 @@ void main()
             o.position = vec4(sf.position, hit.t);
             o.normal = vec4(sf.normal, uintBitsToFloat(hit.instance));
             o.geom_normal = vec4(sf.geom_normal, uintBitsToFloat(hit.tri));
-            o.albedo = vec4(sf.albedo, 1.0);
+            o.albedo = vec4(sf.albedo, sf.offset);
             o.emission = vec4(sf.emission, 0.0);
             o.material = vec4(sf.metallic, sf.roughness, sf.occlusion, sf.specular);
         } else {

@@ -24,7 +24,8 @@ void main()
         if (t.position.w >= 0.0) {
             vec3 p = t.position.xyz, v = normalize(g.view.eye.xyz - p);
             pc_brdf b = gbuffer_brdf(t);
-            l += direct_radiance(g.scene, p, t.normal.xyz, t.geom_normal.xyz, v, b, rays);
+            l += direct_radiance(g.scene, p, t.normal.xyz, t.geom_normal.xyz, t.albedo.w, v, b,
+                                 rays);
         }
         RadianceRef(pc.buf2).v[i] = vec4(l, 1.0);
     }

@@ -117,17 +117,17 @@ float shadow_map_visibility(uint64_t maps, uint index, pc_light l, vec3 p, vec3 
 }
 
 /* How much of light `index`, chosen for a probe hit at p (unit geometric normal ng on the
- * light's side; the light at distance dist along wi), reaches it: from the light's map where the
- * update has one covering p (lights [0, mapped) of the maps at `maps`), else from one shadow
- * ray, counted into rays. */
+ * light's side, ray offset `offset`: pc_surface; the light at distance dist along wi), reaches
+ * it: from the light's map where the update has one covering p (lights [0, mapped) of the maps
+ * at `maps`), else from one shadow ray, counted into rays. */
 float probe_light_visibility(pc_scene_refs s, uint64_t maps, uint mapped, uint index, vec3 p,
-                             vec3 ng, vec3 wi, float dist, inout uint rays)
+                             vec3 ng, float offset, vec3 wi, float dist, inout uint rays)
 {
     if (index < mapped) {
         float seen = shadow_map_visibility(maps, index, LightRef(s.lights).v[index], p, ng);
         if (seen >= 0.0) return seen;
     }
-    return shadow_ray_clear(s, offset_ray_origin(p, ng), wi, dist, rays) ? 1.0 : 0.0;
+    return shadow_ray_clear(s, offset_ray_origin(p, ng, offset), wi, dist, rays) ? 1.0 : 0.0;
 }
 
 #endif

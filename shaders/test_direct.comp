@@ -28,13 +28,14 @@ void main()
         uint rays = 0u;
         float total = light_weight_total(g.scene, sf.position, sf.normal, sf.geom_normal, -d,
                                          lambert);
-        exact = vec4(direct_radiance(g.scene, sf.position, sf.normal, sf.geom_normal, -d, lambert,
-                                     rays), total);
+        exact = vec4(direct_radiance(g.scene, sf.position, sf.normal, sf.geom_normal, sf.offset,
+                                     -d, lambert, rays), total);
         uint n = pc.params.y, sampled = 0u;
         vec3 sum = vec3(0.0);
         for (uint k = 0u; k < n; k++)
-            sum += direct_radiance_sampled(g.scene, sf.position, sf.normal, sf.geom_normal, -d,
-                                           lambert, (float(k) + 0.5) / float(n), sampled);
+            sum += direct_radiance_sampled(g.scene, sf.position, sf.normal, sf.geom_normal,
+                                           sf.offset, -d, lambert, (float(k) + 0.5) / float(n),
+                                           sampled);
         mean = vec4(sum / float(n), float(sampled));
     }
     OutRef(pc.buf1).v[2u * i] = exact;

@@ -299,23 +299,27 @@ bool trace_ray(pc_scene_refs scene, vec3 org, vec3 dir, float tmin, float tmax, 
     return found;
 }
 
-/* Wächter & Binder, "A Fast and Robust Method for Avoiding Self-Intersection", Ray Tracing
- * Gems (2019), ch. 6: offsets a surface point p along its geometric normal n (unit, on the
- * side the new ray leaves from) by an integer number of ulps per component, or by a fixed
- * float step near the origin. The same arithmetic as rd_offset_ray_origin in bvh.c. */
-vec3 offset_ray_origin(vec3 p, vec3 n)
+/* Ray origins off surfaces. A hit's position is rebuilt from its barycentrics in the mesh's
+ * (local) frame and carried to the world by its instance's transform; a ray leaving it is carried
+ * back into each instance it enters, and the triangle test's t errs with the size of its vertices
+ * minus the ray origin. Each step errs by a few ulps of the largest magnitude it handles, so the
+ * origin moves along the geometric normal by PC_RAY_OFFSET_REL times the sum of those magnitudes
+ * (ray_offset_scale in common.glsl, taken by surface_at): Wächter and Binder's 256 ulps (Ray
+ * Tracing Gems, ch. 6), but of the magnitudes the arithmetic met rather than of the world
+ * position alone, which near the floating origin is far smaller than vertices baked kilometres
+ * out. rd_ray_offset_distance and rd_offset_ray_origin in bvh.c are the CPU twins. */
+float ray_offset_distance(float scale)
 {
-    const float origin = 1.0 / 32.0;
-    const float float_scale = 1.0 / 65536.0;
-    const float int_scale = 256.0;
-    vec3 s = int_scale * n;
-    ivec3 of_i = ivec3(mix(vec3(0.0), s, lessThan(abs(s), vec3(1e9)))); /* NaN -> 0 */
-    ivec3 bits = floatBitsToInt(p);
-    bits.x += p.x < 0.0 ? -of_i.x : of_i.x;
-    bits.y += p.y < 0.0 ? -of_i.y : of_i.y;
-    bits.z += p.z < 0.0 ? -of_i.z : of_i.z;
-    precise vec3 near0 = p + float_scale * n;
-    return mix(intBitsToFloat(bits), near0, lessThan(abs(p), vec3(origin)));
+    float d = PC_RAY_OFFSET_REL * scale;
+    return d < 3.0e38 ? max(d, PC_RAY_OFFSET_MIN) : 0.0; /* NaN, Inf -> no offset */
+}
+
+/* p moved along n (unit, toward the side the new ray leaves from) by offset (world units,
+ * ray_offset_distance). */
+vec3 offset_ray_origin(vec3 p, vec3 n, float offset)
+{
+    precise vec3 o = p + n * offset;
+    return o;
 }
 
 #endif

@@ -54,7 +54,8 @@ float *test_render(rd_vk *vk, const test_render_desc *d, pc_view *view_out,
                             .pathtrace_spp = d->pathtrace_spp,
                             .max_bounces = d->max_bounces,
                             .seed = d->seed,
-                            .reflections = d->reflections};
+                            .reflections = d->reflections,
+                            .sky = {d->sky[0], d->sky[1], d->sky[2]}};
     rd_vk_result res = rd_gpu_scene_create(vk, &gs, &s, err, sizeof err);
     CHECKF(res == RD_VK_OK, "%s", err);
     if (res == RD_VK_OK) res = rd_renderer_create(vk, &r, err, sizeof err);

@@ -20,6 +20,7 @@ typedef struct test_render_desc {
     unsigned max_bounces;
     unsigned seed;
     unsigned reflections; /* PC_REFLECT_* (0 = auto) */
+    float sky[3];         /* radiance of rays that escape (default black) */
 } test_render_desc;
 
 /* Creates the device for a GPU test (the environment picks lavapipe and validation) and

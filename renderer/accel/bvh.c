@@ -136,17 +136,16 @@ bool rd_ray_triangle(const float org[3], const float dir[3], const float v0[3], 
 
 /* ---- offset ---------------------------------------------------------------------------------- */
 
-void rd_offset_ray_origin(const float p[3], const float n[3], float out[3])
+float rd_ray_offset_distance(float scale)
 {
-    const float origin = 1.0f / 32.0f, float_scale = 1.0f / 65536.0f, int_scale = 256.0f;
-    for (int a = 0; a < 3; a++) {
-        float s = int_scale * n[a];
-        int32_t of = (s > -1e9f && s < 1e9f) ? (int32_t)s : 0; /* NaN normal -> no offset */
-        /* Integer add on the bit pattern (in uint32 so wrap-around is defined); for a
-         * negative p the offset is negated so the point still moves along n. */
-        uint32_t bits = pc_f2u(p[a]) + (uint32_t)(p[a] < 0.0f ? -of : of);
-        out[a] = fabsf(p[a]) < origin ? p[a] + float_scale * n[a] : pc_u2f(bits);
-    }
+    float d = (float)PC_RAY_OFFSET_REL * scale;
+    return d < 3.0e38f ? fmaxf(d, (float)PC_RAY_OFFSET_MIN) : 0.0f; /* NaN, Inf -> none */
+}
+
+void rd_offset_ray_origin(const float p[3], const float n[3], float offset, float out[3])
+{
+    for (int a = 0; a < 3; a++)
+        out[a] = p[a] + n[a] * offset;
 }
 
 /* ---- CPU traversal ----------------------------------------------------------------------------

@@ -93,12 +93,15 @@ bool rd_ray_triangle(const float org[3], const float dir[3], const float v0[3], 
                      const float v2[3], float tmin, float tmax, float *t, float *u, float *v,
                      bool *backface);
 
-/* Wächter & Binder, "A Fast and Robust Method for Avoiding Self-Intersection" (Ray Tracing
- * Gems, ch. 6): moves p, a point on a surface with geometric normal n (unit, pointing to the
- * side the new ray leaves from), by an integer number of ulps per component (origin 1/32,
- * float_scale 1/65536, int_scale 256). The same arithmetic as offset_ray_origin in
- * shaders/trace.glsl. */
-void rd_offset_ray_origin(const float p[3], const float n[3], float out[3]);
+/* Ray origins off surfaces, the CPU twins of shaders/trace.glsl's (the same arithmetic).
+ * rd_ray_offset_distance: how far a ray leaving a surface point moves along its normal, given
+ * the sum of the magnitudes its computation met (shaders/common.glsl, ray_offset_scale: for an
+ * untransformed triangle, its largest vertex coordinate plus the point's): PC_RAY_OFFSET_REL of
+ * it, Wächter and Binder's 256 ulps (Ray Tracing Gems, ch. 6) of those magnitudes; 0 for a
+ * non-finite scale. rd_offset_ray_origin: p moved by offset along n (unit, toward the side the
+ * new ray leaves from). */
+float rd_ray_offset_distance(float scale);
+void rd_offset_ray_origin(const float p[3], const float n[3], float offset, float out[3]);
 
 /* Closest hit over a triangle BLAS on the CPU (for tests and picking). positions are the
  * mesh's triangles in their original order. Returns the original triangle index or -1. */

@@ -158,6 +158,49 @@ static rd_vk_result upload_materials(rd_vk *vk, rd_gpu_scene *gs, const rd_scene
     return r;
 }
 
+/* The local origin of a mesh whose object-space box is b (min, max): none (0) when the box's
+ * centre lies within 16 times the box's largest side of the origin, where the vertices lose at
+ * most 4 bits to their distance (ray offsets cover it: they scale with the local vertices); else
+ * the centre, rounded to a multiple of the largest power of two not above that side, so that
+ * vertices minus the origin are mostly exact. */
+static void mesh_local_origin(const float b[6], float origin[3])
+{
+    float side = 0, far = 0, c[3];
+    for (int k = 0; k < 3; k++) {
+        c[k] = 0.5f * b[k] + 0.5f * b[3 + k];
+        side = fmaxf(side, b[3 + k] - b[k]);
+        far = fmaxf(far, fabsf(c[k]));
+        origin[k] = 0;
+    }
+    if (!(side > 0) || !isfinite(side) || !isfinite(far) || far <= 16 * side) return;
+    int e;
+    frexpf(side, &e); /* side in [2^(e-1), 2^e) */
+    for (int k = 0; k < 3; k++)
+        origin[k] = ldexpf(rintf(ldexpf(c[k], 1 - e)), e - 1);
+}
+
+/* a - c rounded down and up (a float, c a local origin): BLAS boxes move into the local frame
+ * without losing a triangle that the rounded vertices a - c of their own may reach. */
+static float sub_down(float a, float c)
+{
+    double r = (double)a - (double)c;
+    float f = (float)r;
+    return (double)f > r ? nextafterf(f, -INFINITY) : f;
+}
+static float sub_up(float a, float c)
+{
+    double r = (double)a - (double)c;
+    float f = (float)r;
+    return (double)f < r ? nextafterf(f, INFINITY) : f;
+}
+
+/* v - origin, rounded once: a vertex in its mesh's local frame. */
+static pc_vec4 local_vertex(const float *v, const float origin[3], float w)
+{
+    return (pc_vec4){(float)((double)v[0] - origin[0]), (float)((double)v[1] - origin[1]),
+                     (float)((double)v[2] - origin[2]), w};
+}
+
 rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *s, char *err, size_t errlen)
 {
     memset(p, 0, sizeof *p);
@@ -165,6 +208,8 @@ rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *s, char 
     p->mesh_count = s->mesh_count;
     p->mesh_root = xcalloc(s->mesh_count, sizeof *p->mesh_root);
     p->mesh_bounds = xcalloc(s->mesh_count, 6 * sizeof(float));
+    p->mesh_origin = xcalloc(s->mesh_count, 3 * sizeof(float));
+    p->mesh_local_bounds = xcalloc(s->mesh_count, 6 * sizeof(float));
     rd_bvh *bvhs = xcalloc(s->mesh_count, sizeof *bvhs);
     rd_bvh_mesh *meshes = xcalloc(s->mesh_count, sizeof *meshes);
     for (uint32_t m = 0; m < s->mesh_count; m++)
@@ -183,6 +228,12 @@ rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *s, char 
         float *b = &p->mesh_bounds[m * 6];
         b[0] = root->bmin.x, b[1] = root->bmin.y, b[2] = root->bmin.z;
         b[3] = root->bmax.x, b[4] = root->bmax.y, b[5] = root->bmax.z;
+        float *o = &p->mesh_origin[m * 3], *lb = &p->mesh_local_bounds[m * 6];
+        mesh_local_origin(b, o);
+        for (int k = 0; k < 3; k++) {
+            lb[k] = sub_down(b[k], o[k]);
+            lb[3 + k] = sub_up(b[3 + k], o[k]);
+        }
         if (bvhs[m].depth > p->max_blas_depth) p->max_blas_depth = bvhs[m].depth;
         tri_total += mesh->tri_count;
         node_total += bvhs[m].node_count;
@@ -205,10 +256,17 @@ rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *s, char 
     for (uint32_t m = 0; m < s->mesh_count; m++) {
         const rd_mesh *mesh = &s->meshes[m];
         const rd_bvh *bvh = &bvhs[m];
+        const float *o = &p->mesh_origin[m * 3];
+        bool local = o[0] != 0 || o[1] != 0 || o[2] != 0;
         for (uint32_t i = 0; i < bvh->node_count; i++) {
             pc_bvh_node n = bvh->nodes[i];
             uint32_t first = rd_bvh_node_first(&n), count = rd_bvh_node_count(&n);
             n.bmin.w = pc_u2f(first + (count ? tri_base : node_base));
+            if (local) { /* empty boxes [+inf, -inf] stay empty */
+                n.bmin.x = sub_down(n.bmin.x, o[0]), n.bmax.x = sub_up(n.bmax.x, o[0]);
+                n.bmin.y = sub_down(n.bmin.y, o[1]), n.bmax.y = sub_up(n.bmax.y, o[1]);
+                n.bmin.z = sub_down(n.bmin.z, o[2]), n.bmax.z = sub_up(n.bmax.z, o[2]);
+            }
             p->nodes[node_base + i] = n;
         }
         for (uint32_t i = 0; i < bvh->prim_count; i++) {
@@ -221,9 +279,9 @@ rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *s, char 
             const float *n = &mesh->normals[src * 9];
             const float *uv = &mesh->uvs[src * 6];
             pc_tri *t = &p->tris[tri_base + i];
-            t->v0 = v4(pos, pc_u2f(mat));
-            t->v1 = v4(pos + 3, pc_u2f(flags));
-            t->v2 = v4(pos + 6, pc_u2f(src));
+            t->v0 = local_vertex(pos, o, pc_u2f(mat));
+            t->v1 = local_vertex(pos + 3, o, pc_u2f(flags));
+            t->v2 = local_vertex(pos + 6, o, pc_u2f(src));
             pc_tri_attr *a = &p->attrs[tri_base + i];
             a->n0 = v4(n, 0), a->n1 = v4(n + 3, 0), a->n2 = v4(n + 6, 0);
             a->uv01 = (pc_vec4){uv[0], uv[1], uv[2], uv[3]};
@@ -243,6 +301,8 @@ void rd_gpu_scene_prep_destroy(rd_gpu_scene_prep *p)
 {
     free(p->mesh_root);
     free(p->mesh_bounds);
+    free(p->mesh_origin);
+    free(p->mesh_local_bounds);
     free(p->nodes);
     free(p->tris);
     free(p->attrs);
@@ -256,8 +316,12 @@ static rd_vk_result upload_blas(rd_vk *vk, rd_gpu_scene *gs, rd_gpu_scene_prep *
     gs->mesh_count = p->mesh_count;
     gs->mesh_root = p->mesh_root;
     gs->mesh_bounds = p->mesh_bounds;
+    gs->mesh_origin = p->mesh_origin;
+    gs->mesh_local_bounds = p->mesh_local_bounds;
     p->mesh_root = NULL;
     p->mesh_bounds = NULL;
+    p->mesh_origin = NULL;
+    p->mesh_local_bounds = NULL;
     gs->blas_build_ms = p->build_ms;
     gs->tri_count = p->tri_count;
     gs->blas_node_count = p->node_count;
@@ -343,7 +407,7 @@ static void log_moves(rd_gpu_scene *gs, const pc_instance *inst, const float *lo
             m[r] = row[0], m[4 + r] = row[1], m[8 + r] = row[2], m[12 + r] = row[3];
         }
         m[15] = 1;
-        world_box(m, &gs->mesh_bounds[gs->placed[i].info.y * 6], old_lo, old_hi);
+        world_box(m, &gs->mesh_local_bounds[gs->placed[i].info.y * 6], old_lo, old_hi);
         const float *box[2][2] = {{old_lo, old_hi}, {&lo[i * 3], &hi[i * 3]}};
         for (int b = 0; b < 2; b++) {
             if (!(box[b][0][0] <= box[b][1][0])) continue; /* empty (a singular transform) */
@@ -378,18 +442,23 @@ rd_vk_result rd_gpu_scene_update_instances(rd_vk *vk, rd_gpu_scene *gs, const rd
     float *lo = xcalloc(n, 3 * sizeof(float)), *hi = xcalloc(n, 3 * sizeof(float));
     for (uint32_t i = 0; i < n; i++) {
         const rd_instance *in = &s->instances[i];
-        /* floating origin: the GPU sees positions relative to origin_shift */
+        /* floating origin: the GPU sees positions relative to origin_shift, and the mesh's
+         * vertices relative to its local origin o: world = node (v' + o) - shift, the
+         * translation summed in double and rounded once */
         float world[16];
-        memcpy(world, s->nodes[in->node].world, sizeof world);
+        const float *node = s->nodes[in->node].world, *o = &gs->mesh_origin[in->mesh * 3];
+        memcpy(world, node, sizeof world);
         for (int k = 0; k < 3; k++)
-            world[12 + k] -= gs->origin_shift[k];
+            world[12 + k] = (float)((double)node[k] * o[0] + (double)node[4 + k] * o[1] +
+                                    (double)node[8 + k] * o[2] + (double)node[12 + k] -
+                                    (double)gs->origin_shift[k]);
         float inv[16];
         bool invertible = rd_mat4_inverse(inv, world);
         rows3(inst[i].object_to_world, world);
         rows3(inst[i].world_to_object, invertible ? inv : world);
         inst[i].info = (pc_uvec4){gs->mesh_root[in->mesh], in->mesh, 0, in->node};
         if (invertible) {
-            world_box(world, &gs->mesh_bounds[in->mesh * 6], &lo[i * 3], &hi[i * 3]);
+            world_box(world, &gs->mesh_local_bounds[in->mesh * 6], &lo[i * 3], &hi[i * 3]);
         } else { /* a singular transform flattens the mesh: it cannot be hit */
             lo[i * 3] = lo[i * 3 + 1] = lo[i * 3 + 2] = INFINITY;
             hi[i * 3] = hi[i * 3 + 1] = hi[i * 3 + 2] = -INFINITY;
@@ -576,6 +645,8 @@ void rd_gpu_scene_destroy(rd_vk *vk, rd_gpu_scene *gs)
         rd_buffer_destroy(vk, bufs[i]);
     free(gs->mesh_root);
     free(gs->mesh_bounds);
+    free(gs->mesh_origin);
+    free(gs->mesh_local_bounds);
     free(gs->placed);
     gs->placed = NULL;
     free(gs->placed_lights);
@@ -583,6 +654,8 @@ void rd_gpu_scene_destroy(rd_vk *vk, rd_gpu_scene *gs)
     free(gs->lights_pending);
     gs->mesh_root = NULL;
     gs->mesh_bounds = NULL;
+    gs->mesh_origin = NULL;
+    gs->mesh_local_bounds = NULL;
     gs->lights_pending = NULL;
     gs->lights_pending_count = 0;
     gs->instance_capacity = gs->light_capacity = 0;

@@ -29,6 +29,13 @@ typedef struct rd_gpu_scene {
     uint32_t mesh_count;
     uint32_t *mesh_root; /* absolute BLAS root node per mesh */
     float *mesh_bounds;  /* 6 floats per mesh: object-space min, max */
+    /* Local origin per mesh: the GPU holds a mesh's vertices (and its BLAS) minus
+     * mesh_origin[3 m] and its instances' transforms carry it back, so that vertices baked far
+     * from their own origin (geo-referenced data) keep the precision of their size, not of
+     * their distance. 0 for a mesh that lies within its size of its origin. mesh_local_bounds:
+     * 6 floats per mesh, the BLAS root's box in that local frame. */
+    float *mesh_origin;
+    float *mesh_local_bounds;
     uint32_t instance_capacity;
     uint32_t light_capacity;
     /* lights changed since the last recorded command buffer: written by the next one that
@@ -68,8 +75,10 @@ typedef struct rd_gpu_scene {
  * upload's BVHs on the uploading connection's thread, not on the render thread). */
 typedef struct rd_gpu_scene_prep {
     uint32_t mesh_count;
-    uint32_t *mesh_root; /* absolute BLAS root node per mesh */
-    float *mesh_bounds;  /* 6 floats per mesh */
+    uint32_t *mesh_root;      /* absolute BLAS root node per mesh */
+    float *mesh_bounds;       /* 6 floats per mesh */
+    float *mesh_origin;       /* 3 floats per mesh (rd_gpu_scene.mesh_origin) */
+    float *mesh_local_bounds; /* 6 floats per mesh */
     pc_bvh_node *nodes;
     pc_tri *tris;
     pc_tri_attr *attrs;

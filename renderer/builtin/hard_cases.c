@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "renderer/scene/mesh_builder.h"
+#include "renderer/scene/xform.h"
 #include "renderer/builtin/procedural.h"
 
 static const rd_hard_case CASES[] = {
@@ -20,6 +21,10 @@ static const rd_hard_case CASES[] = {
                     "original (direct light to float precision, GI within its seed noise)"},
     {"far-10km", "the Cornell box translated 10 km from the origin renders like the original "
                  "(direct light to float precision, GI within its seed noise)"},
+    {"far-10km-baked",
+     "the Cornell box scaled x100 with its vertices baked 10 km from the origin (identity nodes, "
+     "as geo-referenced data comes) renders like scaled-100 (direct light to float precision, GI "
+     "within its seed noise, no speckles)"},
     {"tiny-emitter", "a 1 cm emitter of 1e5 nits is the only light: every output finite (no NaN, "
                      "Inf or half-float overflow) at any sample count; sampling finds it rarely "
                      "(fireflies in the path tracer, DDGI may miss it entirely)"},
@@ -67,6 +72,37 @@ static void transform_scene(rd_scene *s, float scale, const float move[3])
     for (uint32_t i = 0; i < s->camera_count; i++)
         for (int k = 0; k < 3; k++)
             s->cameras[i].position[k] = s->cameras[i].position[k] * scale + move[k];
+}
+
+/* Moves every node's placement into its mesh's vertices (computed in double, rounded once) and
+ * leaves the nodes at identity: coordinates as a geo-referenced file stores them. Each mesh
+ * here has exactly one node; normals keep the inverse transpose (tangents are absent). */
+static void bake_node_transforms(rd_scene *s)
+{
+    for (uint32_t i = 0; i < s->node_count; i++) {
+        rd_node *n = &s->nodes[i];
+        if (n->mesh < 0) continue;
+        rd_mesh *m = &s->meshes[n->mesh];
+        const float *w = n->world;
+        for (uint32_t v = 0; v < m->tri_count * 3; v++) {
+            float *p = &m->positions[v * 3], *nrm = &m->normals[v * 3];
+            double q[3];
+            for (int k = 0; k < 3; k++)
+                q[k] = (double)w[k] * p[0] + (double)w[4 + k] * p[1] + (double)w[8 + k] * p[2] +
+                       (double)w[12 + k];
+            for (int k = 0; k < 3; k++)
+                p[k] = (float)q[k];
+            float out[3];
+            rd_mat4_transform_normal(w, nrm, out);
+            float len = sqrtf(out[0] * out[0] + out[1] * out[1] + out[2] * out[2]);
+            for (int k = 0; len > 0 && k < 3; k++)
+                nrm[k] = out[k] / len;
+        }
+        n->has_matrix = false;
+        memset(n->translation, 0, sizeof n->translation);
+        n->rotation[0] = n->rotation[1] = n->rotation[2] = 0, n->rotation[3] = 1;
+        n->scale[0] = n->scale[1] = n->scale[2] = 1;
+    }
 }
 
 static void build_thick_walls(rd_scene *s)
@@ -188,8 +224,8 @@ bool rd_hard_case_build(const char *name, rd_scene *s, char *err, size_t errlen)
     else if (strcmp(name, "glossy") == 0)
         base = "cornell-glossy";
     else if (strcmp(name, "scaled-100") == 0 || strcmp(name, "scaled-0.01") == 0 ||
-             strcmp(name, "far-10km") == 0 || strcmp(name, "moving") == 0 ||
-             strcmp(name, "many-lights") == 0)
+             strcmp(name, "far-10km") == 0 || strcmp(name, "far-10km-baked") == 0 ||
+             strcmp(name, "moving") == 0 || strcmp(name, "many-lights") == 0)
         base = "cornell";
     if (base) {
         if (!rd_procedural_scene(base, s, err, errlen)) return false;
@@ -203,7 +239,14 @@ bool rd_hard_case_build(const char *name, rd_scene *s, char *err, size_t errlen)
         transform_scene(s, 0.01f, zero);
     else if (strcmp(name, "far-10km") == 0)
         transform_scene(s, 1, far);
-    else if (strcmp(name, "thick-walls") == 0)
+    else if (strcmp(name, "far-10km-baked") == 0) {
+        transform_scene(s, 100, far);
+        if (!rd_scene_update(s, err, errlen)) { /* the node matrices to bake */
+            rd_scene_destroy(s);
+            return false;
+        }
+        bake_node_transforms(s);
+    } else if (strcmp(name, "thick-walls") == 0)
         build_thick_walls(s);
     else if (strcmp(name, "tiny-emitter") == 0)
         build_tiny_emitter(s);

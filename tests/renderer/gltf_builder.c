@@ -1,11 +1,13 @@
 /* gltf_builder.c: glTF test files built in memory (see gltf_builder.h). */
 #include "gltf_builder.h"
 
+#include <assert.h>
 #include <math.h>
 #include <png.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "renderer/scene/xform.h"
 #include "test_util.h"
 
 /* ---- byte and string builders ---------------------------------------------------------- */
@@ -232,5 +234,181 @@ char *gltf_furnace(float base, float emission, float metallic, float roughness)
     free(views);
     free(rest);
     free(b.p);
+    return j;
+}
+
+/* A growing JSON text (single quotes, as gltf_json takes it). */
+typedef struct text {
+    char *p;
+    size_t n;
+} text;
+
+static void text_add(text *t, char *piece) /* takes piece */
+{
+    size_t k = strlen(piece);
+    t->p = realloc(t->p, t->n + k + 1);
+    memcpy(t->p + t->n, piece, k + 1);
+    t->n += k;
+    free(piece);
+}
+
+/* Quaternion (x, y, z, w) of the rotation that takes a node's -Z to forward and +Y to up
+ * (glTF cameras and lights look along -Z). */
+static void look_quat(const float fwd[3], const float up_hint[3], float q[4])
+{
+    float f[3], r[3], u[3];
+    rd_vec3_normalize(f, fwd, (const float[3]){0, 0, -1});
+    rd_vec3_cross(r, f, up_hint);
+    if (!(rd_vec3_length(r) > 1e-6f)) rd_vec3_cross(r, f, (const float[3]){1, 0, 0});
+    rd_vec3_normalize(r, r, (const float[3]){1, 0, 0});
+    rd_vec3_cross(u, r, f);
+    const float cols[3][3] = {{r[0], r[1], r[2]}, {u[0], u[1], u[2]}, {-f[0], -f[1], -f[2]}};
+    rd_mat3_cols_to_quat(cols, q);
+}
+
+char *gltf_from_scene(const rd_scene *s)
+{
+    bin b = {0};
+    text views = {0}, acc = {0}, meshes = {0}, mats = {0}, nodes = {0}, lights = {0}, cams = {0};
+    uint32_t view_count = 0, node_count = 0;
+    text roots = {0};
+    for (uint32_t m = 0; m < s->mesh_count; m++) {
+        const rd_mesh *mesh = &s->meshes[m];
+        text prims = {0};
+        for (uint32_t mat = 0; mat < s->material_count; mat++) {
+            uint32_t n = 0;
+            for (uint32_t i = 0; i < mesh->tri_count; i++)
+                n += mesh->material[i] == mat;
+            if (!n) continue;
+            float *pos = malloc(n * 9 * sizeof(float)), *nrm = malloc(n * 9 * sizeof(float));
+            float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+            uint32_t k = 0;
+            for (uint32_t i = 0; i < mesh->tri_count; i++) {
+                if (mesh->material[i] != mat) continue;
+                memcpy(pos + 9 * k, mesh->positions + 9 * i, 9 * sizeof(float));
+                memcpy(nrm + 9 * k, mesh->normals + 9 * i, 9 * sizeof(float));
+                for (int v = 0; v < 9; v++) {
+                    lo[v % 3] = fminf(lo[v % 3], pos[9 * k + v]);
+                    hi[v % 3] = fmaxf(hi[v % 3], pos[9 * k + v]);
+                }
+                k++;
+            }
+            size_t op = bin_put(&b, pos, n * 9 * sizeof(float));
+            size_t on = bin_put(&b, nrm, n * 9 * sizeof(float));
+            free(pos);
+            free(nrm);
+            text_add(&views,
+                     test_xprintf("%s{'buffer':0,'byteOffset':%zu,'byteLength':%zu},"
+                                  "{'buffer':0,'byteOffset':%zu,'byteLength':%zu}",
+                                  view_count ? "," : "", op, (size_t)n * 36, on, (size_t)n * 36));
+            text_add(&acc, test_xprintf(
+                               "%s{'bufferView':%u,'componentType':5126,'count':%u,'type':'VEC3',"
+                               "'min':[%.9g,%.9g,%.9g],'max':[%.9g,%.9g,%.9g]},"
+                               "{'bufferView':%u,'componentType':5126,'count':%u,'type':'VEC3'}",
+                               view_count ? "," : "", view_count, 3 * n, lo[0], lo[1], lo[2], hi[0],
+                               hi[1], hi[2], view_count + 1, 3 * n));
+            text_add(&prims, test_xprintf("%s{'attributes':{'POSITION':%u,'NORMAL':%u},"
+                                          "'material':%u}",
+                                          prims.n ? "," : "", view_count, view_count + 1, mat));
+            view_count += 2;
+        }
+        text_add(&meshes,
+                 test_xprintf("%s{'primitives':[%s]}", m ? "," : "", prims.p ? prims.p : ""));
+        free(prims.p);
+    }
+    for (uint32_t i = 0; i < s->material_count; i++) {
+        const rd_material *m = &s->materials[i];
+        float e = fmaxf(m->emission[0], fmaxf(m->emission[1], m->emission[2]));
+        float k = e > 1 ? 1 / e : 1;
+        char *strength = e > 1 ? test_xprintf(",'extensions':{'KHR_materials_emissive_strength':"
+                                              "{'emissiveStrength':%.9g}}",
+                                              e)
+                               : test_xprintf("%s", "");
+        text_add(&mats,
+                 test_xprintf("%s{'pbrMetallicRoughness':{'baseColorFactor':[%.9g,%.9g,%.9g,%.9g],"
+                              "'metallicFactor':%.9g,'roughnessFactor':%.9g},"
+                              "'emissiveFactor':[%.9g,%.9g,%.9g],'doubleSided':%s%s}",
+                              i ? "," : "", m->base_color[0], m->base_color[1], m->base_color[2],
+                              m->base_color[3], m->metallic, m->roughness, m->emission[0] * k,
+                              m->emission[1] * k, m->emission[2] * k,
+                              m->double_sided ? "true" : "false", strength));
+        free(strength);
+    }
+    for (uint32_t i = 0; i < s->node_count; i++) {
+        const rd_node *n = &s->nodes[i];
+        assert(n->parent < 0);
+        char *place = n->has_matrix
+                          ? test_xprintf("'matrix':[%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,"
+                                         "%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g]",
+                                         n->matrix[0], n->matrix[1], n->matrix[2], n->matrix[3],
+                                         n->matrix[4], n->matrix[5], n->matrix[6], n->matrix[7],
+                                         n->matrix[8], n->matrix[9], n->matrix[10], n->matrix[11],
+                                         n->matrix[12], n->matrix[13], n->matrix[14], n->matrix[15])
+                          : test_xprintf("'translation':[%.9g,%.9g,%.9g],'rotation':[%.9g,%.9g,"
+                                         "%.9g,%.9g],'scale':[%.9g,%.9g,%.9g]",
+                                         n->translation[0], n->translation[1], n->translation[2],
+                                         n->rotation[0], n->rotation[1], n->rotation[2],
+                                         n->rotation[3], n->scale[0], n->scale[1], n->scale[2]);
+        char *mesh = n->mesh >= 0 ? test_xprintf("'mesh':%d,", n->mesh) : test_xprintf("%s", "");
+        text_add(&nodes, test_xprintf("%s{%s%s}", node_count ? "," : "", mesh, place));
+        text_add(&roots, test_xprintf("%s%u", node_count ? "," : "", node_count));
+        node_count++;
+        free(mesh);
+        free(place);
+    }
+    static const char *const kLightType[] = {"point", "spot", "directional"};
+    for (uint32_t i = 0; i < s->light_count; i++) {
+        const rd_light *l = &s->lights[i];
+        char *range =
+            l->range > 0 ? test_xprintf(",'range':%.9g", l->range) : test_xprintf("%s", "");
+        char *spot = l->type == RD_LIGHT_SPOT
+                         ? test_xprintf(",'spot':{'innerConeAngle':%.9g,'outerConeAngle':%.9g}",
+                                        l->inner_cone, l->outer_cone)
+                         : test_xprintf("%s", "");
+        text_add(&lights,
+                 test_xprintf("%s{'type':'%s','color':[%.9g,%.9g,%.9g],'intensity':%.9g%s%s}",
+                              i ? "," : "", kLightType[l->type], l->color[0], l->color[1],
+                              l->color[2], l->intensity, range, spot));
+        free(range);
+        free(spot);
+        float q[4];
+        look_quat(l->direction, (const float[3]){0, 1, 0}, q);
+        text_add(&nodes,
+                 test_xprintf("%s{'translation':[%.9g,%.9g,%.9g],'rotation':[%.9g,%.9g,"
+                              "%.9g,%.9g],'extensions':{'KHR_lights_punctual':{'light':%u}}}",
+                              node_count ? "," : "", l->position[0], l->position[1], l->position[2],
+                              q[0], q[1], q[2], q[3], i));
+        text_add(&roots, test_xprintf("%s%u", node_count ? "," : "", node_count));
+        node_count++;
+    }
+    for (uint32_t i = 0; i < s->camera_count; i++) {
+        const rd_camera *c = &s->cameras[i];
+        text_add(&cams, test_xprintf("%s{'type':'perspective','perspective':{'yfov':%.9g,"
+                                     "'znear':%.9g}}",
+                                     i ? "," : "", c->yfov, c->znear > 0 ? c->znear : 0.01f));
+        float q[4];
+        look_quat(c->forward, c->up, q);
+        text_add(&nodes, test_xprintf("%s{'camera':%u,'translation':[%.9g,%.9g,%.9g],"
+                                      "'rotation':[%.9g,%.9g,%.9g,%.9g]}",
+                                      node_count ? "," : "", i, c->position[0], c->position[1],
+                                      c->position[2], q[0], q[1], q[2], q[3]));
+        text_add(&roots, test_xprintf("%s%u", node_count ? "," : "", node_count));
+        node_count++;
+    }
+    char *light_ext =
+        s->light_count
+            ? test_xprintf(",'extensions':{'KHR_lights_punctual':{'lights':[%s]}}", lights.p)
+            : test_xprintf("%s", "");
+    char *cam_list =
+        s->camera_count ? test_xprintf(",'cameras':[%s]", cams.p) : test_xprintf("%s", "");
+    char *rest = test_xprintf(
+        "'extensionsUsed':['KHR_lights_punctual','KHR_materials_emissive_strength'],"
+        "'materials':[%s],'meshes':[%s],'nodes':[%s],'scenes':[{'nodes':[%s]}],'scene':0%s%s",
+        mats.p ? mats.p : "", meshes.p ? meshes.p : "", nodes.p ? nodes.p : "",
+        roots.p ? roots.p : "", cam_list, light_ext);
+    char *j = gltf_json(&b, 0, views.p ? views.p : "", acc.p ? acc.p : "", rest);
+    free(rest), free(cam_list), free(light_ext);
+    free(views.p), free(acc.p), free(meshes.p), free(mats.p), free(nodes.p), free(lights.p);
+    free(cams.p), free(roots.p), free(b.p);
     return j;
 }

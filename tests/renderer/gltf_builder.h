@@ -61,6 +61,15 @@ char *png_data_uri(const bin *png);
  * (0, 0, 0.5) looking down -Z. */
 char *gltf_furnace(float base, float emission, float metallic, float roughness);
 
+/* An rd_scene written as glTF (JSON with the buffer as a data URI): each mesh's triangles as
+ * non-indexed primitives, one per material (POSITION and NORMAL, bit for bit), its materials as
+ * metallic-roughness materials (emission above 1 through KHR_materials_emissive_strength; a
+ * Lambertian builtin material becomes glTF's dielectric), its root nodes with their TRS or
+ * matrix, its punctual lights (KHR_lights_punctual) and cameras placed by nodes of their own.
+ * The scene must be updated (rd_scene_update) and have no child nodes; lights and cameras
+ * placed by nodes are written at their world placement. */
+char *gltf_from_scene(const rd_scene *s);
+
 /* ---- loading and checking ---- */
 extern char gltf_err[512]; /* the message of the last load_text */
 /* Loads JSON text from memory (no base folder). */

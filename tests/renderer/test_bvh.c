@@ -576,8 +576,9 @@ static void test_axis_aligned(void)
     free(pos);
 }
 
-/* Wächter & Binder offset: a ray leaving the offset hit point into the hemisphere of the
- * normal never hits its own triangle, at several magnitudes. */
+/* Ray offsets (Wächter & Binder's 256 ulps of the magnitudes met): a ray leaving the offset hit
+ * point into the hemisphere of the normal never hits its own triangle, at several magnitudes,
+ * and the surface stays reachable from the other side. */
 static void test_offset(void)
 {
     const float mags[] = {1e-3f, 1.0f, 1e3f, 1e5f};
@@ -603,8 +604,11 @@ static void test_offset(void)
             if (!(len > 0)) continue;
             for (int side = -1; side <= 1; side += 2) {
                 float n[3] = {side * nrm[0] / len, side * nrm[1] / len, side * nrm[2] / len};
-                float q[3];
-                rd_offset_ray_origin(p, n, q);
+                float q[3], scale = 0;
+                for (int a = 0; a < 9; a++) /* ray_offset_scale without a transform */
+                    scale = fmaxf(scale, fabsf(tri[a]));
+                scale += fmaxf(fabsf(p[0]), fmaxf(fabsf(p[1]), fabsf(p[2])));
+                rd_offset_ray_origin(p, n, rd_ray_offset_distance(scale), q);
                 if (q[0] == p[0] && q[1] == p[1] && q[2] == p[2]) unmoved++;
                 for (int r = 0; r < 20; r++) {
                     float d[3];
@@ -638,14 +642,15 @@ static void test_offset(void)
                tested);
         CHECKF(unmoved == 0, "offset at magnitude %g: %d points did not move", M, unmoved);
     }
-    /* Below 1/32 the offset is a fixed float_scale step; above, ulps. */
+    /* The offset is PC_RAY_OFFSET_REL of the scale at every magnitude, only along n; a
+     * non-finite scale gives none. */
     const float p[3] = {0.0f, 1.0f, -1000.0f}, n[3] = {0, 0, 1};
     float q[3];
-    rd_offset_ray_origin(p, n, q);
-    CHECK(q[0] == 0.0f && q[1] == 1.0f && q[2] > -1000.0f && q[2] < -999.9f);
-    const float p2[3] = {0.01f, 0, 0}, n2[3] = {1, 0, 0};
-    rd_offset_ray_origin(p2, n2, q);
-    CHECK(q[0] == 0.01f + 1.0f / 65536.0f && q[1] == 0.0f);
+    rd_offset_ray_origin(p, n, rd_ray_offset_distance(2000.0f), q);
+    CHECK(q[0] == 0.0f && q[1] == 1.0f && q[2] == -1000.0f + 2000.0f / 65536.0f);
+    CHECK(rd_ray_offset_distance(1e-3f) == 1e-3f / 65536.0f);
+    CHECK(rd_ray_offset_distance(INFINITY) == 0.0f && rd_ray_offset_distance(NAN) == 0.0f);
+    CHECK(rd_ray_offset_distance(0.0f) > 0.0f);
 }
 
 int main(void)

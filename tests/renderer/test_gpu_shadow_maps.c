@@ -24,6 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "renderer/accel/bvh.h"
 #include "renderer/scene/mesh_builder.h"
 #include "renderer/world.h"
 #include "shaders/test_shadow_map.spv.h"
@@ -188,6 +189,13 @@ int main(void)
         p[1] = 0 - gs.origin_shift[1];
         p[2] = -HALF + 2 * HALF * (float)(i / GRID) / (GRID - 1) - gs.origin_shift[2];
         p[5] = 1; /* normal +y */
+        /* the ray offset surface_at gives a floor point (ray_offset_scale: its vertices, within
+         * the scene's bounds, plus the point) */
+        float scale = 0;
+        for (int k = 0; k < 3; k++)
+            scale = fmaxf(scale, fmaxf(fabsf(s.bounds_min[k] - gs.origin_shift[k]),
+                                       fabsf(s.bounds_max[k] - gs.origin_shift[k])));
+        p[7] = rd_ray_offset_distance(2 * scale);
     }
     VK_CHECK(rd_buffer_create(&vk, &h.points, POINTS * 8 * sizeof(float), RD_MEMORY_DEVICE, err,
                               sizeof err));
