@@ -220,26 +220,33 @@ float ray_offset_scale(pc_instance inst, pc_tri t, vec3 p)
     return norm * max3(v) + max(r0.w, max(r1.w, r2.w)) + max3(abs(p));
 }
 
-/* Moves p_obj, the hit at barycentrics (u, v) of triangle t (local frame), into the triangle
- * where it lies nearer than `offset` (world) to an edge: at least that far from each edge (or to
- * the centroid, for a triangle too small for it); returns whether it moved. A hit on the edge
- * where two walls meet at a concave corner lies on (or rounds past) the other wall's plane, and
- * the ray offset along its own normal keeps it there: rays from it would leave the room through
- * the corner. Moved inward by the offset, it lies that far inside both walls. Points away from
- * the edges keep their exact barycentric position. */
-bool keep_off_edges(pc_tri t, pc_instance inst, float u, float v, float offset, inout vec3 p_obj)
+/* Moves p (world), the hit at barycentrics (u, v) of triangle t of instance inst, into the
+ * triangle where it lies nearer than `offset` (world) to an edge: along each such edge's inward
+ * normal in the triangle's plane, by what it lacks of that distance (at most 3 offsets in all;
+ * triangles whose incircle is narrower than 2 offsets are left alone). A hit on the edge where two
+ * walls meet at a concave corner lies on (or rounds past) the other wall's plane, and the ray
+ * offset along its own normal keeps it there: rays from it would leave the room through the
+ * corner. Moved inward by the offset, it lies inside both walls. Points away from the edges keep
+ * their exact barycentric position. */
+void keep_off_edges(pc_tri t, pc_instance inst, float u, float v, float offset, inout vec3 p)
 {
-    vec3 b = vec3(1.0 - u - v, u, v);
-    vec3 e1 = xform_vector(inst.object_to_world, t.v1.xyz - t.v0.xyz);
-    vec3 e2 = xform_vector(inst.object_to_world, t.v2.xyz - t.v0.xyz);
-    float area2 = length(cross(e1, e2));
-    /* the barycentric of `offset` from the edge opposite each vertex: offset / height */
-    vec3 margin = offset * vec3(length(e2 - e1), length(e2), length(e1)) / area2;
-    if (!(area2 > 0.0) || isinf(area2) || !any(lessThan(b, margin))) return false;
-    b = max(b, min(margin, vec3(1.0 / 3.0)));
-    b /= b.x + b.y + b.z;
-    p_obj = t.v0.xyz * b.x + t.v1.xyz * b.y + t.v2.xyz * b.z;
-    return true;
+    vec3 e1 = xform_vector(inst.object_to_world, t.v1.xyz - t.v0.xyz); /* v0 -> v1 */
+    vec3 e2 = xform_vector(inst.object_to_world, t.v2.xyz - t.v0.xyz); /* v0 -> v2 */
+    vec3 n = cross(e1, e2);
+    float area2 = length(n);
+    /* the edges opposite v0, v1, v2, counter-clockwise about n: cross(n, edge) points inward */
+    vec3 a = e2 - e1, b = -e2, c = e1;
+    vec3 len = vec3(length(a), length(b), length(c));
+    /* distance of p from each edge: its barycentric times the height over that edge */
+    vec3 dist = vec3(1.0 - u - v, u, v) * area2 / len;
+    vec3 lack = max(vec3(offset) - dist, vec3(0.0));
+    /* offset * perimeter / area2 = offset / the incircle's radius */
+    if (!(area2 > 0.0) || isinf(area2) || offset * (len.x + len.y + len.z) > 0.5 * area2 ||
+        all(equal(lack, vec3(0.0))))
+        return;
+    vec3 move = cross(n, a) * (lack.x / len.x) + cross(n, b) * (lack.y / len.y) +
+                cross(n, c) * (lack.z / len.z);
+    p += move / area2;
 }
 
 /* Rebuilds the surface at a hit. The geometric normal is the object-space front normal
@@ -257,8 +264,7 @@ pc_surface surface_at(pc_scene_refs s, pc_hit hit, vec3 ray_dir)
     vec3 p_obj = t.v0.xyz * w + t.v1.xyz * hit.u + t.v2.xyz * hit.v;
     sf.position = xform_point(inst.object_to_world, p_obj);
     sf.offset = ray_offset_distance(ray_offset_scale(inst, t, sf.position));
-    if (keep_off_edges(t, inst, hit.u, hit.v, sf.offset, p_obj))
-        sf.position = xform_point(inst.object_to_world, p_obj);
+    keep_off_edges(t, inst, hit.u, hit.v, sf.offset, sf.position);
 
     vec3 ng = xform_normal(inst.world_to_object, cross(t.v1.xyz - t.v0.xyz, t.v2.xyz - t.v0.xyz));
     float ng_len = length(ng);
