@@ -234,3 +234,103 @@ char *gltf_furnace(float base, float emission, float metallic, float roughness)
     free(b.p);
     return j;
 }
+
+/* A unit quaternion (x, y, z, w) rotating local -Z onto fwd, local +Y toward up. */
+static void look_quat(const float fwd[3], const float up[3], double q[4])
+{
+    double b[3], r[3], u[3], n = 0; /* the rotation's columns: right, up, back (= -fwd) */
+    for (int k = 0; k < 3; k++)
+        n += (double)fwd[k] * fwd[k];
+    for (int k = 0; k < 3; k++)
+        b[k] = -fwd[k] / sqrt(n);
+    r[0] = up[1] * b[2] - up[2] * b[1], r[1] = up[2] * b[0] - up[0] * b[2];
+    r[2] = up[0] * b[1] - up[1] * b[0];
+    n = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    for (int k = 0; k < 3; k++)
+        r[k] /= n;
+    u[0] = b[1] * r[2] - b[2] * r[1], u[1] = b[2] * r[0] - b[0] * r[2];
+    u[2] = b[0] * r[1] - b[1] * r[0];
+    /* matrix m[row][col] = (r u b)[row]; the standard conversion */
+    double m00 = r[0], m11 = u[1], m22 = b[2], tr = m00 + m11 + m22;
+    if (tr > 0) {
+        double s = 2 * sqrt(1 + tr);
+        q[3] = s / 4, q[0] = (u[2] - b[1]) / s, q[1] = (b[0] - r[2]) / s, q[2] = (r[1] - u[0]) / s;
+    } else if (m00 > m11 && m00 > m22) {
+        double s = 2 * sqrt(1 + m00 - m11 - m22);
+        q[3] = (u[2] - b[1]) / s, q[0] = s / 4, q[1] = (u[0] + r[1]) / s, q[2] = (b[0] + r[2]) / s;
+    } else if (m11 > m22) {
+        double s = 2 * sqrt(1 + m11 - m00 - m22);
+        q[3] = (b[0] - r[2]) / s, q[0] = (u[0] + r[1]) / s, q[1] = s / 4, q[2] = (b[1] + u[2]) / s;
+    } else {
+        double s = 2 * sqrt(1 + m22 - m00 - m11);
+        q[3] = (r[1] - u[0]) / s, q[0] = (b[0] + r[2]) / s, q[1] = (b[1] + u[2]) / s, q[2] = s / 4;
+    }
+}
+
+char *gltf_sun_room(float lux)
+{
+    /* quads: corner, edge a, edge b with a x b pointing into the room */
+    static const float quads[9][9] = {
+        {-3, 0, -3, 0, 3, 0, 0, 0, 6},              /* -x wall */
+        {3, 0, -3, 0, 0, 6, 0, 3, 0},               /* +x wall */
+        {-3, 0, -3, 0, 0, 6, 6, 0, 0},              /* floor */
+        {-3, 3, -3, 6, 0, 0, 0, 0, 6},              /* ceiling */
+        {-3, 0, 3, 0, 3, 0, 6, 0, 0},               /* +z wall */
+        {-3, 0, -3, 2.25f, 0, 0, 0, 3, 0},          /* -z wall: left of the window */
+        {0.75f, 0, -3, 2.25f, 0, 0, 0, 3, 0},       /* right of it */
+        {-0.75f, 0, -3, 1.5f, 0, 0, 0, 1, 0},       /* below it */
+        {-0.75f, 2.2f, -3, 1.5f, 0, 0, 0, 0.8f, 0}, /* above it */
+    };
+    float pos[36 * 3], nrm[36 * 3];
+    uint16_t idx[54];
+    for (int f = 0; f < 9; f++) {
+        const float *o = quads[f], *a = o + 3, *b = o + 6;
+        float n[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                      a[0] * b[1] - a[1] * b[0]};
+        float len = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        for (int k = 0; k < 4; k++) /* o, o + a, o + a + b, o + b */
+            for (int c = 0; c < 3; c++) {
+                pos[3 * (4 * f + k) + c] =
+                    o[c] + ((k == 1 || k == 2) ? a[c] : 0) + (k >= 2 ? b[c] : 0);
+                nrm[3 * (4 * f + k) + c] = n[c] / len;
+            }
+        static const uint16_t tri[6] = {0, 1, 2, 0, 2, 3};
+        for (int k = 0; k < 6; k++)
+            idx[6 * f + k] = (uint16_t)(4 * f + tri[k]);
+    }
+    bin bn = {0};
+    size_t op = bin_put(&bn, pos, sizeof pos), on = bin_put(&bn, nrm, sizeof nrm),
+           oi = bin_put(&bn, idx, sizeof idx);
+    char *views = test_xprintf("{'buffer':0,'byteOffset':%zu,'byteLength':%zu},"
+                               "{'buffer':0,'byteOffset':%zu,'byteLength':%zu},"
+                               "{'buffer':0,'byteOffset':%zu,'byteLength':%zu}",
+                               op, sizeof pos, on, sizeof nrm, oi, sizeof idx);
+    const char *acc = "{'bufferView':0,'componentType':5126,'count':36,'type':'VEC3',"
+                      "'min':[-3,0,-3],'max':[3,3,3]},"
+                      "{'bufferView':1,'componentType':5126,'count':36,'type':'VEC3'},"
+                      "{'bufferView':2,'componentType':5123,'count':54,'type':'SCALAR'}";
+    const float sun_dir[3] = {0.3f, -0.5f, 1.0f}, cam_fwd[3] = {-0.55f, -0.35f, -0.75f},
+                up[3] = {0, 1, 0}, side[3] = {1, 0, 0};
+    double qs[4], qc[4];
+    look_quat(sun_dir, side, qs);
+    look_quat(cam_fwd, up, qc);
+    char *rest = test_xprintf(
+        "'extensionsUsed':['KHR_lights_punctual'],"
+        "'extensions':{'KHR_lights_punctual':{'lights':[{'type':'directional',"
+        "'color':[1,0.95,0.9],'intensity':%g}]}},"
+        "'materials':[{'pbrMetallicRoughness':{'baseColorFactor':[0.7,0.7,0.7,1],"
+        "'metallicFactor':0,'roughnessFactor':1}}],"
+        "'meshes':[{'primitives':[{'attributes':{'POSITION':0,'NORMAL':1},'indices':2,"
+        "'material':0}]}],"
+        "'cameras':[{'type':'perspective','perspective':{'yfov':1.2217,'znear':0.01}}],"
+        "'nodes':[{'mesh':0},"
+        "{'rotation':[%.9f,%.9f,%.9f,%.9f],'extensions':{'KHR_lights_punctual':{'light':0}}},"
+        "{'camera':0,'translation':[2.5,1.6,2.6],'rotation':[%.9f,%.9f,%.9f,%.9f]}],"
+        "'scenes':[{'nodes':[0,1,2]}],'scene':0",
+        (double)lux, qs[0], qs[1], qs[2], qs[3], qc[0], qc[1], qc[2], qc[3]);
+    char *j = gltf_json(&bn, 0, views, acc, rest);
+    free(views);
+    free(rest);
+    free(bn.p);
+    return j;
+}
