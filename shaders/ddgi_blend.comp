@@ -5,11 +5,12 @@
  * mean and mean square of min(|t|, max distance)). The distance blend runs first.
  *
  * Hysteresis is per probe (renderer/gi/ddgi.c says why): h = min(h_max, a / (a + AGE_RAMP)) for
- * the probe's age a. The irradiance blend then measures the probe: its relative change this
- * update (mean fresh against mean stored encoded luminance), which feeds the drift sums the CPU turns
- * into next update's hold flag; ages advance unless the field drifts. It also classifies the
- * probe: more than params.z back-face hits means it sits inside geometry (off); a probe whose
- * age reached the sleep age falls asleep.
+ * the probe's age a. The irradiance blend then measures the probe: the gap between its tile's
+ * fresh and stored encoded luminance and the stored luminance feed the field's drift sums
+ * (summed over the probes before dividing), which the CPU turns into next update's hold flag;
+ * ages advance unless the field drifts and the probe still has hold budget. It also classifies
+ * the probe: more than params.z back-face hits means it sits inside geometry (off); a probe
+ * whose age reached the sleep age falls asleep.
  * push: globals, params.x = atlas. */
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
@@ -17,12 +18,20 @@
 
 layout(local_size_x = PC_DDGI_DIST_INTERIOR, local_size_y = PC_DDGI_DIST_INTERIOR) in;
 
+/* the atlas read back after the write (ddgi_blend measures the step the stored value really made;
+ * volatile keeps the compiler from folding unpackHalf2x16(packHalf2x16(x)) back into x) */
+layout(buffer_reference, std430, buffer_reference_align = 8) volatile buffer DdgiIrradianceReread
+{
+    uvec2 v[];
+};
+
 #define CHUNK 256u
 #define TEXELS (PC_DDGI_IRR_INTERIOR * PC_DDGI_IRR_INTERIOR)
 shared vec4 s_ray[CHUNK];
 shared vec3 s_dir[CHUNK];
 shared uint s_backfaces;
-shared vec2 s_lum[TEXELS]; /* per irradiance texel: (stored, fresh) encoded luminance */
+shared vec3 s_lum[TEXELS]; /* per irradiance texel, encoded luminance: x stored before the
+                              blend (< 0: never written), y fresh, z the gap the blend closed */
 
 void main()
 {
@@ -43,7 +52,7 @@ void main()
     uint lid = gl_LocalInvocationIndex;
     uint threads = gl_WorkGroupSize.x * gl_WorkGroupSize.y;
     if (lid == 0u) s_backfaces = 0u;
-    if (lid < TEXELS) s_lum[lid] = vec2(0.0);
+    if (lid < TEXELS) s_lum[lid] = vec3(0.0);
 
     vec3 sum = vec3(0.0);
     float wsum = 0.0;
@@ -93,13 +102,22 @@ void main()
              * the per-probe age already makes steps large after a change. */
             vec3 result = written ? mix(fresh, old, h) : fresh;
             if (any(isnan(result)) || any(isinf(result))) result = vec3(0.0);
-            a.v[texel] = uvec2(packHalf2x16(result.rg), packHalf2x16(vec2(result.b, 1.0)));
-            /* measured in the stored (encoded) space: there the blend is an unbiased mean of
-             * the fresh values, so a settled probe shows no drift (decoded, the stored value
-             * sits below the fresh mean by Jensen's inequality) */
+            uvec2 bits = uvec2(packHalf2x16(result.rg), packHalf2x16(vec2(result.b, 1.0)));
+            a.v[texel] = bits;
+            /* Measured in the stored (encoded) space, where the blend is an unbiased mean of the
+             * fresh values: a settled probe shows no drift (decoded, the stored value sits below
+             * the fresh mean by Jensen's inequality). The gap between fresh and stored is taken
+             * from the step the stored value really made, as half floats, divided by 1 - h: a
+             * gap too small to move a half float (a few 1/10000 relative, over 1 - h) cannot be
+             * closed by more updates and is no drift. */
+            uvec2 kept = DdgiIrradianceReread(vol.irradiance).v[texel];
+            vec3 stored = vec3(unpackHalf2x16(kept.x), unpackHalf2x16(kept.y).x);
             if (any(isnan(old)) || any(isinf(old))) old = vec3(0.0);
+            float lum_old = luminance(max(old, vec3(0.0)));
+            float moved = luminance(max(stored, vec3(0.0))) - lum_old;
             s_lum[t.y * PC_DDGI_IRR_INTERIOR + t.x] =
-                vec2(written ? luminance(max(old, vec3(0.0))) : 0.0, luminance(max(fresh, vec3(0.0))));
+                vec3(written ? lum_old : -1.0, luminance(max(fresh, vec3(0.0))),
+                     h < 1.0 ? moved / (1.0 - h) : 0.0);
         } else {
             DdgiDistanceRef a = DdgiDistanceRef(vol.distance);
             vec2 fresh = wsum > 1e-6 ? sum.xy / wsum : a.v[texel];
@@ -117,26 +135,45 @@ void main()
     uint state;
     if (inside) {
         state = PC_DDGI_PROBE_OFF;
-        st.x = 0.0; /* when it comes back on, it starts over */
+        st.xy = vec2(0.0); /* when it comes back on, it starts over */
     } else if (!probe_on) {
         state = PC_DDGI_PROBE_AWAKE; /* back on (geometry moved): blended from the next update */
-        st.x = 0.0;
+        st.xy = vec2(0.0);
     } else {
-        vec2 m = vec2(0.0);
-        for (uint i = 0u; i < TEXELS; i++) m += s_lum[i];
-        /* relative change, as a change of the decoded value (x^e changes e times as much) */
-        float rel = clamp(float(PC_DDGI_IRRADIANCE_EXPONENT) * (m.y - m.x) /
-                              max(max(m.x, m.y), 1e-12),
-                          -1.0, 1.0);
-        if (isnan(rel) || isinf(rel)) rel = 0.0;
-        st.y = mix(st.y, rel, 0.25);
-        st.z = mix(st.z, abs(rel), 0.25);
-        atomicAdd(ctrl.drift.x, int(round(rel * PC_DDGI_DRIFT_SCALE)));
-        atomicAdd(ctrl.drift.y, int(round(rel * rel * PC_DDGI_DRIFT_SCALE)));
-        atomicAdd(ctrl.drift.z, 1);
-        if (vol.control.x == 0u) st.x += 1.0;
-        state = st.x >= uintBitsToFloat(vol.control.y) ? PC_DDGI_PROBE_SLEEPING
-                                                      : PC_DDGI_PROBE_AWAKE;
+        vec3 m = vec3(0.0);
+        bool measured = true; /* every texel held a value before this blend */
+        for (uint i = 0u; i < TEXELS; i++) {
+            measured = measured && s_lum[i].x >= 0.0;
+            m += vec3(max(s_lum[i].xy, vec2(0.0)), s_lum[i].z);
+        }
+        /* The drift sums, in fixed point (params.w units; the CPU keeps a typical probe near
+         * 1/64 of the per-probe limit): the gap between fresh and stored, and stored, over the
+         * probes with a stored value, and fresh over all. Summed before dividing, the ratio has
+         * no bias from noise, and a probe weighs by its brightness, so noisy single probes (a
+         * sun patch, rare hits of a small emitter) and dark ones leave no mean drift (a ratio
+         * per probe would: its mean relative change is not zero when its noise is large). */
+        float k = vol.params.w;
+        float limit = float(PC_DDGI_DRIFT_RANGE / max(ddgi_probe_count(vol), 1u));
+        float fresh_q = clamp(round(m.y * k), 0.0, limit);
+        if (isnan(fresh_q)) fresh_q = 0.0;
+        atomicAdd(ctrl.drift.w, int(fresh_q));
+        if (measured) {
+            float stored_q = clamp(round(m.x * k), 0.0, limit);
+            float gap_q = clamp(round(m.z * k), -limit, limit);
+            if (isnan(stored_q) || isnan(gap_q)) stored_q = gap_q = 0.0;
+            atomicAdd(ctrl.drift.x, int(gap_q));
+            atomicAdd(ctrl.drift.y, int(stored_q));
+            atomicAdd(ctrl.drift.z, 1);
+        }
+        /* Ages hold while the field drifts, for at most PC_DDGI_HOLD_FACTOR sleep ages since the
+         * probe's last wake (st.y counts the held updates): every probe sleeps within
+         * (1 + PC_DDGI_HOLD_FACTOR) sleep ages, whatever the measure says. */
+        float sleep_age = uintBitsToFloat(vol.control.y);
+        if (vol.control.x != 0u && st.y < float(PC_DDGI_HOLD_FACTOR) * sleep_age)
+            st.y += 1.0;
+        else
+            st.x += 1.0;
+        state = st.x >= sleep_age ? PC_DDGI_PROBE_SLEEPING : PC_DDGI_PROBE_AWAKE;
     }
     if (state == PC_DDGI_PROBE_AWAKE) atomicAdd(ctrl.after.x, 1u);
     else if (state == PC_DDGI_PROBE_SLEEPING) atomicAdd(ctrl.after.y, 1u);

@@ -1,8 +1,9 @@
 #version 460
 /* DDGI wake events: one thread per probe. A probe inside one of this update's wake boxes
  * (GPU frame; the box is grown by one probe spacing here) wakes: sleeping becomes awake, and
- * its age drops to the event's (so its hysteresis starts low again); an off probe is re-checked
- * in this update. Runs before ddgi_select.comp.
+ * its age drops to the event's (so its hysteresis starts low again) and its hold budget starts
+ * over (ddgi_blend.comp); an off probe is re-checked in this update. Runs before
+ * ddgi_select.comp.
  * push: globals. */
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
@@ -34,6 +35,7 @@ void main()
         if (state == PC_DDGI_PROBE_SLEEPING)
             DdgiProbeRef(vol.probes).v[probe].w = float(PC_DDGI_PROBE_AWAKE);
         st.x = min(st.x, age);
+        st.y = 0.0; /* a new hold budget */
     }
     stats.v[probe] = st;
 }

@@ -296,10 +296,13 @@ PC_END(pc_environment);
 #define PC_DDGI_OFF_RECHECK 16u
 /* Adaptive hysteresis: a probe of age a (updates since it was woken, counted only while the
  * awake field shows no drift) blends with h = min(h_max, a / (a + PC_DDGI_AGE_RAMP)), and
- * falls asleep PC_DDGI_SETTLE_UPDATES updates after h reached h_max. Rule and measurements:
- * renderer/gi/ddgi.c. Wake events set the age of the probes they reach to at most: */
+ * falls asleep PC_DDGI_SETTLE_UPDATES updates after h reached h_max. A probe's age holds for
+ * at most PC_DDGI_HOLD_FACTOR times the sleep age since its last wake, so every probe sleeps
+ * within (1 + PC_DDGI_HOLD_FACTOR) sleep ages. Rule and measurements: renderer/gi/ddgi.c.
+ * Wake events set the age of the probes they reach to at most: */
 #define PC_DDGI_AGE_RAMP 4.0
 #define PC_DDGI_SETTLE_UPDATES 16u
+#define PC_DDGI_HOLD_FACTOR 3u
 #define PC_DDGI_WAKE_AGE_GEOMETRY 0.0 /* a node moved: start over (h = 0) */
 #define PC_DDGI_WAKE_AGE_LIGHT 4.0    /* a light or the sky changed: h = 0.5 at first */
 #define PC_DDGI_WAKE_AGE_NUDGE 23.0   /* one small step of an animated light: h = 0.85 */
@@ -328,7 +331,7 @@ PC_END(pc_environment);
 #define PC_SHADOW_MAP_PASS_SUNS 1u
 #define PC_SHADOW_MAP_PASS_RECT 2u
 #define PC_SHADOW_MAP_SUN_FACE 6u
-#define PC_DDGI_DRIFT_SCALE 16384.0   /* fixed point of the drift sums */
+#define PC_DDGI_DRIFT_RANGE 0x3fffffffu /* the drift sums' fixed point: |sum| <= this */
 /* Irradiance texels hold (E / pi)^(1/5) (the paper's perceptual encoding, blended in that
  * space); readers raise the stored value to the 5th power. A fixed 5 lets the shaders decode
  * with three multiplies instead of pow (12 per probe of an irradiance query). */
@@ -339,7 +342,8 @@ PC_END(pc_environment);
  * counts: xyz probes per axis, w = rays per probe;
  * rotation: rows of this update's random ray rotation (uniform on SO(3));
  * params: x maximum hysteresis, y bias scale (world units), z back-face ratio that deactivates
- *   a probe, w unused (0; the encoding exponent is PC_DDGI_IRRADIANCE_EXPONENT);
+ *   a probe, w fixed-point units per unit of encoded luminance in the drift sums (set by the CPU
+ *   each update; the encoding exponent is PC_DDGI_IRRADIANCE_EXPONENT);
  * info: x PC_GI_*, y updates done since reset (0 = next is the first), z atlas irradiance
  *   tile side (interior + 2), w distance tile side (interior + 2);
  * control: x = 1 while the awake field drifts (ages hold), y = age at which a probe falls
@@ -348,8 +352,8 @@ PC_END(pc_environment);
  * distance: vec2[] per texel (mean, mean of squares);
  * rays: vec4[] per probe ray (radiance, hit distance; < 0: back face);
  * probes: vec4[] per probe (xyz offset, w = PC_DDGI_PROBE_* state as float);
- * stats: vec4[] per probe (x age, y mean of its relative change per update, z mean of its
- *   absolute relative change per update, w = 1 when an off probe must be re-checked);
+ * stats: vec4[] per probe (x age, y updates its age held since its last wake, z unused (0),
+ *   w = 1 when an off probe must be re-checked);
  * list: uint[] probes updated this update (written by ddgi_select.comp);
  * ctrl: pc_ddgi_control (host-visible: indirect dispatch sizes, census, drift sums);
  * wake: pc_ddgi_wake[control.z] boxes (host-visible);
@@ -388,8 +392,10 @@ PC_STRUCT(pc_ddgi_control)
     pc_uvec4 border_args; /* x border groups per probe, y listed probes, z 1 */
     pc_uvec4 before;      /* states when the update began: x awake, y sleeping, z off, w listed */
     pc_uvec4 after;       /* states the listed probes ended in: x awake, y sleeping, z off */
-    pc_uvec4 drift;       /* over blended probes: x sum of relative change (int, fixed point),
-                             y sum of its square (fixed point), z probes, w unused */
+    pc_uvec4 drift;       /* encoded luminance of the blended probes' tiles, fixed point (int):
+                             x sum of the gap the blend closed (step of the stored value over
+                             1 - h), y sum of stored, both over probes that had a stored value,
+                             z their count, w sum of fresh over all */
     pc_uvec4 shade_args;  /* sorted probe shading: x groups, y 1, z 1, w rays (ddgi_scan.comp) */
 }
 PC_END(pc_ddgi_control);

@@ -123,3 +123,81 @@ double test_image_mean(const float *rgb, size_t floats, size_t *non_finite)
     if (non_finite) *non_finite = bad;
     return floats ? sum / floats : 0;
 }
+
+/* ---- convergence of noisy fields -------------------------------------------------------- */
+
+static double mean_luminance(rd_renderer *r, const rd_view_camera *cam, char *err, size_t errlen)
+{
+    enum { W = 16, H = 12 };
+    rd_view_settings vs = {.width = W, .height = H, .seed = 1};
+    float img[W * H * 3];
+    if (rd_view_render(&r->view, &r->world, cam, &vs, err, errlen) != RD_VK_OK ||
+        rd_view_read_hdr(&r->view, img, err, errlen) != RD_VK_OK) {
+        CHECKF(false, "render: %s", err);
+        return NAN;
+    }
+    double s = 0;
+    for (int i = 0; i < W * H; i++)
+        s += 0.2126 * img[3 * i] + 0.7152 * img[3 * i + 1] + 0.0722 * img[3 * i + 2];
+    return s / (W * H);
+}
+
+unsigned test_converge_noisy(rd_vk *vk, const char *label, rd_scene *s, const unsigned counts[3],
+                             unsigned more, double max_bias, double sd_factor, double *mean)
+{
+    char err[512] = "";
+    rd_view_camera cam;
+    CHECKF(rd_camera_for_scene(s, -1, &cam, err, sizeof err), "%s", err);
+    rd_gpu_scene gs;
+    rd_renderer r;
+    memset(&gs, 0, sizeof gs);
+    memset(&r, 0, sizeof r);
+    rd_ddgi_settings gi = {
+        .mode = PC_GI_DDGI, .counts = {counts[0], counts[1], counts[2]}, .rays = 64, .seed = 1};
+    unsigned updates = 0, bound = rd_ddgi_sleep_bound(RD_DDGI_DEFAULT_HYSTERESIS);
+    *mean = NAN;
+    VK_CHECK(rd_gpu_scene_create(vk, &gs, s, err, sizeof err));
+    VK_CHECK(rd_renderer_create(vk, &r, err, sizeof err));
+    VK_CHECK(rd_renderer_configure_gi(&r, s->bounds_min, s->bounds_max, &gi, err, sizeof err));
+    rd_world *w = &r.world;
+    rd_world_set_scene(w, &gs);
+    const float black[3] = {0, 0, 0};
+    rd_world_set_sky(w, black);
+    VK_CHECK(rd_world_converge(w, RD_WORLD_CONVERGE_CAP, &updates, err, sizeof err));
+    const rd_ddgi_census *c = &w->ddgi.census;
+    printf("%s: %u probes, asleep after %u updates (sleep age %g, bound %u): %u asleep, %u off\n",
+           label, rd_ddgi_probe_count(&w->ddgi), updates,
+           (double)rd_ddgi_sleep_age(RD_DDGI_DEFAULT_HYSTERESIS), bound, c->sleeping, c->off);
+    CHECKF(rd_world_converged(w), "%s: not asleep after %u updates (%u awake)", label, updates,
+           c->awake);
+    CHECKF(updates <= bound, "%s: asleep after %u updates, more than the bound %u", label, updates,
+           bound);
+    double at_sleep = *mean = mean_luminance(&r, &cam, err, sizeof err);
+    CHECKF(isfinite(at_sleep), "%s: the image is not finite", label);
+    if (!(at_sleep > 0) || more == 0) goto done;
+
+    /* the longer run: every probe woken before each update without lowering its age (so it
+     * blends at the maximum hysteresis and falls asleep again) */
+    double sum = 0, sq = 0;
+    unsigned n = 0;
+    for (unsigned k = 1; k <= more; k++) {
+        rd_world_wake_all(w, 1e30f);
+        VK_CHECK(rd_world_update(w, 1, err, sizeof err));
+        CHECKF(c->updated > 0, "%s: the longer run updates no probe", label);
+        if (k > more / 2 && k % 4 == 0) {
+            double l = mean_luminance(&r, &cam, err, sizeof err);
+            sum += l, sq += l * l, n++;
+        }
+    }
+    double ref = sum / n, sd = sqrt(fmax(0, sq / n - ref * ref)) / ref, bias = at_sleep / ref - 1;
+    double allowed = fmax(max_bias, sd_factor * sd);
+    printf("%s: mean luminance at sleep %.6g, after %u more updates %.6g (one image's sd %.1f%%): "
+           "bias %+.2f%% (allowed %.0f%%)\n",
+           label, at_sleep, more, ref, 100 * sd, 100 * bias, 100 * allowed);
+    CHECKF(ref > 0, "%s: the longer run is black", label);
+    CHECKF(fabs(bias) <= allowed, "%s: bias at sleep %+.2f%%", label, 100 * bias);
+done:
+    rd_renderer_destroy(&r);
+    rd_gpu_scene_destroy(vk, &gs);
+    return updates;
+}

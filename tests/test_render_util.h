@@ -48,6 +48,15 @@ rd_material test_material(const float base[3], float metallic, float roughness, 
 /* The unit direction of the camera ray through pixel (x, y) of a width x height image, as
  * shaders/common.glsl's camera_dir computes it. */
 void test_pixel_dir(const pc_view *v, unsigned width, unsigned height, int x, int y, double d[3]);
+/* Converges the field of s (GI with `counts` probes, 64 rays, seed 1, default hysteresis, black
+ * sky) and checks that it sleeps within rd_ddgi_sleep_bound; then, unless `more` is 0 or the
+ * image is black, keeps every probe updating for `more` updates (each woken without lowering its
+ * age, so it blends at the maximum hysteresis) and checks the mean luminance of a 16 x 12 image
+ * at sleep against the mean over the second half of that longer run: |bias| <= max_bias, or
+ * <= sd_factor standard deviations of one image of the longer run when that is larger. Prints
+ * both. Returns the updates to sleep; *mean gets the mean at sleep. */
+unsigned test_converge_noisy(rd_vk *vk, const char *label, rd_scene *s, const unsigned counts[3],
+                             unsigned more, double max_bias, double sd_factor, double *mean);
 /* Mean of all channels; number of non-finite values. */
 double test_image_mean(const float *rgb, size_t floats, size_t *non_finite);
 

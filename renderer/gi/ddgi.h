@@ -48,9 +48,13 @@ typedef struct rd_ddgi {
     unsigned updates; /* since the last reset */
     bool configured;
     rd_ddgi_census census;
-    /* drift of the awake field: exponential means of the blended probes' mean relative
-     * change per update and of its variance across probes; hold = significant drift */
-    double drift, drift_var;
+    /* drift of the awake field (renderer/gi/ddgi.c, "convergence"): exponential mean of the
+     * relative change of its luminance per update that each update's fresh values ask for, the
+     * noise variance of those measures, the last two, how many since the awake set was last
+     * new, hold = significant drift (ages hold); drift_unit: the drift sums' fixed point
+     * (pc_ddgi_volume.params.w) */
+    double drift, drift_var, drift_recent[2], drift_unit;
+    unsigned drift_measures;
     bool hold;
     unsigned wake_count; /* wake boxes waiting for the next update */
     /* Sort the hits by place before shading them (probe sort) when shading traces shadow rays:
@@ -83,6 +87,9 @@ void rd_ddgi_wake_all(rd_ddgi *d, float age);
 bool rd_ddgi_converged(const rd_ddgi *d);
 /* The age at which a probe falls asleep for the configured maximum hysteresis. */
 float rd_ddgi_sleep_age(float max_hysteresis);
+/* The most updates after a wake event (or a reset) before a probe falls asleep, however the field
+ * drifts: ages hold for at most PC_DDGI_HOLD_FACTOR sleep ages (584 at the default 0.97). */
+unsigned rd_ddgi_sleep_bound(float max_hysteresis);
 /* Chooses the next update's random rotation; call before writing pc_globals for it. */
 void rd_ddgi_begin_update(rd_ddgi *d);
 /* Records one probe update. globals must hold d->vol as set by rd_ddgi_begin_update.

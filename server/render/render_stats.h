@@ -44,7 +44,7 @@ typedef struct srv_render_stats {
     unsigned gi_updates;                                /* since the last change that woke probes */
     unsigned probes_awake, probes_sleeping, probes_off; /* per state (renderer/gi/ddgi.h) */
     bool gi_converged;                                  /* no probe awake: no probe work */
-    double gi_drift;            /* mean relative change per update of the awake probes (smoothed) */
+    double gi_drift;            /* relative change per update of the awake field (smoothed) */
     unsigned shadow_map_lights; /* lights whose distance map is valid (renderer/gi/shadow_maps.h) */
     uint64_t shadow_map_builds, shadow_map_bytes;
     uint64_t scene_generation, triangles;

@@ -1,6 +1,7 @@
 /* Probe states and convergence (renderer/gi/ddgi.c): a field converges by its own measure and then
  * does no probe work at all; moving one small object wakes only the probes around it; a light
- * change wakes every probe; the atlases stay finite throughout. */
+ * change wakes every probe; the atlases stay finite throughout; a field that keeps drifting still
+ * sleeps within rd_ddgi_sleep_bound. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -140,6 +141,25 @@ static void test_probe_states(void)
     CHECKF(rd_world_converge(&w, 500, &done, err, sizeof err) == RD_VK_OK, "%s", err);
     CHECK(rd_world_converged(&w));
     CHECK(atlases_finite(&w.ddgi));
+
+    /* 5. a field that never stops drifting (the light brightens 3% every update and nobody
+     * calls a wake) holds its ages, but only for PC_DDGI_HOLD_FACTOR sleep ages: it sleeps at
+     * the bound (a coarse grid: this part only counts updates) */
+    gi.counts[0] = gi.counts[2] = 4, gi.counts[1] = 2;
+    CHECKF(rd_world_configure_gi(&w, s.bounds_min, s.bounds_max, &gi, err, sizeof err) == RD_VK_OK,
+           "%s", err);
+    unsigned bound = rd_ddgi_sleep_bound(0.5f), n = 0, held = 0;
+    while (!rd_world_converged(&w) && n < 2 * bound) {
+        s.lights[0].intensity *= 1.03f;
+        CHECKF(rd_gpu_scene_update_lights(&vk, &gs, &s, err, sizeof err) == RD_VK_OK, "%s", err);
+        CHECKF(rd_world_update(&w, 1, err, sizeof err) == RD_VK_OK, "%s", err);
+        held += w.ddgi.hold;
+        n++;
+    }
+    printf("drifting field: asleep after %u updates (held %u; sleep age %g, bound %u)\n", n, held,
+           (double)rd_ddgi_sleep_age(0.5f), bound);
+    CHECKF(rd_world_converged(&w) && n <= bound, "drifting field: %u updates, bound %u", n, bound);
+    CHECKF(n > bound / 2, "drifting field slept after %u updates: its drift held nothing", n);
 
     rd_world_destroy(&w);
     rd_gpu_scene_destroy(&vk, &gs);
