@@ -5,6 +5,7 @@
 
 #include <ctype.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -118,42 +119,149 @@ bool srv_json_once(unsigned *has, unsigned bit, const cJSON *it, srv_api_error *
 
 #define LIMIT_COORD 1e7 /* metres: anything beyond is surely a client bug */
 
+/* ---- one shape for every patch: a table of fields --------------------------------------------
+ * Each body (camera, light, node, animation playback, pick) is a table of its fields: the name,
+ * the bit in the patch's `has`, what the value must be and where it goes (an offset into the
+ * patch struct). parse_member reads one member by its table; parse_patch reads a whole object,
+ * naming unknown fields with the body's own hint. */
+
+typedef enum field_kind {
+    FIELD_VEC,       /* n finite numbers in [lo, hi] (float[n]) */
+    FIELD_FLOAT,     /* one number in [lo, hi] (float) */
+    FIELD_RANGE,     /* a number in [lo, hi], or null: 0 (float) */
+    FIELD_SECONDS,   /* a finite number >= 0 (double) */
+    FIELD_BOOL,      /* true or false (bool) */
+    FIELD_ENUM,      /* one of names[count] (uint32_t index) */
+    FIELD_NAME,      /* a string shorter than SRV_NAME_MAX (char[SRV_NAME_MAX]) */
+    FIELD_READ_ONLY, /* reported, never written */
+} field_kind;
+
+enum { CHECK_NONZERO = 1, CHECK_NO_ZERO_COMPONENT = 2 };
+
+typedef struct patch_field {
+    const char *name;
+    unsigned bit;
+    field_kind kind;
+    size_t offset;
+    int n;
+    double lo, hi;
+    unsigned check;
+    const char *const *names; /* FIELD_ENUM */
+    unsigned count;
+} patch_field;
+
+typedef struct patch_shape {
+    const char *what; /* "Unknown <what> field" */
+    const char *hint; /* appended to that message, "" or " (...)" */
+    const patch_field *fields;
+    size_t field_count;
+    size_t has_offset; /* of the patch's `unsigned has` */
+} patch_shape;
+
+#define SHAPE(what, hint, fields, type)                                                            \
+    {                                                                                              \
+        what, hint, fields, sizeof fields / sizeof fields[0], offsetof(type, has)                  \
+    }
+
+static bool read_field(const patch_field *f, const cJSON *it, char *patch, srv_api_error *e)
+{
+    void *at = patch + f->offset;
+    switch (f->kind) {
+    case FIELD_VEC:
+        if (!get_vec(it, f->n, f->lo, f->hi, at, e)) return false;
+        if ((f->check & CHECK_NONZERO) && !nonzero(at, f->n))
+            return f->n == 4 ? BAD("Field '%s' must be a non-zero quaternion.", f->name)
+                             : BAD("Field '%s' must not be the zero vector.", f->name);
+        for (int i = 0; (f->check & CHECK_NO_ZERO_COMPONENT) && i < f->n; i++)
+            if (fabsf(((float *)at)[i]) < 1e-6f)
+                return BAD("Field '%s' must not have zero components.", f->name);
+        return true;
+    case FIELD_RANGE:
+        if (cJSON_IsNull(it)) {
+            *(float *)at = 0;
+            return true;
+        }
+        /* fall through */
+    case FIELD_FLOAT:
+        return srv_json_get_float(it, f->lo, f->hi, at, e);
+    case FIELD_SECONDS:
+        if (!cJSON_IsNumber(it) || !isfinite(it->valuedouble) || it->valuedouble < 0)
+            return BAD("Field '%s' must be a finite number of seconds, 0 or more.", f->name);
+        *(double *)at = it->valuedouble;
+        return true;
+    case FIELD_BOOL:
+        if (!cJSON_IsBool(it)) return BAD("Field '%s' must be true or false.", f->name);
+        *(bool *)at = cJSON_IsTrue(it);
+        return true;
+    case FIELD_ENUM: {
+        unsigned v;
+        if (!get_enum(it, f->names, f->count, &v, e)) return false;
+        *(uint32_t *)at = v;
+        return true;
+    }
+    case FIELD_NAME:
+        if (!cJSON_IsString(it) || strlen(it->valuestring) >= SRV_NAME_MAX)
+            return BAD("Field '%s' must be a string of at most %d bytes.", f->name,
+                       SRV_NAME_MAX - 1);
+        snprintf(at, SRV_NAME_MAX, "%s", it->valuestring);
+        return true;
+    case FIELD_READ_ONLY:
+        return BAD("Field '%s' is read-only.", f->name);
+    }
+    return BAD("Field '%s' cannot be read.", f->name);
+}
+
+/* One member by the shape's table; *known = false (and true returned) for a name it lacks. */
+static bool parse_member(const patch_shape *s, const cJSON *it, void *patch, bool *known,
+                         srv_api_error *e)
+{
+    for (size_t i = 0; i < s->field_count; i++) {
+        const patch_field *f = &s->fields[i];
+        if (strcmp(it->string, f->name) != 0) continue;
+        *known = true;
+        unsigned *has = (unsigned *)((char *)patch + s->has_offset);
+        return (f->kind == FIELD_READ_ONLY || srv_json_once(has, f->bit, it, e)) &&
+               read_field(f, it, patch, e);
+    }
+    *known = false;
+    return true;
+}
+
+/* A whole object: patch is zeroed, then every member must be one of the shape's fields. */
+static bool parse_patch(const patch_shape *s, const cJSON *obj, void *patch, size_t size,
+                        srv_api_error *e)
+{
+    memset(patch, 0, size);
+    const cJSON *it;
+    cJSON_ArrayForEach(it, obj)
+    {
+        bool known;
+        if (!parse_member(s, it, patch, &known, e)) return false;
+        if (!known) return BAD("Unknown %s field '%s'%s.", s->what, it->string, s->hint);
+    }
+    return true;
+}
+
 /* ---- camera -----------------------------------------------------------------------------------
  */
 
+#define CAM(name, bit, kind, member, n, lo, hi, check)                                             \
+    {                                                                                              \
+        name, bit, kind, offsetof(srv_camera_patch, member), n, lo, hi, check, NULL, 0             \
+    }
+static const patch_field camera_fields[] = {
+    CAM("position", SRV_CAM_POSITION, FIELD_VEC, position, 3, -LIMIT_COORD, LIMIT_COORD, 0),
+    CAM("target", SRV_CAM_TARGET, FIELD_VEC, target, 3, -LIMIT_COORD, LIMIT_COORD, 0),
+    CAM("forward", SRV_CAM_FORWARD, FIELD_VEC, forward, 3, -1e6, 1e6, CHECK_NONZERO),
+    CAM("up", SRV_CAM_UP, FIELD_VEC, up, 3, -1e6, 1e6, CHECK_NONZERO),
+    CAM("orientation", SRV_CAM_ORIENTATION, FIELD_VEC, orientation, 4, -1e6, 1e6, CHECK_NONZERO),
+    CAM("fov", SRV_CAM_FOV, FIELD_FLOAT, fov_deg, 1, 1, 170, 0),
+};
+static const patch_shape camera_shape = SHAPE("camera", "", camera_fields, srv_camera_patch);
+
 bool srv_json_camera_member(const cJSON *it, srv_camera_patch *p, bool *known, srv_api_error *e)
 {
-    const char *k = it->string;
-    *known = true;
-    if (strcmp(k, "position") == 0)
-        return srv_json_once(&p->has, SRV_CAM_POSITION, it, e) &&
-               get_vec(it, 3, -LIMIT_COORD, LIMIT_COORD, p->position, e);
-    if (strcmp(k, "target") == 0)
-        return srv_json_once(&p->has, SRV_CAM_TARGET, it, e) &&
-               get_vec(it, 3, -LIMIT_COORD, LIMIT_COORD, p->target, e);
-    if (strcmp(k, "forward") == 0) {
-        if (!srv_json_once(&p->has, SRV_CAM_FORWARD, it, e) ||
-            !get_vec(it, 3, -1e6, 1e6, p->forward, e))
-            return false;
-        return nonzero(p->forward, 3) || BAD("Field 'forward' must not be the zero vector.");
-    }
-    if (strcmp(k, "up") == 0) {
-        if (!srv_json_once(&p->has, SRV_CAM_UP, it, e) || !get_vec(it, 3, -1e6, 1e6, p->up, e))
-            return false;
-        return nonzero(p->up, 3) || BAD("Field 'up' must not be the zero vector.");
-    }
-    if (strcmp(k, "orientation") == 0) {
-        if (!srv_json_once(&p->has, SRV_CAM_ORIENTATION, it, e) ||
-            !get_vec(it, 4, -1e6, 1e6, p->orientation, e))
-            return false;
-        return nonzero(p->orientation, 4) ||
-               BAD("Field 'orientation' must be a non-zero quaternion.");
-    }
-    if (strcmp(k, "fov") == 0)
-        return srv_json_once(&p->has, SRV_CAM_FOV, it, e) &&
-               srv_json_get_float(it, 1, 170, &p->fov_deg, e);
-    *known = false;
-    return true;
+    return parse_member(&camera_shape, it, p, known, e);
 }
 
 bool srv_json_camera_consistent(const srv_camera_patch *p, srv_api_error *e)
@@ -167,15 +275,8 @@ bool srv_json_camera_consistent(const srv_camera_patch *p, srv_api_error *e)
 
 bool srv_json_camera_patch(const cJSON *obj, srv_camera_patch *out, srv_api_error *e)
 {
-    memset(out, 0, sizeof *out);
-    const cJSON *it;
-    cJSON_ArrayForEach(it, obj)
-    {
-        bool known;
-        if (!srv_json_camera_member(it, out, &known, e)) return false;
-        if (!known) return BAD("Unknown camera field '%s'.", it->string);
-    }
-    return srv_json_camera_consistent(out, e);
+    return parse_patch(&camera_shape, obj, out, sizeof *out, e) &&
+           srv_json_camera_consistent(out, e);
 }
 
 /* ---- lights --------------------------------------------------------------------------------- */
@@ -187,142 +288,91 @@ const char *srv_light_type_name(uint32_t type)
     return type < 3 ? light_types[type] : "unknown";
 }
 
+#define LIGHT(name, bit, kind, member, n, lo, hi, check)                                           \
+    {                                                                                              \
+        name, bit, kind, offsetof(srv_light_patch, member), n, lo, hi, check, NULL, 0              \
+    }
+static const patch_field light_fields[] = {
+    {"type", SRV_LIGHT_TYPE, FIELD_ENUM, offsetof(srv_light_patch, type), 1, 0, 0, 0, light_types,
+     3},
+    LIGHT("name", SRV_LIGHT_NAME, FIELD_NAME, name, 1, 0, 0, 0),
+    LIGHT("color", SRV_LIGHT_COLOR, FIELD_VEC, color, 3, 0, 1e6, 0),
+    LIGHT("intensity", SRV_LIGHT_INTENSITY, FIELD_FLOAT, intensity, 1, 0, 1e9, 0),
+    LIGHT("position", SRV_LIGHT_POSITION, FIELD_VEC, position, 3, -LIMIT_COORD, LIMIT_COORD, 0),
+    LIGHT("direction", SRV_LIGHT_DIRECTION, FIELD_VEC, direction, 3, -1e6, 1e6, CHECK_NONZERO),
+    LIGHT("range", SRV_LIGHT_RANGE, FIELD_RANGE, range, 1, 0, 1e9, 0), /* null: unlimited */
+    LIGHT("inner_cone_angle", SRV_LIGHT_INNER_CONE, FIELD_FLOAT, inner_cone, 1, 0, M_PI / 2, 0),
+    LIGHT("outer_cone_angle", SRV_LIGHT_OUTER_CONE, FIELD_FLOAT, outer_cone, 1, 0, M_PI / 2, 0),
+    {"id", 0, FIELD_READ_ONLY, 0, 0, 0, 0, 0, NULL, 0},
+    {"node", 0, FIELD_READ_ONLY, 0, 0, 0, 0, 0, NULL, 0},
+};
+static const patch_shape light_shape = SHAPE("light", "", light_fields, srv_light_patch);
+
 bool srv_json_light_patch(const cJSON *obj, srv_light_patch *p, srv_api_error *e)
 {
-    memset(p, 0, sizeof *p);
-    const cJSON *it;
-    cJSON_ArrayForEach(it, obj)
-    {
-        const char *k = it->string;
-        bool ok;
-        if (strcmp(k, "type") == 0) {
-            unsigned t = 0;
-            ok = srv_json_once(&p->has, SRV_LIGHT_TYPE, it, e) &&
-                 get_enum(it, light_types, 3, &t, e);
-            p->type = t;
-        } else if (strcmp(k, "name") == 0) {
-            ok = srv_json_once(&p->has, SRV_LIGHT_NAME, it, e);
-            if (ok && (!cJSON_IsString(it) || strlen(it->valuestring) >= SRV_NAME_MAX))
-                ok = BAD("Field 'name' must be a string of at most %d bytes.", SRV_NAME_MAX - 1);
-            if (ok) snprintf(p->name, sizeof p->name, "%s", it->valuestring);
-        } else if (strcmp(k, "color") == 0) {
-            ok = srv_json_once(&p->has, SRV_LIGHT_COLOR, it, e) &&
-                 get_vec(it, 3, 0, 1e6, p->color, e);
-        } else if (strcmp(k, "intensity") == 0) {
-            ok = srv_json_once(&p->has, SRV_LIGHT_INTENSITY, it, e) &&
-                 srv_json_get_float(it, 0, 1e9, &p->intensity, e);
-        } else if (strcmp(k, "position") == 0) {
-            ok = srv_json_once(&p->has, SRV_LIGHT_POSITION, it, e) &&
-                 get_vec(it, 3, -LIMIT_COORD, LIMIT_COORD, p->position, e);
-        } else if (strcmp(k, "direction") == 0) {
-            ok = srv_json_once(&p->has, SRV_LIGHT_DIRECTION, it, e) &&
-                 get_vec(it, 3, -1e6, 1e6, p->direction, e);
-            if (ok && !nonzero(p->direction, 3))
-                ok = BAD("Field 'direction' must not be the zero vector.");
-        } else if (strcmp(k, "range") == 0) {
-            ok = srv_json_once(&p->has, SRV_LIGHT_RANGE, it, e);
-            if (ok && cJSON_IsNull(it))
-                p->range = 0; /* unlimited */
-            else if (ok)
-                ok = srv_json_get_float(it, 0, 1e9, &p->range, e);
-        } else if (strcmp(k, "inner_cone_angle") == 0) {
-            ok = srv_json_once(&p->has, SRV_LIGHT_INNER_CONE, it, e) &&
-                 srv_json_get_float(it, 0, M_PI / 2, &p->inner_cone, e);
-        } else if (strcmp(k, "outer_cone_angle") == 0) {
-            ok = srv_json_once(&p->has, SRV_LIGHT_OUTER_CONE, it, e) &&
-                 srv_json_get_float(it, 0, M_PI / 2, &p->outer_cone, e);
-        } else if (strcmp(k, "id") == 0 || strcmp(k, "node") == 0) {
-            ok = BAD("Field '%s' is read-only.", k);
-        } else {
-            ok = BAD("Unknown light field '%s'.", k);
-        }
-        if (!ok) return false;
-    }
-    return true;
+    return parse_patch(&light_shape, obj, p, sizeof *p, e);
 }
 
 /* ---- nodes ---------------------------------------------------------------------------------- */
 
+#define NODE(name, bit, member, n, lo, hi, check)                                                  \
+    {                                                                                              \
+        name, bit, FIELD_VEC, offsetof(srv_node_patch, member), n, lo, hi, check, NULL, 0          \
+    }
+static const patch_field node_fields[] = {
+    NODE("translation", SRV_NODE_TRANSLATION, translation, 3, -LIMIT_COORD, LIMIT_COORD, 0),
+    NODE("rotation", SRV_NODE_ROTATION, rotation, 4, -1e6, 1e6, CHECK_NONZERO),
+    NODE("scale", SRV_NODE_SCALE, scale, 3, -1e6, 1e6, CHECK_NO_ZERO_COMPONENT),
+};
+static const patch_shape node_shape =
+    SHAPE("node", " (translation, rotation and scale can be changed)", node_fields, srv_node_patch);
+
 bool srv_json_node_patch(const cJSON *obj, srv_node_patch *p, srv_api_error *e)
 {
-    memset(p, 0, sizeof *p);
-    const cJSON *it;
-    cJSON_ArrayForEach(it, obj)
-    {
-        const char *k = it->string;
-        bool ok;
-        if (strcmp(k, "translation") == 0) {
-            ok = srv_json_once(&p->has, SRV_NODE_TRANSLATION, it, e) &&
-                 get_vec(it, 3, -LIMIT_COORD, LIMIT_COORD, p->translation, e);
-        } else if (strcmp(k, "rotation") == 0) {
-            ok = srv_json_once(&p->has, SRV_NODE_ROTATION, it, e) &&
-                 get_vec(it, 4, -1e6, 1e6, p->rotation, e);
-            if (ok && !nonzero(p->rotation, 4))
-                ok = BAD("Field 'rotation' must be a non-zero quaternion.");
-        } else if (strcmp(k, "scale") == 0) {
-            ok = srv_json_once(&p->has, SRV_NODE_SCALE, it, e) &&
-                 get_vec(it, 3, -1e6, 1e6, p->scale, e);
-            for (int i = 0; ok && i < 3; i++)
-                if (fabsf(p->scale[i]) < 1e-6f)
-                    ok = BAD("Field 'scale' must not have zero components.");
-        } else {
-            ok =
-                BAD("Unknown node field '%s' (translation, rotation and scale can be changed).", k);
-        }
-        if (!ok) return false;
-    }
+    if (!parse_patch(&node_shape, obj, p, sizeof *p, e)) return false;
     if (!p->has) return BAD("Give at least one of 'translation', 'rotation' and 'scale'.");
     return true;
 }
 
 /* ---- animation playback ----------------------------------------------------------------- */
 
+static const patch_field playback_fields[] = {
+    {"playing", SRV_PLAY_PLAYING, FIELD_BOOL, offsetof(srv_playback_patch, playing), 1, 0, 0, 0,
+     NULL, 0},
+    {"time", SRV_PLAY_TIME, FIELD_SECONDS, offsetof(srv_playback_patch, time_s), 1, 0, 0, 0, NULL,
+     0},
+};
+static const patch_shape playback_shape =
+    SHAPE("animation", " (playing and time can be changed)", playback_fields, srv_playback_patch);
+
 bool srv_json_playback_patch(const cJSON *obj, srv_playback_patch *p, srv_api_error *e)
 {
-    memset(p, 0, sizeof *p);
-    const cJSON *it;
-    cJSON_ArrayForEach(it, obj)
-    {
-        const char *k = it->string;
-        bool ok;
-        if (strcmp(k, "playing") == 0) {
-            ok = srv_json_once(&p->has, SRV_PLAY_PLAYING, it, e) &&
-                 (cJSON_IsBool(it) || BAD("Field 'playing' must be true or false."));
-            p->playing = cJSON_IsTrue(it);
-        } else if (strcmp(k, "time") == 0) {
-            ok = srv_json_once(&p->has, SRV_PLAY_TIME, it, e) &&
-                 ((cJSON_IsNumber(it) && isfinite(it->valuedouble) && it->valuedouble >= 0) ||
-                  BAD("Field 'time' must be a finite number of seconds, 0 or more."));
-            p->time_s = ok ? it->valuedouble : 0;
-        } else {
-            ok = BAD("Unknown animation field '%s' (playing and time can be changed).", k);
-        }
-        if (!ok) return false;
-    }
+    if (!parse_patch(&playback_shape, obj, p, sizeof *p, e)) return false;
     if (!p->has) return BAD("Give at least one of 'playing' and 'time'.");
     return true;
 }
 
 /* ---- picking -------------------------------------------------------------------------------- */
 
+typedef struct pick_patch {
+    unsigned has;
+    float point[2];
+} pick_patch;
+
+static const patch_field pick_fields[] = {
+    {"x", 1u, FIELD_FLOAT, offsetof(pick_patch, point[0]), 1, 0, 1, 0, NULL, 0},
+    {"y", 2u, FIELD_FLOAT, offsetof(pick_patch, point[1]), 1, 0, 1, 0, NULL, 0},
+};
+static const patch_shape pick_shape =
+    SHAPE("pick", " (x and y, 0..1 across and down the picture)", pick_fields, pick_patch);
+
 bool srv_json_pick_request(const cJSON *obj, float point[2], srv_api_error *e)
 {
-    unsigned has = 0;
-    const cJSON *it;
-    cJSON_ArrayForEach(it, obj)
-    {
-        const char *k = it->string;
-        bool ok;
-        if (strcmp(k, "x") == 0)
-            ok = srv_json_once(&has, 1u, it, e) && srv_json_get_float(it, 0, 1, &point[0], e);
-        else if (strcmp(k, "y") == 0)
-            ok = srv_json_once(&has, 2u, it, e) && srv_json_get_float(it, 0, 1, &point[1], e);
-        else
-            ok = BAD("Unknown pick field '%s' (x and y, 0..1 across and down the picture).", k);
-        if (!ok) return false;
-    }
-    if (has != 3u)
+    pick_patch p;
+    if (!parse_patch(&pick_shape, obj, &p, sizeof p, e)) return false;
+    if (p.has != 3u)
         return BAD("Give both 'x' and 'y': the point in the picture, 0..1 across and down.");
+    point[0] = p.point[0], point[1] = p.point[1];
     return true;
 }
 

@@ -35,6 +35,78 @@ static bool parse_settings(const char *text, srv_settings_patch *p, srv_api_erro
     return ok;
 }
 
+/* Parses text with one of the patch parsers; on failure, *message holds the 400's message. */
+typedef bool (*patch_parser)(const cJSON *, void *, srv_api_error *);
+
+static bool parse_with(patch_parser f, const char *text, void *out, srv_api_error *e)
+{
+    cJSON *j = srv_json_parse_object(text, strlen(text), e);
+    if (!j) return false;
+    bool ok = f(j, out, e);
+    cJSON_Delete(j);
+    return ok;
+}
+
+static bool node_parser(const cJSON *j, void *p, srv_api_error *e)
+{
+    return srv_json_node_patch(j, p, e);
+}
+static bool playback_parser(const cJSON *j, void *p, srv_api_error *e)
+{
+    return srv_json_playback_patch(j, p, e);
+}
+static bool pick_parser(const cJSON *j, void *p, srv_api_error *e)
+{
+    return srv_json_pick_request(j, p, e);
+}
+
+/* The failure's message is exactly want (the bodies share one table-driven parser; each keeps
+ * its own sentences). */
+static void check_rejects(patch_parser f, const char *text, const char *want)
+{
+    srv_api_error e = {0};
+    char out[256];
+    CHECKF(!parse_with(f, text, out, &e), "'%s' was accepted", text);
+    CHECKF(e.status == 400 && strcmp(e.message, want) == 0, "'%s' -> %d '%s', want '%s'", text,
+           e.status, e.message, want);
+}
+
+static void test_patch_shapes(void)
+{
+    srv_node_patch np;
+    srv_api_error e;
+    CHECK(parse_with(node_parser, "{\"translation\":[1,2,3],\"scale\":[2,2,2]}", &np, &e));
+    CHECK(np.has == (SRV_NODE_TRANSLATION | SRV_NODE_SCALE) && np.translation[2] == 3 &&
+          np.scale[0] == 2);
+    check_rejects(node_parser, "{\"scale\":[1,0,1]}",
+                  "Field 'scale' must not have zero components.");
+    check_rejects(node_parser, "{\"rotation\":[0,0,0,0]}",
+                  "Field 'rotation' must be a non-zero quaternion.");
+    check_rejects(node_parser, "{\"translation\":[1,2]}",
+                  "Field 'translation' must be an array of 3 numbers.");
+    check_rejects(node_parser, "{\"translation\":[1,2,3],\"translation\":[1,2,3]}",
+                  "Field 'translation' appears more than once.");
+    check_rejects(node_parser, "{\"matrix\":[]}",
+                  "Unknown node field 'matrix' (translation, rotation and scale can be changed).");
+    check_rejects(node_parser, "{}", "Give at least one of 'translation', 'rotation' and 'scale'.");
+
+    srv_playback_patch pp;
+    CHECK(parse_with(playback_parser, "{\"playing\":false,\"time\":2.5}", &pp, &e));
+    CHECK(pp.has == (SRV_PLAY_PLAYING | SRV_PLAY_TIME) && !pp.playing && pp.time_s == 2.5);
+    check_rejects(playback_parser, "{\"playing\":1}", "Field 'playing' must be true or false.");
+    check_rejects(playback_parser, "{\"time\":-1}",
+                  "Field 'time' must be a finite number of seconds, 0 or more.");
+    check_rejects(playback_parser, "{\"speed\":2}",
+                  "Unknown animation field 'speed' (playing and time can be changed).");
+
+    float point[2];
+    CHECK(parse_with(pick_parser, "{\"x\":0.25,\"y\":0.75}", point, &e));
+    CHECK(point[0] == 0.25f && point[1] == 0.75f);
+    check_rejects(pick_parser, "{\"x\":0.5}",
+                  "Give both 'x' and 'y': the point in the picture, 0..1 across and down.");
+    check_rejects(pick_parser, "{\"x\":1.5,\"y\":0}", "Field 'x' must be a number in [0, 1].");
+}
+
 static void test_bodies(void)
 {
     srv_api_error e;
@@ -79,6 +151,12 @@ static void test_bodies(void)
     CHECK(!parse_light("{\"id\":3}", &lp, &e));
     CHECK(!parse_light("{\"direction\":[0,0,0]}", &lp, &e));
     CHECK(!parse_light("{\"name\":5}", &lp, &e));
+    CHECK(!parse_light("{\"node\":1}", &lp, &e) &&
+          strcmp(e.message, "Field 'node' is read-only.") == 0);
+    CHECK(!parse_light("{\"glow\":1}", &lp, &e) &&
+          strcmp(e.message, "Unknown light field 'glow'.") == 0);
+    CHECK(parse_light("{\"range\":4,\"name\":\"key\"}", &lp, &e) && lp.range == 4 &&
+          strcmp(lp.name, "key") == 0 && lp.has == (SRV_LIGHT_RANGE | SRV_LIGHT_NAME));
 
     srv_settings_patch sp;
     CHECK(parse_settings("{\"width\":64,\"height\":48,\"gi_mode\":\"off\",\"probe_counts\":[2,2,2],"
@@ -314,6 +392,7 @@ int main(void)
     test_pick_and_file_name();
     test_default_lighting();
     test_bodies();
+    test_patch_shapes();
     test_state();
     return test_finish();
 }
