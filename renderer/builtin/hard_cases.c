@@ -43,6 +43,13 @@ static const rd_hard_case CASES[] = {
     {"sun-room", "a closed 6 x 3 x 6 m room lit only by a sun through one window (a bright patch "
                  "on the floor, the rest by bounces): the probe field sleeps within 600 updates "
                  "at the default hysteresis, its mean within 2% of a field updated for longer"},
+    {"thin-walls", "a closed 4 x 2.5 x 4 m room of 5 cm walls and roof on a sunlit terrace, lit "
+                   "inside only through a door on its shaded side; the camera inside faces the "
+                   "sunlit wall: no light through the walls (within 5% of the path tracer, no "
+                   "bright seam along the corners)"},
+    {"narrow-gap", "an 8 x 3 x 4 m room split by a 1 cm wall with a 25 cm gap at the floor, the "
+                   "light on one side, the camera on the other: the dark side gets the light "
+                   "through the gap within 5% of the path tracer"},
 };
 
 const rd_hard_case *rd_hard_cases(unsigned *count)
@@ -179,6 +186,52 @@ static void build_sun_room(rd_scene *s)
     rd_build_camera(s, eye, fwd, UP_Y, 70);
 }
 
+/* Solid slab walls (outward-facing boxes, 5 cm) of a 4 x 2.5 x 4 m room on a 20 x 20 m terrace;
+ * a 1 x 2 m door in the -x wall, the sun on the +x side and the roof: inside, only light that
+ * came in through the door (issue 28: probes outside a wall thinner than their spacing leaked
+ * the sunlit side into the room). */
+static void build_thin_walls(rd_scene *s)
+{
+    rd_tri_list t = {0};
+    uint32_t white = rd_build_material(s, "white", 0.7f, 0.7f, 0.7f, 0, 0, 0);
+    uint32_t stone = rd_build_material(s, "terrace", 0.5f, 0.5f, 0.5f, 0, 0, 0);
+    static const float slabs[][6] = {
+        /* the -x wall around the door z in [-0.5, 0.5], y in [0, 2] */
+        {-2 - 0.05f, 0, -2 - 0.05f, -2, 2.5f, -0.5f},
+        {-2 - 0.05f, 0, 0.5f, -2, 2.5f, 2 + 0.05f},
+        {-2 - 0.05f, 2, -0.5f, -2, 2.5f, 0.5f},
+        {2, 0, -2 - 0.05f, 2 + 0.05f, 2.5f, 2 + 0.05f}, /* +x wall, sunlit outside */
+        {-2, 0, -2 - 0.05f, 2, 2.5f, -2},               /* -z wall */
+        {-2, 0, 2, 2, 2.5f, 2 + 0.05f},                 /* +z wall */
+        {-2 - 0.05f, 2.5f, -2 - 0.05f, 2 + 0.05f, 2.5f + 0.05f, 2 + 0.05f}, /* roof */
+    };
+    for (size_t i = 0; i < sizeof slabs / sizeof slabs[0]; i++)
+        rd_tris_box(&t, slabs[i], slabs[i] + 3, white);
+    const float ground_lo[3] = {-10, -0.1f, -10}, ground_hi[3] = {10, 0, 10};
+    rd_tris_box(&t, ground_lo, ground_hi, stone);
+    rd_tris_commit(&t, s, "terrace");
+    const float dir[3] = {-1.0f, -1.2f, 0.3f}, sun[3] = {1, 0.95f, 0.9f};
+    rd_build_sun(s, dir, sun, 50);
+    const float eye[3] = {-1.5f, 1.4f, 1.5f}, fwd[3] = {1.0f, -0.2f, -0.7f};
+    rd_build_camera(s, eye, fwd, UP_Y, 70);
+}
+
+/* A closed 8 x 3 x 4 m room split at x = 0 by a 1 cm wall that stops 25 cm above the floor; a
+ * point light on the -x side, the camera on the +x side, lit only through the gap. */
+static void build_narrow_gap(rd_scene *s)
+{
+    rd_tri_list t = {0};
+    uint32_t white = rd_build_material(s, "white", 0.7f, 0.7f, 0.7f, 0, 0, 0);
+    const float lo[3] = {-4, 0, -2}, hi[3] = {4, 3, 2};
+    rd_tris_room(&t, lo, hi, white);
+    const float p_lo[3] = {-0.005f, 0.25f, -2}, p_hi[3] = {0.005f, 3, 2};
+    rd_tris_box(&t, p_lo, p_hi, white);
+    rd_tris_commit(&t, s, "room");
+    rd_build_point_light(s, -2.0f, 1.2f, 0.0f, 40.0f);
+    const float eye[3] = {3.7f, 1.6f, 1.7f}, fwd[3] = {-1.0f, -0.45f, -0.45f};
+    rd_build_camera(s, eye, fwd, UP_Y, 70);
+}
+
 static void build_no_lights(rd_scene *s)
 {
     rd_tri_list t = {0};
@@ -294,6 +347,10 @@ bool rd_hard_case_build(const char *name, rd_scene *s, char *err, size_t errlen)
         build_no_lights(s);
     else if (strcmp(name, "sun-room") == 0)
         build_sun_room(s);
+    else if (strcmp(name, "thin-walls") == 0)
+        build_thin_walls(s);
+    else if (strcmp(name, "narrow-gap") == 0)
+        build_narrow_gap(s);
     else if (strcmp(name, "degenerate") == 0)
         build_degenerate(s);
     else if (strcmp(name, "mirrored") == 0)

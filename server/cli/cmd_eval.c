@@ -254,6 +254,34 @@ static double median(double *v, unsigned n)
     return v[n / 2];
 }
 
+/* Renders the frame fs describes, compares it with ref (row->err), then times steady-state
+ * frames of one update each (row->gpu_ms). GPU clocks ramp up under load: two warm-up frames,
+ * then the median frame. */
+static bool measure_frame(eval_ctx *c, rd_gpu_scene *gs, const rd_view_camera *cam,
+                          rd_frame_settings *fs, const float *ref, eval_row *row)
+{
+    const eval_args *a = c->a;
+    if (rd_renderer_render(&c->r, gs, cam, fs, c->err, sizeof c->err) != RD_VK_OK) return false;
+    size_t px = (size_t)a->width * a->height;
+    float *img = malloc(px * 12);
+    if (!img) abort();
+    if (rd_renderer_read_hdr(&c->r, img, c->err, sizeof c->err) != RD_VK_OK) {
+        free(img);
+        return false;
+    }
+    rd_image_compare(img, ref, px, &row->err);
+    free(img);
+    fs->gi_updates = 1;
+    double times[100];
+    for (unsigned f = 0; f < a->timing_frames + 2; f++) {
+        if (rd_renderer_render(&c->r, gs, cam, fs, c->err, sizeof c->err) != RD_VK_OK)
+            return false;
+        if (f >= 2) times[f - 2] = rd_frame_stats_total_ms(&c->r.stats);
+    }
+    row->gpu_ms = median(times, a->timing_frames);
+    return true;
+}
+
 /* One GI setting: converge for `updates` (the moving case moves half way through), measure
  * the error, then time steady-state frames of one update each. */
 static bool run_setting(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene *gs,
@@ -280,25 +308,7 @@ static bool run_setting(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene
     } else {
         fs.gi_updates = updates;
     }
-    if (rd_renderer_render(&c->r, gs, cam, &fs, c->err, sizeof c->err) != RD_VK_OK) return false;
-    size_t px = (size_t)a->width * a->height;
-    float *img = malloc(px * 12);
-    if (!img) abort();
-    if (rd_renderer_read_hdr(&c->r, img, c->err, sizeof c->err) != RD_VK_OK) {
-        free(img);
-        return false;
-    }
-    rd_image_compare(img, ref, px, &row->err);
-    free(img);
-    /* GPU clocks ramp up under load: two warm-up frames, then the median frame */
-    fs.gi_updates = 1;
-    double times[100];
-    for (unsigned f = 0; f < a->timing_frames + 2; f++) {
-        if (rd_renderer_render(&c->r, gs, cam, &fs, c->err, sizeof c->err) != RD_VK_OK)
-            return false;
-        if (f >= 2) times[f - 2] = rd_frame_stats_total_ms(&c->r.stats);
-    }
-    row->gpu_ms = median(times, a->timing_frames);
+    if (!measure_frame(c, gs, cam, &fs, ref, row)) return false;
     if (gi->mode != PC_GI_OFF) {
         row->probes[0] = c->r.world.ddgi.vol.counts.x;
         row->probes[1] = c->r.world.ddgi.vol.counts.y;
@@ -331,24 +341,7 @@ static bool run_default(eval_ctx *c, rd_scene *s, rd_gpu_scene *gs, const rd_vie
     row->slept = rd_world_converged(&c->r.world);
     row->updates = done;
     rd_frame_settings fs = {.width = a->width, .height = a->height, .seed = 1, .env = &c->env};
-    if (rd_renderer_render(&c->r, gs, cam, &fs, c->err, sizeof c->err) != RD_VK_OK) return false;
-    size_t px = (size_t)a->width * a->height;
-    float *img = malloc(px * 12);
-    if (!img) abort();
-    if (rd_renderer_read_hdr(&c->r, img, c->err, sizeof c->err) != RD_VK_OK) {
-        free(img);
-        return false;
-    }
-    rd_image_compare(img, ref, px, &row->err);
-    free(img);
-    fs.gi_updates = 1;
-    double times[100];
-    for (unsigned f = 0; f < a->timing_frames + 2; f++) {
-        if (rd_renderer_render(&c->r, gs, cam, &fs, c->err, sizeof c->err) != RD_VK_OK)
-            return false;
-        if (f >= 2) times[f - 2] = rd_frame_stats_total_ms(&c->r.stats);
-    }
-    row->gpu_ms = median(times, a->timing_frames);
+    if (!measure_frame(c, gs, cam, &fs, ref, row)) return false;
     row->probes[0] = c->r.world.ddgi.vol.counts.x;
     row->probes[1] = c->r.world.ddgi.vol.counts.y;
     row->probes[2] = c->r.world.ddgi.vol.counts.z;
