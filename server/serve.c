@@ -172,13 +172,9 @@ static int parse(int argc, char **argv, serve_args *a)
         if (setting < 0) return 2;
         if (setting > 0) continue;
         const char *o = argv[i];
-        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
+        const char *v = NULL;
 #define NEED_VALUE                                                                                 \
-    if (!v) {                                                                                      \
-        fprintf(stderr, "probecast serve: %s needs a value\n", o);                                 \
-        return 2;                                                                                  \
-    }                                                                                              \
-    i++;
+    if (!(v = srv_arg_value("probecast serve", argc, argv, &i))) return 2;
 #define IS(name) (strcmp(o, name) == 0)
         if (IS("--help") || IS("-h")) {
             serve_usage(stdout);

@@ -9,6 +9,7 @@
 
 #include "server/api/api_json.h"
 #include "server/api/api_error.h"
+#include "server/base/args.h"
 
 _Static_assert(PC_TONEMAP_ACES == 0 && PC_TONEMAP_CLAMP == 1, "SRV_TONEMAP_NAMES order");
 _Static_assert(PC_VIEW_FINAL == 0 && PC_VIEW_IRRADIANCE == 1 && PC_VIEW_PROBES == 2,
@@ -373,11 +374,8 @@ int srv_settings_parse_flag(const char *cmd, unsigned cli, int argc, char **argv
     if (!d) return 0;
     const char *text = "";
     if (d->type != SRV_TYPE_BOOL) {
-        if (*i + 1 >= argc) {
-            fprintf(stderr, "%s: %s needs a value\n", cmd, d->flag);
-            return -1;
-        }
-        text = argv[++*i];
+        text = srv_arg_value(cmd, argc, argv, i);
+        if (!text) return -1;
     }
     if (!srv_setting_parse(cmd, d, text, s)) return -1;
     *given |= d->bit;

@@ -9,6 +9,15 @@
 #include "renderer/gltf/gltf_loader.h"
 #include "renderer/builtin/procedural.h"
 
+const char *srv_arg_value(const char *cmd, int argc, char **argv, int *i)
+{
+    if (*i + 1 >= argc) {
+        fprintf(stderr, "%s: %s needs a value\n", cmd, argv[*i]);
+        return NULL;
+    }
+    return argv[++*i];
+}
+
 bool srv_arg_uint(const char *opt, const char *s, unsigned min, unsigned max, unsigned *out)
 {
     char *end = NULL;

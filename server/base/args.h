@@ -7,6 +7,10 @@
 
 #include "renderer/scene/scene.h"
 
+/* The value after option argv[*i] of sub-command cmd ("probecast render"): advances *i past it;
+ * with none left, prints "cmd: OPT needs a value" and returns NULL. Every sub-command's loop
+ * over argv takes its option values through this. */
+const char *srv_arg_value(const char *cmd, int argc, char **argv, int *i);
 bool srv_arg_uint(const char *opt, const char *s, unsigned min, unsigned max, unsigned *out);
 bool srv_arg_float(const char *opt, const char *s, float *out);
 bool srv_arg_floats(const char *opt, const char *s, float *out, int n);

@@ -55,38 +55,39 @@ static void eval_default_text(const eval_args *a, const srv_setting_info *d, cha
 static void eval_usage(FILE *f)
 {
     fprintf(
-        f, "usage: probecast eval [OPTIONS]\n"
-           "\n"
-           "Renders each scene of the hard-case suite with a path-traced reference and a sweep of\n"
-           "GI settings, and reports GPU time per frame against the error. Every case also gets\n"
-           "the row a user gets without flags (mode default: the default probe grid converged by\n"
-           "the default rule until it sleeps, with its updates and GPU ms to sleep).\n"
-           "\n"
-           "Options:\n"
-           "  --cases A,B,...        scenes of the suite (default: all; --list shows them)\n"
-           "  --materials A,B,...    material families: lambert (the builtin's own), gltf (its\n"
-           "                         glTF twin: the default dielectric, Appendix B's specular),\n"
-           "                         metal (metallic 0.5, roughness 0.5) (default lambert,gltf);\n"
-           "                         twins only for cases whose materials are all Lambertian\n"
-           "  --ref-spp N            reference samples per pixel (default 1024)\n"
-           "  --updates A,B,...      probe updates before the image (default 8,32)\n"
-           "  --density A,B,...      probe density factors over the fitted grid (default 0.5,1,2)\n"
-           "  --no-noise-floor       skip the second reference (seed 2) that measures its noise\n"
-           "  --timing-frames N      steady-state frames timed per setting, after two warm-up\n"
-           "                         frames; the median is reported (default 7)\n"
-           "  --out DIR              where eval.csv, eval.json, eval.svg go (default eval-out)\n"
-           "  --cache DIR            reference cache (default DIR-of-out/cache)\n"
-           "  --device INDEX|NAME    Vulkan device\n"
-           "  --default-lighting on|off  light scenes without lights, sky or strong emitters\n"
-           "                         as `probecast render` does (default on)\n"
-           "  --list                 list the suite with each case's expectation\n"
-           "  --dynamic              instead of the suite: a light and an object move in a\n"
-           "                         converged field; reports updates, GPU ms and error at\n"
-           "                         fixed update counts after the change (eval-dynamic.csv)\n"
-           "  --replot DIR           redraw DIR/eval.svg and the table from DIR/eval.csv\n"
-           "\n"
-           "Settings (the daemon's, as GET and PATCH /v1/settings name them; a list of up to %u\n"
-           "values is swept, each combination a row):\n",
+        f,
+        "usage: probecast eval [OPTIONS]\n"
+        "\n"
+        "Renders each scene of the hard-case suite with a path-traced reference and a sweep of\n"
+        "GI settings, and reports GPU time per frame against the error. Every case also gets\n"
+        "the row a user gets without flags (mode default: the default probe grid converged by\n"
+        "the default rule until it sleeps, with its updates and GPU ms to sleep).\n"
+        "\n"
+        "Options:\n"
+        "  --cases A,B,...        scenes of the suite (default: all; --list shows them)\n"
+        "  --materials A,B,...    material families: lambert (the builtin's own), gltf (its\n"
+        "                         glTF twin: the default dielectric, Appendix B's specular),\n"
+        "                         metal (metallic 0.5, roughness 0.5) (default lambert,gltf);\n"
+        "                         twins only for cases whose materials are all Lambertian\n"
+        "  --ref-spp N            reference samples per pixel (default 1024)\n"
+        "  --updates A,B,...      probe updates before the image (default 8,32)\n"
+        "  --density A,B,...      probe density factors over the fitted grid (default 0.5,1,2)\n"
+        "  --no-noise-floor       skip the second reference (seed 2) that measures its noise\n"
+        "  --timing-frames N      steady-state frames timed per setting, after two warm-up\n"
+        "                         frames; the median is reported (default 7)\n"
+        "  --out DIR              where eval.csv, eval.json, eval.svg go (default eval-out)\n"
+        "  --cache DIR            reference cache (default DIR-of-out/cache)\n"
+        "  --device INDEX|NAME    Vulkan device\n"
+        "  --default-lighting on|off  light scenes without lights, sky or strong emitters\n"
+        "                         as `probecast render` does (default on)\n"
+        "  --list                 list the suite with each case's expectation\n"
+        "  --dynamic              instead of the suite: a light and an object move in a\n"
+        "                         converged field; reports updates, GPU ms and error at\n"
+        "                         fixed update counts after the change (eval-dynamic.csv)\n"
+        "  --replot DIR           redraw DIR/eval.svg and the table from DIR/eval.csv\n"
+        "\n"
+        "Settings (the daemon's, as GET and PATCH /v1/settings name them; a list of up to %u\n"
+        "values is swept, each combination a row):\n",
         EVAL_LIST_MAX);
     eval_args a;
     eval_defaults(&a);
@@ -122,8 +123,10 @@ static bool parse_families(const char *s, unsigned *out)
         for (unsigned k = 0; k < 3; k++)
             if (strlen(names[k]) == len && strncmp(names[k], p, len) == 0) bit = 1u << k;
         if (!bit) {
-            fprintf(stderr, "probecast eval: --materials: unknown family '%.*s' (lambert, gltf, "
-                            "metal)\n", (int)len, p);
+            fprintf(stderr,
+                    "probecast eval: --materials: unknown family '%.*s' (lambert, gltf, "
+                    "metal)\n",
+                    (int)len, p);
             return false;
         }
         *out |= bit;
@@ -163,17 +166,13 @@ static int parse(int argc, char **argv, eval_args *a)
 {
     eval_defaults(a);
     for (int i = 1; i < argc; i++) {
-        const char *o = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        const char *o = argv[i], *v = NULL;
         bool takes = strcmp(o, "--help") && strcmp(o, "-h") && strcmp(o, "--list") &&
                      strcmp(o, "--no-noise-floor") && strcmp(o, "--dynamic");
-        if (takes && !v) {
-            fprintf(stderr, "probecast eval: %s needs a value\n", o);
-            return 2;
-        }
+        if (takes && !(v = srv_arg_value("probecast eval", argc, argv, &i))) return 2;
         const srv_setting_info *d = srv_setting_by_flag(o, SRV_CLI_EVAL);
         if (d) {
             if (!parse_setting(d, v, a)) return 2;
-            i++;
         } else if (strcmp(o, "--help") == 0 || strcmp(o, "-h") == 0) {
             eval_usage(stdout);
             return 0;
@@ -184,33 +183,29 @@ static int parse(int argc, char **argv, eval_args *a)
         } else if (strcmp(o, "--no-noise-floor") == 0) {
             a->noise_floor = false;
         } else if (strcmp(o, "--cases") == 0) {
-            a->cases = v, i++;
+            a->cases = v;
         } else if (strcmp(o, "--materials") == 0) {
             if (!parse_families(v, &a->families)) return 2;
-            i++;
         } else if (strcmp(o, "--replot") == 0) {
-            a->replot = v, i++;
+            a->replot = v;
         } else if (strcmp(o, "--out") == 0) {
-            a->out_dir = v, i++;
+            a->out_dir = v;
         } else if (strcmp(o, "--cache") == 0) {
-            a->cache_dir = v, i++;
+            a->cache_dir = v;
         } else if (strcmp(o, "--device") == 0) {
-            a->device = v, i++;
+            a->device = v;
         } else if (strcmp(o, "--default-lighting") == 0) {
             if (strcmp(v, "on") != 0 && strcmp(v, "off") != 0) {
                 fprintf(stderr, "probecast eval: --default-lighting expects on or off\n");
                 return 2;
             }
-            a->no_default_lighting = strcmp(v, "off") == 0, i++;
+            a->no_default_lighting = strcmp(v, "off") == 0;
         } else if (strcmp(o, "--ref-spp") == 0) {
             if (!srv_arg_uint(o, v, 1, 1u << 20, &a->ref_spp)) return 2;
-            i++;
         } else if (strcmp(o, "--timing-frames") == 0) {
             if (!srv_arg_uint(o, v, 1, 100, &a->timing_frames)) return 2;
-            i++;
         } else if (strcmp(o, "--updates") == 0) {
             if (!parse_uint_list(o, v, a->updates, &a->nupdates)) return 2;
-            i++;
         } else if (strcmp(o, "--density") == 0) {
             a->ndensity = 0;
             char buf[256];
@@ -224,7 +219,6 @@ static int parse(int argc, char **argv, eval_args *a)
                 }
                 a->ndensity++;
             }
-            i++;
         } else {
             fprintf(stderr, "probecast eval: unknown option '%s' (see --help)\n", o);
             return 2;
@@ -274,8 +268,7 @@ static bool measure_frame(eval_ctx *c, rd_gpu_scene *gs, const rd_view_camera *c
     fs->gi_updates = 1;
     double times[100];
     for (unsigned f = 0; f < a->timing_frames + 2; f++) {
-        if (rd_renderer_render(&c->r, gs, cam, fs, c->err, sizeof c->err) != RD_VK_OK)
-            return false;
+        if (rd_renderer_render(&c->r, gs, cam, fs, c->err, sizeof c->err) != RD_VK_OK) return false;
         if (f >= 2) times[f - 2] = rd_frame_stats_total_ms(&c->r.stats);
     }
     row->gpu_ms = median(times, a->timing_frames);
@@ -328,8 +321,8 @@ static bool run_default(eval_ctx *c, rd_scene *s, rd_gpu_scene *gs, const rd_vie
 {
     const eval_args *a = c->a;
     rd_ddgi_settings gi = {.mode = PC_GI_DDGI, .seed = 1};
-    if (rd_renderer_configure_gi(&c->r, s->bounds_min, s->bounds_max, &gi, c->err,
-                                 sizeof c->err) != RD_VK_OK)
+    if (rd_renderer_configure_gi(&c->r, s->bounds_min, s->bounds_max, &gi, c->err, sizeof c->err) !=
+        RD_VK_OK)
         return false;
     rd_world_set_scene(&c->r.world, gs);
     rd_world_set_environment(&c->r.world, &c->env);
@@ -464,9 +457,9 @@ static bool run_case(eval_ctx *c, const rd_hard_case *hc, unsigned f, eval_row *
             ok = run_setting(c, name, &s, &gs, &cam, &gi, updates, ref, row);
             row->hysteresis = gi.has_hysteresis ? gi.hysteresis : RD_DDGI_DEFAULT_HYSTERESIS;
             if (k >= 1)
-                snprintf(row->config, sizeof row->config, "%s %ux%ux%u r%u u%u h%.2f",
-                         row->mode, row->probes[0], row->probes[1], row->probes[2], row->rays,
-                         row->updates, row->hysteresis);
+                snprintf(row->config, sizeof row->config, "%s %ux%ux%u r%u u%u h%.2f", row->mode,
+                         row->probes[0], row->probes[1], row->probes[2], row->rays, row->updates,
+                         row->hysteresis);
         }
         if (!ok) {
             fprintf(stderr, "\nprobecast eval: %s: %s\n", label, c->err);

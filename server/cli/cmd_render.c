@@ -15,7 +15,7 @@
 #include "renderer/render.h"
 #include "renderer/scene/default_lighting.h"
 
-#define RENDER_WARMUP_MS 500.0   /* --timings renders untimed frames this long first */
+#define RENDER_WARMUP_MS 500.0 /* --timings renders untimed frames this long first */
 
 static void render_usage(FILE *f)
 {
@@ -100,13 +100,9 @@ static int parse(int argc, char **argv, render_args *a)
         if (setting < 0) return 2;
         if (setting > 0) continue;
         const char *o = argv[i];
-        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
+        const char *v = NULL;
 #define NEED_VALUE                                                                                 \
-    if (!v) {                                                                                      \
-        fprintf(stderr, "probecast render: %s needs a value\n", o);                                \
-        return 2;                                                                                  \
-    }                                                                                              \
-    i++;
+    if (!(v = srv_arg_value("probecast render", argc, argv, &i))) return 2;
         if (strcmp(o, "--help") == 0 || strcmp(o, "-h") == 0) {
             render_usage(stdout);
             return 0;
