@@ -152,8 +152,8 @@ static void build_tiny_emitter(rd_scene *s)
 /* A closed room x, z in [-3, 3], y in [0, 3] (single-sided walls facing inward) with a 1.5 x
  * 1.2 m window in the -z wall and a 20 lux sun shining in through it onto the floor; black sky.
  * The probe rays that find the sunlit patch are few and bright: single probes stay noisy
- * however long they update (issue 28). tests/renderer/test_gpu_converge_hard.c writes the same
- * room as glTF. */
+ * however long they update (issue 28). tests/renderer/test_gpu_converge_sun.c writes it
+ * out as glTF. */
 static void build_sun_room(rd_scene *s)
 {
     rd_tri_list t = {0};

@@ -208,7 +208,8 @@ char *gltf_furnace(float base, float emission, float metallic, float roughness)
         /* (u, v) is counter-clockwise seen from +axis: flip the winding for the +side face so
          * every triangle's front faces the centre */
         static const uint16_t ccw[6] = {0, 1, 2, 0, 2, 3}, cw[6] = {0, 2, 1, 0, 3, 2};
-        for (int k = 0; k < 6; k++) idx[6 * f + k] = (uint16_t)(4 * f + (side > 0 ? cw : ccw)[k]);
+        for (int k = 0; k < 6; k++)
+            idx[6 * f + k] = (uint16_t)(4 * f + (side > 0 ? cw : ccw)[k]);
     }
     bin b = {0};
     size_t op = bin_put(&b, pos, sizeof pos), on = bin_put(&b, nrm, sizeof nrm),
@@ -410,74 +411,5 @@ char *gltf_from_scene(const rd_scene *s)
     free(rest), free(cam_list), free(light_ext);
     free(views.p), free(acc.p), free(meshes.p), free(mats.p), free(nodes.p), free(lights.p);
     free(cams.p), free(roots.p), free(b.p);
-    return j;
-}
-
-char *gltf_sun_room(float lux)
-{
-    /* quads: corner, edge a, edge b with a x b pointing into the room */
-    static const float quads[9][9] = {
-        {-3, 0, -3, 0, 3, 0, 0, 0, 6},              /* -x wall */
-        {3, 0, -3, 0, 0, 6, 0, 3, 0},               /* +x wall */
-        {-3, 0, -3, 0, 0, 6, 6, 0, 0},              /* floor */
-        {-3, 3, -3, 6, 0, 0, 0, 0, 6},              /* ceiling */
-        {-3, 0, 3, 0, 3, 0, 6, 0, 0},               /* +z wall */
-        {-3, 0, -3, 2.25f, 0, 0, 0, 3, 0},          /* -z wall: left of the window */
-        {0.75f, 0, -3, 2.25f, 0, 0, 0, 3, 0},       /* right of it */
-        {-0.75f, 0, -3, 1.5f, 0, 0, 0, 1, 0},       /* below it */
-        {-0.75f, 2.2f, -3, 1.5f, 0, 0, 0, 0.8f, 0}, /* above it */
-    };
-    float pos[36 * 3], nrm[36 * 3];
-    uint16_t idx[54];
-    for (int f = 0; f < 9; f++) {
-        const float *o = quads[f], *a = o + 3, *b = o + 6;
-        float n[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-                      a[0] * b[1] - a[1] * b[0]};
-        float len = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        for (int k = 0; k < 4; k++) /* o, o + a, o + a + b, o + b */
-            for (int c = 0; c < 3; c++) {
-                pos[3 * (4 * f + k) + c] =
-                    o[c] + ((k == 1 || k == 2) ? a[c] : 0) + (k >= 2 ? b[c] : 0);
-                nrm[3 * (4 * f + k) + c] = n[c] / len;
-            }
-        static const uint16_t tri[6] = {0, 1, 2, 0, 2, 3};
-        for (int k = 0; k < 6; k++)
-            idx[6 * f + k] = (uint16_t)(4 * f + tri[k]);
-    }
-    bin bn = {0};
-    size_t op = bin_put(&bn, pos, sizeof pos), on = bin_put(&bn, nrm, sizeof nrm),
-           oi = bin_put(&bn, idx, sizeof idx);
-    char *views = test_xprintf("{'buffer':0,'byteOffset':%zu,'byteLength':%zu},"
-                               "{'buffer':0,'byteOffset':%zu,'byteLength':%zu},"
-                               "{'buffer':0,'byteOffset':%zu,'byteLength':%zu}",
-                               op, sizeof pos, on, sizeof nrm, oi, sizeof idx);
-    const char *acc = "{'bufferView':0,'componentType':5126,'count':36,'type':'VEC3',"
-                      "'min':[-3,0,-3],'max':[3,3,3]},"
-                      "{'bufferView':1,'componentType':5126,'count':36,'type':'VEC3'},"
-                      "{'bufferView':2,'componentType':5123,'count':54,'type':'SCALAR'}";
-    const float sun_dir[3] = {0.3f, -0.5f, 1.0f}, cam_fwd[3] = {-0.55f, -0.35f, -0.75f},
-                up[3] = {0, 1, 0}, side[3] = {1, 0, 0};
-    float qs[4], qc[4];
-    look_quat(sun_dir, side, qs);
-    look_quat(cam_fwd, up, qc);
-    char *rest = test_xprintf(
-        "'extensionsUsed':['KHR_lights_punctual'],"
-        "'extensions':{'KHR_lights_punctual':{'lights':[{'type':'directional',"
-        "'color':[1,0.95,0.9],'intensity':%g}]}},"
-        "'materials':[{'pbrMetallicRoughness':{'baseColorFactor':[0.7,0.7,0.7,1],"
-        "'metallicFactor':0,'roughnessFactor':1}}],"
-        "'meshes':[{'primitives':[{'attributes':{'POSITION':0,'NORMAL':1},'indices':2,"
-        "'material':0}]}],"
-        "'cameras':[{'type':'perspective','perspective':{'yfov':1.2217,'znear':0.01}}],"
-        "'nodes':[{'mesh':0},"
-        "{'rotation':[%.9f,%.9f,%.9f,%.9f],'extensions':{'KHR_lights_punctual':{'light':0}}},"
-        "{'camera':0,'translation':[2.5,1.6,2.6],'rotation':[%.9f,%.9f,%.9f,%.9f]}],"
-        "'scenes':[{'nodes':[0,1,2]}],'scene':0",
-        (double)lux, (double)qs[0], (double)qs[1], (double)qs[2], (double)qs[3],
-        (double)qc[0], (double)qc[1], (double)qc[2], (double)qc[3]);
-    char *j = gltf_json(&bn, 0, views, acc, rest);
-    free(views);
-    free(rest);
-    free(bn.p);
     return j;
 }

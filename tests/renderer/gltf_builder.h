@@ -60,11 +60,6 @@ char *png_data_uri(const bin *png);
  * KHR extensions, so the dielectric specular of Appendix B applies), no lights, and a camera at
  * (0, 0, 0.5) looking down -Z. */
 char *gltf_furnace(float base, float emission, float metallic, float roughness);
-/* builtin:hard:sun-room written as glTF: a closed room x, z in [-3, 3], y in [0, 3] of
- * single-sided quads facing inward (base colour 0.7, roughness 1, metallic 0), a 1.5 x 1.2 m
- * window (x in [-0.75, 0.75], y in [1, 2.2]) in the -z wall, a KHR_lights_punctual directional
- * light of `lux` shining along (0.3, -0.5, 1) through it onto the floor, and a camera inside. */
-char *gltf_sun_room(float lux);
 
 /* An rd_scene written as glTF (JSON with the buffer as a data URI): each mesh's triangles as
  * non-indexed primitives, one per material (POSITION and NORMAL, bit for bit), its materials as
