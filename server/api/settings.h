@@ -4,7 +4,7 @@
  * JSON view and the strict JSON patch parser (protocol/openapi.yaml, schema Settings, which
  * tests/server/test_settings_table.c checks against the table), the range checks of a patch,
  * the setting flags of `probecast serve`, `render` and `eval` (its sweeps as lists) with their
- * usage text, and the world/view scope of each setting. Where the renderer has a default or a
+ * usage text (tests/server/test_settings_cli.c), and the world/view scope of each setting. Where the renderer has a default or a
  * limit (renderer/gi/ddgi.h, renderer/view.h), the row names the renderer's constant. Adding a
  * setting is one row here (plus its use and its line in openapi.yaml).
  *
