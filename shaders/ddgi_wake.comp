@@ -2,7 +2,7 @@
 /* DDGI wake events: one thread per probe. A probe inside one of this update's wake boxes
  * (GPU frame; the box is grown by one probe spacing here) wakes: sleeping becomes awake, and
  * its age drops to the event's (so its hysteresis starts low again) and its hold budget starts
- * over (ddgi_blend.comp); an off probe is re-checked in this update. Runs before
+ * over (ddgi_blend.glsl); an off probe is re-checked in this update. Runs before
  * ddgi_select.comp.
  * push: globals. */
 #extension GL_GOOGLE_include_directive : require

@@ -7,7 +7,8 @@
 #include <string.h>
 
 #include "shaders/ddgi_bin.spv.h"
-#include "shaders/ddgi_blend.spv.h"
+#include "shaders/ddgi_blend_distance.spv.h"
+#include "shaders/ddgi_blend_irradiance.spv.h"
 #include "shaders/ddgi_border.spv.h"
 #include "shaders/ddgi_scan.spv.h"
 #include "shaders/ddgi_select.spv.h"
@@ -22,7 +23,10 @@
 static const rd_pipeline_desc pipelines[] = {
     RD_PIPELINE_DESC(rd_ddgi, trace, "probe trace", pc_spv_ddgi_trace, sizeof(pc_push)),
     RD_PIPELINE_DESC(rd_ddgi, shade, "probe shade", pc_spv_ddgi_shade, sizeof(pc_push)),
-    RD_PIPELINE_DESC(rd_ddgi, blend, "probe blend", pc_spv_ddgi_blend, sizeof(pc_push)),
+    RD_PIPELINE_DESC(rd_ddgi, blend_distance, "probe blend distance", pc_spv_ddgi_blend_distance,
+                     sizeof(pc_push)),
+    RD_PIPELINE_DESC(rd_ddgi, blend_irradiance, "probe blend irradiance",
+                     pc_spv_ddgi_blend_irradiance, sizeof(pc_push)),
     RD_PIPELINE_DESC(rd_ddgi, border, "probe borders", pc_spv_ddgi_border, sizeof(pc_push)),
     RD_PIPELINE_DESC(rd_ddgi, select, "probe select", pc_spv_ddgi_select, sizeof(pc_push)),
     RD_PIPELINE_DESC(rd_ddgi, wake, "probe wake", pc_spv_ddgi_wake, sizeof(pc_push)),
@@ -536,12 +540,13 @@ void rd_ddgi_record_update(rd_ddgi *d, rd_cmd *c, rd_timer *timer, VkDeviceAddre
     if (timer) rd_timer_mark(c, timer, "probe shade");
     /* distance first: the irradiance blend re-classifies probes, and both must see the
      * classification the trace used */
-    push.params = (pc_uvec4){1, 0, 0, 0};
-    rd_cmd_dispatch_indirect(c, &d->blend, &push, &d->ctrl, offsetof(pc_ddgi_control, blend_args));
+    push.params = (pc_uvec4){0, 0, 0, 0};
+    rd_cmd_dispatch_indirect(c, &d->blend_distance, &push, &d->ctrl,
+                             offsetof(pc_ddgi_control, blend_args));
     rd_cmd_barrier(c);
     if (timer) rd_timer_mark(c, timer, "blend distance");
-    push.params.x = 0;
-    rd_cmd_dispatch_indirect(c, &d->blend, &push, &d->ctrl, offsetof(pc_ddgi_control, blend_args));
+    rd_cmd_dispatch_indirect(c, &d->blend_irradiance, &push, &d->ctrl,
+                             offsetof(pc_ddgi_control, blend_args));
     rd_cmd_barrier(c);
     if (timer) rd_timer_mark(c, timer, "blend irradiance");
     push.params.x = 0;

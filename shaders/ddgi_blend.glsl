@@ -1,8 +1,10 @@
-#version 460
 /* DDGI probe blend (paper Sec. 4.2, Eq. 1): one workgroup per probe of the update's list, one
- * thread per interior texel of its octahedral tile. params.x selects the atlas: 0 = irradiance
- * (8x8, weights max(0, cos), perceptual encoding x^(1/5)), 1 = distance (16x16, weights cos^50,
- * mean and mean square of min(|t|, max distance)). The distance blend runs first.
+ * thread per interior texel of its octahedral tile. Compiled twice, DDGI_BLEND_IRRADIANCE
+ * selecting the atlas: 1 = irradiance (ddgi_blend_irradiance.comp: 8x8, weights max(0, cos),
+ * perceptual encoding x^(1/5)), 0 = distance (ddgi_blend_distance.comp: 16x16, weights cos^50,
+ * mean and mean square of min(|t|, max distance)); each workgroup is its tile's size (one
+ * program sized for the distance tile left three quarters of the irradiance blend's threads
+ * idle, which lavapipe pays for). The distance blend runs first.
  *
  * Hysteresis is per probe (renderer/gi/ddgi.c says why): h = min(h_max, a / (a + AGE_RAMP)) for
  * the probe's age a. The irradiance blend then measures the probe: the gap between its tile's
@@ -11,12 +13,18 @@
  * ages advance unless the field drifts and the probe still has hold budget. It also classifies
  * the probe: more than params.z back-face hits means it sits inside geometry (off); a probe
  * whose age reached the sleep age falls asleep.
- * push: globals, params.x = atlas. */
-#extension GL_GOOGLE_include_directive : require
+ * push: globals. */
+#ifndef DDGI_BLEND_IRRADIANCE
+#error "ddgi_blend.glsl is the body of ddgi_blend_irradiance.comp and ddgi_blend_distance.comp"
+#endif
 #include "common.glsl"
 #include "ddgi.glsl"
 
+#if DDGI_BLEND_IRRADIANCE
+layout(local_size_x = PC_DDGI_IRR_INTERIOR, local_size_y = PC_DDGI_IRR_INTERIOR) in;
+#else
 layout(local_size_x = PC_DDGI_DIST_INTERIOR, local_size_y = PC_DDGI_DIST_INTERIOR) in;
+#endif
 
 /* the atlas read back after the write (ddgi_blend measures the step the stored value really made;
  * volatile keeps the compiler from folding unpackHalf2x16(packHalf2x16(x)) back into x) */
@@ -33,11 +41,36 @@ shared uint s_backfaces;
 shared vec3 s_lum[TEXELS]; /* per irradiance texel, encoded luminance: x stored before the
                               blend (< 0: never written), y fresh, z the gap the blend closed */
 
+/* cos^50 falls below 1.5e-5 beyond 37 degrees: the distance blend leaves out the rays farther
+ * than that from its texel */
+#define DIST_MIN_COS 0.8
+
+/* The rays [x, y) that can lie within acos(min_cos) of direction d: the ray set is spherical
+ * Fibonacci (ddgi.glsl fibonacci_dir), whose ray i has z = 1 - (2i + 1) / n before the update's
+ * rotation, so the rays within an angle a of d form one run of indices, those whose polar angle
+ * is within a of d's in the set's own frame. Rays outside the run have cos <= min_cos, which the
+ * blend's weights give nothing: skipping them changes no sum. A margin of 1e-3 radians covers the
+ * rounding of the rotation and normalisation. Most of a probe's rays are left out (about half of
+ * the distance blend's, a quarter of the irradiance blend's), and on lavapipe the loop over them,
+ * not its body, was what these passes cost. */
+uvec2 ray_band(pc_ddgi_volume vol, vec3 d, float min_cos, uint n)
+{
+    /* R^T d: ddgi_ray_dir applies R, whose rows are vol.rotation[0..2] */
+    vec3 l = vol.rotation[0].xyz * d.x + vol.rotation[1].xyz * d.y + vol.rotation[2].xyz * d.z;
+    float theta = acos(clamp(l.z / max(length(l), 1e-6), -1.0, 1.0));
+    float a = acos(min_cos) + 1e-3;
+    float z_hi = cos(max(theta - a, 0.0)), z_lo = cos(min(theta + a, PC_PI));
+    /* z = 1 - (2i + 1) / n  <=>  i = ((1 - z) n - 1) / 2 */
+    float fn = float(n);
+    float i_lo = floor(((1.0 - z_hi) * fn - 1.0) * 0.5), i_hi = ceil(((1.0 - z_lo) * fn - 1.0) * 0.5);
+    return uvec2(uint(clamp(i_lo, 0.0, fn)), uint(clamp(i_hi + 1.0, 0.0, fn)));
+}
+
 void main()
 {
     pc_globals g = load_globals();
     pc_ddgi_volume vol = g.ddgi;
-    bool irradiance = pc.params.x == 0u;
+    const bool irradiance = DDGI_BLEND_IRRADIANCE != 0;
     uint interior = irradiance ? PC_DDGI_IRR_INTERIOR : PC_DDGI_DIST_INTERIOR;
     uint side = interior + 2u;
     uint probe = ddgi_listed_probe(vol, gl_WorkGroupID.x);
@@ -54,6 +87,7 @@ void main()
     if (lid == 0u) s_backfaces = 0u;
     if (lid < TEXELS) s_lum[lid] = vec3(0.0);
 
+    uvec2 band = ray_band(vol, texel_dir, irradiance ? 0.0 : DIST_MIN_COS, n);
     vec3 sum = vec3(0.0);
     float wsum = 0.0;
     float max_dist = vol.origin.w;
@@ -68,8 +102,10 @@ void main()
         if (irradiance && lid == 0u) /* classification: back faces among the traced rays */
             for (uint i = 0u; i < count; i++) s_backfaces += s_ray[i].w < 0.0 ? 1u : 0u;
         if (!mine) continue;
+        uint first = clamp(band.x, base, base + count) - base;
+        uint last = clamp(band.y, base, base + count) - base;
         if (irradiance) {
-            for (uint i = 0u; i < count; i++) {
+            for (uint i = first; i < last; i++) {
                 vec4 r = s_ray[i];
                 float w = max(0.0, dot(texel_dir, s_dir[i]));
                 if (r.w < 0.0) continue; /* back face: no irradiance */
@@ -77,11 +113,9 @@ void main()
                 wsum += w;
             }
         } else {
-            /* cos^50 falls below 1.5e-5 beyond 37 degrees: those rays are skipped (most of
-             * them, which on lavapipe made this the costliest pass of an update) */
-            for (uint i = 0u; i < count; i++) {
+            for (uint i = first; i < last; i++) {
                 float c = dot(texel_dir, s_dir[i]);
-                if (c <= 0.8) continue;
+                if (c <= DIST_MIN_COS) continue;
                 float w = pow(c, 50.0);
                 float d = min(abs(s_ray[i].w), max_dist);
                 sum.xy += vec2(d, d * d) * w;
