@@ -21,17 +21,23 @@
 #define STBI_ONLY_PNG
 #define STBI_ONLY_JPEG
 #define STBI_NO_STDIO
-#define STBI_MAX_DIMENSIONS 16384
 #include <stb/stb_image.h>
 #pragma GCC diagnostic pop
 
 enum { MAX_IMAGE_DIM = 16384 };
-static const uint64_t kMaxImagePixels = 1ull << 26;  /* 256 MiB as RGBA8 */
-static const uint64_t kMaxDecodedBytes = 2ull << 30; /* all images together */
+static const uint64_t kMaxImagePixels = 1ull << 26; /* 256 MiB as RGBA8 */
 
-unsigned char *rd_gltf_decode_image(uint64_t *decoded_bytes, const unsigned char *bytes,
-                                    size_t size, int *w, int *h, rd_gltf_result *code, char *why,
-                                    size_t whylen)
+uint64_t rd_gltf_decode_limit(uint64_t bytes_in)
+{
+    uint64_t scaled = bytes_in > RD_GLTF_DECODE_MAX / RD_GLTF_DECODE_RATIO
+                          ? RD_GLTF_DECODE_MAX
+                          : bytes_in * RD_GLTF_DECODE_RATIO;
+    return scaled < RD_GLTF_DECODE_FLOOR ? RD_GLTF_DECODE_FLOOR : scaled;
+}
+
+unsigned char *rd_gltf_decode_image(uint64_t *decoded_bytes, uint64_t bytes_in,
+                                    const unsigned char *bytes, size_t size, int *w, int *h,
+                                    rd_gltf_result *code, char *why, size_t whylen)
 {
     int comp = 0;
     *code = RD_GLTF_ERR_INVALID;
@@ -48,14 +54,22 @@ unsigned char *rd_gltf_decode_image(uint64_t *decoded_bytes, const unsigned char
     if (*w < 1 || *h < 1 || *w > MAX_IMAGE_DIM || *h > MAX_IMAGE_DIM ||
         (uint64_t)*w * (uint64_t)*h > kMaxImagePixels) {
         *code = RD_GLTF_ERR_TOO_LARGE;
-        snprintf(why, whylen, "its size %dx%d exceeds the limit", *w, *h);
+        snprintf(why, whylen,
+                 "its size %dx%d exceeds the limit (%d pixels a side, %llu Mi pixels in all)", *w,
+                 *h, MAX_IMAGE_DIM, (unsigned long long)(kMaxImagePixels >> 20));
         return NULL;
     }
     uint64_t bytes_out = (uint64_t)*w * (uint64_t)*h * 4;
-    if (*decoded_bytes + bytes_out > kMaxDecodedBytes) {
+    uint64_t limit = rd_gltf_decode_limit(bytes_in);
+    if (*decoded_bytes + bytes_out > limit) {
         *code = RD_GLTF_ERR_TOO_LARGE;
-        snprintf(why, whylen, "all decoded images together would exceed %llu MiB",
-                 (unsigned long long)(kMaxDecodedBytes >> 20));
+        snprintf(why, whylen,
+                 "its size %dx%d would take all decoded images together past %llu MiB (a file "
+                 "of %llu KiB may decode to %u times its size, at least %llu MiB, at most %llu "
+                 "MiB)",
+                 *w, *h, (unsigned long long)(limit >> 20), (unsigned long long)(bytes_in >> 10),
+                 RD_GLTF_DECODE_RATIO, (unsigned long long)(RD_GLTF_DECODE_FLOOR >> 20),
+                 (unsigned long long)(RD_GLTF_DECODE_MAX >> 20));
         return NULL;
     }
     int w2 = 0, h2 = 0;

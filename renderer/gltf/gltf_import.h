@@ -216,6 +216,8 @@ typedef struct rd_gltf_files {
     char *prefix; /* base with exactly one trailing '/' */
     size_t prefix_len;
     char last_refusal[256]; /* why the last path was refused ("" : none yet) */
+    uint64_t bytes_in;      /* the file's own bytes, plus each external file read (buffers,
+                               images): what rd_gltf_decode_limit scales with */
 } rd_gltf_files;
 
 /* base_dir NULL: no file may be opened; "" means ".". dispose frees what init allocated. */
@@ -257,10 +259,11 @@ rd_gltf_read_status rd_gltf_read_file_malloc(const char *path, uint64_t max_size
 
 /* Decodes a PNG or JPEG image to w x h 8-bit RGBA pixels (malloc'd; the caller frees) and adds
  * their size to *decoded_bytes, or returns NULL with *code and why saying what is wrong (too
- * large, alone or with the images decoded before, or not decodable). */
-unsigned char *rd_gltf_decode_image(uint64_t *decoded_bytes, const unsigned char *bytes,
-                                    size_t size, int *w, int *h, rd_gltf_result *code, char *why,
-                                    size_t whylen);
+ * large alone, or with the images decoded before beyond rd_gltf_decode_limit(bytes_in), or not
+ * decodable). Sizes are read from the image's header before anything is decoded. */
+unsigned char *rd_gltf_decode_image(uint64_t *decoded_bytes, uint64_t bytes_in,
+                                    const unsigned char *bytes, size_t size, int *w, int *h,
+                                    rd_gltf_result *code, char *why, size_t whylen);
 
 /* The loader's final message: len bytes of msg as one readable line in err (at most errlen - 1
  * bytes, control and non-ASCII bytes replaced with '?'; messages may end up in JSON or logs). */

@@ -129,6 +129,7 @@ bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::strin
         snprintf(files->last_refusal, sizeof files->last_refusal, "%s", why);
         return false;
     }
+    files->bytes_in += out->size();
     return true;
 }
 
@@ -173,8 +174,9 @@ bool image_callback(tinygltf::Image *image, const int index, std::string *, std:
     int w = 0, h = 0;
     image->image.clear();
     unsigned char *px = size < 0 ? nullptr
-                                 : rd_gltf_decode_image(&ctx->decoded_bytes, bytes, (size_t)size,
-                                                        &w, &h, &f.code, why, sizeof why);
+                                 : rd_gltf_decode_image(&ctx->decoded_bytes, ctx->files.bytes_in,
+                                                        bytes, (size_t)size, &w, &h, &f.code, why,
+                                                        sizeof why);
     if (!px) {
         if (size >= 0) f.why = why;
         ctx->image_failures[index] = f;
@@ -604,6 +606,7 @@ void load(const unsigned char *data, size_t size, const char *base_dir, const rd
 {
     if (size > 0xffffffffull) fail(RD_GLTF_ERR_TOO_LARGE, "the file is larger than 4 GiB");
     LoadContext ctx(base_dir);
+    ctx.files.bytes_in = size;
     rd_gltf_container c;
     char cerr[256];
     check(rd_gltf_parse_container(data, size, &c, cerr, sizeof cerr), cerr);

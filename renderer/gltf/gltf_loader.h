@@ -42,6 +42,21 @@ typedef enum rd_gltf_result {
 /* Static name of a result ("ok", "io error", ...). */
 const char *rd_gltf_strerror(rd_gltf_result r);
 
+/* Bounded memory for every input (issue 30): the images of one file may decode to at most
+ * RD_GLTF_DECODE_RATIO times the bytes it brings (the file and the external files it reads),
+ * never less than RD_GLTF_DECODE_FLOOR (a small file may still carry a 4096 x 4096 flat-colour
+ * texture, 64 MiB as RGBA, several times over) and never more than RD_GLTF_DECODE_MAX. Real
+ * models stay far below the ratio: JPEG and PNG textures decode to 4-30 times their size
+ * (DamagedHelmet: 3.7 MB of images, 80 MiB decoded). The file cannot ask for more memory by
+ * compressing well: a 200 KiB PNG of 16384 x 4096 one-colour pixels (256 MiB decoded) is refused
+ * unless the file around it is 4 MiB. Each image alone is also held to 16384 pixels a side and
+ * 2^26 pixels. */
+#define RD_GLTF_DECODE_FLOOR ((uint64_t)256 << 20)
+#define RD_GLTF_DECODE_RATIO 64u
+#define RD_GLTF_DECODE_MAX ((uint64_t)2 << 30)
+/* The decoded bytes a file of bytes_in bytes (the file and the external files read) may take. */
+uint64_t rd_gltf_decode_limit(uint64_t bytes_in);
+
 typedef struct rd_gltf_options {
     uint64_t max_triangles; /* over all meshes the scene uses; 0 = 50 million */
 } rd_gltf_options;

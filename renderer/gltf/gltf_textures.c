@@ -57,7 +57,9 @@ static rd_gltf_result read_external(rd_gltf_conv *c, const rd_gltf_doc_image *im
                             "%s could not be loaded: %s", what, why);
     }
     rd_gltf_result code;
-    *rgba = rd_gltf_decode_image(c->decoded_bytes, file, size, w, h, &code, why, sizeof why);
+    c->files->bytes_in += size;
+    *rgba = rd_gltf_decode_image(c->decoded_bytes, c->files->bytes_in, file, size, w, h, &code,
+                                 why, sizeof why);
     free(file);
     if (!*rgba)
         return rd_gltf_fail(c->err, c->errlen, code, "%s could not be decoded: %s", what, why);

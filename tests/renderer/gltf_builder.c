@@ -413,3 +413,48 @@ char *gltf_from_scene(const rd_scene *s)
     free(cams.p), free(roots.p), free(b.p);
     return j;
 }
+
+uint8_t *make_glb_images(const bin *pngs, int count, size_t pad, size_t *size)
+{
+    bin b;
+    std_bin(&b, NULL);
+    for (size_t i = 0; i < pad; i++) bin_raw(&b, "", 1);
+    const int copies = count;
+    size_t cap = 256;
+    for (int i = 0; i < count; i++) cap += pngs[i].n * 4 / 3 + 512;
+    char *rest = malloc(cap);
+    if (!rest) abort();
+    size_t n = 0;
+#define PUT(...) n += (size_t)snprintf(rest + n, cap - n, __VA_ARGS__)
+    PUT("'images':[");
+    for (int i = 0; i < count; i++) {
+        char *uri = png_data_uri(&pngs[i]);
+        PUT("%s{'uri':'%s'}", i ? "," : "", uri);
+        free(uri);
+    }
+    PUT("],'textures':[");
+    for (int i = 0; i < copies; i++) PUT("%s{'source':%d}", i ? "," : "", i);
+    PUT("],'materials':[");
+    for (int i = 0; i < copies; i++)
+        PUT("%s{'pbrMetallicRoughness':{'baseColorTexture':{'index':%d}}}", i ? "," : "", i);
+    PUT("],'meshes':[{'primitives':[");
+    for (int i = 0; i < copies; i++)
+        PUT("%s{'attributes':{'POSITION':0,'NORMAL':1,'TEXCOORD_0':2},'indices':3,'material':%d}",
+            i ? "," : "", i);
+    PUT("]}],'nodes':[{'mesh':0}],'scenes':[{'nodes':[0]}]");
+#undef PUT
+    char *j = gltf_json(&b, 1, NULL, NULL, rest);
+    uint8_t *glb = make_glb(j, &b, size);
+    free(j);
+    free(rest);
+    free(b.p);
+    return glb;
+}
+
+void make_flat_png(bin *out, int w, int h)
+{
+    uint8_t *px = calloc((size_t)w * (size_t)h, 1);
+    if (!px) abort();
+    make_png(out, w, h, PNG_COLOR_TYPE_GRAY, 8, px);
+    free(px);
+}

@@ -53,6 +53,12 @@ uint8_t *make_glb(const char *json, const bin *b, size_t *size);
 void make_png(bin *out, int w, int h, int color_type, int depth, const uint8_t *px);
 /* "data:image/png;base64,..." */
 char *png_data_uri(const bin *png);
+/* A .glb of one quad drawn count times, each with a material of its own whose base colour is a
+ * texture from an image of its own: pngs[i] as a data URI. pad zero bytes follow the standard
+ * buffer in the BIN chunk (unused; they make the file that much larger). */
+uint8_t *make_glb_images(const bin *pngs, int count, size_t pad, size_t *size);
+/* A w x h one-channel 8-bit PNG of zeros: a few KiB for 64 Mi pixels. */
+void make_flat_png(bin *out, int w, int h);
 
 /* ---- whole test scenes ---- */
 /* A closed furnace written as glTF: the inside of the cube [-1, 1]^3 (inward normals, single

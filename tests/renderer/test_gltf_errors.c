@@ -250,9 +250,60 @@ static void test_mutations(void)
     free(png.p);
 }
 
+/* Bounded memory (issue 30): image sizes are read from their headers before anything is decoded;
+ * one image may not pass 16384 pixels a side or 2^26 pixels, and all images of a file together
+ * may decode to rd_gltf_decode_limit of the bytes it brings. */
+static void test_image_limits(void)
+{
+    CHECK(rd_gltf_decode_limit(0) == RD_GLTF_DECODE_FLOOR);
+    CHECK(rd_gltf_decode_limit(4u << 20) == RD_GLTF_DECODE_FLOOR);
+    CHECK(rd_gltf_decode_limit(8u << 20) == (uint64_t)RD_GLTF_DECODE_RATIO * (8u << 20));
+    CHECK(rd_gltf_decode_limit((uint64_t)1 << 40) == RD_GLTF_DECODE_MAX);
+    rd_scene s;
+    size_t size;
+    struct {
+        int w, h;
+        const char *needle;
+    } alone[] = {{16385, 1, "its size 16385x1 exceeds the limit"},
+                 {8193, 8192, "its size 8193x8192 exceeds the limit"}};
+    for (size_t i = 0; i < sizeof alone / sizeof alone[0]; i++) {
+        bin png;
+        make_flat_png(&png, alone[i].w, alone[i].h);
+        uint8_t *glb = make_glb_images(&png, 1, 0, &size);
+        rd_gltf_result r = rd_gltf_load_memory(glb, size, NULL, NULL, &s, gltf_err, sizeof gltf_err);
+        CHECKF(r == RD_GLTF_ERR_TOO_LARGE && strstr(gltf_err, alone[i].needle), "%s: %s",
+               rd_gltf_strerror(r), gltf_err);
+        CHECK(scene_is_empty(&s));
+        free(glb);
+        free(png.p);
+    }
+    /* a 16384 x 4096 image (256 MiB as RGBA, the floor) from a file of a few hundred KiB, then a
+     * 2 x 2 one: the first decodes, the second is refused from its header; 4 MiB more of file
+     * make room for it */
+    bin png[2];
+    make_flat_png(&png[0], 16384, 4096);
+    make_flat_png(&png[1], 2, 2);
+    uint8_t *glb = make_glb_images(png, 2, 0, &size);
+    rd_gltf_result r = rd_gltf_load_memory(glb, size, NULL, NULL, &s, gltf_err, sizeof gltf_err);
+    CHECKF(r == RD_GLTF_ERR_TOO_LARGE && strstr(gltf_err, "image 1") &&
+               strstr(gltf_err, "past 256 MiB"),
+           "%zu-byte file: %s: %s", size, rd_gltf_strerror(r), gltf_err);
+    CHECK(scene_is_empty(&s));
+    printf("a 16384x4096 image and a 2x2 one in %zu KiB: %s\n", size >> 10, gltf_err);
+    free(glb);
+    glb = make_glb_images(png, 2, (size_t)4 << 20, &size);
+    r = rd_gltf_load_memory(glb, size, NULL, NULL, &s, gltf_err, sizeof gltf_err);
+    CHECKF(r == RD_GLTF_OK, "%zu-byte file: %s: %s", size, rd_gltf_strerror(r), gltf_err);
+    if (r == RD_GLTF_OK) rd_scene_destroy(&s);
+    free(glb);
+    free(png[0].p);
+    free(png[1].p);
+}
+
 int main(void)
 {
     test_errors();
+    test_image_limits();
     test_mutations();
     return test_finish();
 }
