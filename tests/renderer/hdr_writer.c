@@ -102,3 +102,24 @@ pc_bytes pc_hdr_write(unsigned w, unsigned h, bool rle, void (*tex)(unsigned, un
     free(line);
     return b;
 }
+
+pc_bytes pc_hdr_constant(unsigned w, unsigned h, const uint8_t rgbe[4])
+{
+    pc_bytes b = {0};
+    char head[96];
+    int k =
+        snprintf(head, sizeof head, "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y %u +X %u\n", h, w);
+    pc_bytes_put(&b, head, (size_t)k);
+    for (unsigned y = 0; y < h; y++) {
+        uint8_t mark[4] = {2, 2, (uint8_t)(w >> 8), (uint8_t)(w & 255)};
+        pc_bytes_put(&b, mark, 4);
+        for (int c = 0; c < 4; c++)
+            for (unsigned x = 0; x < w;) {
+                unsigned run = w - x < 127 ? w - x : 127;
+                uint8_t r[2] = {(uint8_t)(128 + run), rgbe[c]};
+                pc_bytes_put(&b, r, 2);
+                x += run;
+            }
+    }
+    return b;
+}

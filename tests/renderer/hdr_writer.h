@@ -23,6 +23,10 @@ void pc_rgbe(const float c[3], uint8_t out[4]);
  * bytes are written as runs, others as literals). The caller frees .d. */
 pc_bytes pc_hdr_write(unsigned w, unsigned h, bool rle, void (*tex)(unsigned, unsigned, float[3]));
 
+/* A run-length .hdr of w x h texels of one colour: a few bytes a scanline whatever its width
+ * (runs of 127). The caller frees .d. */
+pc_bytes pc_hdr_constant(unsigned w, unsigned h, const uint8_t rgbe[4]);
+
 /* Texels of many magnitudes and full mantissas, whose 2x2 sums round: a reduction that adds
  * in another order than rd_env_image_limit gives other floats. */
 void pc_noisy_texel(unsigned x, unsigned y, float c[3]);

@@ -186,28 +186,6 @@ static size_t peak_rss(void)
     return (size_t)ru.ru_maxrss * 1024;
 }
 
-/* A run-length .hdr of one colour: a few KiB a scanline whatever its width. */
-static pc_bytes make_constant_hdr(unsigned w, unsigned h, const uint8_t rgbe[4])
-{
-    pc_bytes b = {0};
-    char head[96];
-    int k =
-        snprintf(head, sizeof head, "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y %u +X %u\n", h, w);
-    pc_bytes_put(&b, head, (size_t)k);
-    for (unsigned y = 0; y < h; y++) {
-        uint8_t mark[4] = {2, 2, (uint8_t)(w >> 8), (uint8_t)(w & 255)};
-        pc_bytes_put(&b, mark, 4);
-        for (int c = 0; c < 4; c++)
-            for (unsigned x = 0; x < w;) {
-                unsigned run = w - x < 127 ? w - x : 127;
-                uint8_t r[2] = {(uint8_t)(128 + run), rgbe[c]};
-                pc_bytes_put(&b, r, 2);
-                x += run;
-            }
-    }
-    return b;
-}
-
 /* The largest files a client may send hold tens of MiB while they are read, not the GiB their
  * texels would take at full size (which the readers once allocated before reducing). Counted
  * twice: by the readers' own tally (their buffers, the image, OpenEXRCore's allocations) and
@@ -259,7 +237,7 @@ static void test_bounded_memory(void)
      * 4095 x 682 (33 MiB) */
     const unsigned hw = 0x7fff, hh = (unsigned)(RD_ENV_MAX_BYTES / 12 / hw);
     const uint8_t rgbe[4] = {128, 64, 32, 129}; /* 1, 0.5, 0.25 (+ half a step) */
-    pc_bytes b = make_constant_hdr(hw, hh, rgbe);
+    pc_bytes b = pc_hdr_constant(hw, hh, rgbe);
     rss0 = peak_rss();
     ok = rd_env_image_parse(b.d, b.n, &desc, &img, err, sizeof err);
     rss1 = peak_rss();
