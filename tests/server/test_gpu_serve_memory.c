@@ -4,7 +4,8 @@
  *   the file (rd_gltf_decode_limit: 256 MiB for a small file) is spent, the daemon's peak
  *   resident memory grows by a bounded amount, and the scene it had keeps rendering;
  * - a 4 MiB run-length .hdr environment of 8000 x 8000 texels (732 MiB as float RGB) is reduced
- *   while it is decoded: accepted, at 4000 x 4000, for a bounded growth of the peak;
+ *   while it is decoded and uploaded in slices: accepted, at 4000 x 4000, for a bounded growth
+ *   of the peak;
  * - more concurrent uploads than the daemon takes get 503 with Retry-After, and uploads are
  *   taken again once the others end.
  * The peak is read from /proc/PID/status (VmHWM), reset to the current resident set before each
@@ -114,10 +115,11 @@ static void test_huge_environment(void)
     CHECKF(pc_json_number(env, "width") == 4000 && pc_json_number(env, "height") == 4000,
            "environment_image %s", env ? cJSON_PrintUnformatted(env) : "(none)");
     cJSON_Delete(scene);
-    /* the reduced image (183 MiB as float RGB) is held by the reader, the world's copy and, on
-     * lavapipe, the GPU texture and its staging buffer in host memory: four copies at most,
-     * where the full-size image alone would be 732 MiB */
-    CHECKF(before > 0 && grew_mib < 4 * 183 + 64, "peak RSS grew by %llu MiB", grew_mib);
+    /* the reduced image's floats (183 MiB, kept for the irradiance projection) and, on
+     * lavapipe, its GPU copy as half RGBA (122 MiB) in host memory, converted and uploaded in
+     * 4 MiB slices; the full-size image alone would be 732 MiB. +315 MiB measured (+495 when
+     * the whole image was converted to halves before the upload) */
+    CHECKF(before > 0 && grew_mib < 448, "peak RSS grew by %llu MiB", grew_mib);
     free(hdr.d);
 }
 
