@@ -61,6 +61,8 @@ static void serve_usage(FILE *f)
         "  --max-viewers N        stream connections in all (default 100)\n"
         "  --max-viewers-per-ip N stream connections per client address (default 64)\n"
         "  --http-connections N   HTTP connections in all (default 64; 16 per address)\n"
+        "  --idle-timeout S       seconds an HTTP connection may send nothing before it is\n"
+        "                         closed (default 30)\n"
         "  --max-views N          views in all: the default view and one per viewer of stream\n"
         "                         protocol 2 (default 64, at most 256)\n"
         "  --max-total-pixels N   pixels over all views (default 16777216)\n"
@@ -85,7 +87,8 @@ typedef struct serve_args {
     const char *tls_cert, *tls_key; /* both or neither */
     char public_names[1024];        /* --public-name values, comma-separated */
     size_t max_upload;
-    unsigned max_viewers, max_per_ip, http_connections, encoders, max_views, max_total_pixels;
+    unsigned max_viewers, max_per_ip, http_connections, idle_timeout, encoders, max_views,
+        max_total_pixels;
     srv_settings settings;
     unsigned given; /* SRV_SET_* chosen on the command line */
     int animate;    /* -1 default, 0 off, 1 on */
@@ -222,6 +225,8 @@ static int parse(int argc, char **argv, serve_args *a)
             NEED_VALUE if (!srv_arg_uint(o, v, 256, 4000000000u, &a->max_total_pixels)) return 2;
         } else if (IS("--http-connections")) {
             NEED_VALUE if (!srv_arg_uint(o, v, 1, 10000, &a->http_connections)) return 2;
+        } else if (IS("--idle-timeout")) {
+            NEED_VALUE if (!srv_arg_uint(o, v, 1, 3600, &a->idle_timeout)) return 2;
         } else if (IS("--encoders")) {
             NEED_VALUE if (!srv_arg_uint(o, v, 1, 64, &a->encoders)) return 2;
         } else if (IS("--jpeg")) {
@@ -471,6 +476,7 @@ int srv_serve(int argc, char **argv)
         .public_names = a.public_names,
         .max_upload = a.max_upload,
         .max_connections = a.http_connections,
+        .timeout_s = a.idle_timeout,
         .stream_viewers = a.max_viewers ? a.max_viewers : 100,
         .stream_per_ip = a.max_per_ip ? a.max_per_ip : 64,
         .web_dir = a.web_dir ? a.web_dir : find_resource("web", web_buf, sizeof web_buf),

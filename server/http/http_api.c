@@ -412,6 +412,9 @@ srv_http *srv_http_start(const srv_http_config *cfg, char *err, size_t errlen)
     snprintf(h->token, sizeof h->token, "%s", cfg->token ? cfg->token : "");
     h->start_ms = srv_mono_ms();
     pthread_mutex_init(&h->counters_mu, NULL);
+    /* per address: plain requests and the relayed stream together */
+    srv_admission_init(&h->admission, h->cfg.max_connections + h->cfg.stream_viewers,
+                       h->cfg.max_per_ip + h->cfg.stream_per_ip);
     h->relay_wake = -1;
     if (!srv_http_stream_init(h)) {
         snprintf(err, errlen, "cannot create an eventfd");
@@ -463,13 +466,14 @@ srv_http *srv_http_start(const srv_http_config *cfg, char *err, size_t errlen)
     start_message = mhd_said;
     start_message_len = sizeof mhd_said;
     h->daemon = MHD_start_daemon(
-        flags, (uint16_t)cfg->port, NULL, NULL, on_request, h, MHD_OPTION_EXTERNAL_LOGGER, mhd_log,
+        flags, (uint16_t)cfg->port, srv_admission_accept, &h->admission, on_request, h,
+        MHD_OPTION_EXTERNAL_LOGGER, mhd_log,
         NULL, /* first, as MHD asks */
         MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&ss, MHD_OPTION_CONNECTION_LIMIT,
         (unsigned int)(h->cfg.max_connections + h->cfg.stream_viewers),
-        MHD_OPTION_PER_IP_CONNECTION_LIMIT,
-        (unsigned int)(h->cfg.max_per_ip + h->cfg.stream_per_ip), MHD_OPTION_CONNECTION_TIMEOUT,
-        (unsigned int)h->cfg.timeout_s, MHD_OPTION_NOTIFY_COMPLETED, on_completed, h,
+        MHD_OPTION_NOTIFY_CONNECTION, srv_admission_notify, &h->admission,
+        MHD_OPTION_CONNECTION_TIMEOUT, (unsigned int)h->cfg.timeout_s,
+        MHD_OPTION_NOTIFY_COMPLETED, on_completed, h,
         MHD_OPTION_ARRAY, tls ? tls_options : tls_end, MHD_OPTION_END);
     start_message = NULL;
     if (!h->daemon) {
@@ -510,6 +514,7 @@ void srv_http_stop(srv_http *h)
     if (h->daemon) MHD_stop_daemon(h->daemon);
     h->daemon = NULL;
     srv_http_stream_destroy(h);
+    srv_admission_destroy(&h->admission);
     free(h->openapi);
     pthread_mutex_destroy(&h->counters_mu);
     free(h);

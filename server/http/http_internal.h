@@ -6,6 +6,7 @@
 #ifndef SRV_HTTP_INTERNAL_H
 #define SRV_HTTP_INTERNAL_H
 
+#include "server/http/http_admission.h"
 #include <limits.h>
 #include <microhttpd.h>
 #include <pthread.h>
@@ -52,6 +53,7 @@ struct srv_http {
     unsigned port;
     double start_ms;
     atomic_uint uploads_in_progress;
+    srv_admission admission; /* connections per client address (http_admission.h) */
     pthread_mutex_t counters_mu;
     srv_http_counters counters;
     /* relays of /v1/stream connections (http_stream.c) */

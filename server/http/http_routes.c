@@ -51,6 +51,9 @@ void srv_http_stats_snapshot(srv_http *h, srv_stats_snapshot *s)
     pthread_mutex_lock(&h->counters_mu);
     s->http = h->counters;
     pthread_mutex_unlock(&h->counters_mu);
+    srv_admission_counts(&h->admission, &s->http.connections_open, &s->http.connections_refused);
+    s->http.connections_per_ip = h->admission.per_ip;
+    s->http.idle_timeout_s = h->cfg.timeout_s;
     s->uptime_s = (srv_mono_ms() - h->start_ms) / 1000.0;
 }
 

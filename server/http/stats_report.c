@@ -111,6 +111,7 @@ cJSON *srv_stats_json(const srv_stats_snapshot *s)
     cJSON_AddNumberToObject(st, "connections_rejected", (double)s->stream.connections_rejected);
     cJSON_AddNumberToObject(st, "connections_closed_for_abuse",
                             (double)s->stream.connections_closed_for_abuse);
+    cJSON_AddNumberToObject(st, "inputs_dropped", (double)s->stream.inputs_dropped);
     cJSON *h = cJSON_AddObjectToObject(j, "http");
     cJSON_AddNumberToObject(h, "requests", (double)s->http.requests);
     cJSON_AddNumberToObject(h, "status_2xx", (double)s->http.status_2xx);
@@ -118,6 +119,10 @@ cJSON *srv_stats_json(const srv_stats_snapshot *s)
     cJSON_AddNumberToObject(h, "status_5xx", (double)s->http.status_5xx);
     cJSON_AddNumberToObject(h, "uploads_accepted", (double)s->http.uploads_accepted);
     cJSON_AddNumberToObject(h, "uploads_rejected", (double)s->http.uploads_rejected);
+    cJSON_AddNumberToObject(h, "connections_open", s->http.connections_open);
+    cJSON_AddNumberToObject(h, "connections_refused", (double)s->http.connections_refused);
+    cJSON_AddNumberToObject(h, "connections_per_ip", s->http.connections_per_ip);
+    cJSON_AddNumberToObject(h, "idle_timeout_s", s->http.idle_timeout_s);
     cJSON *scene = cJSON_AddObjectToObject(j, "scene");
     cJSON_AddNumberToObject(scene, "generation", (double)r->scene_generation);
     cJSON_AddNumberToObject(scene, "triangles", (double)r->triangles);
@@ -233,6 +238,13 @@ char *srv_stats_prometheus(const srv_stats_snapshot *s)
            "Frames viewers skipped (latest frame wins).", (double)s->stream.frames_skipped);
     metric(&t, "probecast_stream_lag_seconds_max", "gauge", "Largest smoothed viewer lag.",
            s->stream.lag_ms_max / 1000.0);
+    metric(&t, "probecast_stream_inputs_dropped_total", "counter",
+           "Viewer messages the render queue had no room for.", (double)s->stream.inputs_dropped);
+    metric(&t, "probecast_http_connections", "gauge", "HTTP connections open (stream included).",
+           s->http.connections_open);
+    metric(&t, "probecast_http_connections_refused_total", "counter",
+           "HTTP connections refused for their address's limit.",
+           (double)s->http.connections_refused);
     put(&t,
         "# HELP probecast_http_responses_total HTTP responses by status class.\n"
         "# TYPE probecast_http_responses_total counter\n"

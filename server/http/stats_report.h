@@ -12,6 +12,10 @@
 
 typedef struct srv_http_counters {
     uint64_t requests, status_2xx, status_4xx, status_5xx, uploads_accepted, uploads_rejected;
+    /* connections (http_admission.h): open now, refused for their address's limit, the limit
+     * per address and the idle timeout */
+    uint64_t connections_refused;
+    unsigned connections_open, connections_per_ip, idle_timeout_s;
 } srv_http_counters;
 
 typedef struct srv_stats_snapshot {

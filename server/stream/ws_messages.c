@@ -131,6 +131,21 @@ void srv_ws_release_followers(srv_ws_stream *ws, uint32_t view)
 
 /* ---- viewer messages ---------------------------------------------------------------------- */
 
+/* Posts a viewer's command to the render loop; a full queue drops it (a flood of messages
+ * outruns the renderer: the newest input wins anyway), counted in inputs_dropped. Returns the
+ * ticket, 0 when dropped. */
+static uint64_t post_input(srv_ws_stream *ws, viewer *v, srv_cmd *c)
+{
+    uint64_t ticket = srv_render_post(ws->cfg.loop, c);
+    if (!ticket) {
+        srv_debug("stream", "viewer %u: input dropped (render queue full)", v->id);
+        pthread_mutex_lock(&ws->stats_mu);
+        ws->stats.inputs_dropped++;
+        pthread_mutex_unlock(&ws->stats_mu);
+    }
+    return ticket;
+}
+
 void srv_ws_handle_message(srv_ws_stream *ws, viewer *v)
 {
     srv_viewer_msg m;
@@ -148,11 +163,8 @@ void srv_ws_handle_message(srv_ws_stream *ws, viewer *v)
         srv_cmd *c = srv_cmd_new(SRV_CMD_VIEWER_CAMERA);
         c->view = v->own_view;
         c->camera = m.camera;
-        uint64_t ticket = srv_render_post(ws->cfg.loop, c);
-        if (!ticket) {
-            srv_debug("stream", "viewer %u: input dropped (render queue full)", v->id);
-            break;
-        }
+        uint64_t ticket = post_input(ws, v, c);
+        if (!ticket) break;
         if (v->input_count == INPUT_RING) {
             v->evicted_seq = v->inputs[v->input_head].seq; /* the oldest is overwritten */
             v->input_count--;
@@ -169,7 +181,7 @@ void srv_ws_handle_message(srv_ws_stream *ws, viewer *v)
         c->view = v->own_view;
         c->width = (unsigned)lroundf(m.width * m.dpr);
         c->height = (unsigned)lroundf(m.height * m.dpr);
-        srv_render_post(ws->cfg.loop, c);
+        post_input(ws, v, c);
         break;
     }
     case SRV_VIEWER_FOLLOW: {
@@ -197,7 +209,7 @@ void srv_ws_handle_message(srv_ws_stream *ws, viewer *v)
         c->view = v->own_view;
         c->jpeg_cap = m.jpeg_cap;
         c->fps_cap = m.fps_cap;
-        srv_render_post(ws->cfg.loop, c);
+        post_input(ws, v, c);
         break;
     }
     case SRV_VIEWER_ACK: {

@@ -43,6 +43,7 @@ typedef struct srv_ws_stats {
     unsigned viewers;
     uint64_t frames_sent, frames_skipped, bytes_sent, messages_received, events_sent;
     uint64_t connections_rejected, connections_closed_for_abuse;
+    uint64_t inputs_dropped; /* viewer messages the render queue had no room for (a flood) */
     double bandwidth_bps; /* bits per second sent over the last second */
     double lag_ms_max;    /* largest smoothed viewer lag */
     srv_latency_summary latency; /* input-to-frame stages (server/render/latency_stats.h) */
