@@ -5,14 +5,15 @@
 # daemon with a self-signed certificate), systemd's systemd-analyze (verifies
 # deploy/systemd/probecast.service; no running systemd needed), and Node.js with
 # tests/deploy/lint/node_modules (Redocly CLI and kubernetes-models, pinned by its
-# package-lock.json; they lint protocol/openapi.yaml and deploy/kubernetes). Idempotent.
+# package-lock.json; they lint protocol/openapi.yaml and deploy/kubernetes), and clang with
+# its libFuzzer runtime (tests/fuzz/run.sh). Idempotent.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 lint="$root/tests/deploy/lint"
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 
-packages=(python3 python3-prometheus-client nginx-light openssl systemd)
+packages=(python3 python3-prometheus-client nginx-light openssl systemd clang libclang-rt-14-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # All tests: install dependencies, build twice (-Werror release, and AddressSanitizer +
-# UndefinedBehaviorSanitizer), and run every test once: the sanitizer build runs all but the
-# slow ones, the release build those (labels converging and rerun). GPU tests run on lavapipe
-# with the Vulkan validation layer on.
+# UndefinedBehaviorSanitizer), fuzz every parser of untrusted bytes for 30 s each (clang,
+# tests/fuzz/run.sh), and run every test once: the sanitizer build runs all but the slow ones,
+# the release build those (labels converging and rerun). GPU tests run on lavapipe with the
+# Vulkan validation layer on.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 "$root/deploy/install-deps.sh"
@@ -16,6 +17,8 @@ echo "== build (AddressSanitizer + UBSan) =="
 BUILD_DIR="$root/build-asan" "$root/deploy/build.sh" -DPROBECAST_WERROR=ON -DPROBECAST_SANITIZE=ON
 
 status=0
+echo "== fuzzing (clang, libFuzzer, ${FUZZ_SECONDS:-30} s per harness) =="
+FUZZ_BUILD_DIR="$root/build-fuzz" "$root/tests/fuzz/run.sh" || status=1
 echo "== tests: sanitizer build =="
 # tests that converge probe fields (hundreds of lavapipe updates, 10-20x slower under ASan, see
 # tests/CMakeLists.txt) and the serve tests rerun on the GPU JPEG path (label rerun) run once, in
