@@ -23,6 +23,17 @@
 
 static pc_daemon d = {.token = "s3cret"};
 
+/* The bounds hold for the release build. Under AddressSanitizer the daemon's memory has the
+ * sanitizer's shadow (an eighth of what is touched) and redzones on top, and freed blocks wait in
+ * its quarantine before they are reused: main turns the quarantine off for the daemon, and the
+ * bounds get half again (CI measured +681 and +456 MiB there with the quarantine on, against
+ * +514 and +315 in the release build). */
+#if defined(__SANITIZE_ADDRESS__)
+#define SANITIZER_SLACK 1.5
+#else
+#define SANITIZER_SLACK 1.0
+#endif
+
 /* VmHWM (peak resident set) of the daemon in KiB; 0 when unreadable. */
 static unsigned long long peak_kib(void)
 {
@@ -82,7 +93,7 @@ static void test_huge_images(void)
     printf("%zu KiB file of %d images of 16384x4096: HTTP %d, daemon peak RSS %llu -> %llu MiB "
            "(+%llu)\n",
            size >> 10, COPIES, status, before >> 10, after >> 10, grew_mib);
-    CHECKF(before > 0 && grew_mib < 1024, "peak RSS grew by %llu MiB", grew_mib);
+    CHECKF(before > 0 && grew_mib < 1024 * SANITIZER_SLACK, "peak RSS grew by %llu MiB", grew_mib);
     pc_http_response_free(&r);
     free(glb);
     free(png[0].p);
@@ -119,7 +130,7 @@ static void test_huge_environment(void)
      * lavapipe, its GPU copy as half RGBA (122 MiB) in host memory, converted and uploaded in
      * 4 MiB slices; the full-size image alone would be 732 MiB. +315 MiB measured (+495 when
      * the whole image was converted to halves before the upload) */
-    CHECKF(before > 0 && grew_mib < 448, "peak RSS grew by %llu MiB", grew_mib);
+    CHECKF(before > 0 && grew_mib < 448 * SANITIZER_SLACK, "peak RSS grew by %llu MiB", grew_mib);
     free(hdr.d);
 }
 
@@ -171,6 +182,12 @@ static void test_concurrent_uploads(void)
 
 int main(void)
 {
+#if defined(__SANITIZE_ADDRESS__)
+    static char asan[512];
+    const char *given = getenv("ASAN_OPTIONS");
+    snprintf(asan, sizeof asan, "%s%squarantine_size_mb=0", given ? given : "", given ? ":" : "");
+    setenv("ASAN_OPTIONS", asan, 1); /* the daemon inherits it */
+#endif
     const char *args[] = {"--no-animate", "--width", "32",    "--height",  "32",
                           "--probes",     "2,2,2",   "--rays", "16",       "--token",
                           "s3cret",       "--scene", "builtin:cornell", NULL};
