@@ -96,6 +96,30 @@ bool pc_daemon_start(pc_daemon *d, const char *const *args)
     return ok;
 }
 
+unsigned long long pc_daemon_memory_kib(const pc_daemon *d, const char *field)
+{
+    char path[64], line[256], format[64];
+    snprintf(path, sizeof path, "/proc/%d/status", (int)d->pid);
+    snprintf(format, sizeof format, "%s: %%llu kB", field);
+    FILE *f = fopen(path, "r");
+    unsigned long long kib = 0;
+    if (!f) return 0;
+    while (fgets(line, sizeof line, f))
+        if (sscanf(line, format, &kib) == 1) break;
+    fclose(f);
+    return kib;
+}
+
+bool pc_daemon_reset_peak(const pc_daemon *d)
+{
+    char path[64];
+    snprintf(path, sizeof path, "/proc/%d/clear_refs", (int)d->pid);
+    FILE *f = fopen(path, "w");
+    if (!f) return false;
+    bool ok = fputs("5", f) >= 0;
+    return fclose(f) == 0 && ok;
+}
+
 bool pc_daemon_alive(pc_daemon *d)
 {
     if (d->pid <= 0) return false;

@@ -27,6 +27,12 @@ bool pc_daemon_start(pc_daemon *d, const char *const *args);
 int pc_daemon_stop(pc_daemon *d);
 /* True while the process runs. */
 bool pc_daemon_alive(pc_daemon *d);
+/* A line of the daemon's /proc/PID/status in KiB: "VmRSS" (resident now) or "VmHWM" (its peak);
+ * 0 when unreadable. */
+unsigned long long pc_daemon_memory_kib(const pc_daemon *d, const char *field);
+/* Resets the daemon's VmHWM to its current resident set (/proc/PID/clear_refs, Linux 4.0 and
+ * later); false when refused. */
+bool pc_daemon_reset_peak(const pc_daemon *d);
 
 /* HTTP call with the daemon's token (auth = true) and a JSON body (may be NULL). */
 int pc_api(pc_daemon *d, const char *method, const char *path, const char *json, bool auth,

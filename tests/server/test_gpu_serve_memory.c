@@ -34,31 +34,6 @@ static pc_daemon d = {.token = "s3cret"};
 #define SANITIZER_SLACK 1.0
 #endif
 
-/* VmHWM (peak resident set) of the daemon in KiB; 0 when unreadable. */
-static unsigned long long peak_kib(void)
-{
-    char path[64], line[256];
-    snprintf(path, sizeof path, "/proc/%d/status", (int)d.pid);
-    FILE *f = fopen(path, "r");
-    unsigned long long kib = 0;
-    if (!f) return 0;
-    while (fgets(line, sizeof line, f))
-        if (sscanf(line, "VmHWM: %llu kB", &kib) == 1) break;
-    fclose(f);
-    return kib;
-}
-
-/* Resets VmHWM to the current resident set (Linux 4.0 and later); false when refused. */
-static bool reset_peak(void)
-{
-    char path[64];
-    snprintf(path, sizeof path, "/proc/%d/clear_refs", (int)d.pid);
-    FILE *f = fopen(path, "w");
-    if (!f) return false;
-    bool ok = fputs("5", f) >= 0;
-    return fclose(f) == 0 && ok;
-}
-
 static int put_scene(const void *body, size_t len, pc_http_response *r)
 {
     return pc_http("127.0.0.1", d.http_port, "PUT", "/v1/scene",
@@ -77,11 +52,11 @@ static void test_huge_images(void)
     }
     size_t size;
     uint8_t *glb = make_glb_images(png, COPIES, 0, &size);
-    CHECK(reset_peak());
-    unsigned long long before = peak_kib();
+    CHECK(pc_daemon_reset_peak(&d));
+    unsigned long long before = pc_daemon_memory_kib(&d, "VmHWM");
     pc_http_response r;
     int status = put_scene(glb, size, &r);
-    unsigned long long after = peak_kib();
+    unsigned long long after = pc_daemon_memory_kib(&d, "VmHWM");
     CHECKF(status == 422 && r.body && strstr(r.body, "past 256 MiB"),
            "%zu-byte file of %d 16384x4096 images: %d %s", size, COPIES, status,
            r.body ? r.body : "");
@@ -109,13 +84,13 @@ static void test_huge_environment(void)
 {
     const uint8_t grey[4] = {128, 128, 128, 128}; /* 0.5 */
     pc_bytes hdr = pc_hdr_constant(8000, 8000, grey);
-    CHECK(reset_peak());
-    unsigned long long before = peak_kib();
+    CHECK(pc_daemon_reset_peak(&d));
+    unsigned long long before = pc_daemon_memory_kib(&d, "VmHWM");
     pc_http_response r;
     int status = pc_http("127.0.0.1", d.http_port, "PUT", "/v1/environment",
                          "Authorization: Bearer s3cret\r\nContent-Type: image/vnd.radiance\r\n",
                          hdr.d, hdr.n, &r, 300000);
-    unsigned long long after = peak_kib();
+    unsigned long long after = pc_daemon_memory_kib(&d, "VmHWM");
     CHECKF(status == 200, "8000x8000 .hdr: %d %s", status, r.body ? r.body : "");
     pc_http_response_free(&r);
     unsigned long long grew_mib = after > before ? (after - before) >> 10 : 0;
