@@ -74,14 +74,13 @@ void main()
     uint interior = irradiance ? PC_DDGI_IRR_INTERIOR : PC_DDGI_DIST_INTERIOR;
     uint side = interior + 2u;
     uint probe = ddgi_listed_probe(vol, gl_WorkGroupID.x);
-    uvec2 t = gl_LocalInvocationID.xy;
-    bool mine = all(lessThan(t, uvec2(interior)));
-    vec3 texel_dir = oct_texel_dir(min(t, uvec2(interior - 1u)), interior);
+    uvec2 t = gl_LocalInvocationID.xy; /* the workgroup is the tile's interior */
+    vec3 texel_dir = oct_texel_dir(t, interior);
     /* the classification as the trace saw it (the irradiance blend updates it last) */
     bool probe_on = ddgi_probe_active(vol, probe);
     if (!probe_on && !irradiance) return; /* whole workgroup: an off probe keeps its atlas */
     uint n = probe_on ? vol.counts.w : min(vol.counts.w, PC_DDGI_INACTIVE_RAYS);
-    if (!probe_on) mine = false;         /* only re-classified, not blended */
+    bool mine = probe_on; /* an off probe is only re-classified, not blended */
     uint lid = gl_LocalInvocationIndex;
     uint threads = gl_WorkGroupSize.x * gl_WorkGroupSize.y;
     if (lid == 0u) s_backfaces = 0u;

@@ -549,7 +549,6 @@ void rd_ddgi_record_update(rd_ddgi *d, rd_cmd *c, rd_timer *timer, VkDeviceAddre
                              offsetof(pc_ddgi_control, blend_args));
     rd_cmd_barrier(c);
     if (timer) rd_timer_mark(c, timer, "blend irradiance");
-    push.params.x = 0;
     rd_cmd_dispatch_indirect(c, &d->border, &push, &d->ctrl,
                              offsetof(pc_ddgi_control, border_args));
     push.params.x = 1;
