@@ -97,42 +97,86 @@ static uint16_t half_of(float f)
     return (uint16_t)(h > 0x7bff ? 0x7bff : h);
 }
 
-rd_vk_result rd_world_set_environment_image(rd_world *w, rd_env_image *img, char *err,
-                                            size_t errlen)
+rd_vk_result rd_world_stage_environment(rd_vk *vk, rd_env_staged *out, rd_env_image *img,
+                                        char *err, size_t errlen)
+{
+    memset(out, 0, sizeof *out);
+    rd_env_image im = *img;
+    memset(img, 0, sizeof *img);
+    if (!im.width || !im.rgb) {
+        rd_env_image_free(&im);
+        return RD_VK_OK;
+    }
+    rd_env_image_limit(&im, RD_ENV_IMAGE_MAX_WIDTH);
+    size_t n = (size_t)im.width * im.height;
+    out->vk = vk;
+    out->width = im.width;
+    out->height = im.height;
+    /* the texels as halves straight into staging memory (written once, in order: it may be
+     * write-combined); then the floats shrunk for the SH and freed, and only then the GPU
+     * buffer (host memory too on lavapipe): the peak is the floats and the halves */
+    rd_buffer upload;
+    rd_vk_result res = rd_buffer_create(vk, &upload, n * 8, RD_MEMORY_UPLOAD, err, errlen);
+    if (res == RD_VK_OK) {
+        uint16_t *texels = upload.mapped;
+        for (size_t i = 0; i < n; i++) {
+            const float *rgb = im.rgb + i * 3;
+            uint16_t t[4] = {half_of(rgb[0]), half_of(rgb[1]), half_of(rgb[2]), 0x3c00 /* 1 */};
+            memcpy(texels + i * 4, t, sizeof t);
+        }
+        rd_env_image_shrunk(&im, RD_WORLD_SH_WIDTH, &out->sh_image);
+        rd_env_image_free(&im);
+        res = rd_buffer_create(vk, &out->texels, n * 8, RD_MEMORY_DEVICE, err, errlen);
+        if (res == RD_VK_OK)
+            res = rd_staging_adopt(&out->copies, &upload, &out->texels, 0, err, errlen);
+        rd_buffer_destroy(vk, &upload); /* when not adopted */
+    }
+    rd_env_image_free(&im);
+    if (res != RD_VK_OK) rd_env_staged_destroy(out);
+    return res;
+}
+
+void rd_env_staged_destroy(rd_env_staged *st)
+{
+    if (!st->vk) return;
+    rd_staging_release(st->vk, &st->copies);
+    rd_buffer_destroy(st->vk, &st->texels);
+    rd_env_image_free(&st->sh_image);
+    memset(st, 0, sizeof *st);
+}
+
+rd_vk_result rd_world_set_environment_staged(rd_world *w, rd_env_staged *st, char *err,
+                                             size_t errlen)
 {
     /* in-flight frames may still sample the image that is replaced here (a rare event) */
-    if (w->env_texels.buffer) vkDeviceWaitIdle(w->vk->device);
+    if (w->env_texels.buffer) rd_vk_wait_idle(w->vk);
     rd_buffer_destroy(w->vk, &w->env_texels);
     rd_env_image_free(&w->image);
+    w->env_width = w->env_height = 0;
     rd_vk_result res = RD_VK_OK;
-    if (img && img->width && img->rgb) {
-        w->image = *img;
-        memset(img, 0, sizeof *img);
-        rd_env_image_limit(&w->image, RD_ENV_IMAGE_MAX_WIDTH);
-        size_t n = (size_t)w->image.width * w->image.height;
-        res = rd_buffer_create(w->vk, &w->env_texels, n * 8, RD_MEMORY_DEVICE, err, errlen);
-        /* converted to half RGBA and uploaded a slice at a time: the whole image as halves
-         * beside its floats was 122 MiB more at the peak of a 4096 x 4096 upload */
-        enum { SLICE_TEXELS = 1 << 19 }; /* 4 MiB of halves */
-        uint16_t *texels = malloc((n < SLICE_TEXELS ? n : SLICE_TEXELS) * 4 * sizeof *texels);
-        if (!texels) abort();
-        for (size_t start = 0; start < n && res == RD_VK_OK; start += SLICE_TEXELS) {
-            size_t count = n - start < SLICE_TEXELS ? n - start : SLICE_TEXELS;
-            for (size_t i = 0; i < count; i++) {
-                const float *rgb = w->image.rgb + (start + i) * 3;
-                for (int c = 0; c < 3; c++) texels[i * 4 + (size_t)c] = half_of(rgb[c]);
-                texels[i * 4 + 3] = 0x3c00; /* 1.0 */
-            }
-            res = rd_buffer_upload(w->vk, &w->env_texels, start * 8, texels, count * 8, err,
-                                   errlen);
-        }
-        free(texels);
-        if (res != RD_VK_OK) {
-            rd_buffer_destroy(w->vk, &w->env_texels);
-            rd_env_image_free(&w->image);
+    if (st && st->vk) {
+        res = rd_staging_submit_wait(w->vk, &st->copies, err, errlen);
+        if (res == RD_VK_OK) {
+            w->env_texels = st->texels;
+            w->image = st->sh_image;
+            w->env_width = st->width;
+            w->env_height = st->height;
+            memset(st, 0, sizeof *st);
+        } else {
+            rd_env_staged_destroy(st);
         }
     }
     rd_world_set_environment(w, &w->env); /* the image (or its absence) and its irradiance */
+    return res;
+}
+
+rd_vk_result rd_world_set_environment_image(rd_world *w, rd_env_image *img, char *err,
+                                            size_t errlen)
+{
+    rd_env_staged st;
+    rd_vk_result res = rd_world_stage_environment(w->vk, &st, img, err, errlen);
+    if (res == RD_VK_OK) return rd_world_set_environment_staged(w, &st, err, errlen);
+    rd_world_set_environment_staged(w, NULL, err, errlen); /* as before: the old image goes */
     return res;
 }
 
@@ -177,7 +221,11 @@ void rd_world_fill_globals(const rd_world *w, pc_globals *g)
         }
     }
     rd_env_fill_gpu(&w->env, w->env_sh, &g->env);
-    if (g->env.mode == PC_ENV_IMAGE) g->env.image = w->env_texels.address;
+    if (g->env.mode == PC_ENV_IMAGE) { /* the texels' size, not that of the floats kept */
+        g->env.image = w->env_texels.address;
+        g->env.width = w->env_width;
+        g->env.height = w->env_height;
+    }
     g->brdf_albedo = w->brdf_albedo.address;
 }
 

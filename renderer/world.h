@@ -25,13 +25,15 @@ typedef struct rd_world {
     /* the environment seen by primary misses, probe rays and path tracing (environment.h);
      * env.image points at image, the world's own copy of an HDR image (none: width 0) */
     rd_environment env;
-    rd_env_image image;
-    rd_buffer env_texels;        /* the image as RGBA16F, on the GPU; only while there is one */
-    float env_sh[9][3];          /* irradiance SH9 of env */
-    rd_ddgi ddgi;                /* the probe field; valid when gi */
-    rd_shadow_maps shadow_maps;  /* the lights' distance maps its updates shade hits with */
-    bool gi;                     /* a GI mode other than off is configured */
-    rd_buffer globals, counters; /* for probe updates */
+    rd_env_image image;             /* the image's floats, reduced to RD_WORLD_SH_WIDTH: what the
+                                       irradiance projection reads (none: width 0) */
+    rd_buffer env_texels;           /* the image as RGBA16F, on the GPU; only while there is one */
+    uint32_t env_width, env_height; /* of env_texels (0 without an image) */
+    float env_sh[9][3];             /* irradiance SH9 of env */
+    rd_ddgi ddgi;                   /* the probe field; valid when gi */
+    rd_shadow_maps shadow_maps;     /* the lights' distance maps its updates shade hits with */
+    bool gi;                        /* a GI mode other than off is configured */
+    rd_buffer globals, counters;    /* for probe updates */
     /* the specular albedo table (shaders/brdf_albedo.comp, computed once at creation) that
      * camera pixels, probe-ray hits and reflection hits reflect with (brdf_hit_albedo) */
     rd_buffer brdf_albedo;
@@ -58,9 +60,35 @@ void rd_world_set_sky(rd_world *w, const float sky[3]);
  * e->sky uniformly). Recomputes the irradiance SH. */
 void rd_world_set_environment(rd_world *w, const rd_environment *e);
 /* Takes *img (left zeroed; width 0 drops the image), reduces it to RD_ENV_IMAGE_MAX_WIDTH and
- * uploads it. */
+ * uploads it (rd_world_stage_environment, then rd_world_set_environment_staged). */
 rd_vk_result rd_world_set_environment_image(rd_world *w, rd_env_image *img, char *err,
                                             size_t errlen);
+
+/* The width of the floats a world keeps of its environment image for the irradiance SH (SH9
+ * has no detail finer than ~30 degrees; 512 texels are 0.7 degrees). */
+#define RD_WORLD_SH_WIDTH 512u
+
+/* An environment image made ready for the GPU on any thread, so that the render thread only
+ * swaps it in (a 4096 x 2048 image's conversion and upload held every view's frame for 200 ms
+ * on lavapipe, 100 ms on an H100): reduced to RD_ENV_IMAGE_MAX_WIDTH, converted to half RGBA
+ * into staging memory (vk_staging.h), its floats shrunk to RD_WORLD_SH_WIDTH, its GPU buffer
+ * created. */
+typedef struct rd_env_staged {
+    rd_vk *vk;              /* NULL: nothing staged */
+    uint32_t width, height; /* of the texels */
+    rd_env_image sh_image;  /* becomes rd_world.image */
+    rd_buffer texels;       /* becomes rd_world.env_texels once the copies ran */
+    rd_staging copies;
+} rd_env_staged;
+/* Stages *img (taken: left zeroed). Any thread; nothing is submitted. */
+rd_vk_result rd_world_stage_environment(rd_vk *vk, rd_env_staged *out, rd_env_image *img, char *err,
+                                        size_t errlen);
+/* On the queue's thread: waits for frames in flight (they may sample the image replaced), runs
+ * st's copies and makes it the world's image; st NULL (or empty) drops the image. st is left
+ * empty either way. */
+rd_vk_result rd_world_set_environment_staged(rd_world *w, rd_env_staged *st, char *err,
+                                             size_t errlen);
+void rd_env_staged_destroy(rd_env_staged *st); /* idempotent; any thread */
 /* Configures global illumination for scene bounds (PC_GI_OFF frees the probe field) and resets
  * the field. RD_VK_ERR_UNSUPPORTED with a message for settings out of range; gi is then off. */
 rd_vk_result rd_world_configure_gi(rd_world *w, const float bmin[3], const float bmax[3],

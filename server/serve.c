@@ -500,18 +500,20 @@ int srv_serve(int argc, char **argv)
     /* the saved environment image comes back before the first frame (the render loop takes
      * commands in order) */
     if (saved.environment) {
-        rd_env_image *img = calloc(1, sizeof *img);
-        if (!img) abort();
+        rd_env_image img;
         char env_err[256];
-        if (rd_env_image_parse(saved.environment, saved.environment_size, NULL, img, env_err,
-                               sizeof env_err)) {
-            srv_cmd *c = srv_cmd_new(SRV_CMD_SET_ENVIRONMENT);
-            c->env_image = img;
+        srv_cmd *c = srv_cmd_new(SRV_CMD_SET_ENVIRONMENT);
+        c->env_staged = calloc(1, sizeof *c->env_staged);
+        if (!c->env_staged) abort();
+        if (rd_env_image_parse(saved.environment, saved.environment_size, NULL, &img, env_err,
+                               sizeof env_err) &&
+            rd_world_stage_environment(srv_render_loop_device(loop), c->env_staged, &img, env_err,
+                                       sizeof env_err) == RD_VK_OK) {
             srv_render_post(loop, c); /* takes c */
         } else {
             srv_warn("serve", "the saved environment image no longer loads (%s); not used",
                      env_err);
-            free(img);
+            srv_cmd_unref(c);
         }
     }
     if (!srv_render_loop_start(loop) || !srv_ws_start(ws)) {

@@ -31,12 +31,13 @@ static pc_vec4 v4(const float *p, float w)
     return (pc_vec4){p[0], p[1], p[2], w};
 }
 
-/* Creates a device buffer holding size bytes of data. */
-static rd_vk_result upload_new(rd_vk *vk, rd_buffer *b, const void *data, size_t size, char *err,
-                               size_t errlen)
+/* Creates a device buffer holding size bytes of data: written at once without st, staged into
+ * st with it (vk_staging.h). */
+static rd_vk_result upload_new(rd_vk *vk, rd_staging *st, rd_buffer *b, const void *data,
+                               size_t size, char *err, size_t errlen)
 {
     rd_vk_result r = rd_buffer_create(vk, b, size, RD_MEMORY_DEVICE, err, errlen);
-    if (r == RD_VK_OK && size > 0) r = rd_buffer_upload(vk, b, 0, data, size, err, errlen);
+    if (r == RD_VK_OK && size > 0) r = rd_upload(vk, st, b, 0, data, size, err, errlen);
     return r;
 }
 
@@ -116,8 +117,8 @@ static bool material_glossy(const pc_material *g)
     return specular && (g->pbr.y < PC_REFLECT_MAX_ROUGHNESS || g->tex2.x != 0);
 }
 
-static rd_vk_result upload_materials(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, char *err,
-                                     size_t errlen)
+static rd_vk_result upload_materials(rd_vk *vk, rd_staging *st, rd_gpu_scene *gs, const rd_scene *s,
+                                     char *err, size_t errlen)
 {
     pc_material *mats = xcalloc(s->material_count, sizeof *mats);
     gs->glossy = false;
@@ -126,7 +127,7 @@ static rd_vk_result upload_materials(rd_vk *vk, rd_gpu_scene *gs, const rd_scene
         gs->glossy |= material_glossy(&mats[i]);
     }
     rd_vk_result r =
-        upload_new(vk, &gs->materials, mats, sizeof *mats * s->material_count, err, errlen);
+        upload_new(vk, st, &gs->materials, mats, sizeof *mats * s->material_count, err, errlen);
     free(mats);
     if (r != RD_VK_OK) return r;
 
@@ -144,7 +145,7 @@ static rd_vk_result upload_materials(rd_vk *vk, rd_gpu_scene *gs, const rd_scene
                  (unsigned long long)texel_total);
         return RD_VK_ERR_OUT_OF_MEMORY;
     }
-    r = upload_new(vk, &gs->textures, texs, sizeof *texs * s->texture_count, err, errlen);
+    r = upload_new(vk, st, &gs->textures, texs, sizeof *texs * s->texture_count, err, errlen);
     free(texs);
     if (r != RD_VK_OK) return r;
     r = rd_buffer_create(vk, &gs->texels, texel_total * 4, RD_MEMORY_DEVICE, err, errlen);
@@ -152,7 +153,7 @@ static rd_vk_result upload_materials(rd_vk *vk, rd_gpu_scene *gs, const rd_scene
     for (uint32_t i = 0; r == RD_VK_OK && i < s->texture_count; i++) {
         const rd_texture *t = &s->textures[i];
         uint64_t bytes = (uint64_t)t->width * t->height * 4;
-        if (bytes) r = rd_buffer_upload(vk, &gs->texels, offset, t->rgba, bytes, err, errlen);
+        if (bytes) r = rd_upload(vk, st, &gs->texels, offset, t->rgba, bytes, err, errlen);
         offset += bytes;
     }
     return r;
@@ -309,9 +310,10 @@ void rd_gpu_scene_prep_destroy(rd_gpu_scene_prep *p)
     memset(p, 0, sizeof *p);
 }
 
-/* Uploads the prepared BLAS nodes and triangle records; the mesh tables move into gs. */
-static rd_vk_result upload_blas(rd_vk *vk, rd_gpu_scene *gs, rd_gpu_scene_prep *p, char *err,
-                                size_t errlen)
+/* Uploads (or stages) the prepared BLAS nodes and triangle records, then frees them; the mesh
+ * tables move into gs. */
+static rd_vk_result upload_blas(rd_vk *vk, rd_staging *st, rd_gpu_scene *gs, rd_gpu_scene_prep *p,
+                                char *err, size_t errlen)
 {
     gs->mesh_count = p->mesh_count;
     gs->mesh_root = p->mesh_root;
@@ -327,13 +329,21 @@ static rd_vk_result upload_blas(rd_vk *vk, rd_gpu_scene *gs, rd_gpu_scene_prep *
     gs->blas_node_count = p->node_count;
     gs->max_blas_depth = p->max_blas_depth;
     double t1 = now_ms();
-    rd_vk_result r =
-        upload_new(vk, &gs->blas_nodes, p->nodes, sizeof *p->nodes * p->node_count, err, errlen);
+    rd_vk_result r = upload_new(vk, st, &gs->blas_nodes, p->nodes, sizeof *p->nodes * p->node_count,
+                                err, errlen);
     if (r == RD_VK_OK)
-        r = upload_new(vk, &gs->tris, p->tris, sizeof *p->tris * p->tri_count, err, errlen);
+        r = upload_new(vk, st, &gs->tris, p->tris, sizeof *p->tris * p->tri_count, err, errlen);
     if (r == RD_VK_OK)
-        r = upload_new(vk, &gs->tri_attrs, p->attrs, sizeof *p->attrs * p->tri_count, err, errlen);
+        r = upload_new(vk, st, &gs->tri_attrs, p->attrs, sizeof *p->attrs * p->tri_count, err,
+                       errlen);
     gs->upload_ms += now_ms() - t1;
+    /* copied (or staged): the host's copies go now, not with the prep, which lowers the peak */
+    free(p->nodes);
+    free(p->tris);
+    free(p->attrs);
+    p->nodes = NULL;
+    p->tris = NULL;
+    p->attrs = NULL;
     return r;
 }
 
@@ -429,8 +439,9 @@ static void log_moves(rd_gpu_scene *gs, const pc_instance *inst, const float *lo
     }
 }
 
-rd_vk_result rd_gpu_scene_update_instances(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
-                                           char *err, size_t errlen)
+/* rd_gpu_scene_update_instances, its buffers written at once without st, staged into st with it */
+static rd_vk_result update_instances(rd_vk *vk, rd_staging *st, rd_gpu_scene *gs, const rd_scene *s,
+                                     char *err, size_t errlen)
 {
     double t0 = now_ms();
     uint32_t n = s->instance_count;
@@ -496,20 +507,27 @@ rd_vk_result rd_gpu_scene_update_instances(rd_vk *vk, rd_gpu_scene *gs, const rd
         gs->instance_capacity = n;
     }
     if (r == RD_VK_OK && n)
-        r = rd_buffer_upload(vk, &gs->instances, 0, inst, sizeof *inst * n, err, errlen);
+        r = rd_upload(vk, st, &gs->instances, 0, inst, sizeof *inst * n, err, errlen);
     if (r == RD_VK_OK)
-        r = rd_buffer_upload(vk, &gs->tlas_nodes, 0, tlas.nodes,
-                             sizeof(pc_bvh_node) * tlas.node_count, err, errlen);
+        r = rd_upload(vk, st, &gs->tlas_nodes, 0, tlas.nodes, sizeof(pc_bvh_node) * tlas.node_count,
+                      err, errlen);
     if (r == RD_VK_OK && n)
-        r = rd_buffer_upload(vk, &gs->tlas_index, 0, tlas.prim_index, sizeof(uint32_t) * n, err,
-                             errlen);
+        r = rd_upload(vk, st, &gs->tlas_index, 0, tlas.prim_index, sizeof(uint32_t) * n, err,
+                      errlen);
     rd_bvh_destroy(&tlas);
     free(inst);
     return r;
 }
 
-rd_vk_result rd_gpu_scene_update_lights(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, char *err,
-                                        size_t errlen)
+rd_vk_result rd_gpu_scene_update_instances(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
+                                           char *err, size_t errlen)
+{
+    return update_instances(vk, NULL, gs, s, err, errlen);
+}
+
+/* rd_gpu_scene_update_lights; a new buffer's contents are staged into st when it is given */
+static rd_vk_result update_lights(rd_vk *vk, rd_staging *st, rd_gpu_scene *gs, const rd_scene *s,
+                                  char *err, size_t errlen)
 {
     uint32_t n = s->light_count;
     bool grow = n > gs->light_capacity || gs->lights.buffer == VK_NULL_HANDLE;
@@ -565,7 +583,7 @@ rd_vk_result rd_gpu_scene_update_lights(rd_vk *vk, rd_gpu_scene *gs, const rd_sc
     rd_vk_result r = RD_VK_OK;
     gs->refs.counts.y = n;
     if (grow) { /* a new buffer: nothing reads it yet */
-        if (n) r = rd_buffer_upload(vk, &gs->lights, 0, lights, sizeof *lights * n, err, errlen);
+        if (n) r = rd_upload(vk, st, &gs->lights, 0, lights, sizeof *lights * n, err, errlen);
         free(lights);
         return r;
     }
@@ -573,6 +591,12 @@ rd_vk_result rd_gpu_scene_update_lights(rd_vk *vk, rd_gpu_scene *gs, const rd_sc
     gs->lights_pending = lights;
     gs->lights_pending_count = n;
     return r;
+}
+
+rd_vk_result rd_gpu_scene_update_lights(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, char *err,
+                                        size_t errlen)
+{
+    return update_lights(vk, NULL, gs, s, err, errlen);
 }
 
 void rd_gpu_scene_record_updates(rd_gpu_scene *gs, rd_cmd *cmd)
@@ -590,7 +614,8 @@ void rd_gpu_scene_record_updates(rd_gpu_scene *gs, rd_cmd *cmd)
     gs->lights_pending_count = 0;
 }
 
-rd_vk_result rd_gpu_scene_upload(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
+/* rd_gpu_scene_upload, or with st its staging half (rd_gpu_scene_stage) */
+static rd_vk_result scene_upload(rd_vk *vk, rd_staging *st, rd_gpu_scene *gs, const rd_scene *s,
                                  rd_gpu_scene_prep *prep, char *err, size_t errlen)
 {
     memset(gs, 0, sizeof *gs);
@@ -598,10 +623,10 @@ rd_vk_result rd_gpu_scene_upload(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
         float c = 0.5f * (s->bounds_min[k] + s->bounds_max[k]);
         gs->origin_shift[k] = isfinite(c) ? c : 0.0f;
     }
-    rd_vk_result r = upload_blas(vk, gs, prep, err, errlen);
-    if (r == RD_VK_OK) r = rd_gpu_scene_update_instances(vk, gs, s, err, errlen);
-    if (r == RD_VK_OK) r = upload_materials(vk, gs, s, err, errlen);
-    if (r == RD_VK_OK) r = rd_gpu_scene_update_lights(vk, gs, s, err, errlen);
+    rd_vk_result r = upload_blas(vk, st, gs, prep, err, errlen);
+    if (r == RD_VK_OK) r = update_instances(vk, st, gs, s, err, errlen);
+    if (r == RD_VK_OK) r = upload_materials(vk, st, gs, s, err, errlen);
+    if (r == RD_VK_OK) r = update_lights(vk, st, gs, s, err, errlen);
     if (r != RD_VK_OK) {
         rd_gpu_scene_destroy(vk, gs);
         return r;
@@ -620,6 +645,51 @@ rd_vk_result rd_gpu_scene_upload(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
         .counts = {s->instance_count, s->light_count, s->material_count, s->texture_count},
     };
     return RD_VK_OK;
+}
+
+rd_vk_result rd_gpu_scene_upload(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
+                                 rd_gpu_scene_prep *prep, char *err, size_t errlen)
+{
+    return scene_upload(vk, NULL, gs, s, prep, err, errlen);
+}
+
+rd_vk_result rd_gpu_scene_stage(rd_vk *vk, rd_gpu_scene_staged *out, const rd_scene *s,
+                                rd_gpu_scene_prep *prep, char *err, size_t errlen)
+{
+    memset(out, 0, sizeof *out);
+    double t0 = now_ms();
+    rd_vk_result r = scene_upload(vk, &out->copies, &out->gs, s, prep, err, errlen);
+    if (r != RD_VK_OK) {
+        rd_staging_release(vk, &out->copies);
+        return r;
+    }
+    out->vk = vk;
+    out->stage_ms = now_ms() - t0;
+    return RD_VK_OK;
+}
+
+rd_vk_result rd_gpu_scene_commit(rd_gpu_scene_staged *st, rd_gpu_scene *gs, char *err,
+                                 size_t errlen)
+{
+    double t0 = now_ms();
+    rd_vk_result r = rd_staging_submit_wait(st->vk, &st->copies, err, errlen);
+    if (r != RD_VK_OK) {
+        rd_gpu_scene_staged_destroy(st);
+        memset(gs, 0, sizeof *gs);
+        return r;
+    }
+    *gs = st->gs;
+    gs->upload_ms = st->stage_ms + (now_ms() - t0);
+    memset(st, 0, sizeof *st);
+    return RD_VK_OK;
+}
+
+void rd_gpu_scene_staged_destroy(rd_gpu_scene_staged *st)
+{
+    if (!st->vk) return;
+    rd_staging_release(st->vk, &st->copies);
+    rd_gpu_scene_destroy(st->vk, &st->gs);
+    memset(st, 0, sizeof *st);
 }
 
 rd_vk_result rd_gpu_scene_create(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, char *err,

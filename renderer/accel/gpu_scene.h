@@ -11,6 +11,7 @@
 #include "renderer/scene/scene.h"
 #include "renderer/vk/vk_buffer.h"
 #include "renderer/vk/vk_compute.h"
+#include "renderer/vk/vk_staging.h"
 
 #define RD_GPU_SCENE_DIRTY_MAX PC_SHADOW_MAP_BOXES
 typedef struct rd_gpu_scene_dirty {
@@ -91,11 +92,28 @@ typedef struct rd_gpu_scene_prep {
 rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *scene, char *err,
                                   size_t errlen);
 void rd_gpu_scene_prep_destroy(rd_gpu_scene_prep *p); /* idempotent */
-/* The GPU half: uploads prep (its mesh tables move into gs), builds the top level, uploads
- * materials, textures and lights. prep must come from the same scene. On failure everything is
- * released. */
+/* The GPU half: uploads prep (its mesh tables move into gs, its arrays are freed), builds the
+ * top level, uploads materials, textures and lights. prep must come from the same scene. On
+ * failure everything is released. */
 rd_vk_result rd_gpu_scene_upload(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *scene,
                                  rd_gpu_scene_prep *prep, char *err, size_t errlen);
+/* The GPU half split once more, for uploads that must not stall rendering: on any thread,
+ * rd_gpu_scene_stage creates the scene's buffers and stages their contents in host-visible
+ * memory (vk_staging.h; nothing is submitted, and prep's arrays are freed as they are staged);
+ * on the queue's thread, rd_gpu_scene_commit copies them (one submission, waited for) and
+ * gives the scene. A staged scene that is never committed is freed by
+ * rd_gpu_scene_staged_destroy (idempotent; on any thread). */
+typedef struct rd_gpu_scene_staged {
+    rd_vk *vk; /* NULL: nothing staged */
+    rd_gpu_scene gs;
+    rd_staging copies;
+    double stage_ms;
+} rd_gpu_scene_staged;
+rd_vk_result rd_gpu_scene_stage(rd_vk *vk, rd_gpu_scene_staged *out, const rd_scene *scene,
+                                rd_gpu_scene_prep *prep, char *err, size_t errlen);
+rd_vk_result rd_gpu_scene_commit(rd_gpu_scene_staged *st, rd_gpu_scene *gs, char *err,
+                                 size_t errlen);
+void rd_gpu_scene_staged_destroy(rd_gpu_scene_staged *st);
 /* Both halves at once. */
 rd_vk_result rd_gpu_scene_create(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *scene, char *err,
                                  size_t errlen);

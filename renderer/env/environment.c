@@ -229,6 +229,31 @@ void rd_env_image_limit(rd_env_image *img, uint32_t max_width)
     }
 }
 
+void rd_env_image_shrunk(const rd_env_image *src, uint32_t max_width, rd_env_image *out)
+{
+    uint32_t f = 1;
+    while ((src->width / f > max_width || src->height / f > max_width) && src->width / f >= 2 &&
+           src->height / f >= 2)
+        f *= 2;
+    out->width = src->width / f;
+    out->height = src->height / f;
+    out->rgb = malloc((size_t)out->width * out->height * 3 * sizeof *out->rgb);
+    if (!out->rgb) abort();
+    const float scale = 1.0f / (float)(f * f);
+    for (uint32_t y = 0; y < out->height; y++)
+        for (uint32_t x = 0; x < out->width; x++) {
+            double acc[3] = {0, 0, 0};
+            for (uint32_t j = 0; j < f; j++) {
+                const float *row = src->rgb + ((size_t)(y * f + j) * src->width + x * f) * 3;
+                for (uint32_t i = 0; i < f * 3; i += 3)
+                    for (int c = 0; c < 3; c++)
+                        acc[c] += row[i + (uint32_t)c];
+            }
+            for (int c = 0; c < 3; c++)
+                out->rgb[((size_t)y * out->width + x) * 3 + (size_t)c] = (float)acc[c] * scale;
+        }
+}
+
 void rd_env_image_free(rd_env_image *img)
 {
     free(img->rgb);

@@ -111,6 +111,10 @@ bool rd_env_image_size_ok(uint64_t w, uint64_t h, const char *format, char *err,
 /* Halves a whole image in memory (2x2 box; an odd last row or column is dropped) while it is
  * wider or taller than max_width (and at least 2 x 2): what the readers do stripe by stripe. */
 void rd_env_image_limit(rd_env_image *img, uint32_t max_width);
+/* A copy of src box-filtered by a power of two until it is at most max_width wide and high
+ * (blocks of f x f texels averaged; a remainder row or column is dropped), allocated at its own
+ * size (src is only read): what the irradiance projection needs of a large image. */
+void rd_env_image_shrunk(const rd_env_image *src, uint32_t max_width, rd_env_image *out);
 void rd_env_image_free(rd_env_image *img);
 
 /* Radiance of the environment toward unit direction d (the CPU twin of env_radiance, for

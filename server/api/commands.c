@@ -14,13 +14,13 @@ static void cmd_destroy(srv_mail *m)
         rd_scene_destroy(c->scene);
         free(c->scene);
     }
-    if (c->prepared) {
-        rd_gpu_scene_prep_destroy(c->prepared);
-        free(c->prepared);
+    if (c->staged) {
+        rd_gpu_scene_staged_destroy(c->staged);
+        free(c->staged);
     }
-    if (c->env_image) {
-        rd_env_image_free(c->env_image);
-        free(c->env_image);
+    if (c->env_staged) {
+        rd_env_staged_destroy(c->env_staged);
+        free(c->env_staged);
     }
     free(c);
 }

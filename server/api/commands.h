@@ -16,6 +16,7 @@
 
 #include "renderer/env/environment.h"
 #include "renderer/accel/gpu_scene.h"
+#include "renderer/world.h"
 #include "renderer/scene/scene.h"
 #include "server/api/api_error.h"
 #include "server/api/mailbox.h"
@@ -142,14 +143,17 @@ typedef struct srv_cmd {
     srv_node_patch node;
     srv_settings_patch settings;
     srv_playback_patch playback;
-    unsigned width, height;      /* VIEWER_RESIZE: device pixels */
-    unsigned jpeg_cap, fps_cap;  /* VIEWER_QUALITY: the view's caps (0: none) */
-    rd_scene *scene;             /* REPLACE_SCENE: validated scene, owned by the command */
-    rd_gpu_scene_prep *prepared; /* REPLACE_SCENE: its BVHs, built by the poster (owned) */
-    char source[128];            /* REPLACE_SCENE: where it came from ("upload", "builtin:...") */
+    unsigned width, height;     /* VIEWER_RESIZE: device pixels */
+    unsigned jpeg_cap, fps_cap; /* VIEWER_QUALITY: the view's caps (0: none) */
+    rd_scene *scene;            /* REPLACE_SCENE: validated scene, owned by the command */
+    /* REPLACE_SCENE from an upload: its BVHs built and its GPU buffers staged by the poster
+     * (owned; NULL: the render thread builds them) */
+    rd_gpu_scene_staged *staged;
+    char source[128]; /* REPLACE_SCENE: where it came from ("upload", "builtin:...") */
     char file_name[SRV_FILE_NAME_MAX]; /* REPLACE_SCENE: the uploaded file's name ("": none) */
     float pick[2];                     /* PICK: normalised picture point (x across, y down), 0..1 */
-    rd_env_image *env_image;   /* SET_ENVIRONMENT: the parsed HDR image (owned), NULL = none */
+    /* SET_ENVIRONMENT: the image staged for the GPU by the poster (owned), NULL = none */
+    rd_env_staged *env_staged;
     uint64_t scene_generation; /* REPLACE_SCENE, set before a 200 reply: the scene's generation */
 } srv_cmd;
 

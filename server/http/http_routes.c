@@ -162,25 +162,36 @@ enum MHD_Result srv_http_handle_upload(srv_http *h, struct MHD_Connection *conn,
         srv_warn("http", "uploaded scene: %s", scene->warnings[i]);
     srv_info("http", "scene upload of %zu bytes parsed in %.0f ms (%llu triangles)", rq->len,
              srv_mono_ms() - t0, (unsigned long long)scene->tri_total);
-    /* the BVHs too are built here, on this connection's thread: the render thread only uploads
-     * them, so viewers keep seeing the old scene meanwhile */
-    rd_gpu_scene_prep *prep = calloc(1, sizeof *prep);
-    if (!prep) abort();
+    /* the BVHs too are built here, on this connection's thread, and the GPU buffers created and
+     * their contents staged: the render thread only runs the copies, so viewers keep seeing the
+     * old scene meanwhile */
+    rd_gpu_scene_prep prep;
+    rd_gpu_scene_staged *staged = calloc(1, sizeof *staged);
+    if (!staged) abort();
     double t1 = srv_mono_ms();
-    rd_vk_result pr = rd_gpu_scene_prepare(prep, scene, err, sizeof err);
+    rd_vk_result pr = rd_gpu_scene_prepare(&prep, scene, err, sizeof err);
+    double t2 = srv_mono_ms();
+    if (pr == RD_VK_OK) {
+        pr = rd_gpu_scene_stage(srv_render_loop_device(h->cfg.loop), staged, scene, &prep, err,
+                                sizeof err);
+        rd_gpu_scene_prep_destroy(&prep);
+    }
     if (pr != RD_VK_OK) {
-        free(prep);
+        free(staged);
         rd_scene_destroy(scene);
         free(scene);
         pthread_mutex_lock(&h->counters_mu);
         h->counters.uploads_rejected++;
         pthread_mutex_unlock(&h->counters_mu);
-        return srv_http_respond_error(h, conn, rq, 422, SRV_ERR_INVALID_GLTF, "%s", err);
+        bool bad = pr == RD_VK_ERR_UNSUPPORTED || pr == RD_VK_ERR_OUT_OF_MEMORY;
+        return srv_http_respond_error(h, conn, rq, bad ? 422 : 500,
+                                      bad ? SRV_ERR_INVALID_GLTF : SRV_ERR_GPU, "%s", err);
     }
-    srv_info("http", "BVHs of the upload built in %.0f ms", srv_mono_ms() - t1);
+    srv_info("http", "BVHs of the upload built in %.0f ms, staged for the GPU in %.0f ms", t2 - t1,
+             srv_mono_ms() - t2);
     srv_cmd *c = srv_cmd_new(SRV_CMD_REPLACE_SCENE);
     c->scene = scene;
-    c->prepared = prep;
+    c->staged = staged;
     snprintf(c->source, sizeof c->source, "upload");
     memcpy(c->file_name, file_name, sizeof c->file_name);
     srv_render_call(h->cfg.loop, c, SCENE_TIMEOUT_MS);
@@ -208,15 +219,21 @@ enum MHD_Result srv_http_handle_environment(srv_http *h, struct MHD_Connection *
     srv_cmd *c = srv_cmd_new(SRV_CMD_SET_ENVIRONMENT);
     if (rq->method == M_PUT) {
         char err[256] = "";
-        rd_env_image *img = calloc(1, sizeof *img);
-        if (!img) abort();
-        if (!rd_env_image_parse(rq->data, rq->len, NULL, img, err, sizeof err)) {
-            free(img);
+        rd_env_image img;
+        if (!rd_env_image_parse(rq->data, rq->len, NULL, &img, err, sizeof err)) {
             srv_cmd_unref(c);
             srv_info("http", "environment upload of %zu bytes rejected: %s", rq->len, err);
             return srv_http_respond_error(h, conn, rq, 422, SRV_ERR_INVALID_IMAGE, "%s", err);
         }
-        c->env_image = img;
+        /* converted and staged for the GPU here too, not on the render thread */
+        c->env_staged = calloc(1, sizeof *c->env_staged);
+        if (!c->env_staged) abort();
+        if (rd_world_stage_environment(srv_render_loop_device(h->cfg.loop), c->env_staged, &img,
+                                       err, sizeof err) != RD_VK_OK) {
+            srv_cmd_unref(c);
+            srv_warn("http", "environment upload of %zu bytes not staged: %s", rq->len, err);
+            return srv_http_respond_error(h, conn, rq, 500, SRV_ERR_GPU, "%s", err);
+        }
     }
     srv_render_call(h->cfg.loop, c, SCENE_TIMEOUT_MS);
     bool ok = c->mail.reply.status == 200 || c->mail.reply.status == 204;

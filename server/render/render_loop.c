@@ -573,6 +573,11 @@ void srv_render_loop_stop(srv_render_loop *l)
     }
 }
 
+rd_vk *srv_render_loop_device(srv_render_loop *l)
+{
+    return &l->vk;
+}
+
 unsigned srv_render_loop_validation_messages(srv_render_loop *l)
 {
     return l && l->vk_ok ? rd_vk_validation_messages(&l->vk) : 0;

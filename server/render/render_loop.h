@@ -59,6 +59,11 @@ unsigned srv_render_loop_validation_messages(srv_render_loop *l);
 /* Stops, waits for the GPU and destroys everything in reverse order (NULL is fine). */
 void srv_render_loop_destroy(srv_render_loop *l);
 
+/* The loop's Vulkan device, for connection threads that stage an upload's GPU buffers before
+ * posting it (rd_gpu_scene_stage, rd_world_stage_environment: buffer creation and host writes
+ * only; the queue stays the render thread's). Valid until srv_render_loop_destroy. */
+rd_vk *srv_render_loop_device(srv_render_loop *l);
+
 /* srv_mailbox_call / srv_mailbox_post on the loop's mailbox. */
 bool srv_render_call(srv_render_loop *l, srv_cmd *c, unsigned timeout_ms);
 uint64_t srv_render_post(srv_render_loop *l, srv_cmd *c);

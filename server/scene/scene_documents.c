@@ -75,10 +75,10 @@ cJSON *srv_scene_json(const srv_scene_service *svc)
     cJSON_AddNumberToObject(bvh, "tlas_build_ms", svc->gs.tlas_build_ms);
     cJSON_AddNumberToObject(bvh, "upload_ms", svc->gs.upload_ms);
     cJSON_AddItemToObject(j, "probes", probes_json(svc));
-    if (svc->world.image.width) {
+    if (svc->world.env_width) {
         cJSON *im = cJSON_AddObjectToObject(j, "environment_image");
-        cJSON_AddNumberToObject(im, "width", svc->world.image.width);
-        cJSON_AddNumberToObject(im, "height", svc->world.image.height);
+        cJSON_AddNumberToObject(im, "width", svc->world.env_width);
+        cJSON_AddNumberToObject(im, "height", svc->world.env_height);
     } else {
         cJSON_AddNullToObject(j, "environment_image");
     }

@@ -155,8 +155,8 @@ static unsigned replace_scene(srv_scene_service *svc, srv_cmd *c)
     rd_gpu_scene ngs;
     double t0 = srv_mono_ms();
     rd_vk_result vr;
-    if (c->prepared) {
-        vr = rd_gpu_scene_upload(svc->vk, &ngs, c->scene, c->prepared, err, sizeof err);
+    if (c->staged) { /* staged by the uploading connection: only the copies run here */
+        vr = rd_gpu_scene_commit(c->staged, &ngs, err, sizeof err);
     } else {
         vr = rd_gpu_scene_create(svc->vk, &ngs, c->scene, err, sizeof err);
     }
@@ -166,6 +166,8 @@ static unsigned replace_scene(srv_scene_service *svc, srv_cmd *c)
                      vr == RD_VK_ERR_UNSUPPORTED ? SRV_ERR_INVALID_GLTF : SRV_ERR_GPU, err);
         return 0;
     }
+    double t1 = srv_mono_ms();
+    rd_vk_wait_idle(svc->vk); /* frames in flight may read the scene replaced */
     rd_gpu_scene_destroy(svc->vk, &svc->gs);
     svc->gs = ngs;
     rd_world_set_scene(&svc->world, &svc->gs);
@@ -184,10 +186,12 @@ static unsigned replace_scene(srv_scene_service *svc, srv_cmd *c)
     srv_scene_load_playback(svc);
     if (configure_gi(svc, err, sizeof err) != RD_VK_OK)
         srv_warn("render", "global illumination is off for this scene: %s", err);
+    double t2 = srv_mono_ms();
     srv_info("render",
-             "scene replaced (generation %llu, %llu triangles, %.0f ms on the render thread)",
+             "scene replaced (generation %llu, %llu triangles, %.1f ms on the render thread: "
+             "GPU copies %.1f, the rest %.1f)",
              (unsigned long long)svc->st.generation, (unsigned long long)svc->st.scene.tri_total,
-             srv_mono_ms() - t0);
+             t2 - t0, t1 - t0, t2 - t1);
     srv_scene_publish_scene(svc);
     pthread_mutex_lock(&c->mail.mu);
     c->scene_generation = svc->st.generation;
@@ -201,10 +205,11 @@ static unsigned replace_scene(srv_scene_service *svc, srv_cmd *c)
 static unsigned set_environment_image(srv_scene_service *svc, srv_cmd *c)
 {
     char err[256];
-    bool upload = c->env_image != NULL;
-    rd_env_image none = {0};
-    rd_vk_result vr =
-        rd_world_set_environment_image(&svc->world, upload ? c->env_image : &none, err, sizeof err);
+    bool upload = c->env_staged != NULL;
+    double t0 = srv_mono_ms();
+    rd_vk_result vr = rd_world_set_environment_staged(&svc->world, c->env_staged, err, sizeof err);
+    srv_debug("render", "environment %s in %.1f ms on the render thread",
+              upload ? "replaced" : "dropped", srv_mono_ms() - t0);
     if (vr != RD_VK_OK) {
         srv_cmd_fail(c, 500, SRV_ERR_GPU, err);
         apply_sky(svc);
@@ -217,8 +222,8 @@ static unsigned set_environment_image(srv_scene_service *svc, srv_cmd *c)
     srv_scene_publish_scene(svc);
     if (upload) {
         cJSON *j = cJSON_CreateObject();
-        cJSON_AddNumberToObject(j, "width", svc->world.image.width);
-        cJSON_AddNumberToObject(j, "height", svc->world.image.height);
+        cJSON_AddNumberToObject(j, "width", svc->world.env_width);
+        cJSON_AddNumberToObject(j, "height", svc->world.env_height);
         cJSON_AddStringToObject(j, "sky_mode", "image");
         srv_cmd_complete_json(c, 200, j);
     } else {

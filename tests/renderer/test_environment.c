@@ -506,8 +506,49 @@ static void test_irradiance(void)
     rd_env_image_free(&img);
 }
 
+/* rd_env_image_shrunk: a box-filtered copy at most max_width on both sides (the source only
+ * read), equal to halving it as many times with rd_env_image_limit */
+static void test_shrunk(void)
+{
+    rd_env_image img = {.width = 256, .height = 128};
+    img.rgb = malloc((size_t)256 * 128 * 3 * sizeof(float));
+    for (unsigned i = 0; i < 256 * 128 * 3; i++)
+        img.rgb[i] = (float)((i * 37u) % 101u) * 0.25f;
+    rd_env_image copy = {.width = 256, .height = 128};
+    copy.rgb = malloc((size_t)256 * 128 * 3 * sizeof(float));
+    memcpy(copy.rgb, img.rgb, (size_t)256 * 128 * 3 * sizeof(float));
+    rd_env_image small;
+    rd_env_image_shrunk(&img, 64, &small);
+    CHECK(small.width == 64 && small.height == 32);
+    CHECK(memcmp(img.rgb, copy.rgb, (size_t)256 * 128 * 3 * sizeof(float)) == 0);
+    /* a 4 x 4 block's mean: texel (5, 3) averages rows 12-15, columns 20-23 */
+    double want = 0;
+    for (unsigned y = 12; y < 16; y++)
+        for (unsigned x = 20; x < 24; x++)
+            want += img.rgb[(y * 256 + x) * 3 + 1];
+    want /= 16;
+    float got = small.rgb[(3 * 64 + 5) * 3 + 1];
+    CHECKF(fabs(got - want) < 1e-4 * want + 1e-6, "block mean %g, want %g", (double)got, want);
+    rd_env_image_limit(&copy, 64);
+    float worst = 0;
+    for (unsigned i = 0; i < 64 * 32 * 3; i++) {
+        float e = fabsf(copy.rgb[i] - small.rgb[i]);
+        worst = e > worst ? e : worst;
+    }
+    CHECKF(worst < 1e-4f, "shrunk against halved twice: worst %g", (double)worst);
+    rd_env_image_free(&small);
+    /* small enough already: a plain copy */
+    rd_env_image_shrunk(&img, 512, &small);
+    CHECK(small.width == 256 && small.height == 128 &&
+          memcmp(small.rgb, img.rgb, (size_t)256 * 128 * 3 * sizeof(float)) == 0);
+    rd_env_image_free(&small);
+    rd_env_image_free(&copy);
+    rd_env_image_free(&img);
+}
+
 int main(void)
 {
+    test_shrunk();
     test_hdr_reader();
     test_exr_reader();
     test_irradiance();

@@ -287,7 +287,7 @@ static void test_environments(fixture *f)
             t[2] = (x / 8 + y / 8) % 2 ? 2.0f : 0.25f;
         }
     CHECK(rd_world_set_environment_image(&f->world, &img, err, sizeof err) == RD_VK_OK);
-    CHECK(img.rgb == NULL && f->world.image.width == 64);
+    CHECK(img.rgb == NULL && f->world.env_width == 64);
     rd_environment im = {
         .mode = RD_ENV_IMAGE, .sky = {9, 9, 9}, .intensity = 1.5f, .rotation = 0.7f};
     rd_world_set_environment(&f->world, &im);
