@@ -55,6 +55,7 @@ void srv_http_stats_snapshot(srv_http *h, srv_stats_snapshot *s)
     s->http.connections_per_ip = h->admission.per_ip;
     s->http.idle_timeout_s = h->cfg.timeout_s;
     s->uptime_s = (srv_mono_ms() - h->start_ms) / 1000.0;
+    srv_process_memory_read(&s->memory);
 }
 
 enum MHD_Result srv_http_handle_health(srv_http *h, struct MHD_Connection *conn, request *rq)

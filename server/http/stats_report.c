@@ -126,6 +126,12 @@ cJSON *srv_stats_json(const srv_stats_snapshot *s)
     cJSON *scene = cJSON_AddObjectToObject(j, "scene");
     cJSON_AddNumberToObject(scene, "generation", (double)r->scene_generation);
     cJSON_AddNumberToObject(scene, "triangles", (double)r->triangles);
+    cJSON *mem = cJSON_AddObjectToObject(j, "memory");
+    cJSON_AddNumberToObject(mem, "rss_bytes", (double)s->memory.rss_bytes);
+    cJSON_AddNumberToObject(mem, "peak_rss_bytes", (double)s->memory.peak_rss_bytes);
+    cJSON_AddNumberToObject(mem, "heap_in_use_bytes", (double)s->memory.heap_in_use_bytes);
+    cJSON_AddNumberToObject(mem, "heap_free_bytes", (double)s->memory.heap_free_bytes);
+    cJSON_AddNumberToObject(mem, "heap_mmap_bytes", (double)s->memory.heap_mmap_bytes);
     return j;
 }
 
@@ -170,6 +176,14 @@ char *srv_stats_prometheus(const srv_stats_snapshot *s)
     metric(&t, "probecast_up", "gauge", "1 while the GPU device works.", r->device_lost ? 0 : 1);
     metric(&t, "probecast_uptime_seconds", "gauge", "Seconds since the server started.",
            s->uptime_s);
+    metric(&t, "probecast_resident_memory_bytes", "gauge", "Resident memory of the daemon.",
+           (double)s->memory.rss_bytes);
+    metric(&t, "probecast_heap_in_use_bytes", "gauge",
+           "C heap allocated and not freed (0 where the allocator does not tell).",
+           (double)s->memory.heap_in_use_bytes);
+    metric(&t, "probecast_heap_free_bytes", "gauge",
+           "C heap freed but kept by the allocator (fragmentation shows here).",
+           (double)s->memory.heap_free_bytes);
     metric(&t, "probecast_rendering", "gauge", "1 while something changes and frames are rendered.",
            r->rendering);
     metric(&t, "probecast_fps", "gauge", "Frames rendered in the last second.", r->fps);

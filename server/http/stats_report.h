@@ -6,6 +6,7 @@
 #include <cjson/cJSON.h>
 #include <stdint.h>
 
+#include "server/base/process_memory.h"
 #include "server/encode/encoder_pool.h"
 #include "server/render/render_loop.h"
 #include "server/stream/ws_stream.h"
@@ -23,6 +24,7 @@ typedef struct srv_stats_snapshot {
     srv_encoder_stats encoder;
     srv_ws_stats stream;
     srv_http_counters http;
+    srv_process_memory memory;
     double uptime_s;
 } srv_stats_snapshot;
 

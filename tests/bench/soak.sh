@@ -7,7 +7,9 @@
 #   tests/bench/soak.sh BIN_DIR OUT_DIR [SECONDS] [-- extra serve options]
 #
 # BIN_DIR holds probecast and probecast_loadtest; OUT_DIR gets soak_rss.csv (seconds, RSS in
-# KiB, frames rendered, requests), soak.txt (the table and the viewers' summary) and serve.log.
+# KiB, frames rendered, requests, and the C heap from /v1/stats: KiB in use and KiB free but
+# kept), soak.txt (the table and the viewers' summary) and serve.log. SOAK_WRITER=0 leaves the
+# API writer out (viewers only).
 # Default: 600 seconds (the issue's 10 minutes), lavapipe when no GPU is present. Needs curl and
 # python3 besides the build.
 set -euo pipefail
@@ -44,6 +46,7 @@ api() { curl -s -o /dev/null -w '%{http_code}' -X "$1" -H 'Content-Type: applica
 viewers=$!
 
 # the writer: a change every 200 ms, cycling through the kinds of change
+if [ "${SOAK_WRITER:-1}" != 0 ]; then
 (
     i=0
     while :; do
@@ -62,18 +65,25 @@ viewers=$!
     done
 ) 2>/dev/null &
 writer=$!
+fi
 
-printf '%8s %10s %10s %10s\n' seconds rss_kib frames requests | tee "$out/soak.txt"
-echo "seconds,rss_kib,frames,requests" >"$out/soak_rss.csv"
+printf '%8s %10s %10s %10s %10s %10s\n' seconds rss_kib frames requests heap_kib free_kib |
+    tee "$out/soak.txt"
+echo "seconds,rss_kib,frames,requests,heap_in_use_kib,heap_free_kib" >"$out/soak_rss.csv"
 start=$(date +%s)
 while :; do
     now=$(($(date +%s) - start))
     rss=$(awk '/^VmRSS:/ { print $2 }' "/proc/$pid/status" 2>/dev/null || echo 0)
     stats=$(curl -s "http://127.0.0.1:$port/v1/stats" || echo '{}')
-    frames=$(echo "$stats" | python3 -c 'import json,sys; print(json.load(sys.stdin).get("frames_rendered", 0))' 2>/dev/null || echo 0)
-    reqs=$(echo "$stats" | python3 -c 'import json,sys; print(json.load(sys.stdin).get("http", {}).get("requests", 0))' 2>/dev/null || echo 0)
-    printf '%8d %10d %10s %10s\n' "$now" "$rss" "$frames" "$reqs" | tee -a "$out/soak.txt"
-    echo "$now,$rss,$frames,$reqs" >>"$out/soak_rss.csv"
+    read -r frames reqs heap free <<<"$(echo "$stats" | python3 -c '
+import json, sys
+s = json.load(sys.stdin); m = s.get("memory", {})
+print(s.get("frames_rendered", 0), s.get("http", {}).get("requests", 0),
+      m.get("heap_in_use_bytes", 0) // 1024, m.get("heap_free_bytes", 0) // 1024)' 2>/dev/null ||
+        echo 0 0 0 0)"
+    printf '%8d %10d %10s %10s %10s %10s\n' "$now" "$rss" "$frames" "$reqs" "$heap" "$free" |
+        tee -a "$out/soak.txt"
+    echo "$now,$rss,$frames,$reqs,$heap,$free" >>"$out/soak_rss.csv"
     [ "$now" -ge "$seconds" ] && break
     sleep "${SOAK_SAMPLE_S:-10}"
 done

@@ -54,7 +54,8 @@ try:
     for want in ["probecast_uptime_seconds", "probecast_frame_gpu_seconds",
                  "probecast_pass_gpu_seconds", "probecast_jpeg_encode_seconds",
                  "probecast_stream_bandwidth_bytes_per_second", "probecast_world_ticks_total",
-                 "probecast_probe_updates_total", "probecast_http_responses_total"]:
+                 "probecast_probe_updates_total", "probecast_http_responses_total",
+                 "probecast_resident_memory_bytes", "probecast_heap_in_use_bytes"]:
         check(want in names, "metric present: " + want)
 finally:
     proc.terminate()

@@ -131,7 +131,8 @@ static void test_concurrent_uploads(void)
     size_t size;
     uint8_t *glb = pc_make_glb(0.3f, &size);
     int held[2];
-    for (int i = 0; i < 2; i++) held[i] = hold_upload();
+    for (int i = 0; i < 2; i++)
+        held[i] = hold_upload();
     CHECK(held[0] >= 0 && held[1] >= 0);
     pc_sleep_ms(300); /* both requests' headers reach the daemon */
     pc_http_response r;
@@ -155,6 +156,33 @@ static void test_concurrent_uploads(void)
     free(glb);
 }
 
+/* /v1/stats reports the daemon's memory: resident as /proc says, the heap consistent with it */
+static void test_stats_memory(void)
+{
+    unsigned long long rss_kib = pc_daemon_memory_kib(&d, "VmRSS");
+    cJSON *s = pc_api_get_json(&d, "/v1/stats");
+    const cJSON *m = s ? cJSON_GetObjectItem(s, "memory") : NULL;
+    CHECK(m != NULL);
+    if (m) {
+        double rss = pc_json_number(m, "rss_bytes") / 1024,
+               peak = pc_json_number(m, "peak_rss_bytes");
+        double in_use = pc_json_number(m, "heap_in_use_bytes");
+        double free_b = pc_json_number(m, "heap_free_bytes");
+        double mmap_b = pc_json_number(m, "heap_mmap_bytes");
+        printf("stats memory: rss %.0f KiB (/proc: %llu), peak %.0f MiB, heap in use %.1f MiB "
+               "(mmap %.1f), free %.1f MiB\n",
+               rss, rss_kib, peak / 1048576, in_use / 1048576, mmap_b / 1048576, free_b / 1048576);
+        CHECKF(rss > 0.8 * (double)rss_kib && rss < 1.25 * (double)rss_kib, "rss %.0f KiB", rss);
+        CHECK(peak >= rss * 1024);
+        CHECK(in_use >= mmap_b && free_b >= 0);
+#if !defined(__SANITIZE_ADDRESS__)
+        /* glibc tells: the daemon holds a scene, views and encoders on its heap */
+        CHECK(in_use > 1e6 && in_use < rss * 1024 + mmap_b);
+#endif
+    }
+    cJSON_Delete(s);
+}
+
 int main(void)
 {
 #if defined(__SANITIZE_ADDRESS__)
@@ -163,9 +191,9 @@ int main(void)
     snprintf(asan, sizeof asan, "%s%squarantine_size_mb=0", given ? given : "", given ? ":" : "");
     setenv("ASAN_OPTIONS", asan, 1); /* the daemon inherits it */
 #endif
-    const char *args[] = {"--no-animate", "--width", "32",    "--height",  "32",
-                          "--probes",     "2,2,2",   "--rays", "16",       "--token",
-                          "s3cret",       "--scene", "builtin:cornell", NULL};
+    const char *args[] = {"--no-animate",    "--width", "32", "--height", "32",     "--probes",
+                          "2,2,2",           "--rays",  "16", "--token",  "s3cret", "--scene",
+                          "builtin:cornell", NULL};
     if (!pc_daemon_start(&d, args)) {
         CHECK(!"daemon started");
         return test_finish();
@@ -177,6 +205,7 @@ int main(void)
     pc_http_response_free(&r);
     free(glb);
 
+    test_stats_memory();
     test_huge_images();
     test_huge_environment();
     test_concurrent_uploads();
