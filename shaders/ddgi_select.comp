@@ -3,7 +3,9 @@
  * probes per state and lists those this update works on — every awake probe, and off probes
  * whose re-check is due (every PC_DDGI_OFF_RECHECK updates, staggered, or after a wake event
  * reached them). Sleeping probes are not listed: no ray, shading or blending work at all. The
- * list's length lands in the indirect dispatch sizes of the passes that follow.
+ * list's length lands in the indirect dispatch sizes of the passes that follow. It also marks,
+ * for every probe, which segments to its +x, +y, +z neighbours geometry crosses (stats.z): the
+ * cells where the irradiance query traces visibility rays (ddgi.glsl, PC_DDGI_VIS_*).
  * push: globals. */
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
@@ -17,6 +19,24 @@ void main()
     pc_ddgi_volume vol = g.ddgi;
     uint probe = gl_GlobalInvocationID.x;
     if (probe >= ddgi_probe_count(vol)) return;
+    /* which segments to the +x, +y, +z neighbours geometry crosses (stats.z, ddgi_probe_edges):
+     * three short rays per probe and update, so that the cells that need visibility rays in
+     * ddgi_irradiance follow moving geometry */
+    ivec3 c = ddgi_probe_coord(vol, probe);
+    vec3 pos = ddgi_probe_position(vol, probe);
+    uint edges = 0u;
+    bool wanted = vol.info.x == PC_GI_DDGI && uint(vol.spacing.w) != PC_DDGI_VIS_OFF;
+    for (int k = 0; k < 3 && wanted; k++) {
+        ivec3 nc = c;
+        nc[k] += 1;
+        if (nc[k] >= int(vol.counts[k])) continue;
+        vec3 to = ddgi_probe_position(vol, ddgi_probe_index(vol, nc)) - pos;
+        float dist = length(to);
+        pc_hit h;
+        if (dist > 0.0 && trace_ray(g.scene, pos, to / dist, 0.0, dist, PC_TRACE_ANY_HIT, h))
+            edges |= 1u << uint(k);
+    }
+    DdgiStatsRef(vol.stats).v[probe].z = float(edges);
     DdgiControlRef ctrl = DdgiControlRef(vol.ctrl);
     uint state = ddgi_probe_state(vol, probe);
     bool listed;

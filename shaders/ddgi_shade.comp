@@ -83,7 +83,7 @@ void main()
                                                    dist, shadow_rays);
         vec3 indirect = vec3(0.0);
         if (pc.params.y != 0u)
-            indirect = ddgi_irradiance(vol, env_irradiance(g.env, sf.normal), sf.position,
+            indirect = ddgi_irradiance(vol, g.scene, true, env_irradiance(g.env, sf.normal), sf.position,
                                        sf.normal, -dir);
         vec3 radiance = sf.emission + direct +
                         sf.occlusion * min(albedo, vec3(0.9)) / PC_PI * indirect;

@@ -282,6 +282,13 @@ PC_END(pc_environment);
 /* Probe states (probes[].w, as a float; 2021 follow-up paper, Sec. 5). Bit 0 (ACTIVE) means
  * shading samples the probe; bit 1 means its value is final and updates skip it. */
 #define PC_DDGI_PROBE_ACTIVE 1u   /* bit: outside geometry, sampled */
+/* Where the irradiance query traces visibility rays (ddgi.glsl, issue 28): in a cell whose cage
+ * edges geometry crosses (a wall thinner than the spacing, furniture), one ray to each probe on
+ * a crossed edge, at probe-ray hits and camera pixels and reflection hits (ALL, the default), at
+ * probe-ray hits only (PROBES), or nowhere (OFF: Chebyshev's test alone, as in the paper). */
+#define PC_DDGI_VIS_ALL 0u
+#define PC_DDGI_VIS_PROBES 1u
+#define PC_DDGI_VIS_OFF 2u
 #define PC_DDGI_PROBE_OFF 0u      /* inside geometry: not sampled; re-checked now and then */
 #define PC_DDGI_PROBE_AWAKE 1u    /* sampled, traced and blended every update */
 #define PC_DDGI_PROBE_SLEEPING 3u /* converged: sampled, neither traced nor blended */
@@ -338,7 +345,7 @@ PC_END(pc_environment);
 #define PC_DDGI_IRRADIANCE_EXPONENT 5 /* an integer: the shaders test it with #if */
 
 /* origin: xyz position of probe (0,0,0), w = max ray distance for distance blending;
- * spacing: xyz grid spacing, w unused (0);
+ * spacing: xyz grid spacing, w = PC_DDGI_VIS_* (as float);
  * counts: xyz probes per axis, w = rays per probe;
  * rotation: rows of this update's random ray rotation (uniform on SO(3));
  * params: x maximum hysteresis, y bias scale (world units), z back-face ratio that deactivates
@@ -352,8 +359,9 @@ PC_END(pc_environment);
  * distance: vec2[] per texel (mean, mean of squares);
  * rays: vec4[] per probe ray (radiance, hit distance; < 0: back face);
  * probes: vec4[] per probe (xyz offset, w = PC_DDGI_PROBE_* state as float);
- * stats: vec4[] per probe (x age, y updates its age held since its last wake, z unused (0),
- *   w = 1 when an off probe must be re-checked);
+ * stats: vec4[] per probe (x age, y updates its age held since its last wake, z bits 0-2: geometry
+ *   crosses the segment to the +x, +y, +z neighbour (ddgi_select.comp), w = 1 when an off probe
+ *   must be re-checked);
  * list: uint[] probes updated this update (written by ddgi_select.comp);
  * ctrl: pc_ddgi_control (host-visible: indirect dispatch sizes, census, drift sums);
  * wake: pc_ddgi_wake[control.z] boxes (host-visible);

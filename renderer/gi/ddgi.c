@@ -212,6 +212,10 @@ rd_vk_result rd_ddgi_configure(rd_ddgi *d, const float bmin[3], const float bmax
         snprintf(err, errlen, "at most %u rays per probe (got %u)", PC_DDGI_MAX_RAYS, rays);
         return RD_VK_ERR_UNSUPPORTED;
     }
+    if (s->visibility > PC_DDGI_VIS_OFF) {
+        snprintf(err, errlen, "unknown visibility rays mode %u", s->visibility);
+        return RD_VK_ERR_UNSUPPORTED;
+    }
     if (!(hysteresis >= 0 && hysteresis <= RD_DDGI_MAX_HYSTERESIS)) {
         snprintf(err, errlen, "hysteresis must be in [0, %g] (got %g)",
                  (double)RD_DDGI_MAX_HYSTERESIS, hysteresis);
@@ -258,7 +262,7 @@ rd_vk_result rd_ddgi_configure(rd_ddgi *d, const float bmin[3], const float bmax
     pc_ddgi_volume *v = &d->vol;
     memset(v, 0, sizeof *v);
     v->origin = (pc_vec4){origin[0], origin[1], origin[2], max_dist};
-    v->spacing = (pc_vec4){spacing[0], spacing[1], spacing[2], 0};
+    v->spacing = (pc_vec4){spacing[0], spacing[1], spacing[2], (float)s->visibility};
     v->counts = (pc_uvec4){counts[0], counts[1], counts[2], rays};
     /* 2021 paper: bias = (0.2 n + 0.8 v) * 0.75 * min spacing * 0.3 */
     v->params = (pc_vec4){hysteresis, 0.75f * min_spacing * 0.3f, 0.10f, 0.0f};

@@ -29,6 +29,7 @@ typedef struct rd_ddgi_settings {
     float hysteresis;    /* maximum weight of the old value, used when has_hysteresis is set */
     bool has_hysteresis; /* (0 too: no history); unset = RD_DDGI_DEFAULT_HYSTERESIS */
     unsigned seed;       /* ray rotations are a deterministic function of seed and update */
+    unsigned visibility; /* PC_DDGI_VIS_* (0: ALL, the default) */
 } rd_ddgi_settings;
 
 /* Probes per state after the last update (or reset). */

@@ -18,6 +18,8 @@ _Static_assert(PC_GI_OFF == 0 && PC_GI_CLASSIC == 1 && PC_GI_DDGI == 2 && SRV_GI
                "SRV_GI_NAMES order");
 _Static_assert(PC_ENV_UNIFORM == 0 && PC_ENV_GRADIENT == 1 && PC_ENV_IMAGE == 2,
                "SRV_SKY_MODE_NAMES order");
+_Static_assert(PC_DDGI_VIS_ALL == 0 && PC_DDGI_VIS_PROBES == 1 && PC_DDGI_VIS_OFF == 2,
+               "SRV_VISIBILITY_NAMES order");
 _Static_assert(SRV_SETTING_COUNT <= 31, "SRV_SET_* bits fit an int enum");
 
 #define BAD(...) (srv_api_fail(e, 400, SRV_ERR_INVALID_FIELD, __VA_ARGS__), false)
@@ -233,6 +235,7 @@ void srv_settings_to_gi(const srv_settings *s, rd_ddgi_settings *gi)
     gi->rays = s->rays_per_probe;
     gi->hysteresis = s->hysteresis;
     gi->has_hysteresis = true;
+    gi->visibility = s->visibility_rays;
 }
 
 /* ---- JSON ------------------------------------------------------------------------------- */

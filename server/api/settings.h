@@ -62,6 +62,7 @@ typedef enum srv_setting_type {
 #define SRV_VIEW_NAMES "final", "irradiance", "probes"
 #define SRV_GI_NAMES "off", "classic", "ddgi", "pathtrace"
 #define SRV_SKY_MODE_NAMES "uniform", "gradient", "image"
+#define SRV_VISIBILITY_NAMES "all", "probes", "off"
 /* gi_mode beyond PC_GI_*: reference path tracing, no probes (srv_settings_to_gi maps it to
  * PC_GI_OFF) */
 #define SRV_GI_PATHTRACE 3u
@@ -130,7 +131,12 @@ typedef enum srv_setting_type {
     X(SKY_INTENSITY, sky_intensity, FLOAT, "sky_intensity", "--sky-intensity", SERVE, "X", 0,      \
       1000000, 1, WORLD, (NULL), "scale of the HDR image's radiance")                              \
     X(SKY_ROTATION, sky_rotation, FLOAT, "sky_rotation", "--sky-rotation", SERVE, "DEG", -360,     \
-      360, 0, WORLD, (NULL), "turn of the HDR image about the vertical axis, degrees")
+      360, 0, WORLD, (NULL), "turn of the HDR image about the vertical axis, degrees")             \
+    X(VISIBILITY_RAYS, visibility_rays, ENUM, "visibility_rays", "--visibility-rays", ALL, "", 0,  \
+      0, PC_DDGI_VIS_ALL, WORLD, (SRV_VISIBILITY_NAMES),                                           \
+      "probe visibility rays where geometry crosses a probe cell (walls thinner than the "        \
+      "spacing): at probe-ray hits and camera pixels, at probe-ray hits only (no cost per "       \
+      "frame), or none (the paper's Chebyshev test alone)")
 /* clang-format on */
 
 /* Values a CPU device (lavapipe) starts with for the settings the command line did not give:
@@ -167,7 +173,7 @@ enum { SRV_SETTINGS(SRV_SETTING_BIT_) };
 /* The settings whose change restarts the probe field. */
 #define SRV_SET_GI_FIELDS                                                                          \
     (SRV_SET_GI_MODE | SRV_SET_PROBE_COUNTS | SRV_SET_PROBE_SPACING | SRV_SET_RAYS |               \
-     SRV_SET_HYSTERESIS)
+     SRV_SET_HYSTERESIS | SRV_SET_VISIBILITY_RAYS)
 /* The settings of the environment (a change relights everything). */
 #define SRV_SET_ENV_FIELDS                                                                         \
     (SRV_SET_SKY | SRV_SET_SKY_MODE | SRV_SET_SKY_GROUND | SRV_SET_SKY_INTENSITY |                 \
