@@ -186,8 +186,8 @@ uint ddgi_probe_edges(pc_ddgi_volume vol, uint index)
  * Beyond half a spacing outside the probe hull the result fades, over one spacing, to sky_e,
  * the environment's irradiance at n (env_irradiance).
  * Visibility rays (PC_DDGI_VIS_*; probe_hit: the caller shades a probe-ray hit, else a camera
- * pixel or a reflection hit): in a cell whose cage edges geometry crosses, each probe on a
- * crossed edge that still has weight gets a ray from the biased point; blocked, its weight
+ * pixel or a reflection hit): where geometry crosses a cage edge between two active probes,
+ * each of them that still has weight gets a ray from the biased point; blocked, its weight
  * drops to that of a probe Chebyshev rejects outright. The filtered distances cannot tell a
  * wall thinner than their spread (a 5 cm wall seen from 2 m, next to a depth edge) from open
  * space; the ray can (issue 28: thin-walls +222% -> -2.1% against the path tracer).
@@ -213,16 +213,26 @@ vec3 ddgi_irradiance(pc_ddgi_volume vol, pc_scene_refs scene, bool probe_hit, ve
      * the spacing, furniture) gets visibility rays: Chebyshev's test on filtered distances lets
      * light through such walls where a texel straddles a depth edge (issue 28); elsewhere the
      * test alone decides, as in the paper */
-    uint suspect = 0u; /* bit i: corner i's cage edge in this cell is crossed */
+    uint suspect = 0u; /* bit i: a crossed cage edge joins corner i to another active probe */
     if (mode == PC_GI_DDGI && vis_rays) {
+        uint live = 0u, edges[8];
         for (uint i = 0u; i < 8u; i++) {
             ivec3 pc = min(base + ivec3(i & 1u, (i >> 1) & 1u, (i >> 2) & 1u),
                            ivec3(vol.counts.xyz) - 1);
-            uint e = ddgi_probe_edges(vol, ddgi_probe_index(vol, pc));
-            for (uint k = 0u; k < 3u; k++)
-                if ((i & (1u << k)) == 0u && (e & (1u << k)) != 0u)
-                    suspect |= (1u << i) | (1u << (i | (1u << k)));
+            uint probe = ddgi_probe_index(vol, pc);
+            edges[i] = ddgi_probe_edges(vol, probe);
+            if (ddgi_probe_active(vol, probe)) live |= 1u << i;
         }
+        /* an edge into a probe that is off (inside geometry: not sampled) says only that the
+         * geometry is solid there; one between two active probes, that it is thinner than the
+         * spacing */
+        for (uint i = 0u; i < 8u; i++)
+            for (uint k = 0u; k < 3u; k++) {
+                uint j = i | (1u << k);
+                if (j != i && (edges[i] & (1u << k)) != 0u && (live & (1u << i)) != 0u &&
+                    (live & (1u << j)) != 0u)
+                    suspect |= (1u << i) | (1u << j);
+            }
     }
     vec3 sum = vec3(0.0);
     float wsum = 0.0;

@@ -282,9 +282,9 @@ PC_END(pc_environment);
 /* Probe states (probes[].w, as a float; 2021 follow-up paper, Sec. 5). Bit 0 (ACTIVE) means
  * shading samples the probe; bit 1 means its value is final and updates skip it. */
 #define PC_DDGI_PROBE_ACTIVE 1u   /* bit: outside geometry, sampled */
-/* Where the irradiance query traces visibility rays (ddgi.glsl, issue 28): in a cell whose cage
- * edges geometry crosses (a wall thinner than the spacing, furniture), one ray to each probe on
- * a crossed edge, at probe-ray hits and camera pixels and reflection hits (ALL, the default), at
+/* Where the irradiance query traces visibility rays (ddgi.glsl, issue 28): where geometry
+ * crosses a cage edge between two active probes (a wall thinner than the spacing), one ray to
+ * each of them, at probe-ray hits and camera pixels and reflection hits (ALL, the default), at
  * probe-ray hits only (PROBES), or nowhere (OFF: Chebyshev's test alone, as in the paper). */
 #define PC_DDGI_VIS_ALL 0u
 #define PC_DDGI_VIS_PROBES 1u
