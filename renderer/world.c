@@ -125,13 +125,13 @@ rd_vk_result rd_world_stage_environment(rd_vk *vk, rd_env_staged *out, rd_env_im
             memcpy(texels + i * 4, t, sizeof t);
         }
         rd_env_image_shrunk(&im, RD_WORLD_SH_WIDTH, &out->sh_image);
-        rd_env_image_free(&im);
+        rd_env_image_free(&im); /* before the GPU buffer: the peak is the floats and the halves */
         res = rd_buffer_create(vk, &out->texels, n * 8, RD_MEMORY_DEVICE, err, errlen);
         if (res == RD_VK_OK)
             res = rd_staging_adopt(&out->copies, &upload, &out->texels, 0, err, errlen);
         rd_buffer_destroy(vk, &upload); /* when not adopted */
     }
-    rd_env_image_free(&im);
+    rd_env_image_free(&im); /* when the staging buffer could not be had */
     if (res != RD_VK_OK) rd_env_staged_destroy(out);
     return res;
 }

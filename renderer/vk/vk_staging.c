@@ -33,10 +33,11 @@ static bool fits(const rd_buffer *dst, VkDeviceSize offset, VkDeviceSize size, c
 rd_vk_result rd_staging_adopt(rd_staging *s, rd_buffer *src, rd_buffer *dst, VkDeviceSize offset,
                               char *err, size_t errlen)
 {
-    if (!src->mapped || !fits(dst, offset, src->size, err, errlen)) {
-        if (!src->mapped) rd_vk_errorf(err, errlen, "Staging: the source is not host visible.");
+    if (!src->mapped) {
+        rd_vk_errorf(err, errlen, "Staging: the source is not host visible.");
         return RD_VK_ERR_VULKAN;
     }
+    if (!fits(dst, offset, src->size, err, errlen)) return RD_VK_ERR_VULKAN;
     rd_staging_copy *c = next_copy(s);
     c->src = *src;
     c->dst = dst->buffer;
@@ -74,7 +75,7 @@ rd_vk_result rd_staging_add(rd_vk *vk, rd_staging *s, rd_buffer *dst, VkDeviceSi
 
 void rd_staging_record(const rd_staging *s, rd_cmd *cmd)
 {
-    if (s->count == 0) return;
+    if (s->count == 0) return; /* no barrier either */
     for (uint32_t i = 0; i < s->count; i++) {
         const rd_staging_copy *c = &s->copies[i];
         VkBufferCopy region = {.srcOffset = 0, .dstOffset = c->offset, .size = c->size};
