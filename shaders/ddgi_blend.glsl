@@ -171,12 +171,25 @@ void main()
     DdgiControlRef ctrl = DdgiControlRef(vol.ctrl);
     bool inside = float(s_backfaces) > vol.params.z * float(n);
     uint state;
+    /* Off and back on keep the age, unless a wake event (geometry moved) listed the probe
+     * (st.w = 2, ddgi_select.comp): then it starts over. A probe on a surface (half its rays
+     * behind it, classified by how a few rays graze) can flip between off and on at every
+     * re-check; when each return reset its age it never slept, and the field never converged
+     * (probes on the walls of a room, tests/bench/results/h200/narrow_gap_spacing.txt). Kept, its
+     * ages still add up to the sleep age, so the bound below holds for it too. */
+    if (!probe_on) {
+        /* re-checked: by a wake event, or periodically, PC_DDGI_OFF_RECHECK updates after the
+         * last check, which the age counts as if blended (so off stints of a flipping probe do
+         * not stretch the bound either) */
+        if (st.w > 1.5)
+            st.xy = vec2(0.0);
+        else
+            st.x += float(PC_DDGI_OFF_RECHECK);
+    }
     if (inside) {
         state = PC_DDGI_PROBE_OFF;
-        st.xy = vec2(0.0); /* when it comes back on, it starts over */
     } else if (!probe_on) {
-        state = PC_DDGI_PROBE_AWAKE; /* back on (geometry moved): blended from the next update */
-        st.xy = vec2(0.0);
+        state = PC_DDGI_PROBE_AWAKE; /* back on: blended from the next update */
     } else {
         vec3 m = vec3(0.0);
         bool measured = true; /* every texel held a value before this blend */
@@ -216,6 +229,7 @@ void main()
     if (state == PC_DDGI_PROBE_AWAKE) atomicAdd(ctrl.after.x, 1u);
     else if (state == PC_DDGI_PROBE_SLEEPING) atomicAdd(ctrl.after.y, 1u);
     else atomicAdd(ctrl.after.z, 1u);
+    st.w = 0.0;
     stats.v[probe] = st;
     vec4 pd = DdgiProbeRef(vol.probes).v[probe];
     pd.w = float(state);

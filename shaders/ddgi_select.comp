@@ -49,8 +49,11 @@ void main()
     } else {
         atomicAdd(ctrl.before.z, 1u);
         DdgiStatsRef stats = DdgiStatsRef(vol.stats);
-        listed = stats.v[probe].w != 0.0 || (probe + vol.info.y) % PC_DDGI_OFF_RECHECK == 0u;
-        stats.v[probe].w = 0.0;
+        /* w = 2 tells the blend that a wake event (geometry moved) listed it: if it comes back
+         * on, it starts over; a periodic re-check that finds it on keeps its age */
+        bool woken = stats.v[probe].w != 0.0;
+        listed = woken || (probe + vol.info.y) % PC_DDGI_OFF_RECHECK == 0u;
+        stats.v[probe].w = woken ? 2.0 : 0.0;
     }
     if (!listed) return;
     uint slot = atomicAdd(ctrl.trace_args.y, 1u);

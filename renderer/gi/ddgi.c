@@ -112,8 +112,14 @@ static bool place_grid(const float bmin[3], const float bmax[3], const rd_ddgi_s
         if (s->counts[k]) {
             counts[k] = s->counts[k];
         } else {
-            float target = s->spacing[k] > 0 ? s->spacing[k] : default_spacing;
-            double n = span > 0 ? floor(span / target + 0.999) + 1 : 1;
+            /* A fitted spacing stretches to the span; a given one is kept, so its layers must
+             * fit inside the span: rounded up, they reached past it, and with a spacing that
+             * divides the bounds (1 m in an 8 x 3 x 4 m room) the outermost layers lay on the
+             * walls, half their rays outside the room (33% dark, and the field never slept;
+             * tests/bench/results/h200/narrow_gap_spacing.txt). */
+            double n = span <= 0          ? 1
+                       : s->spacing[k] > 0 ? floor(span / s->spacing[k] + 1e-4) + 1
+                                           : floor(span / default_spacing + 0.999) + 1;
             counts[k] = n < 1                         ? 1
                         : n > RD_DDGI_MAX_AXIS_PROBES ? RD_DDGI_MAX_AXIS_PROBES
                                                       : (unsigned)n;
@@ -392,8 +398,9 @@ void rd_ddgi_random_rotation(uint64_t *state, float m[3][3])
  *    little to second differences), and holds the ages while |mean| > max(0.2%, 2 standard
  *    errors). Drift restarts from scratch when a sleeping field wakes.
  *  - the bound: a probe's age holds for at most PC_DDGI_HOLD_FACTOR (3) sleep ages after its
- *    last wake (stats.y counts), so every probe sleeps within 4 sleep ages, 584 updates at
- *    h_max 0.97 (rd_ddgi_sleep_bound), whatever the measure says. Holding longer would not help:
+ *    last wake (stats.y counts), so every probe sleeps within 4 sleep ages (584 updates at
+ *    h_max 0.97), whatever the measure says; 601 with the re-check period a probe that flips
+ *    between off and awake may add (rd_ddgi_sleep_bound). Holding longer would not help:
  *    while ages hold, h stays low and the bounces converge by h + (1 - h) rho per update.
  *
  * Why the age ramp with a hold (a scalar model of the coupled field, 6% noise per update, mean
@@ -437,9 +444,12 @@ float rd_ddgi_sleep_age(float h_max)
 unsigned rd_ddgi_sleep_bound(float h_max)
 {
     /* each update that blends a probe adds 1 to its age or to its held count, and the held
-     * count stops at HOLD_FACTOR sleep ages */
+     * count stops at HOLD_FACTOR sleep ages. A probe on a surface may flip between off and
+     * awake: each periodic re-check of it while off adds the updates since the last one to its
+     * age (ddgi_blend.glsl), so it can be off for at most one re-check period past the sleep
+     * age and then comes back for the one blend that puts it to sleep. */
     double a = rd_ddgi_sleep_age(h_max);
-    return (unsigned)ceil(a) + (unsigned)ceil(PC_DDGI_HOLD_FACTOR * a);
+    return (unsigned)ceil(a) + (unsigned)ceil(PC_DDGI_HOLD_FACTOR * a) + PC_DDGI_OFF_RECHECK + 1;
 }
 
 bool rd_ddgi_converged(const rd_ddgi *d)
@@ -635,6 +645,38 @@ static float half_to_float(uint16_t h)
 }
 
 /* Lays out per-probe square tiles of `side` texels into one image. */
+rd_vk_result rd_ddgi_read_probes(rd_ddgi *d, rd_ddgi_probe_info **out, char *err, size_t errlen)
+{
+    unsigned n = rd_ddgi_probe_count(d);
+    pc_vec4 *probes = malloc((size_t)n * sizeof *probes + 1);
+    pc_vec4 *stats = malloc((size_t)n * sizeof *stats + 1);
+    rd_ddgi_probe_info *info = calloc((size_t)n + 1, sizeof *info);
+    if (!probes || !stats || !info) abort();
+    rd_vk_result r = rd_buffer_download(d->vk, &d->probes, 0, probes, (size_t)n * 16, err, errlen);
+    if (r == RD_VK_OK)
+        r = rd_buffer_download(d->vk, &d->stats, 0, stats, (size_t)n * 16, err, errlen);
+    const unsigned c[3] = {d->vol.counts.x, d->vol.counts.y, d->vol.counts.z};
+    for (unsigned i = 0; r == RD_VK_OK && i < n; i++) {
+        unsigned coord[3] = {i % c[0], (i / c[0]) % c[1], i / (c[0] * c[1])};
+        const float o[3] = {d->vol.origin.x, d->vol.origin.y, d->vol.origin.z};
+        const float s[3] = {d->vol.spacing.x, d->vol.spacing.y, d->vol.spacing.z};
+        const float off[3] = {probes[i].x, probes[i].y, probes[i].z};
+        for (int k = 0; k < 3; k++) info[i].position[k] = o[k] + (float)coord[k] * s[k] + off[k];
+        info[i].state = (unsigned)probes[i].w;
+        info[i].age = stats[i].x;
+        info[i].held = stats[i].y;
+        info[i].edges = (unsigned)stats[i].z;
+    }
+    free(probes);
+    free(stats);
+    if (r != RD_VK_OK) {
+        free(info);
+        return r;
+    }
+    *out = info;
+    return RD_VK_OK;
+}
+
 static float *tile_image(unsigned probes, unsigned side, unsigned *w, unsigned *h)
 {
     unsigned per_row = (unsigned)ceil(sqrt((double)probes));

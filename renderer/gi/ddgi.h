@@ -89,7 +89,8 @@ bool rd_ddgi_converged(const rd_ddgi *d);
 /* The age at which a probe falls asleep for the configured maximum hysteresis. */
 float rd_ddgi_sleep_age(float max_hysteresis);
 /* The most updates after a wake event (or a reset) before a probe falls asleep, however the field
- * drifts: ages hold for at most PC_DDGI_HOLD_FACTOR sleep ages (584 at the default 0.97). */
+ * drifts: ages hold for at most PC_DDGI_HOLD_FACTOR sleep ages, plus one off re-check period for
+ * a probe that flips between off and awake (601 at the default 0.97). */
 unsigned rd_ddgi_sleep_bound(float max_hysteresis);
 /* Chooses the next update's random rotation; call before writing pc_globals for it. */
 void rd_ddgi_begin_update(rd_ddgi *d);
@@ -112,6 +113,17 @@ unsigned rd_ddgi_probe_count(const rd_ddgi *d);
 rd_vk_result rd_ddgi_read_atlases(rd_ddgi *d, float **irr_rgb, unsigned *irr_w, unsigned *irr_h,
                                   float **dist_rgb, unsigned *dist_w, unsigned *dist_h, char *err,
                                   size_t errlen);
+
+/* One probe as the GPU holds it (rd_ddgi_read_probes). */
+typedef struct rd_ddgi_probe_info {
+    float position[3]; /* world position: grid point plus its offset */
+    unsigned state;    /* PC_DDGI_PROBE_OFF, _AWAKE or _SLEEPING */
+    float age;         /* updates blended since its last wake (sleeps at rd_ddgi_sleep_age) */
+    float held;        /* updates its age was held while the field drifted */
+    unsigned edges;    /* bits 0-2: geometry crosses the segment to the +x, +y, +z neighbour */
+} rd_ddgi_probe_info;
+/* Downloads every probe's position, state and ages (rd_ddgi_probe_count entries; caller frees). */
+rd_vk_result rd_ddgi_read_probes(rd_ddgi *d, rd_ddgi_probe_info **out, char *err, size_t errlen);
 
 /* Uniformly random rotation (rows of a 3x3) from a 64-bit state (Shoemake's quaternion
  * method); advances the state. Exposed for tests. */

@@ -52,7 +52,8 @@ static void render_usage(FILE *f)
             "                         or maps rebuilt every update (benchmarks)\n"
             "  --seed S               seed of the probe ray rotations (same seed, same image)\n"
             "  --dump-probes PREFIX   write the probe atlases as PREFIX-irradiance.{pfm,png}\n"
-            "                         and PREFIX-distance.pfm\n"
+            "                         and PREFIX-distance.pfm, and every probe's position,\n"
+            "                         state and age as PREFIX-probes.csv\n"
             "  --timings              print BVH build time, per-pass GPU times and rays/s\n"
             "  --repeat N             frames to time for --timings, after 0.5 s of warm-up;\n"
             "                         each pass's median is reported (default 5)\n"
@@ -305,6 +306,26 @@ static rd_vk_result dump_probes(rd_renderer *r, const char *prefix, char *err, s
     free(rgba);
     free(irr);
     free(dist);
+    rd_ddgi_probe_info *probes = NULL;
+    if (ok) vr = rd_ddgi_read_probes(&r->world.ddgi, &probes, err, errlen);
+    if (!ok || vr != RD_VK_OK) return ok ? vr : RD_VK_ERR_VULKAN;
+    snprintf(path, sizeof path, "%s-probes.csv", prefix);
+    FILE *f = fopen(path, "w");
+    if (f) {
+        static const char *const state_names[] = {"off", "awake", "?", "sleeping"};
+        fprintf(f, "probe,x,y,z,state,age,held,crossed_edges\n");
+        for (unsigned i = 0; i < rd_ddgi_probe_count(&r->world.ddgi); i++) {
+            const rd_ddgi_probe_info *p = &probes[i];
+            fprintf(f, "%u,%.4f,%.4f,%.4f,%s,%.0f,%.0f,%u\n", i, p->position[0], p->position[1],
+                    p->position[2], p->state < 4 ? state_names[p->state] : "?", p->age, p->held,
+                    p->edges);
+        }
+        ok = fclose(f) == 0;
+    } else {
+        ok = false;
+    }
+    if (!ok) snprintf(err, errlen, "cannot write %.400s", path);
+    free(probes);
     return ok ? RD_VK_OK : RD_VK_ERR_VULKAN;
 }
 
