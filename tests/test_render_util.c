@@ -72,7 +72,8 @@ float *test_render(rd_vk *vk, const test_render_desc *d, pc_view *view_out,
         printf("%s: converged after %u probe updates\n", d->scene, done);
         if (d->converge_updates) *d->converge_updates = done;
     }
-    if (res == RD_VK_OK) res = rd_renderer_render(&r, &gs, &cam, &fs, err, sizeof err);
+    for (unsigned f = 0; res == RD_VK_OK && f < (d->frames ? d->frames : 1); f++)
+        res = rd_renderer_render(&r, &gs, &cam, &fs, err, sizeof err);
     CHECKF(res == RD_VK_OK, "%s", err);
     if (res == RD_VK_OK) res = rd_renderer_read_hdr(&r, rgb, err, sizeof err);
     CHECKF(res == RD_VK_OK, "%s", err);
