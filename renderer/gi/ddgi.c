@@ -117,7 +117,7 @@ static bool place_grid(const float bmin[3], const float bmax[3], const rd_ddgi_s
              * divides the bounds (1 m in an 8 x 3 x 4 m room) the outermost layers lay on the
              * walls, half their rays outside the room (33% dark, and the field never slept;
              * tests/bench/results/h200/narrow_gap_spacing.txt). */
-            double n = span <= 0          ? 1
+            double n = span <= 0           ? 1
                        : s->spacing[k] > 0 ? floor(span / s->spacing[k] + 1e-4) + 1
                                            : floor(span / default_spacing + 0.999) + 1;
             counts[k] = n < 1                         ? 1
@@ -661,7 +661,8 @@ rd_vk_result rd_ddgi_read_probes(rd_ddgi *d, rd_ddgi_probe_info **out, char *err
         const float o[3] = {d->vol.origin.x, d->vol.origin.y, d->vol.origin.z};
         const float s[3] = {d->vol.spacing.x, d->vol.spacing.y, d->vol.spacing.z};
         const float off[3] = {probes[i].x, probes[i].y, probes[i].z};
-        for (int k = 0; k < 3; k++) info[i].position[k] = o[k] + (float)coord[k] * s[k] + off[k];
+        for (int k = 0; k < 3; k++)
+            info[i].position[k] = o[k] + (float)coord[k] * s[k] + off[k];
         info[i].state = (unsigned)probes[i].w;
         info[i].age = stats[i].x;
         info[i].held = stats[i].y;

@@ -555,8 +555,8 @@ static void test_thin_walls_metal(void)
     float *img = ref ? test_render(&vk, &dd, NULL, NULL) : NULL;
     if (img) {
         double r = test_image_mean(ref, PX * 3, NULL), m = test_image_mean(img, PX * 3, NULL);
-        printf("thin-walls+metal: DDGI mean %.4f, path traced %.4f: bias %+.1f%%, relMSE %.3g\n",
-               m, r, 100 * (m / r - 1), rel_mse(img, ref));
+        printf("thin-walls+metal: DDGI mean %.4f, path traced %.4f: bias %+.1f%%, relMSE %.3g\n", m,
+               r, 100 * (m / r - 1), rel_mse(img, ref));
         CHECKF(fabs(m / r - 1) < 0.10, "thin-walls+metal: bias %+.1f%%", 100 * (m / r - 1));
         CHECK(count_non_finite(img) == 0);
     }
@@ -564,34 +564,52 @@ static void test_thin_walls_metal(void)
     free(ref);
 }
 
-int main(int argc, char **argv)
+static void test_cornell_errors(void)
 {
-    if (!test_vk_open(&vk)) return test_finish();
-    if (argc > 1) { /* one case by name, while working on it */
-        if (strcmp(argv[1], "probes-on-surfaces") == 0) test_probes_on_surfaces();
-        else if (strcmp(argv[1], "thin-walls-metal") == 0) test_thin_walls_metal();
-        else CHECKF(0, "no case %s", argv[1]);
-        return test_vk_close(&vk);
-    }
-    unsigned n;
-    const rd_hard_case *cases = rd_hard_cases(&n);
-    for (unsigned i = 0; i < n; i++)
-        printf("case %-13s expects: %s\n", cases[i].name, cases[i].expect);
-    test_pathtracer_analytic();
     test_cornell_error("cornell");
     test_cornell_error("thick-walls");
     test_cornell_error("many-lights");
-    test_thin_walls();
-    test_thin_walls_metal();
-    test_thick_walls_probes();
-    test_probes_on_surfaces();
-    test_invariance();
-    test_far_baked();
-    test_no_lights();
-    test_closed_room_sky();
+}
+
+static void test_finite_and_lit_cases(void)
+{
     test_finite_and_lit("tiny-emitter", 64, 0);
     test_finite_and_lit("degenerate", 16, 3);
-    test_mirrored();
-    test_moving();
+}
+
+/* every check, in order; `test_gpu_hard_cases NAME` runs one (while working on it) */
+static const struct {
+    const char *name;
+    void (*run)(void);
+} checks[] = {
+    {"pathtracer-analytic", test_pathtracer_analytic},
+    {"cornell-errors", test_cornell_errors},
+    {"thin-walls", test_thin_walls},
+    {"thin-walls-metal", test_thin_walls_metal},
+    {"thick-walls-probes", test_thick_walls_probes},
+    {"probes-on-surfaces", test_probes_on_surfaces},
+    {"invariance", test_invariance},
+    {"far-baked", test_far_baked},
+    {"no-lights", test_no_lights},
+    {"closed-room-sky", test_closed_room_sky},
+    {"finite-and-lit", test_finite_and_lit_cases},
+    {"mirrored", test_mirrored},
+    {"moving", test_moving},
+};
+
+int main(int argc, char **argv)
+{
+    if (!test_vk_open(&vk)) return test_finish();
+    unsigned n, ran = 0;
+    const rd_hard_case *cases = rd_hard_cases(&n);
+    if (argc < 2)
+        for (unsigned i = 0; i < n; i++)
+            printf("case %-13s expects: %s\n", cases[i].name, cases[i].expect);
+    for (size_t i = 0; i < sizeof checks / sizeof checks[0]; i++)
+        if (argc < 2 || strcmp(argv[1], checks[i].name) == 0) {
+            checks[i].run();
+            ran++;
+        }
+    CHECKF(ran > 0, "no check named %s", argc > 1 ? argv[1] : "");
     return test_vk_close(&vk);
 }
