@@ -112,14 +112,17 @@ static bool place_grid(const float bmin[3], const float bmax[3], const rd_ddgi_s
         if (s->counts[k]) {
             counts[k] = s->counts[k];
         } else {
-            /* A fitted spacing stretches to the span; a given one is kept, so its layers must
-             * fit inside the span: rounded up, they reached past it, and with a spacing that
-             * divides the bounds (1 m in an 8 x 3 x 4 m room) the outermost layers lay on the
-             * walls, half their rays outside the room (33% dark, and the field never slept;
-             * tests/bench/results/h200/narrow_gap_spacing.txt). */
-            double n = span <= 0           ? 1
-                       : s->spacing[k] > 0 ? floor(span / s->spacing[k] + 1e-4) + 1
-                                           : floor(span / default_spacing + 0.999) + 1;
+            /* A fitted spacing stretches to the span. A given one is kept, and its outermost
+             * layers lie between 2% and 52% of a spacing inside the bounds: rounded up to the
+             * span, they reached past it, and with a spacing that divides the bounds (1 m in
+             * an 8 x 3 x 4 m room) lay on the walls, half their rays outside the room (33% dark,
+             * and the field never slept); rounded down to the span, they could stop a whole
+             * spacing short of the floor, where the query fades toward the sky (0.25 m: 63%
+             * dark; tests/bench/results/h200/narrow_gap_spacing.txt). */
+            double given = ext[k] / (s->spacing[k] > 0 ? s->spacing[k] : 1);
+            double n = s->spacing[k] > 0 ? (given > 0.04 ? floor(given - 0.04) + 1 : 1)
+                       : span <= 0       ? 1
+                                         : floor(span / default_spacing + 0.999) + 1;
             counts[k] = n < 1                         ? 1
                         : n > RD_DDGI_MAX_AXIS_PROBES ? RD_DDGI_MAX_AXIS_PROBES
                                                       : (unsigned)n;
