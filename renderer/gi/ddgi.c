@@ -16,9 +16,6 @@
 #include "shaders/ddgi_trace.spv.h"
 #include "shaders/ddgi_wake.spv.h"
 
-#define IRR_SIDE (PC_DDGI_IRR_INTERIOR + 2)
-#define DIST_SIDE (PC_DDGI_DIST_INTERIOR + 2)
-
 /* The probe passes, one line each (rd_ddgi_update dispatches them). */
 static const rd_pipeline_desc pipelines[] = {
     RD_PIPELINE_DESC(rd_ddgi, trace, "probe trace", pc_spv_ddgi_trace, sizeof(pc_push)),
@@ -238,10 +235,12 @@ rd_vk_result rd_ddgi_configure(rd_ddgi *d, const float bmin[3], const float bmax
     if (realloc_needed) {
         free_buffers(d);
         d->configured = false;
-        rd_vk_result r = rd_buffer_create(d->vk, &d->irradiance, probes * IRR_SIDE * IRR_SIDE * 8,
+        rd_vk_result r = rd_buffer_create(d->vk, &d->irradiance,
+                                          probes * RD_DDGI_IRR_SIDE * RD_DDGI_IRR_SIDE * 8,
                                           RD_MEMORY_DEVICE, err, errlen);
         if (r == RD_VK_OK)
-            r = rd_buffer_create(d->vk, &d->distance, probes * DIST_SIDE * DIST_SIDE * 8,
+            r = rd_buffer_create(d->vk, &d->distance,
+                                 probes * RD_DDGI_DIST_SIDE * RD_DDGI_DIST_SIDE * 8,
                                  RD_MEMORY_DEVICE, err, errlen);
         if (r == RD_VK_OK)
             r = rd_buffer_create(d->vk, &d->rays, probes * rays * 16, RD_MEMORY_DEVICE, err,
@@ -275,7 +274,7 @@ rd_vk_result rd_ddgi_configure(rd_ddgi *d, const float bmin[3], const float bmax
     v->counts = (pc_uvec4){counts[0], counts[1], counts[2], rays};
     /* 2021 paper: bias = (0.2 n + 0.8 v) * 0.75 * min spacing * 0.3 */
     v->params = (pc_vec4){hysteresis, 0.75f * min_spacing * 0.3f, 0.10f, 0.0f};
-    v->info = (pc_uvec4){s->mode, 0, IRR_SIDE, DIST_SIDE};
+    v->info = (pc_uvec4){s->mode, 0, RD_DDGI_IRR_SIDE, RD_DDGI_DIST_SIDE};
     v->irradiance = d->irradiance.address;
     v->distance = d->distance.address;
     v->rays = d->rays.address;
@@ -502,7 +501,7 @@ void rd_ddgi_begin_update(rd_ddgi *d)
     memcpy(d->wake_boxes.mapped, d->wakes, sizeof(pc_ddgi_wake) * d->wake_count);
     d->wake_count = 0;
     unsigned ray_groups = (d->vol.counts.w + PC_WG_1D - 1) / PC_WG_1D;
-    unsigned border_groups = (4 * (DIST_SIDE - 1) + PC_WG_1D - 1) / PC_WG_1D;
+    unsigned border_groups = (4 * (RD_DDGI_DIST_SIDE - 1) + PC_WG_1D - 1) / PC_WG_1D;
     pc_ddgi_control c = {.trace_args = {ray_groups, 0, 1, 0},
                          .blend_args = {0, 1, 1, 0},
                          .border_args = {border_groups, 0, 1, 0}};
@@ -630,114 +629,4 @@ void rd_ddgi_end_update(rd_ddgi *d)
      * fresh values ask for: the encoded ratio times the encoding exponent */
     double D = stored > 0 ? (double)PC_DDGI_IRRADIANCE_EXPONENT * gap / stored : gap > 0 ? 1 : 0;
     drift_measure(d, fmax(-DRIFT_MAX, fmin(DRIFT_MAX, D)));
-}
-
-static float half_to_float(uint16_t h)
-{
-    uint32_t sign = (uint32_t)(h & 0x8000) << 16, exp = (h >> 10) & 0x1f, man = h & 0x3ff;
-    float f;
-    if (exp == 0) {
-        f = ldexpf((float)man, -24);
-    } else if (exp == 31) {
-        f = man ? NAN : INFINITY;
-    } else {
-        uint32_t bits = ((exp + 112) << 23) | (man << 13);
-        memcpy(&f, &bits, 4);
-    }
-    return sign ? -f : f;
-}
-
-/* Lays out per-probe square tiles of `side` texels into one image. */
-rd_vk_result rd_ddgi_read_probes(rd_ddgi *d, rd_ddgi_probe_info **out, char *err, size_t errlen)
-{
-    unsigned n = rd_ddgi_probe_count(d);
-    pc_vec4 *probes = malloc((size_t)n * sizeof *probes + 1);
-    pc_vec4 *stats = malloc((size_t)n * sizeof *stats + 1);
-    rd_ddgi_probe_info *info = calloc((size_t)n + 1, sizeof *info);
-    if (!probes || !stats || !info) abort();
-    rd_vk_result r = rd_buffer_download(d->vk, &d->probes, 0, probes, (size_t)n * 16, err, errlen);
-    if (r == RD_VK_OK)
-        r = rd_buffer_download(d->vk, &d->stats, 0, stats, (size_t)n * 16, err, errlen);
-    const unsigned c[3] = {d->vol.counts.x, d->vol.counts.y, d->vol.counts.z};
-    for (unsigned i = 0; r == RD_VK_OK && i < n; i++) {
-        unsigned coord[3] = {i % c[0], (i / c[0]) % c[1], i / (c[0] * c[1])};
-        const float o[3] = {d->vol.origin.x, d->vol.origin.y, d->vol.origin.z};
-        const float s[3] = {d->vol.spacing.x, d->vol.spacing.y, d->vol.spacing.z};
-        const float off[3] = {probes[i].x, probes[i].y, probes[i].z};
-        for (int k = 0; k < 3; k++)
-            info[i].position[k] = o[k] + (float)coord[k] * s[k] + off[k];
-        info[i].state = (unsigned)probes[i].w;
-        info[i].age = stats[i].x;
-        info[i].held = stats[i].y;
-        info[i].edges = (unsigned)stats[i].z;
-    }
-    free(probes);
-    free(stats);
-    if (r != RD_VK_OK) {
-        free(info);
-        return r;
-    }
-    *out = info;
-    return RD_VK_OK;
-}
-
-static float *tile_image(unsigned probes, unsigned side, unsigned *w, unsigned *h)
-{
-    unsigned per_row = (unsigned)ceil(sqrt((double)probes));
-    if (per_row == 0) per_row = 1;
-    unsigned rows = (probes + per_row - 1) / per_row;
-    *w = per_row * side;
-    *h = (rows ? rows : 1) * side;
-    float *img = calloc((size_t)*w * *h * 3, sizeof(float));
-    if (!img) abort();
-    return img;
-}
-
-rd_vk_result rd_ddgi_read_atlases(rd_ddgi *d, float **irr_rgb, unsigned *irr_w, unsigned *irr_h,
-                                  float **dist_rgb, unsigned *dist_w, unsigned *dist_h, char *err,
-                                  size_t errlen)
-{
-    unsigned probes = rd_ddgi_probe_count(d);
-    size_t irr_texels = (size_t)probes * IRR_SIDE * IRR_SIDE;
-    size_t dist_texels = (size_t)probes * DIST_SIDE * DIST_SIDE;
-    uint16_t *irr = malloc(irr_texels * 8);
-    float *dist = malloc(dist_texels * 8);
-    if (!irr || !dist) abort();
-    rd_vk_result r = rd_buffer_download(d->vk, &d->irradiance, 0, irr, irr_texels * 8, err, errlen);
-    if (r == RD_VK_OK)
-        r = rd_buffer_download(d->vk, &d->distance, 0, dist, dist_texels * 8, err, errlen);
-    if (r != RD_VK_OK) {
-        free(irr);
-        free(dist);
-        return r;
-    }
-    float *a = tile_image(probes, IRR_SIDE, irr_w, irr_h);
-    float *b = tile_image(probes, DIST_SIDE, dist_w, dist_h);
-    unsigned per_row_a = *irr_w / IRR_SIDE, per_row_b = *dist_w / DIST_SIDE;
-    float e = (float)PC_DDGI_IRRADIANCE_EXPONENT;
-    for (unsigned p = 0; p < probes; p++)
-        for (unsigned y = 0; y < IRR_SIDE; y++)
-            for (unsigned x = 0; x < IRR_SIDE; x++) {
-                const uint16_t *t = &irr[(((size_t)p * IRR_SIDE + y) * IRR_SIDE + x) * 4];
-                size_t o = ((size_t)((p / per_row_a) * IRR_SIDE + y) * *irr_w +
-                            (p % per_row_a) * IRR_SIDE + x) *
-                           3;
-                for (int c = 0; c < 3; c++)
-                    a[o + c] = powf(fmaxf(half_to_float(t[c]), 0), e);
-            }
-    for (unsigned p = 0; p < probes; p++)
-        for (unsigned y = 0; y < DIST_SIDE; y++)
-            for (unsigned x = 0; x < DIST_SIDE; x++) {
-                const float *t = &dist[(((size_t)p * DIST_SIDE + y) * DIST_SIDE + x) * 2];
-                size_t o = ((size_t)((p / per_row_b) * DIST_SIDE + y) * *dist_w +
-                            (p % per_row_b) * DIST_SIDE + x) *
-                           3;
-                b[o] = t[0];
-                b[o + 1] = t[1];
-            }
-    free(irr);
-    free(dist);
-    *irr_rgb = a;
-    *dist_rgb = b;
-    return RD_VK_OK;
 }

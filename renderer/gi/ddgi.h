@@ -10,6 +10,10 @@
 #include "renderer/vk/vk_buffer.h"
 #include "renderer/vk/vk_compute.h"
 
+/* Sides of a probe's atlas tiles: the octahedral interior and a one-texel border. */
+#define RD_DDGI_IRR_SIDE (PC_DDGI_IRR_INTERIOR + 2)
+#define RD_DDGI_DIST_SIDE (PC_DDGI_DIST_INTERIOR + 2)
+
 /* The probe field's defaults (what zero rays or an unset has_hysteresis in rd_ddgi_settings stand
  * for) and limits (rd_ddgi_configure refuses settings beyond them). The server's settings table
  * (server/api/settings.h) takes its defaults and ranges from here. */
