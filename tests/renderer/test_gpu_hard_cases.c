@@ -379,15 +379,12 @@ static void test_thick_walls_probes(void)
     CHECK(rd_renderer_render(&r, &gs, &cam, &fs, err, sizeof err) == RD_VK_OK);
     unsigned n = rd_ddgi_probe_count(&r.world.ddgi), inside = 0, off = 0, off_outside = 0;
     unsigned off_due = 0; /* off probes re-checked in the next update (the 4th) */
-    pc_vec4 *probes = malloc(n * sizeof *probes);
-    CHECK(rd_buffer_download(&vk, &r.world.ddgi.probes, 0, probes, n * sizeof *probes, err,
-                             sizeof err) == RD_VK_OK);
-    const pc_ddgi_volume *v = &r.world.ddgi.vol;
-    for (unsigned i = 0; i < n; i++) {
-        unsigned x = i % v->counts.x, z = i / (v->counts.x * v->counts.y);
-        float px = v->origin.x + x * v->spacing.x, pz = v->origin.z + z * v->spacing.z;
+    rd_ddgi_probe_info *probes = NULL;
+    CHECK(rd_ddgi_read_probes(&r.world.ddgi, &probes, err, sizeof err) == RD_VK_OK);
+    for (unsigned i = 0; probes && i < n; i++) {
+        float px = probes[i].position[0], pz = probes[i].position[2];
         bool in_wall = fabsf(px) < 0.3f && pz < 0.3f;
-        bool active = ((unsigned)probes[i].w & PC_DDGI_PROBE_ACTIVE) != 0;
+        bool active = (probes[i].state & PC_DDGI_PROBE_ACTIVE) != 0;
         inside += in_wall;
         off += in_wall && !active;
         off_outside += !in_wall && !active;
