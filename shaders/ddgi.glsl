@@ -22,6 +22,8 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer DdgiControl
     ivec4 drift;
     uvec4 shade_args;
 };
+layout(buffer_reference, std430, buffer_reference_align = 8) buffer DdgiWeightRef { uvec2 v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer DdgiWeightCountRef { uint v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer DdgiWakeRef
 {
     pc_ddgi_wake v[];
@@ -66,6 +68,19 @@ vec3 ddgi_ray_dir(pc_ddgi_volume vol, uint i)
     vec3 d = fibonacci_dir(i, vol.counts.w);
     return normalize(vec3(dot(vol.rotation[0].xyz, d), dot(vol.rotation[1].xyz, d),
                           dot(vol.rotation[2].xyz, d)));
+}
+
+/* ---- blend weights ------------------------------------------------------------------- */
+/* cos^50 falls below 1.5e-5 beyond 37 degrees: the distance blend leaves out the rays farther
+ * than that from its texel */
+#define DDGI_DIST_MIN_COS 0.8
+
+/* The weight of a ray at cosine c from a texel's direction (paper Sec. 4.2): the irradiance
+ * blend's max(0, c), the distance blend's c^50 (0 beyond DDGI_DIST_MIN_COS). */
+float ddgi_blend_weight(bool irradiance, float c)
+{
+    if (irradiance) return max(0.0, c);
+    return c > DDGI_DIST_MIN_COS ? pow(c, 50.0) : 0.0;
 }
 
 /* ---- probe addressing ---------------------------------------------------------------- */

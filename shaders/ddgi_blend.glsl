@@ -2,7 +2,9 @@
  * thread per interior texel of its octahedral tile. Compiled twice, DDGI_BLEND_IRRADIANCE
  * selecting the atlas: 1 = irradiance (ddgi_blend_irradiance.comp: 8x8, weights max(0, cos),
  * perceptual encoding x^(1/5)), 0 = distance (ddgi_blend_distance.comp: 16x16, weights cos^50,
- * mean and mean square of min(|t|, max distance)); each workgroup is its tile's size (one
+ * mean and mean square of min(|t|, max distance)); each texel visits only the rays its weight
+ * counts, as the update's weight lists give them (ddgi_weights.comp, shared by every probe); each
+ * workgroup is its tile's size (one
  * program sized for the distance tile left three quarters of the irradiance blend's threads
  * idle, which lavapipe pays for). The distance blend runs first.
  *
@@ -34,37 +36,11 @@ layout(buffer_reference, std430, buffer_reference_align = 8) volatile buffer Ddg
 };
 
 #define CHUNK 256u
-#define TEXELS (PC_DDGI_IRR_INTERIOR * PC_DDGI_IRR_INTERIOR)
+#define TEXELS PC_DDGI_IRR_TEXELS
 shared vec4 s_ray[CHUNK];
-shared vec3 s_dir[CHUNK];
 shared uint s_backfaces;
 shared vec3 s_lum[TEXELS]; /* per irradiance texel, encoded luminance: x stored before the
                               blend (< 0: never written), y fresh, z the gap the blend closed */
-
-/* cos^50 falls below 1.5e-5 beyond 37 degrees: the distance blend leaves out the rays farther
- * than that from its texel */
-#define DIST_MIN_COS 0.8
-
-/* The rays [x, y) that can lie within acos(min_cos) of direction d: the ray set is spherical
- * Fibonacci (ddgi.glsl fibonacci_dir), whose ray i has z = 1 - (2i + 1) / n before the update's
- * rotation, so the rays within an angle a of d form one run of indices, those whose polar angle
- * is within a of d's in the set's own frame. Rays outside the run have cos <= min_cos, which the
- * blend's weights give nothing: skipping them changes no sum. A margin of 1e-3 radians covers the
- * rounding of the rotation and normalisation. Most of a probe's rays are left out (about half of
- * the distance blend's, a quarter of the irradiance blend's), and on lavapipe the loop over them,
- * not its body, was what these passes cost. */
-uvec2 ray_band(pc_ddgi_volume vol, vec3 d, float min_cos, uint n)
-{
-    /* R^T d: ddgi_ray_dir applies R, whose rows are vol.rotation[0..2] */
-    vec3 l = vol.rotation[0].xyz * d.x + vol.rotation[1].xyz * d.y + vol.rotation[2].xyz * d.z;
-    float theta = acos(clamp(l.z / max(length(l), 1e-6), -1.0, 1.0));
-    float a = acos(min_cos) + 1e-3;
-    float z_hi = cos(max(theta - a, 0.0)), z_lo = cos(min(theta + a, PC_PI));
-    /* z = 1 - (2i + 1) / n  <=>  i = ((1 - z) n - 1) / 2 */
-    float fn = float(n);
-    float i_lo = floor(((1.0 - z_hi) * fn - 1.0) * 0.5), i_hi = ceil(((1.0 - z_lo) * fn - 1.0) * 0.5);
-    return uvec2(uint(clamp(i_lo, 0.0, fn)), uint(clamp(i_hi + 1.0, 0.0, fn)));
-}
 
 void main()
 {
@@ -75,7 +51,6 @@ void main()
     uint side = interior + 2u;
     uint probe = ddgi_listed_probe(vol, gl_WorkGroupID.x);
     uvec2 t = gl_LocalInvocationID.xy; /* the workgroup is the tile's interior */
-    vec3 texel_dir = oct_texel_dir(t, interior);
     /* the classification as the trace saw it (the irradiance blend updates it last) */
     bool probe_on = ddgi_probe_active(vol, probe);
     if (!probe_on && !irradiance) return; /* whole workgroup: an off probe keeps its atlas */
@@ -86,40 +61,37 @@ void main()
     if (lid == 0u) s_backfaces = 0u;
     if (lid < TEXELS) s_lum[lid] = vec3(0.0);
 
-    uvec2 band = ray_band(vol, texel_dir, irradiance ? 0.0 : DIST_MIN_COS, n);
+    /* this texel's rays of weight above zero, in increasing ray order (ddgi_weights.comp) */
+    uint texel_index = irradiance ? lid : PC_DDGI_IRR_TEXELS + lid;
+    uint entries = mine ? DdgiWeightCountRef(vol.weights).v[texel_index] : 0u;
+    DdgiWeightRef list = DdgiWeightRef(vol.weights + PC_DDGI_WEIGHT_HEADER);
+    uint first_entry = texel_index * vol.counts.w;
+    uint k = 0u; /* the next entry */
     vec3 sum = vec3(0.0);
     float wsum = 0.0;
     float max_dist = vol.origin.w;
     for (uint base = 0u; base < n; base += CHUNK) {
         barrier();
-        for (uint i = lid; i < CHUNK && base + i < n; i += threads) {
+        for (uint i = lid; i < CHUNK && base + i < n; i += threads)
             s_ray[i] = DdgiRayRef(vol.rays).v[probe * vol.counts.w + base + i];
-            s_dir[i] = ddgi_ray_dir(vol, base + i);
-        }
         barrier();
         uint count = min(CHUNK, n - base);
         if (irradiance && lid == 0u) /* classification: back faces among the traced rays */
             for (uint i = 0u; i < count; i++) s_backfaces += s_ray[i].w < 0.0 ? 1u : 0u;
-        if (!mine) continue;
-        uint first = clamp(band.x, base, base + count) - base;
-        uint last = clamp(band.y, base, base + count) - base;
-        if (irradiance) {
-            for (uint i = first; i < last; i++) {
-                vec4 r = s_ray[i];
-                float w = max(0.0, dot(texel_dir, s_dir[i]));
+        uint end = base + count;
+        for (; k < entries; k++) {
+            uvec2 e = list.v[first_entry + k];
+            if (e.x >= end) break; /* in a later chunk */
+            vec4 r = s_ray[e.x - base];
+            float w = uintBitsToFloat(e.y);
+            if (irradiance) {
                 if (r.w < 0.0) continue; /* back face: no irradiance */
                 sum += r.rgb * w;
-                wsum += w;
-            }
-        } else {
-            for (uint i = first; i < last; i++) {
-                float c = dot(texel_dir, s_dir[i]);
-                if (c <= DIST_MIN_COS) continue;
-                float w = pow(c, 50.0);
-                float d = min(abs(s_ray[i].w), max_dist);
+            } else {
+                float d = min(abs(r.w), max_dist);
                 sum.xy += vec2(d, d * d) * w;
-                wsum += w;
             }
+            wsum += w;
         }
     }
     DdgiStatsRef stats = DdgiStatsRef(vol.stats);

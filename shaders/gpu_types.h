@@ -279,6 +279,11 @@ PC_END(pc_environment);
 #define PC_DDGI_IRR_INTERIOR 8u   /* irradiance texels per side, without border */
 #define PC_DDGI_DIST_INTERIOR 16u /* distance texels per side, without border */
 #define PC_DDGI_MAX_RAYS 1024u
+#define PC_DDGI_IRR_TEXELS (PC_DDGI_IRR_INTERIOR * PC_DDGI_IRR_INTERIOR)
+#define PC_DDGI_WEIGHT_TEXELS (PC_DDGI_IRR_TEXELS + PC_DDGI_DIST_INTERIOR * PC_DDGI_DIST_INTERIOR)
+/* The update's blend weights (ddgi_weights.comp): uint counts[PC_DDGI_WEIGHT_TEXELS], then from
+ * byte PC_DDGI_WEIGHT_HEADER uvec2 (ray, weight bits) entries, texel t's at t * rays + k */
+#define PC_DDGI_WEIGHT_HEADER (PC_DDGI_WEIGHT_TEXELS * 4u)
 /* Probe states (probes[].w, as a float; 2021 follow-up paper, Sec. 5). Bit 0 (ACTIVE) means
  * shading samples the probe; bit 1 means its value is final and updates skip it. */
 #define PC_DDGI_PROBE_ACTIVE 1u   /* bit: outside geometry, sampled */
@@ -365,6 +370,8 @@ PC_END(pc_environment);
  * list: uint[] probes updated this update (written by ddgi_select.comp);
  * ctrl: pc_ddgi_control (host-visible: indirect dispatch sizes, census, drift sums);
  * wake: pc_ddgi_wake[control.z] boxes (host-visible);
+ * weights: the update's blend weights per tile texel (ddgi_weights.comp; layout at
+ *   PC_DDGI_WEIGHT_HEADER);
  * order: uint[counts.w], the ray each thread of a probe traces and shades: the rays sorted so
  *   that a warp's rays point into one patch of the sphere (renderer/gi/ddgi.c). Their hits lie
  *   close together and their shadow rays toward a light run side by side, which the GPU
@@ -389,6 +396,8 @@ PC_STRUCT(pc_ddgi_volume)
     pc_u64 wake;
     pc_u64 order;
     pc_u64 shadow_maps; /* float[]: the lights' distance maps (renderer/gi/shadow_maps.h); 0: none */
+    pc_u64 weights;
+    pc_u64 pad;
 }
 PC_END(pc_ddgi_volume);
 
@@ -534,7 +543,8 @@ PC_OFF(pc_view, tonemap, 80);
 PC_CHECK(pc_environment, 208);
 PC_OFF(pc_environment, image, 176);
 PC_OFF(pc_environment, mode, 184);
-PC_CHECK(pc_ddgi_volume, 224);
+PC_CHECK(pc_ddgi_volume, 240);
+PC_OFF(pc_ddgi_volume, weights, 224);
 PC_OFF(pc_ddgi_volume, control, 160);
 PC_OFF(pc_ddgi_volume, wake, 200);
 PC_OFF(pc_ddgi_volume, order, 208);
@@ -547,11 +557,11 @@ PC_OFF(pc_ddgi_volume, params, 96);
 PC_OFF(pc_ddgi_volume, info, 112);
 PC_OFF(pc_ddgi_volume, irradiance, 128);
 PC_OFF(pc_ddgi_volume, probes, 152);
-PC_CHECK(pc_globals, 640);
-PC_OFF(pc_globals, brdf_albedo, 624);
+PC_CHECK(pc_globals, 656);
+PC_OFF(pc_globals, brdf_albedo, 640);
 PC_OFF(pc_globals, view, 96);
 PC_OFF(pc_globals, ddgi, 192);
-PC_OFF(pc_globals, env, 416);
+PC_OFF(pc_globals, env, 432);
 PC_CHECK(pc_gbuffer_texel, 96);
 PC_OFF(pc_gbuffer_texel, albedo, 48);
 PC_OFF(pc_gbuffer_texel, emission, 64);

@@ -15,6 +15,7 @@
 #include "shaders/ddgi_shade.spv.h"
 #include "shaders/ddgi_trace.spv.h"
 #include "shaders/ddgi_wake.spv.h"
+#include "shaders/ddgi_weights.spv.h"
 
 /* The probe passes, one line each (rd_ddgi_update dispatches them). */
 static const rd_pipeline_desc pipelines[] = {
@@ -29,6 +30,7 @@ static const rd_pipeline_desc pipelines[] = {
     RD_PIPELINE_DESC(rd_ddgi, wake, "probe wake", pc_spv_ddgi_wake, sizeof(pc_push)),
     RD_PIPELINE_DESC(rd_ddgi, bin, "probe bin", pc_spv_ddgi_bin, sizeof(pc_push)),
     RD_PIPELINE_DESC(rd_ddgi, scan, "probe bin scan", pc_spv_ddgi_scan, sizeof(pc_push)),
+    RD_PIPELINE_DESC(rd_ddgi, weights, "probe blend weights", pc_spv_ddgi_weights, sizeof(pc_push)),
 };
 #define PIPELINE_COUNT (sizeof pipelines / sizeof pipelines[0])
 
@@ -59,6 +61,7 @@ static void free_buffers(rd_ddgi *d)
     rd_buffer_destroy(d->vk, &d->list);
     rd_buffer_destroy(d->vk, &d->order);
     rd_buffer_destroy(d->vk, &d->sorted);
+    rd_buffer_destroy(d->vk, &d->weight_lists);
 }
 
 void rd_ddgi_destroy(rd_ddgi *d)
@@ -258,6 +261,11 @@ rd_vk_result rd_ddgi_configure(rd_ddgi *d, const float bmin[3], const float bmax
         if (r == RD_VK_OK)
             r = rd_buffer_create(d->vk, &d->sorted, probes * rays * 4, RD_MEMORY_DEVICE, err,
                                  errlen);
+        if (r == RD_VK_OK)
+            r = rd_buffer_create(d->vk, &d->weight_lists,
+                                 PC_DDGI_WEIGHT_HEADER +
+                                     (VkDeviceSize)PC_DDGI_WEIGHT_TEXELS * rays * 8,
+                                 RD_MEMORY_DEVICE, err, errlen);
         if (r != RD_VK_OK) {
             free_buffers(d);
             return r;
@@ -287,6 +295,7 @@ rd_vk_result rd_ddgi_configure(rd_ddgi *d, const float bmin[3], const float bmax
     v->ctrl = d->ctrl.address;
     v->wake = d->wake_boxes.address;
     v->order = d->order.address;
+    v->weights = d->weight_lists.address;
     d->configured = true;
     return rd_ddgi_reset(d, err, errlen);
 }
@@ -519,6 +528,9 @@ void rd_ddgi_record_update(rd_ddgi *d, rd_cmd *c, rd_timer *timer, VkDeviceAddre
         rd_cmd_barrier(c);
     }
     rd_cmd_dispatch(c, &d->select, &push, probe_groups, 1, 1);
+    /* the blends' weights for this update's rotation (read by the blends, after the barriers
+     * below) */
+    rd_cmd_dispatch(c, &d->weights, &push, (PC_DDGI_WEIGHT_TEXELS + PC_WG_1D - 1) / PC_WG_1D, 1, 1);
     rd_cmd_barrier(c);
     /* everything below works on the listed probes only (indirect sizes) */
     rd_cmd_dispatch_indirect(c, &d->trace, &push, &d->ctrl, offsetof(pc_ddgi_control, trace_args));

@@ -44,8 +44,10 @@ typedef struct rd_ddgi_census {
 
 typedef struct rd_ddgi {
     rd_vk *vk;
-    rd_pipeline trace, shade, blend_distance, blend_irradiance, border, select, wake, bin, scan;
+    rd_pipeline trace, shade, blend_distance, blend_irradiance, border, select, wake, bin, scan,
+        weights;
     rd_buffer irradiance, distance, rays, hits, probes, stats, list, order;
+    rd_buffer weight_lists;     /* the update's blend weights (ddgi_weights.comp) */
     rd_buffer bins, sorted;     /* probe-hit binning for sorted shading (ddgi_bin.comp) */
     rd_buffer ctrl, wake_boxes; /* host-visible: pc_ddgi_control, pc_ddgi_wake[] */
     pc_ddgi_volume vol;         /* what the shaders see (rotation of the current update) */
