@@ -70,6 +70,11 @@ vec3 ddgi_ray_dir(pc_ddgi_volume vol, uint i)
                           dot(vol.rotation[2].xyz, d)));
 }
 
+/* Probe rays that hit the back of a single-sided surface store -DDGI_BACKFACE_DISTANCE times
+ * their hit distance (ddgi_trace.comp): negative marks the back face (classification,
+ * relocation), and the short distance makes the distance blend see such a probe as enclosed. */
+#define DDGI_BACKFACE_DISTANCE 0.2
+
 /* ---- blend weights ------------------------------------------------------------------- */
 /* cos^50 falls below 1.5e-5 beyond 37 degrees: the distance blend leaves out the rays farther
  * than that from its texel */

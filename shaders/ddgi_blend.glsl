@@ -67,6 +67,8 @@ void main()
     DdgiWeightRef list = DdgiWeightRef(vol.weights + PC_DDGI_WEIGHT_HEADER);
     uint first_entry = texel_index * vol.counts.w;
     uint k = 0u; /* the next entry */
+    float back_t = 1e30, front_t = 1e30; /* thread 0: the nearest back and front face */
+    uint back_ray = PC_INVALID, front_ray = PC_INVALID;
     vec3 sum = vec3(0.0);
     float wsum = 0.0;
     float max_dist = vol.origin.w;
@@ -76,8 +78,14 @@ void main()
             s_ray[i] = DdgiRayRef(vol.rays).v[probe * vol.counts.w + base + i];
         barrier();
         uint count = min(CHUNK, n - base);
-        if (irradiance && lid == 0u) /* classification: back faces among the traced rays */
-            for (uint i = 0u; i < count; i++) s_backfaces += s_ray[i].w < 0.0 ? 1u : 0u;
+        if (irradiance && lid == 0u) /* classification: back faces among the traced rays, and
+                                        for relocation the nearest back and front face */
+            for (uint i = 0u; i < count; i++) {
+                float d = s_ray[i].w;
+                s_backfaces += d < 0.0 ? 1u : 0u;
+                if (d < 0.0 && -d < back_t) back_t = -d, back_ray = base + i;
+                if (d >= 0.0 && d < front_t) front_t = d, front_ray = base + i;
+            }
         uint end = base + count;
         for (; k < entries; k++) {
             uvec2 e = list.v[first_entry + k];
@@ -158,7 +166,34 @@ void main()
         else
             st.x += float(PC_DDGI_OFF_RECHECK);
     }
-    if (inside) {
+    /* Relocation (PC_DDGI_RELOCATE_*), during a probe's first blends after a reset or a geometry
+     * wake (age plus held updates: one per blend). A probe inside a wall thinner than the
+     * spacing went off, and the cells around it lost a corner: a layer of probes inside a 1 cm
+     * wall darkened the room beside it by 63% (tests/bench/results/h200/narrow_gap_spacing.txt);
+     * moved through the wall's near face it stays on. */
+    vec4 pd = DdgiProbeRef(vol.probes).v[probe];
+    bool moved_out = false;
+    if (vol.relocate != 0u && st.x + st.y < float(PC_DDGI_RELOCATE_BLENDS)) {
+        float clearance = PC_DDGI_RELOCATE_CLEARANCE *
+                          min(vol.spacing.x, min(vol.spacing.y, vol.spacing.z));
+        vec3 move = vec3(0.0);
+        if (inside && back_ray != PC_INVALID)
+            move = ddgi_ray_dir(vol, back_ray) * (back_t / DDGI_BACKFACE_DISTANCE + clearance);
+        else if (!inside && front_ray != PC_INVALID && front_t < clearance)
+            move = -ddgi_ray_dir(vol, front_ray) * (clearance - front_t);
+        vec3 offset = pd.xyz + move;
+        if (any(notEqual(move, vec3(0.0))) &&
+            all(lessThanEqual(abs(offset), PC_DDGI_RELOCATE_LIMIT * vol.spacing.xyz))) {
+            pd.xyz = offset;
+            /* traced again at its new place by the next update, with all its rays; the move
+             * counts as a blend, so a probe moves at most PC_DDGI_RELOCATE_BLENDS times */
+            moved_out = inside;
+            if (inside) st.x += 1.0;
+        }
+    }
+    if (moved_out) {
+        state = PC_DDGI_PROBE_AWAKE;
+    } else if (inside) {
         state = PC_DDGI_PROBE_OFF;
     } else if (!probe_on) {
         state = PC_DDGI_PROBE_AWAKE; /* back on: blended from the next update */
@@ -203,7 +238,6 @@ void main()
     else atomicAdd(ctrl.after.z, 1u);
     st.w = 0.0;
     stats.v[probe] = st;
-    vec4 pd = DdgiProbeRef(vol.probes).v[probe];
     pd.w = float(state);
     DdgiProbeRef(vol.probes).v[probe] = pd;
 }

@@ -2,8 +2,8 @@
 /* DDGI probe trace (paper Sec. 4.1): one thread per (probe ray, probe). Rays follow the
  * update's randomly rotated spherical Fibonacci directions (ray generation happens here, in
  * registers). Writes per ray: hits[] = (tri, instance, u bits, v bits) and rays[].w = hit
- * distance (1e27 for a miss, -0.2 t for a back face of a single-sided surface, which marks a
- * probe that may sit inside geometry). ddgi_shade.comp fills in the radiance.
+ * distance (1e27 for a miss, -DDGI_BACKFACE_DISTANCE t for a back face of a single-sided
+ * surface, which marks a probe that may sit inside geometry). ddgi_shade.comp fills in the radiance.
  * Works on the update's probe list (ddgi_select.comp; dispatched indirectly: x ray groups, y
  * listed probes). Off probes trace only their first PC_DDGI_INACTIVE_RAYS rays (for
  * re-classification).
@@ -34,7 +34,7 @@ void main()
         rays = 1u;
         if (trace_ray(g.scene, org, dir, 0.0, 1e30, 0u, hit)) {
             bool single_sided = (floatBitsToUint(TriRef(g.scene.tris).v[hit.tri].v1.w) & PC_TRI_DOUBLE_SIDED) == 0u;
-            t = hit.backface && single_sided ? -0.2 * hit.t : hit.t;
+            t = hit.backface && single_sided ? -DDGI_BACKFACE_DISTANCE * hit.t : hit.t;
             rec = uvec4(hit.tri, hit.instance, floatBitsToUint(hit.u), floatBitsToUint(hit.v));
         }
         HitRef(pc.buf0).v[slot] = rec;

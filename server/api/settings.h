@@ -63,6 +63,7 @@ typedef enum srv_setting_type {
 #define SRV_GI_NAMES "off", "classic", "ddgi", "pathtrace"
 #define SRV_SKY_MODE_NAMES "uniform", "gradient", "image"
 #define SRV_VISIBILITY_NAMES "all", "probes", "off"
+#define SRV_RELOCATION_NAMES "on", "off"
 /* gi_mode beyond PC_GI_*: reference path tracing, no probes (srv_settings_to_gi maps it to
  * PC_GI_OFF) */
 #define SRV_GI_PATHTRACE 3u
@@ -136,7 +137,11 @@ typedef enum srv_setting_type {
       0, PC_DDGI_VIS_ALL, WORLD, (SRV_VISIBILITY_NAMES),                                           \
       "probe visibility rays where geometry crosses a probe cell (walls thinner than the "        \
       "spacing): at probe-ray hits and camera pixels, at probe-ray hits only (no cost per "       \
-      "frame), or none (the paper's Chebyshev test alone)")
+      "frame), or none (the paper's Chebyshev test alone)")                                      \
+    X(PROBE_RELOCATION, probe_relocation, ENUM, "probe_relocation", "--probe-relocation", ALL,    \
+      "", 0, 0, 0, WORLD, (SRV_RELOCATION_NAMES),                                                  \
+      "probes inside geometry move out through its nearest face, and probes on a surface move "  \
+      "off it, during their first updates (the 2021 paper's relocation), or stay on the grid")
 /* clang-format on */
 
 /* Values a CPU device (lavapipe) starts with for the settings the command line did not give:
@@ -173,7 +178,7 @@ enum { SRV_SETTINGS(SRV_SETTING_BIT_) };
 /* The settings whose change restarts the probe field. */
 #define SRV_SET_GI_FIELDS                                                                          \
     (SRV_SET_GI_MODE | SRV_SET_PROBE_COUNTS | SRV_SET_PROBE_SPACING | SRV_SET_RAYS |               \
-     SRV_SET_HYSTERESIS | SRV_SET_VISIBILITY_RAYS)
+     SRV_SET_HYSTERESIS | SRV_SET_VISIBILITY_RAYS | SRV_SET_PROBE_RELOCATION)
 /* The settings of the environment (a change relights everything). */
 #define SRV_SET_ENV_FIELDS                                                                         \
     (SRV_SET_SKY | SRV_SET_SKY_MODE | SRV_SET_SKY_GROUND | SRV_SET_SKY_INTENSITY |                 \

@@ -359,7 +359,9 @@ static void test_mirrored(void)
     free(plain), free(mirrored);
 }
 
-/* Thick walls: probes inside the solid wall must be switched off. */
+/* Thick walls: probes inside the solid wall must be switched off. Checked on the grid
+ * (relocation off): relocated, the column inside this 0.6 m wall moves out through the doorway
+ * side, whose face is within reach (test_relocation checks moves). */
 static void test_thick_walls_probes(void)
 {
     char err[512];
@@ -371,6 +373,7 @@ static void test_thick_walls_probes(void)
     CHECK(rd_renderer_create(&vk, &r, err, sizeof err) == RD_VK_OK);
     rd_ddgi_settings gi = DDGI;
     gi.counts[0] = 9, gi.counts[1] = 2, gi.counts[2] = 3; /* x spacing 4/9: a column at x = 0 */
+    gi.no_relocation = true;
     CHECK(rd_renderer_configure_gi(&r, s.bounds_min, s.bounds_max, &gi, err, sizeof err) ==
           RD_VK_OK);
     rd_view_camera cam;
@@ -457,6 +460,96 @@ static void test_probes_on_surfaces(void)
         }
     }
     rd_ddgi_destroy(&ddgi);
+    rd_scene_destroy(&s);
+}
+
+/* Relocation (issue 28, 2021 paper): the narrow-gap room with an odd probe count along x, so
+ * that the middle layer of the fitted grid lies at x = 0, inside the 1 cm wall. Left on the
+ * grid, the layer above the gap is off (back faces all round); relocated, every one of those
+ * probes moves through the wall's nearest face to PC_DDGI_RELOCATE_CLEARANCE spacings beyond
+ * it and stays on. A probe under the wall's lower edge, closer to it than the clearance, moves
+ * away to the clearance; probes farther from every surface do not move, and no offset passes
+ * PC_DDGI_RELOCATE_LIMIT of the spacing. */
+static void test_relocation(void)
+{
+    char err[512];
+    rd_scene s;
+    CHECK(rd_hard_case_build("narrow-gap", &s, err, sizeof err));
+    rd_gpu_scene gs;
+    rd_renderer r;
+    CHECK(rd_gpu_scene_create(&vk, &gs, &s, err, sizeof err) == RD_VK_OK);
+    CHECK(rd_renderer_create(&vk, &r, err, sizeof err) == RD_VK_OK);
+    rd_view_camera cam;
+    rd_camera_for_scene(&s, -1, &cam, err, sizeof err);
+    for (int relocate = 0; relocate < 2; relocate++) {
+        rd_ddgi_settings gi = {.mode = PC_GI_DDGI,
+                               .counts = {9, 4, 5},
+                               .rays = 64,
+                               .seed = 3,
+                               .no_relocation = !relocate};
+        CHECK(rd_renderer_configure_gi(&r, s.bounds_min, s.bounds_max, &gi, err, sizeof err) ==
+              RD_VK_OK);
+        rd_frame_settings fs = {.width = 8, .height = 8, .gi_updates = PC_DDGI_RELOCATE_BLENDS + 2};
+        CHECK(rd_renderer_render(&r, &gs, &cam, &fs, err, sizeof err) == RD_VK_OK);
+        const pc_ddgi_volume *v = &r.world.ddgi.vol;
+        const float origin[3] = {v->origin.x, v->origin.y, v->origin.z};
+        const float spacing[3] = {v->spacing.x, v->spacing.y, v->spacing.z};
+        float clearance =
+            (float)PC_DDGI_RELOCATE_CLEARANCE * fminf(spacing[0], fminf(spacing[1], spacing[2]));
+        CHECKF(fabsf(origin[0] + 4 * spacing[0]) < 1e-4f, "the middle layer at x = %g",
+               origin[0] + 4 * spacing[0]);
+        rd_ddgi_probe_info *probes = NULL;
+        CHECK(rd_ddgi_read_probes(&r.world.ddgi, &probes, err, sizeof err) == RD_VK_OK);
+        unsigned n = rd_ddgi_probe_count(&r.world.ddgi), in_wall = 0, off = 0, out = 0;
+        unsigned moved_free = 0, too_far = 0, under_edge = 0, under_kept = 0;
+        for (unsigned i = 0; probes && i < n; i++) {
+            unsigned c[3] = {i % 9, (i / 9) % 4, i / 36};
+            float offset[3], grid[3];
+            bool beyond = false, moved = false;
+            for (int k = 0; k < 3; k++) {
+                grid[k] = origin[k] + (float)c[k] * spacing[k];
+                offset[k] = probes[i].position[k] - grid[k];
+                beyond |= fabsf(offset[k]) > (float)PC_DDGI_RELOCATE_LIMIT * spacing[k] + 1e-4f;
+                moved |= fabsf(offset[k]) > 1e-4f;
+            }
+            too_far += beyond;
+            bool active = (probes[i].state & PC_DDGI_PROBE_ACTIVE) != 0;
+            if (c[0] == 4 && grid[1] > 0.25f) { /* inside the wall */
+                in_wall++;
+                off += !active;
+                /* through the near face, to the clearance beyond it */
+                out += active && fabsf(probes[i].position[0]) > 0.005f + 0.5f * clearance;
+            } else if (c[0] == 4) { /* in the gap, under the wall's lower edge */
+                under_edge++;
+                under_kept += active && 0.25f - probes[i].position[1] > 0.9f * clearance;
+            } else {
+                moved_free += moved; /* farther than the clearance from every surface */
+            }
+        }
+        printf("relocation %s: %u probes inside the wall, %u off, %u moved out; %u under its "
+               "edge, %u at the clearance\n",
+               relocate ? "on" : "off", in_wall, off, out, under_edge, under_kept);
+        CHECKF(in_wall == 15 && under_edge == 5, "%u probes inside the wall, %u under it", in_wall,
+               under_edge);
+        if (relocate) {
+            CHECKF(off == 0 && out == in_wall,
+                   "relocated: %u of %u probes inside the wall off, "
+                   "%u moved out",
+                   off, in_wall, out);
+            CHECKF(under_kept == under_edge,
+                   "%u of %u probes under the wall's edge moved to the "
+                   "clearance",
+                   under_kept, under_edge);
+        } else {
+            CHECKF(off == in_wall, "on the grid: %u of %u probes inside the wall off", off,
+                   in_wall);
+        }
+        CHECKF(moved_free == 0, "%u probes away from every surface moved", moved_free);
+        CHECKF(too_far == 0, "%u offsets past the limit", too_far);
+        free(probes);
+    }
+    rd_renderer_destroy(&r);
+    rd_gpu_scene_destroy(&vk, &gs);
     rd_scene_destroy(&s);
 }
 
@@ -591,6 +684,7 @@ static const struct {
     {"thin-walls-metal", test_thin_walls_metal},
     {"thick-walls-probes", test_thick_walls_probes},
     {"probes-on-surfaces", test_probes_on_surfaces},
+    {"relocation", test_relocation},
     {"invariance", test_invariance},
     {"far-baked", test_far_baked},
     {"no-lights", test_no_lights},
