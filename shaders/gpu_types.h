@@ -282,7 +282,9 @@ PC_END(pc_environment);
 #define PC_DDGI_IRR_TEXELS (PC_DDGI_IRR_INTERIOR * PC_DDGI_IRR_INTERIOR)
 #define PC_DDGI_WEIGHT_TEXELS (PC_DDGI_IRR_TEXELS + PC_DDGI_DIST_INTERIOR * PC_DDGI_DIST_INTERIOR)
 /* The update's blend weights (ddgi_weights.comp): uint counts[PC_DDGI_WEIGHT_TEXELS], then from
- * byte PC_DDGI_WEIGHT_HEADER uvec2 (ray, weight bits) entries, texel t's at t * rays + k */
+ * byte PC_DDGI_WEIGHT_HEADER uvec2 (ray, weight bits) entries, texel t's k-th at
+ * k * PC_DDGI_WEIGHT_TEXELS + t (neighbouring texels' k-th entries side by side: a warp of the
+ * blend reads one run of memory) */
 #define PC_DDGI_WEIGHT_HEADER (PC_DDGI_WEIGHT_TEXELS * 4u)
 /* Probe states (probes[].w, as a float; 2021 follow-up paper, Sec. 5). Bit 0 (ACTIVE) means
  * shading samples the probe; bit 1 means its value is final and updates skip it. */
@@ -407,8 +409,9 @@ PC_STRUCT(pc_ddgi_volume)
     pc_u64 order;
     pc_u64 shadow_maps; /* float[]: the lights' distance maps (renderer/gi/shadow_maps.h); 0: none */
     pc_u64 weights;
-    pc_u32 relocate; /* 1: probes move out of geometry and off surfaces (ddgi_blend.glsl) */
-    pc_u32 pad;
+    pc_u32 relocate;    /* 1: probes move out of geometry and off surfaces (ddgi_blend.glsl) */
+    pc_u32 blend_lists; /* 1: the irradiance blend walks the weight lists (a CPU device), 0: the
+                           hemisphere's run of rays (a GPU; ddgi_blend.glsl says why) */
 }
 PC_END(pc_ddgi_volume);
 

@@ -297,6 +297,7 @@ rd_vk_result rd_ddgi_configure(rd_ddgi *d, const float bmin[3], const float bmax
     v->order = d->order.address;
     v->weights = d->weight_lists.address;
     v->relocate = !s->no_relocation;
+    v->blend_lists = d->vk->is_cpu;
     d->configured = true;
     return rd_ddgi_reset(d, err, errlen);
 }
@@ -531,7 +532,7 @@ void rd_ddgi_record_update(rd_ddgi *d, rd_cmd *c, rd_timer *timer, VkDeviceAddre
     rd_cmd_dispatch(c, &d->select, &push, probe_groups, 1, 1);
     /* the blends' weights for this update's rotation (read by the blends, after the barriers
      * below) */
-    rd_cmd_dispatch(c, &d->weights, &push, (PC_DDGI_WEIGHT_TEXELS + PC_WG_1D - 1) / PC_WG_1D, 1, 1);
+    rd_cmd_dispatch(c, &d->weights, &push, PC_DDGI_WEIGHT_TEXELS, 1, 1);
     rd_cmd_barrier(c);
     /* everything below works on the listed probes only (indirect sizes) */
     rd_cmd_dispatch_indirect(c, &d->trace, &push, &d->ctrl, offsetof(pc_ddgi_control, trace_args));
