@@ -309,7 +309,8 @@ PC_END(pc_environment);
  * from it, to that clearance; a move that would take its offset past PC_DDGI_RELOCATE_LIMIT of
  * the spacing on any axis is not made (the probe stays where it is, off if inside). The
  * clearance stays below the default grid's margin (0.15 spacings, renderer/gi/ddgi.c), so the
- * default layers next to a room's walls do not move. */
+ * default layers next to a room's walls do not move. Off by default (setting probe_relocation):
+ * tests/bench/results/h200/relocation.txt. */
 #define PC_DDGI_RELOCATE_BLENDS 4u
 #define PC_DDGI_RELOCATE_CLEARANCE 0.1
 #define PC_DDGI_RELOCATE_LIMIT 0.45

@@ -296,7 +296,7 @@ rd_vk_result rd_ddgi_configure(rd_ddgi *d, const float bmin[3], const float bmax
     v->wake = d->wake_boxes.address;
     v->order = d->order.address;
     v->weights = d->weight_lists.address;
-    v->relocate = !s->no_relocation;
+    v->relocate = s->relocation;
     v->blend_lists = d->vk->is_cpu;
     d->configured = true;
     return rd_ddgi_reset(d, err, errlen);

@@ -34,7 +34,7 @@ typedef struct rd_ddgi_settings {
     bool has_hysteresis; /* (0 too: no history); unset = RD_DDGI_DEFAULT_HYSTERESIS */
     unsigned seed;       /* ray rotations are a deterministic function of seed and update */
     unsigned visibility; /* PC_DDGI_VIS_* (0: ALL, the default) */
-    bool no_relocation;  /* probes stay on their grid points (PC_DDGI_RELOCATE_*: default on) */
+    bool relocation;     /* probes move out of geometry and off surfaces (PC_DDGI_RELOCATE_*) */
 } rd_ddgi_settings;
 
 /* Probes per state after the last update (or reset). */

@@ -236,7 +236,7 @@ void srv_settings_to_gi(const srv_settings *s, rd_ddgi_settings *gi)
     gi->hysteresis = s->hysteresis;
     gi->has_hysteresis = true;
     gi->visibility = s->visibility_rays;
-    gi->no_relocation = s->probe_relocation != 0; /* "off" */
+    gi->relocation = s->probe_relocation != 0; /* "on" */
 }
 
 /* ---- JSON ------------------------------------------------------------------------------- */

@@ -63,7 +63,7 @@ typedef enum srv_setting_type {
 #define SRV_GI_NAMES "off", "classic", "ddgi", "pathtrace"
 #define SRV_SKY_MODE_NAMES "uniform", "gradient", "image"
 #define SRV_VISIBILITY_NAMES "all", "probes", "off"
-#define SRV_RELOCATION_NAMES "on", "off"
+#define SRV_RELOCATION_NAMES "off", "on"
 /* gi_mode beyond PC_GI_*: reference path tracing, no probes (srv_settings_to_gi maps it to
  * PC_GI_OFF) */
 #define SRV_GI_PATHTRACE 3u
@@ -140,8 +140,9 @@ typedef enum srv_setting_type {
       "frame), or none (the paper's Chebyshev test alone)")                                      \
     X(PROBE_RELOCATION, probe_relocation, ENUM, "probe_relocation", "--probe-relocation", ALL,    \
       "", 0, 0, 0, WORLD, (SRV_RELOCATION_NAMES),                                                  \
-      "probes inside geometry move out through its nearest face, and probes on a surface move "  \
-      "off it, during their first updates (the 2021 paper's relocation), or stay on the grid")
+      "on: probes inside geometry move out through its nearest face, and probes on a surface "   \
+      "move off it, during their first updates (the 2021 paper's relocation); off: they stay on " \
+      "the grid")
 /* clang-format on */
 
 /* Values a CPU device (lavapipe) starts with for the settings the command line did not give:

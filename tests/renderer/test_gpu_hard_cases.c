@@ -359,9 +359,9 @@ static void test_mirrored(void)
     free(plain), free(mirrored);
 }
 
-/* Thick walls: probes inside the solid wall must be switched off. Checked on the grid
- * (relocation off): relocated, the column inside this 0.6 m wall moves out through the doorway
- * side, whose face is within reach (test_relocation checks moves). */
+/* Thick walls: probes inside the solid wall must be switched off (on the grid, the default;
+ * relocated, the column inside this 0.6 m wall moves out through the doorway side, whose face
+ * is within reach: test_relocation checks moves). */
 static void test_thick_walls_probes(void)
 {
     char err[512];
@@ -373,7 +373,6 @@ static void test_thick_walls_probes(void)
     CHECK(rd_renderer_create(&vk, &r, err, sizeof err) == RD_VK_OK);
     rd_ddgi_settings gi = DDGI;
     gi.counts[0] = 9, gi.counts[1] = 2, gi.counts[2] = 3; /* x spacing 4/9: a column at x = 0 */
-    gi.no_relocation = true;
     CHECK(rd_renderer_configure_gi(&r, s.bounds_min, s.bounds_max, &gi, err, sizeof err) ==
           RD_VK_OK);
     rd_view_camera cam;
@@ -482,11 +481,8 @@ static void test_relocation(void)
     rd_view_camera cam;
     rd_camera_for_scene(&s, -1, &cam, err, sizeof err);
     for (int relocate = 0; relocate < 2; relocate++) {
-        rd_ddgi_settings gi = {.mode = PC_GI_DDGI,
-                               .counts = {9, 4, 5},
-                               .rays = 64,
-                               .seed = 3,
-                               .no_relocation = !relocate};
+        rd_ddgi_settings gi = {
+            .mode = PC_GI_DDGI, .counts = {9, 4, 5}, .rays = 64, .seed = 3, .relocation = relocate};
         CHECK(rd_renderer_configure_gi(&r, s.bounds_min, s.bounds_max, &gi, err, sizeof err) ==
               RD_VK_OK);
         rd_frame_settings fs = {.width = 8, .height = 8, .gi_updates = PC_DDGI_RELOCATE_BLENDS + 2};
