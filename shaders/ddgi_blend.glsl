@@ -204,9 +204,8 @@ void main()
     }
     /* Relocation (PC_DDGI_RELOCATE_*), during a probe's first blends after a reset or a geometry
      * wake (age plus held updates: one per blend). A probe inside a wall thinner than the
-     * spacing went off, and the cells around it lost a corner: a layer of probes inside a 1 cm
-     * wall darkened the room beside it by 63% (tests/bench/results/h200/narrow_gap_spacing.txt);
-     * moved through the wall's near face it stays on. */
+     * spacing goes off, and the cells around it lose a corner; moved through the wall's near
+     * face it stays on (measured: tests/bench/results/h200/relocation.txt). */
     vec4 pd = DdgiProbeRef(vol.probes).v[probe];
     bool moved_out = false;
     if (vol.relocate != 0u && st.x + st.y < float(PC_DDGI_RELOCATE_BLENDS)) {
