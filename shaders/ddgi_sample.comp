@@ -38,7 +38,7 @@ void main()
         vec3 v = normalize(g.view.eye.xyz - p);
         float reach = 0.5 * distance(g.view.eye.xyz, p);
         vec3 e = ddgi_irradiance(g.ddgi, g.scene, false, env_irradiance(g.env, t.normal.xyz), p,
-                                 t.normal.xyz, v, reach);
+                                 t.normal.xyz, v, reach, DDGI_VIS_CLEAR_SIGMAS);
         pc_brdf b = gbuffer_brdf(t);
         bool specular = pc.params.x != 0u && gbuffer_has_specular(t);
         float nv = clamp(dot(t.normal.xyz, v), 0.0, 1.0);
@@ -48,7 +48,7 @@ void main()
         if (specular && !gbuffer_traces_reflection(t) && view != PC_VIEW_IRRADIANCE) {
             vec3 d = brdf_dominant_direction(b, t.normal.xyz, v);
             vec3 ed = ddgi_irradiance(g.ddgi, g.scene, false, env_irradiance(g.env, d), p, d, v,
-                                      reach);
+                                      reach, DDGI_VIS_CLEAR_SIGMAS);
             l += t.material.z * brdf_specular_albedo(g.brdf_albedo, b, nv) * ed / PC_PI;
         }
     } else if (view == PC_VIEW_IRRADIANCE) {

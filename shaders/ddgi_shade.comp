@@ -84,7 +84,7 @@ void main()
         vec3 indirect = vec3(0.0);
         if (pc.params.y != 0u)
             indirect = ddgi_irradiance(vol, g.scene, true, env_irradiance(g.env, sf.normal), sf.position,
-                                       sf.normal, -dir, 1e30);
+                                       sf.normal, -dir, 1e30, 0.0);
         vec3 radiance = sf.emission + direct +
                         sf.occlusion * min(albedo, vec3(0.9)) / PC_PI * indirect;
         if (any(isnan(radiance)) || any(isinf(radiance))) radiance = vec3(0.0);

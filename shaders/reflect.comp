@@ -46,7 +46,7 @@ vec3 incoming(pc_globals g, vec3 origin, vec3 l, inout uint rays)
     vec3 direct =
         direct_radiance(g.scene, sf.position, sf.normal, sf.geom_normal, sf.offset, -l, b, rays);
     vec3 e = ddgi_irradiance(g.ddgi, g.scene, false, env_irradiance(g.env, sf.normal), sf.position,
-                             sf.normal, -l, 0.5 * hit.t);
+                             sf.normal, -l, 0.5 * hit.t, 0.0);
     vec3 a = brdf_hit_albedo(g.brdf_albedo, b, clamp(dot(sf.normal, -l), 0.0, 1.0));
     return sf.emission + direct + sf.occlusion * a / PC_PI * e;
 }
