@@ -303,14 +303,14 @@ PC_END(pc_environment);
  * it changes (2021 paper: off probes trace a few fixed rays), and is neither shaded nor
  * blended; it is traced once every PC_DDGI_OFF_RECHECK updates, or after a wake in its box. */
 #define PC_DDGI_INACTIVE_RAYS 32u
-/* Probe relocation (2021 follow-up paper, Sec. 5.2): during the first PC_DDGI_RELOCATE_BLENDS
- * blends after a reset or a geometry wake, a probe inside geometry moves through its nearest
- * back face, and one closer than PC_DDGI_RELOCATE_CLEARANCE spacings to a front face moves away
- * from it, to that clearance; a move that would take its offset past PC_DDGI_RELOCATE_LIMIT of
- * the spacing on any axis is not made (the probe stays where it is, off if inside). The
- * clearance stays below the default grid's margin (0.15 spacings, renderer/gi/ddgi.c), so the
- * default layers next to a room's walls do not move. Off by default (setting probe_relocation):
- * tests/bench/results/h200/relocation.txt. */
+/* Probe relocation (2021 follow-up paper; RTXGI 1.3 limits moves to 45% of a cell): during the
+ * first PC_DDGI_RELOCATE_BLENDS blends after a reset or a geometry wake, a probe inside geometry
+ * moves through its nearest back face, and one closer than PC_DDGI_RELOCATE_CLEARANCE spacings
+ * to a front face moves away from it, to that clearance; a move that would take its offset past
+ * PC_DDGI_RELOCATE_LIMIT of the spacing on any axis is not made (the probe stays where it is, off
+ * if inside). The clearance stays below the default grid's margin (0.15 spacings,
+ * renderer/gi/ddgi.c), so the default layers next to a room's walls do not move. Off by default
+ * (setting probe_relocation): tests/bench/results/h200/relocation.txt. */
 #define PC_DDGI_RELOCATE_BLENDS 4u
 #define PC_DDGI_RELOCATE_CLEARANCE 0.1
 #define PC_DDGI_RELOCATE_LIMIT 0.45
