@@ -223,9 +223,16 @@ test('dragging asks for half the pixels, then the full size; the quality menu sc
       window.probecast.stream.addEventListener('frame', (e) => window.__q.push(e.detail.quality));
     });
     await drag(p, 80, 0);
-    await p.waitForFunction(() => window.__q.length >= 2, null, { timeout: 20000 });
+    // A frame the daemon encoded before it read the caps may still be on its way (CI saw
+    // 60,30,40 once): from the first frame at 50 or below, the caps hold for every frame.
+    await p.waitForFunction(() => {
+      const i = window.__q.findIndex((q) => q <= 50);
+      return i >= 0 && window.__q.length - i >= 3;
+    }, null, { timeout: 20000 });
     const qs = await p.evaluate(() => window.__q);
-    assert.ok(qs.every((q) => q <= 50), `frames at quality 50 at most: ${qs}`);
+    const capped = qs.slice(qs.findIndex((q) => q <= 50));
+    assert.ok(capped.every((q) => q <= 50), `frames at quality 50 at most once capped: ${qs}`);
+    assert.ok(qs.findIndex((q) => q <= 50) <= 3, `at most three frames in flight before the caps: ${qs}`);
     // after a reconnect (a new view, without caps) the caps are sent again after the welcome
     n = await p.evaluate(() => window.__sent.length);
     const gen = (await state(p)).gen;
