@@ -155,6 +155,9 @@ void main()
              * the per-probe age already makes steps large after a change. */
             vec3 result = written ? mix(fresh, old, h) : fresh;
             if (any(isnan(result)) || any(isinf(result))) result = vec3(0.0);
+            /* stored linearly, an irradiance past the half-float range would pack to Inf (a
+             * texel's mean of a few rays that met an emitter of 1e6 nits and more) */
+            result = min(result, vec3(60000.0));
             uvec2 bits = uvec2(packHalf2x16(result.rg), packHalf2x16(vec2(result.b, 1.0)));
             a.v[texel] = bits;
             /* The blend is an unbiased mean of the fresh values: a settled probe shows no
