@@ -142,7 +142,13 @@ uint ddgi_texel(uint probe, uint side, uint x, uint y) { return (probe * side + 
 /* ---- atlas sampling (manual bilinear inside one bordered tile) ------------------------ */
 vec3 ddgi_decode_irradiance(uvec2 packed)
 {
-    return max(vec3(unpackHalf2x16(packed.x), unpackHalf2x16(packed.y).x), vec3(0.0));
+    vec3 enc = max(vec3(unpackHalf2x16(packed.x), unpackHalf2x16(packed.y).x), vec3(0.0));
+#if PC_DDGI_IRRADIANCE_EXPONENT == 5
+    vec3 enc2 = enc * enc;
+    return enc2 * enc2 * enc;
+#else
+    return pow(enc, vec3(float(PC_DDGI_IRRADIANCE_EXPONENT)));
+#endif
 }
 
 /* Tile coordinates (texel units, border included) of direction dir. */

@@ -357,25 +357,23 @@ PC_END(pc_environment);
 #define PC_SHADOW_MAP_PASS_RECT 2u
 #define PC_SHADOW_MAP_SUN_FACE 6u
 #define PC_DDGI_DRIFT_RANGE 0x3fffffffu /* the drift sums' fixed point: |sum| <= this */
-/* Irradiance texels hold E / pi itself, blended linearly. The paper's perceptual encoding,
- * (E / pi)^(1/5) blended in that space, averages the fifth roots of the fresh values: a texel
- * whose fresh values are noisy (rare rays that meet a small bright patch: the inside of a lamp
- * shade, a sunlit strip) settles well below their mean (Jensen's inequality). It made the lamp
- * room (tests/bench/lamp_room_gltf.py) 5 points darker and the tiny-emitter case black; half
- * floats need no encoding for range or precision (tests/bench/results/h200/probe_paths.txt). */
+/* Irradiance texels hold (E / pi)^(1/5) (the paper's perceptual encoding, blended in that
+ * space); readers raise the stored value to the 5th power. A fixed 5 lets the shaders decode
+ * with three multiplies instead of pow (12 per probe of an irradiance query). */
+#define PC_DDGI_IRRADIANCE_EXPONENT 5 /* an integer: the shaders test it with #if */
 
 /* origin: xyz position of probe (0,0,0), w = max ray distance for distance blending;
  * spacing: xyz grid spacing, w = PC_DDGI_VIS_* (as float);
  * counts: xyz probes per axis, w = rays per probe;
  * rotation: rows of this update's random ray rotation (uniform on SO(3));
  * params: x maximum hysteresis, y bias scale (world units), z back-face ratio that deactivates
- *   a probe, w fixed-point units per unit of stored luminance in the drift sums (set by the CPU
- *   each update);
+ *   a probe, w fixed-point units per unit of encoded luminance in the drift sums (set by the CPU
+ *   each update; the encoding exponent is PC_DDGI_IRRADIANCE_EXPONENT);
  * info: x PC_GI_*, y updates done since reset (0 = next is the first), z atlas irradiance
  *   tile side (interior + 2), w distance tile side (interior + 2);
  * control: x = 1 while the awake field drifts (ages hold), y = age at which a probe falls
  *   asleep (as float bits), z = wake boxes this update, w unused;
- * irradiance: uvec2[] per texel (packHalf2x16 of rgb = E / pi and a written flag);
+ * irradiance: uvec2[] per texel (packHalf2x16 of rgb^(1/5) and a written flag);
  * distance: vec2[] per texel (mean, mean of squares);
  * rays: vec4[] per probe ray (radiance, hit distance; < 0: back face);
  * probes: vec4[] per probe (xyz offset, w = PC_DDGI_PROBE_* state as float);
@@ -426,7 +424,7 @@ PC_STRUCT(pc_ddgi_control)
     pc_uvec4 border_args; /* x border groups per probe, y listed probes, z 1 */
     pc_uvec4 before;      /* states when the update began: x awake, y sleeping, z off, w listed */
     pc_uvec4 after;       /* states the listed probes ended in: x awake, y sleeping, z off */
-    pc_uvec4 drift;       /* stored luminance of the blended probes' tiles, fixed point (int):
+    pc_uvec4 drift;       /* encoded luminance of the blended probes' tiles, fixed point (int):
                              x sum of the gap the blend closed (step of the stored value over
                              1 - h), y sum of stored, both over probes that had a stored value,
                              z their count, w sum of fresh over all */
@@ -483,10 +481,10 @@ PC_STRUCT(pc_counters)
     pc_u32 shadow_rays; /* from camera-visible surfaces */
     pc_u32 probe_rays;
     pc_u32 path_rays;         /* path-traced rays, shadow rays included */
-    pc_u32 probe_shadow_rays; /* from probe-ray hits and their paths' vertices */
+    pc_u32 probe_shadow_rays; /* from probe-ray hits */
     pc_u32 reflect_rays;      /* reflection rays of camera pixels and their shadow rays */
     pc_u32 shadow_map_rays;   /* rays that built lights' distance maps */
-    pc_u32 probe_path_rays;   /* bounce rays of the paths that probe-ray hits continue */
+    pc_u32 pad;
 }
 PC_END(pc_counters);
 

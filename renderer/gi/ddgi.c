@@ -310,8 +310,8 @@ static void drift_restart(rd_ddgi *d)
     d->hold = false;
 }
 
-/* Fixed-point units per unit of stored luminance (pc_ddgi_volume.params.w) for probe tiles of
- * mean stored luminance `mean` (summed over the tile's texels): such a probe contributes 1/64
+/* Fixed-point units per unit of encoded luminance (pc_ddgi_volume.params.w) for probe tiles of
+ * mean encoded luminance `mean` (summed over the tile's texels): such a probe contributes 1/64
  * of the per-probe limit, so probes up to 64 times brighter than the mean sum exactly. */
 static double drift_unit(const rd_ddgi *d, double mean)
 {
@@ -326,7 +326,7 @@ rd_vk_result rd_ddgi_reset(rd_ddgi *d, char *err, size_t errlen)
     d->vol.info.y = 0;
     d->census = (rd_ddgi_census){.awake = rd_ddgi_probe_count(d)};
     drift_restart(d);
-    d->drift_unit = drift_unit(d, 64.0); /* until measured: luminance 1 per texel */
+    d->drift_unit = drift_unit(d, 64.0); /* until measured: encoded luminance 1 per texel */
     d->wake_count = 0;
     rd_vk_result r = rd_buffer_fill(d->vk, &d->irradiance, 0, err, errlen);
     if (r == RD_VK_OK) r = rd_buffer_fill(d->vk, &d->distance, 0, err, errlen);
@@ -392,10 +392,10 @@ void rd_ddgi_random_rotation(uint64_t *state, float m[3][3])
  * while the awake field does not drift, so h stays low while the bounces still add light and
  * rises to average the noise away once only noise is left:
  *  - the measure: each update, the blend sums over the awake probes the gap between fresh and
- *    stored luminance of their tiles (the step the stored half floats really made, divided by
- *    1 - h) and the stored luminance; D = gap sum / stored sum is the relative change of the
- *    field's luminance per update that the fresh values ask for. The stored value is the mean
- *    of the fresh ones, and a ratio of sums has no bias from
+ *    stored encoded luminance of their tiles (the step the stored half floats really made,
+ *    divided by 1 - h) and the stored luminance; D = 5 x gap sum / stored sum is the relative
+ *    change of the field's luminance per update that the fresh values ask for. In the encoded
+ *    space the stored value is the mean of the fresh ones, and a ratio of sums has no bias from
  *    noise, so a settled field measures 0 however noisy single probes are (a sun patch, rare
  *    hits of a small emitter), and dark probes weigh little. The old measure, the mean over
  *    probes of each probe's change relative to max(fresh, stored), was biased by the noise
@@ -639,8 +639,8 @@ void rd_ddgi_end_update(rd_ddgi *d)
         d->hold = false;
         return;
     }
-    /* the relative change of the field's luminance per update that this update's fresh values
-     * ask for */
-    double D = stored > 0 ? (double)gap / stored : gap > 0 ? 1 : 0;
+    /* the relative change of the field's (decoded) luminance per update that this update's
+     * fresh values ask for: the encoded ratio times the encoding exponent */
+    double D = stored > 0 ? (double)PC_DDGI_IRRADIANCE_EXPONENT * gap / stored : gap > 0 ? 1 : 0;
     drift_measure(d, fmax(-DRIFT_MAX, fmin(DRIFT_MAX, D)));
 }
