@@ -140,15 +140,15 @@ uint ddgi_thread_ray(pc_ddgi_volume vol, uint x)
 uint ddgi_texel(uint probe, uint side, uint x, uint y) { return (probe * side + y) * side + x; }
 
 /* ---- atlas sampling (manual bilinear inside one bordered tile) ------------------------ */
-vec3 ddgi_decode_irradiance(uvec2 packed)
+vec3 ddgi_decode_irradiance(pc_ddgi_volume vol, uvec2 packed)
 {
     vec3 enc = max(vec3(unpackHalf2x16(packed.x), unpackHalf2x16(packed.y).x), vec3(0.0));
-#if PC_DDGI_IRRADIANCE_EXPONENT == 5
+#if PC_DDGI_ENCODING_PAPER != 5
+#error "ddgi_decode_irradiance raises to the 5th power"
+#endif
+    if (vol.encoding != uint(PC_DDGI_ENCODING_PAPER)) return enc; /* linear */
     vec3 enc2 = enc * enc;
     return enc2 * enc2 * enc;
-#else
-    return pow(enc, vec3(float(PC_DDGI_IRRADIANCE_EXPONENT)));
-#endif
 }
 
 /* Tile coordinates (texel units, border included) of direction dir. */
@@ -176,8 +176,10 @@ vec3 ddgi_sample_irradiance(pc_ddgi_volume vol, uint probe, vec3 n)
     vec4 w;
     ddgi_bilinear(probe, vol.info.z, ddgi_tile_coord(n, PC_DDGI_IRR_INTERIOR), idx, w);
     DdgiIrradianceRef a = DdgiIrradianceRef(vol.irradiance);
-    return ddgi_decode_irradiance(a.v[idx.x]) * w.x + ddgi_decode_irradiance(a.v[idx.y]) * w.y +
-           ddgi_decode_irradiance(a.v[idx.z]) * w.z + ddgi_decode_irradiance(a.v[idx.w]) * w.w;
+    return ddgi_decode_irradiance(vol, a.v[idx.x]) * w.x +
+           ddgi_decode_irradiance(vol, a.v[idx.y]) * w.y +
+           ddgi_decode_irradiance(vol, a.v[idx.z]) * w.z +
+           ddgi_decode_irradiance(vol, a.v[idx.w]) * w.w;
 }
 
 /* (mean distance, mean squared distance) of probe in direction dir. */

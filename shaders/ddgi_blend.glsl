@@ -1,7 +1,7 @@
 /* DDGI probe blend (paper Sec. 4.2, Eq. 1): one workgroup per probe of the update's list, one
  * thread per interior texel of its octahedral tile. Compiled twice, DDGI_BLEND_IRRADIANCE
  * selecting the atlas: 1 = irradiance (ddgi_blend_irradiance.comp: 8x8, weights max(0, cos),
- * perceptual encoding x^(1/5)), 0 = distance (ddgi_blend_distance.comp: 16x16, weights cos^50,
+ * in the encoded space of pc_ddgi_volume.encoding, gpu_types.h says why), 0 = distance (ddgi_blend_distance.comp: 16x16, weights cos^50,
  * mean and mean square of min(|t|, max distance)); each texel visits only the rays its weight
  * counts, as the update's weight lists give them (ddgi_weights.comp, shared by every probe; the
  * irradiance blend on a GPU walks its hemisphere's run of rays instead); each workgroup is its
@@ -11,7 +11,7 @@
  *
  * Hysteresis is per probe (renderer/gi/ddgi.c says why): h = min(h_max, a / (a + AGE_RAMP)) for
  * the probe's age a. The irradiance blend then measures the probe: the gap between its tile's
- * fresh and stored encoded luminance and the stored luminance feed the field's drift sums
+ * fresh and stored (encoded) luminance and the stored luminance feed the field's drift sums
  * (summed over the probes before dividing), which the CPU turns into next update's hold flag;
  * ages advance unless the field drifts and the probe still has hold budget. It also classifies
  * the probe: more than params.z back-face hits means it sits inside geometry (off); a probe
@@ -41,7 +41,7 @@ layout(buffer_reference, std430, buffer_reference_align = 8) volatile buffer Ddg
 shared vec4 s_ray[CHUNK];
 shared vec3 s_dir[CHUNK]; /* the rays' directions, for the irradiance band loop */
 shared uint s_backfaces;
-shared vec3 s_lum[TEXELS]; /* per irradiance texel, encoded luminance: x stored before the
+shared vec3 s_lum[TEXELS]; /* per irradiance texel, luminance: x stored before the
                               blend (< 0: never written), y fresh, z the gap the blend closed */
 
 /* The irradiance blend on a GPU (vol.blend_lists 0): the rays [x, y) that can lie within 90
@@ -145,8 +145,8 @@ void main()
     if (mine) {
         uint texel = ddgi_texel(probe, side, t.x + 1u, t.y + 1u);
         if (irradiance) {
-            vec3 fresh = pow(wsum > 1e-6 ? sum / wsum : vec3(0.0),
-                             vec3(1.0 / float(PC_DDGI_IRRADIANCE_EXPONENT)));
+            vec3 fresh = wsum > 1e-6 ? sum / wsum : vec3(0.0);
+            if (vol.encoding != 1u) fresh = pow(fresh, vec3(1.0 / float(vol.encoding)));
             DdgiIrradianceRef a = DdgiIrradianceRef(vol.irradiance);
             uvec2 old_packed = a.v[texel];
             vec3 old = vec3(unpackHalf2x16(old_packed.x), unpackHalf2x16(old_packed.y).x);
@@ -156,11 +156,14 @@ void main()
              * the per-probe age already makes steps large after a change. */
             vec3 result = written ? mix(fresh, old, h) : fresh;
             if (any(isnan(result)) || any(isinf(result))) result = vec3(0.0);
+            /* stored linearly, an irradiance past the half-float range would pack to Inf (a
+             * texel's mean of a few rays that met an emitter of 1e6 nits and more); encoded
+             * values never come near */
+            result = min(result, vec3(60000.0));
             uvec2 bits = uvec2(packHalf2x16(result.rg), packHalf2x16(vec2(result.b, 1.0)));
             a.v[texel] = bits;
             /* Measured in the stored (encoded) space, where the blend is an unbiased mean of the
-             * fresh values: a settled probe shows no drift (decoded, the stored value sits below
-             * the fresh mean by Jensen's inequality). The gap between fresh and stored is taken
+             * fresh values: a settled probe shows no drift. The gap between fresh and stored is taken
              * from the step the stored value really made, as half floats, divided by 1 - h: a
              * gap too small to move a half float (a few 1/10000 relative, over 1 - h) cannot be
              * closed by more updates and is no drift. */

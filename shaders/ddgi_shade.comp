@@ -1,17 +1,25 @@
 #version 460
-/* DDGI probe-ray shading (paper Sec. 4.1 and 5): radiance leaving each probe ray's hit toward
- * the probe (v = -ray direction) = emission + f(v, l) * direct irradiance + occlusion *
- * min(A(N.V), 0.9)/pi * the previous update's irradiance at the hit, where f is the hit's full
- * BRDF (brdf_eval) and A = brdf_hit_albedo, the directional albedo of that same f (diffuse part
- * with its (1 - F), plus the specular part's tabulated albedo: brdf.glsl's header gives the
- * split), so a hit reflects what the path tracer's next vertex would. The direct term comes from one
- * light per hit, chosen by its unshadowed contribution and divided by the choice's probability
- * (choose_light, unbiased); its visibility is read from the light's distance map where the
- * update has one (lights [0, vol.control.w): shadow_map.glsl) and the map covers the hit, else
- * traced by one shadow ray. The paper shades probe hits diffusely; here the indirect light
- * arriving at a hit is still taken as diffuse (the irradiance around its normal), but its
- * reflected energy is the BRDF's own at this view (A <= 1). The last term carries light across updates,
- * one more bounce per update; the 0.9 cap guards energy (production practice).
+/* DDGI probe-ray shading (paper Sec. 4.1 and 5): the radiance leaving each probe ray's hit
+ * toward the probe (v = -ray direction). The hit starts a short path: at each vertex, emission +
+ * f(v, l) * direct irradiance, then the path samples the BRDF (brdf_sample, as the path tracer
+ * does) for vol.path_bounces bounces (the probe_paths setting; 0: the paper's first hit only); its
+ * last vertex adds occlusion * min(A(N.V), 0.9)/pi * the
+ * previous update's irradiance there, where f is the vertex's full BRDF (brdf_eval) and A =
+ * brdf_hit_albedo, the directional albedo of that same f (diffuse part with its (1 - F), plus
+ * the specular part's tabulated albedo: brdf.glsl's header gives the split). The direct term
+ * comes from one light per vertex, chosen by its unshadowed contribution and divided by the
+ * choice's probability (choose_light, unbiased); its visibility is read from the light's
+ * distance map where the update has one (lights [0, vol.control.w): shadow_map.glsl) and the map
+ * covers the point, else traced by one shadow ray. The field's term carries light across
+ * updates, one more bounce per update; the 0.9 cap guards energy (production practice).
+ * The paper ends every probe ray at its first hit with the field's irradiance there. Where the
+ * field cannot hold the light a hit receives (the inside of a lamp shade lit by its bulb: the
+ * field interpolates the room's probes, which see the shade from outside), that loses the
+ * near-field bounces: builtin:interior is 26% dark against the path tracer. Three traced
+ * bounces (with the linear blend they need, gpu_types.h) bring it to -4..-9%, and the lamp room
+ * (tests/bench/lamp_room_gltf.py) from -29% to -7% (NVIDIA H200,
+ * tests/bench/results/h200/probe_paths.txt); they cost probe shading 2.5-4.5 times while probes
+ * are awake, nothing once they sleep. Not yet the default: see the README.
  * Two orders (rd_ddgi.sort_hits):
  * - params.z = 1, sorted: one thread per hit of the update's binned list (ddgi_bin.comp, which
  *   already gave misses the sky and back faces nothing), in cell order: a warp shades hits that
@@ -20,14 +28,15 @@
  * - params.z = 0, when every light has a map: one thread per ray of the listed active probes,
  *   as the trace ran them (dispatched by trace_args); misses and back faces are shaded here.
  * push: globals, buf0 = uvec4 hits[], buf1 = pc_counters, buf2 = uint sorted[] (ray slots;
- * sorted order only), params.y = 1 when the probe field already holds an update (else no
- * indirect term). */
+ * sorted order only), params.y = 1 when the probe field already holds an update (else a path's
+ * last vertex adds no field term). */
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
 #include "ddgi.glsl"
 #include "shadow_map.glsl"
 
 layout(local_size_x = PC_WG_1D) in;
+
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer HitRef { uvec4 v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer SortedRef { uint v[]; };
 
@@ -36,7 +45,7 @@ void main()
     count_rays_begin();
     pc_globals g = load_globals();
     pc_ddgi_volume vol = g.ddgi;
-    uint shadow_rays = 0u;
+    uint shadow_rays = 0u, path_rays = 0u;
     uint slot = PC_INVALID, ray = 0u;
     if (pc.params.z != 0u) { /* sorted: the binned list of hits */
         uint i = gl_GlobalInvocationID.x;
@@ -69,26 +78,54 @@ void main()
         hit.backface = false; /* a front hit, or a back hit of a double-sided surface */
         vec3 dir = ddgi_ray_dir(vol, ray);
         pc_surface sf = surface_at(g.scene, hit, dir);
-        pc_brdf b = surface_brdf(sf);
-        vec3 albedo = brdf_hit_albedo(g.brdf_albedo, b, clamp(dot(sf.normal, -dir), 0.0, 1.0));
         uint seed = pcg(slot ^ pcg(vol.info.y * 0x9E3779B9u + 0x632BE5ABu));
-        vec3 term, wi;
-        float dist;
-        uint light = choose_light(g.scene, sf.position, sf.normal, sf.geom_normal, -dir, b,
-                                  rnd(seed), term, wi, dist);
-        vec3 direct = vec3(0.0);
-        if (light != PC_INVALID)
-            direct = term * probe_light_visibility(g.scene, vol.shadow_maps, vol.control.w, light,
-                                                   sf.position, sf.geom_normal, sf.offset, wi,
-                                                   dist, shadow_rays);
-        vec3 indirect = vec3(0.0);
-        if (pc.params.y != 0u)
-            indirect = ddgi_irradiance(vol, g.scene, true, env_irradiance(g.env, sf.normal), sf.position,
-                                       sf.normal, -dir, 1e30, 0.0);
-        vec3 radiance = sf.emission + direct +
-                        sf.occlusion * min(albedo, vec3(0.9)) / PC_PI * indirect;
+        vec3 radiance = vec3(0.0), throughput = vec3(1.0);
+        for (uint depth = 0u;; depth++) {
+            pc_brdf b = surface_brdf(sf);
+            vec3 v = -dir;
+            vec3 term, wi;
+            float dist;
+            uint light = choose_light(g.scene, sf.position, sf.normal, sf.geom_normal, v, b,
+                                      rnd(seed), term, wi, dist);
+            vec3 direct = vec3(0.0);
+            if (light != PC_INVALID)
+                direct = term * probe_light_visibility(g.scene, vol.shadow_maps, vol.control.w,
+                                                       light, sf.position, sf.geom_normal,
+                                                       sf.offset, wi, dist, shadow_rays);
+            radiance += throughput * (sf.emission + direct);
+            if (depth == vol.path_bounces) {
+                if (pc.params.y == 0u) break; /* no field yet */
+                /* probe-ray hits start at the probe, in free space (no limit on the bias along
+                 * v); a continued path's hits, half their segment */
+                vec3 indirect = ddgi_irradiance(vol, g.scene, true, env_irradiance(g.env, sf.normal),
+                                                sf.position, sf.normal, v,
+                                                depth == 0u ? 1e30 : 0.5 * hit.t, 0.0);
+                vec3 albedo = brdf_hit_albedo(g.brdf_albedo, b, clamp(dot(sf.normal, v), 0.0, 1.0));
+                radiance += throughput * sf.occlusion * min(albedo, vec3(0.9)) / PC_PI * indirect;
+                break;
+            }
+            float u1 = rnd(seed), u2 = rnd(seed), u3 = rnd(seed);
+            vec3 weight;
+            if (!brdf_sample(b, sf.normal, v, vec3(u1, u2, u3), dir, weight)) break;
+            if (dot(dir, sf.geom_normal) <= 0.0) break; /* below the true surface */
+            throughput *= weight;
+            if (all(equal(throughput, vec3(0.0)))) break;
+            path_rays++;
+            if (!trace_ray(g.scene, offset_ray_origin(sf.position, sf.geom_normal, sf.offset), dir,
+                           0.0, 1e30, 0u, hit)) {
+                radiance += throughput * env_radiance(g.env, dir);
+                break;
+            }
+            if (hit.backface &&
+                (floatBitsToUint(TriRef(g.scene.tris).v[hit.tri].v1.w) & PC_TRI_DOUBLE_SIDED) == 0u)
+                break; /* absorbed */
+            hit.backface = false;
+            sf = surface_at(g.scene, hit, dir);
+        }
         if (any(isnan(radiance)) || any(isinf(radiance))) radiance = vec3(0.0);
         DdgiRayRef(vol.rays).v[slot] = vec4(radiance, r.w);
     }
     count_rays_end(pc.buf1, 4u, shadow_rays);
+    count_rays_begin();
+    count_rays_end(pc.buf1, 7u, path_rays);
 }

@@ -357,23 +357,30 @@ PC_END(pc_environment);
 #define PC_SHADOW_MAP_PASS_RECT 2u
 #define PC_SHADOW_MAP_SUN_FACE 6u
 #define PC_DDGI_DRIFT_RANGE 0x3fffffffu /* the drift sums' fixed point: |sum| <= this */
-/* Irradiance texels hold (E / pi)^(1/5) (the paper's perceptual encoding, blended in that
- * space); readers raise the stored value to the 5th power. A fixed 5 lets the shaders decode
- * with three multiplies instead of pow (12 per probe of an irradiance query). */
-#define PC_DDGI_IRRADIANCE_EXPONENT 5 /* an integer: the shaders test it with #if */
+/* Irradiance texels hold (E / pi)^(1/e), blended in that space; readers raise the stored value
+ * to the e-th power (pc_ddgi_volume.encoding). e = 5 is the paper's perceptual encoding, kept
+ * while probe rays end at their first hit (probe_paths 0). With continued probe paths e = 1:
+ * the encoding averages the fifth roots of the fresh values, so a texel whose fresh values are
+ * noisy (rare rays that meet a small bright patch: the inside of a lamp shade, a sunlit strip)
+ * settles well below their mean (Jensen's inequality); it left builtin:interior -14..-19% with
+ * the paths where the linear blend leaves -4..-9% (tests/bench/results/h200/probe_paths.txt).
+ * Half floats need no encoding for range or precision. The linear blend is not the default with
+ * first-hit rays: there the encoding's darkening hides the leaks of thin walls and contacts
+ * (hard:thin-walls +2.8% against -4.0%, the lavapipe Cornell test's relMSE 0.14 against 0.12). */
+#define PC_DDGI_ENCODING_PAPER 5 /* ddgi.glsl decodes it with multiplies */
 
 /* origin: xyz position of probe (0,0,0), w = max ray distance for distance blending;
  * spacing: xyz grid spacing, w = PC_DDGI_VIS_* (as float);
  * counts: xyz probes per axis, w = rays per probe;
  * rotation: rows of this update's random ray rotation (uniform on SO(3));
  * params: x maximum hysteresis, y bias scale (world units), z back-face ratio that deactivates
- *   a probe, w fixed-point units per unit of encoded luminance in the drift sums (set by the CPU
- *   each update; the encoding exponent is PC_DDGI_IRRADIANCE_EXPONENT);
+ *   a probe, w fixed-point units per unit of stored (encoded) luminance in the drift sums (set
+ *   by the CPU each update);
  * info: x PC_GI_*, y updates done since reset (0 = next is the first), z atlas irradiance
  *   tile side (interior + 2), w distance tile side (interior + 2);
  * control: x = 1 while the awake field drifts (ages hold), y = age at which a probe falls
  *   asleep (as float bits), z = wake boxes this update, w unused;
- * irradiance: uvec2[] per texel (packHalf2x16 of rgb^(1/5) and a written flag);
+ * irradiance: uvec2[] per texel (packHalf2x16 of (E / pi)^(1/encoding) and a written flag);
  * distance: vec2[] per texel (mean, mean of squares);
  * rays: vec4[] per probe ray (radiance, hit distance; < 0: back face);
  * probes: vec4[] per probe (xyz offset, w = PC_DDGI_PROBE_* state as float);
@@ -413,6 +420,11 @@ PC_STRUCT(pc_ddgi_volume)
     pc_u32 relocate;    /* 1: probes move out of geometry and off surfaces (ddgi_blend.glsl) */
     pc_u32 blend_lists; /* 1: the irradiance blend walks the weight lists (a CPU device), 0: the
                            hemisphere's run of rays (a GPU; ddgi_blend.glsl says why) */
+    pc_u32 path_bounces; /* bounces a probe ray's path takes before the field ends it (0: the
+                            paper's first hit; ddgi_shade.comp) */
+    pc_u32 encoding;     /* irradiance texels hold (E / pi)^(1/encoding): PC_DDGI_ENCODING_PAPER
+                            or 1 (linear, with path_bounces > 0) */
+    pc_u32 pad0, pad1;
 }
 PC_END(pc_ddgi_volume);
 
@@ -424,7 +436,7 @@ PC_STRUCT(pc_ddgi_control)
     pc_uvec4 border_args; /* x border groups per probe, y listed probes, z 1 */
     pc_uvec4 before;      /* states when the update began: x awake, y sleeping, z off, w listed */
     pc_uvec4 after;       /* states the listed probes ended in: x awake, y sleeping, z off */
-    pc_uvec4 drift;       /* encoded luminance of the blended probes' tiles, fixed point (int):
+    pc_uvec4 drift;       /* stored (encoded) luminance of the blended probes' tiles, fixed point (int):
                              x sum of the gap the blend closed (step of the stored value over
                              1 - h), y sum of stored, both over probes that had a stored value,
                              z their count, w sum of fresh over all */
@@ -481,10 +493,10 @@ PC_STRUCT(pc_counters)
     pc_u32 shadow_rays; /* from camera-visible surfaces */
     pc_u32 probe_rays;
     pc_u32 path_rays;         /* path-traced rays, shadow rays included */
-    pc_u32 probe_shadow_rays; /* from probe-ray hits */
+    pc_u32 probe_shadow_rays; /* from probe-ray hits and their paths' vertices */
     pc_u32 reflect_rays;      /* reflection rays of camera pixels and their shadow rays */
     pc_u32 shadow_map_rays;   /* rays that built lights' distance maps */
-    pc_u32 pad;
+    pc_u32 probe_path_rays;   /* bounce rays of the paths that probe-ray hits continue */
 }
 PC_END(pc_counters);
 
@@ -558,7 +570,7 @@ PC_OFF(pc_view, tonemap, 80);
 PC_CHECK(pc_environment, 208);
 PC_OFF(pc_environment, image, 176);
 PC_OFF(pc_environment, mode, 184);
-PC_CHECK(pc_ddgi_volume, 240);
+PC_CHECK(pc_ddgi_volume, 256);
 PC_OFF(pc_ddgi_volume, weights, 224);
 PC_OFF(pc_ddgi_volume, control, 160);
 PC_OFF(pc_ddgi_volume, wake, 200);
@@ -572,11 +584,11 @@ PC_OFF(pc_ddgi_volume, params, 96);
 PC_OFF(pc_ddgi_volume, info, 112);
 PC_OFF(pc_ddgi_volume, irradiance, 128);
 PC_OFF(pc_ddgi_volume, probes, 152);
-PC_CHECK(pc_globals, 656);
-PC_OFF(pc_globals, brdf_albedo, 640);
+PC_CHECK(pc_globals, 672);
+PC_OFF(pc_globals, brdf_albedo, 656);
 PC_OFF(pc_globals, view, 96);
 PC_OFF(pc_globals, ddgi, 192);
-PC_OFF(pc_globals, env, 432);
+PC_OFF(pc_globals, env, 448);
 PC_CHECK(pc_gbuffer_texel, 96);
 PC_OFF(pc_gbuffer_texel, albedo, 48);
 PC_OFF(pc_gbuffer_texel, emission, 64);

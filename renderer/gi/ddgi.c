@@ -225,6 +225,11 @@ rd_vk_result rd_ddgi_configure(rd_ddgi *d, const float bmin[3], const float bmax
         snprintf(err, errlen, "unknown visibility rays mode %u", s->visibility);
         return RD_VK_ERR_UNSUPPORTED;
     }
+    if (s->path_bounces > RD_DDGI_MAX_PATH_BOUNCES) {
+        snprintf(err, errlen, "probe paths take at most %u bounces (got %u)",
+                 RD_DDGI_MAX_PATH_BOUNCES, s->path_bounces);
+        return RD_VK_ERR_UNSUPPORTED;
+    }
     if (!(hysteresis >= 0 && hysteresis <= RD_DDGI_MAX_HYSTERESIS)) {
         snprintf(err, errlen, "hysteresis must be in [0, %g] (got %g)",
                  (double)RD_DDGI_MAX_HYSTERESIS, hysteresis);
@@ -298,6 +303,9 @@ rd_vk_result rd_ddgi_configure(rd_ddgi *d, const float bmin[3], const float bmax
     v->weights = d->weight_lists.address;
     v->relocate = s->relocation;
     v->blend_lists = d->vk->is_cpu;
+    v->path_bounces = s->path_bounces;
+    /* continued paths need the linear blend, first hits keep the paper's encoding (gpu_types.h) */
+    v->encoding = s->path_bounces > 0 ? 1u : PC_DDGI_ENCODING_PAPER;
     d->configured = true;
     return rd_ddgi_reset(d, err, errlen);
 }
@@ -393,7 +401,8 @@ void rd_ddgi_random_rotation(uint64_t *state, float m[3][3])
  * rises to average the noise away once only noise is left:
  *  - the measure: each update, the blend sums over the awake probes the gap between fresh and
  *    stored encoded luminance of their tiles (the step the stored half floats really made,
- *    divided by 1 - h) and the stored luminance; D = 5 x gap sum / stored sum is the relative
+ *    divided by 1 - h) and the stored luminance; D = e x gap sum / stored sum (e the encoding
+ *    exponent: 5, or 1 when the blend is linear, gpu_types.h) is the relative
  *    change of the field's luminance per update that the fresh values ask for. In the encoded
  *    space the stored value is the mean of the fresh ones, and a ratio of sums has no bias from
  *    noise, so a settled field measures 0 however noisy single probes are (a sun patch, rare
@@ -641,6 +650,6 @@ void rd_ddgi_end_update(rd_ddgi *d)
     }
     /* the relative change of the field's (decoded) luminance per update that this update's
      * fresh values ask for: the encoded ratio times the encoding exponent */
-    double D = stored > 0 ? (double)PC_DDGI_IRRADIANCE_EXPONENT * gap / stored : gap > 0 ? 1 : 0;
+    double D = stored > 0 ? (double)d->vol.encoding * gap / stored : gap > 0 ? 1 : 0;
     drift_measure(d, fmax(-DRIFT_MAX, fmin(DRIFT_MAX, D)));
 }

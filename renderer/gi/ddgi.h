@@ -18,6 +18,7 @@
  * for) and limits (rd_ddgi_configure refuses settings beyond them). The server's settings table
  * (server/api/settings.h) takes its defaults and ranges from here. */
 #define RD_DDGI_DEFAULT_HYSTERESIS 0.97f
+#define RD_DDGI_MAX_PATH_BOUNCES 8u   /* probe paths (ddgi_shade.comp) */
 #define RD_DDGI_MAX_HYSTERESIS 0.999f /* hysteresis in [0, this]; 1 would never change */
 #define RD_DDGI_DEFAULT_RAYS 256u     /* rays in 1..PC_DDGI_MAX_RAYS (shaders/gpu_types.h) */
 #define RD_DDGI_MAX_AXIS_PROBES 256u  /* probes per axis */
@@ -29,12 +30,14 @@ typedef struct rd_ddgi_settings {
     float spacing[3];   /* 0 = derived (from counts, or from the scene's size) */
     float origin[3];    /* position of probe (0,0,0), used when has_origin */
     bool has_origin;
-    unsigned rays;       /* rays per probe per update; 0 = RD_DDGI_DEFAULT_RAYS */
-    float hysteresis;    /* maximum weight of the old value, used when has_hysteresis is set */
-    bool has_hysteresis; /* (0 too: no history); unset = RD_DDGI_DEFAULT_HYSTERESIS */
-    unsigned seed;       /* ray rotations are a deterministic function of seed and update */
-    unsigned visibility; /* PC_DDGI_VIS_* (0: ALL, the default) */
-    bool relocation;     /* probes move out of geometry and off surfaces (PC_DDGI_RELOCATE_*) */
+    unsigned rays;         /* rays per probe per update; 0 = RD_DDGI_DEFAULT_RAYS */
+    float hysteresis;      /* maximum weight of the old value, used when has_hysteresis is set */
+    bool has_hysteresis;   /* (0 too: no history); unset = RD_DDGI_DEFAULT_HYSTERESIS */
+    unsigned seed;         /* ray rotations are a deterministic function of seed and update */
+    unsigned visibility;   /* PC_DDGI_VIS_* (0: ALL, the default) */
+    bool relocation;       /* probes move out of geometry and off surfaces (PC_DDGI_RELOCATE_*) */
+    unsigned path_bounces; /* bounces a probe ray's path takes before the field ends it (0: the
+                              paper's first hit), at most RD_DDGI_MAX_PATH_BOUNCES */
 } rd_ddgi_settings;
 
 /* Probes per state after the last update (or reset). */

@@ -89,7 +89,7 @@ rd_vk_result rd_ddgi_read_atlases(rd_ddgi *d, float **irr_rgb, unsigned *irr_w, 
     float *a = tile_image(probes, RD_DDGI_IRR_SIDE, irr_w, irr_h);
     float *b = tile_image(probes, RD_DDGI_DIST_SIDE, dist_w, dist_h);
     unsigned per_row_a = *irr_w / RD_DDGI_IRR_SIDE, per_row_b = *dist_w / RD_DDGI_DIST_SIDE;
-    float e = (float)PC_DDGI_IRRADIANCE_EXPONENT;
+    float e = (float)d->vol.encoding;
     for (unsigned p = 0; p < probes; p++)
         for (unsigned y = 0; y < RD_DDGI_IRR_SIDE; y++)
             for (unsigned x = 0; x < RD_DDGI_IRR_SIDE; x++) {

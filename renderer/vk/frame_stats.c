@@ -35,6 +35,7 @@ void rd_frame_stats_add(rd_frame_stats *dst, const rd_frame_stats *src)
     dst->rays.probe_shadow_rays += src->rays.probe_shadow_rays;
     dst->rays.reflect_rays += src->rays.reflect_rays;
     dst->rays.shadow_map_rays += src->rays.shadow_map_rays;
+    dst->rays.probe_path_rays += src->rays.probe_path_rays;
 }
 
 void rd_frame_stats_add_timer(rd_frame_stats *dst, const rd_timer *t)

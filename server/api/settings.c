@@ -237,6 +237,7 @@ void srv_settings_to_gi(const srv_settings *s, rd_ddgi_settings *gi)
     gi->has_hysteresis = true;
     gi->visibility = s->visibility_rays;
     gi->relocation = s->probe_relocation != 0; /* "on" */
+    gi->path_bounces = s->probe_paths;
 }
 
 /* ---- JSON ------------------------------------------------------------------------------- */

@@ -142,7 +142,13 @@ typedef enum srv_setting_type {
       "", 0, 0, 0, WORLD, (SRV_RELOCATION_NAMES),                                                  \
       "on: probes inside geometry move out through its nearest face, and probes on a surface "   \
       "move off it, during their first updates (the 2021 paper's relocation); off: they stay on " \
-      "the grid")
+      "the grid")                                                                                  \
+    X(PROBE_PATHS, probe_paths, UINT, "probe_paths", "--probe-paths", ALL, "N", 0,                 \
+      RD_DDGI_MAX_PATH_BOUNCES, 0, WORLD, (NULL),                                                  \
+      "bounces each probe ray's hit follows (sampling its BRDF, direct light at every vertex) "   \
+      "before the probe field ends it, with irradiance blended linearly; 0 = the paper's first " \
+      "hit. 3 brings builtin:interior's lamp-lit rooms from -26% to about -7% against the path " \
+      "tracer, at 2-4x the probe shading while probes are awake")
 /* clang-format on */
 
 /* Values a CPU device (lavapipe) starts with for the settings the command line did not give:
@@ -179,7 +185,7 @@ enum { SRV_SETTINGS(SRV_SETTING_BIT_) };
 /* The settings whose change restarts the probe field. */
 #define SRV_SET_GI_FIELDS                                                                          \
     (SRV_SET_GI_MODE | SRV_SET_PROBE_COUNTS | SRV_SET_PROBE_SPACING | SRV_SET_RAYS |               \
-     SRV_SET_HYSTERESIS | SRV_SET_VISIBILITY_RAYS | SRV_SET_PROBE_RELOCATION)
+     SRV_SET_HYSTERESIS | SRV_SET_VISIBILITY_RAYS | SRV_SET_PROBE_RELOCATION | SRV_SET_PROBE_PATHS)
 /* The settings of the environment (a change relights everything). */
 #define SRV_SET_ENV_FIELDS                                                                         \
     (SRV_SET_SKY | SRV_SET_SKY_MODE | SRV_SET_SKY_GROUND | SRV_SET_SKY_INTENSITY |                 \

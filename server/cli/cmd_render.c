@@ -265,7 +265,8 @@ static void print_timings(const rd_vk *vk, const rd_scene *s, const rd_gpu_scene
         double rays = 0;
         if (strcmp(avg->pass_name[i], "primary") == 0) rays = avg->rays.primary_rays;
         if (strcmp(avg->pass_name[i], "shade") == 0) rays = avg->rays.shadow_rays;
-        if (strcmp(avg->pass_name[i], "probe shade") == 0) rays = avg->rays.probe_shadow_rays;
+        if (strcmp(avg->pass_name[i], "probe shade") == 0)
+            rays = avg->rays.probe_shadow_rays + avg->rays.probe_path_rays;
         if (strcmp(avg->pass_name[i], "probe trace") == 0) rays = avg->rays.probe_rays;
         if (strcmp(avg->pass_name[i], "path trace") == 0) rays = avg->rays.path_rays;
         if (strcmp(avg->pass_name[i], "shadow maps") == 0) rays = avg->rays.shadow_map_rays;
