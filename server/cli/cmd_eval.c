@@ -138,11 +138,13 @@ static bool parse_families(const char *s, unsigned *out)
 
 /* A setting flag of eval (the settings table's rows for eval): one value, or a list of them for a
  * sweep, each checked against the table's range. */
-static bool parse_setting(const srv_setting_info *d, const char *v, eval_args *a)
+static bool parse_setting(const srv_setting_info *d, const char *v, eval_args *a, srv_settings *set)
 {
     static const char cmd[] = "probecast eval";
     srv_settings vals[EVAL_LIST_MAX];
     unsigned n = 1;
+    if (d->bit != SRV_SET_WIDTH && d->bit != SRV_SET_HEIGHT && !(d->bit & EVAL_SWEEPS))
+        return srv_setting_parse(cmd, d, v, set); /* into every row's base */
     if (d->bit & EVAL_SWEEPS) {
         if (!srv_setting_parse_list(cmd, d, v, vals, EVAL_LIST_MAX, &n)) return false;
     } else if (!srv_setting_parse(cmd, d, v, &vals[0])) {
@@ -162,9 +164,39 @@ static bool parse_setting(const srv_setting_info *d, const char *v, eval_args *a
     return true;
 }
 
+/* Appends text to the string dst of capacity cap (cut at the capacity). */
+static void append(char *dst, size_t cap, const char *text)
+{
+    size_t n = strlen(dst), k = strlen(text);
+    if (n + 1 >= cap) return;
+    if (k > cap - 1 - n) k = cap - 1 - n;
+    memcpy(dst + n, text, k);
+    dst[n + k] = '\0';
+}
+
+/* The base GI settings from the unswept flags, and their label. */
+static void set_base(eval_args *a, const srv_settings *set)
+{
+    srv_settings_to_gi(set, &a->base);
+    char *l = a->base_label;
+    size_t cap = sizeof a->base_label;
+    l[0] = '\0';
+    if (a->base.visibility == PC_DDGI_VIS_OFF) append(l, cap, " vis-off");
+    if (a->base.visibility == PC_DDGI_VIS_PROBES) append(l, cap, " vis-probes");
+    if (a->base.relocation) append(l, cap, " relocate");
+    if (a->base.path_bounces) {
+        char p[24];
+        snprintf(p, sizeof p, " paths%u", a->base.path_bounces);
+        append(l, cap, p);
+    }
+}
+
 static int parse(int argc, char **argv, eval_args *a)
 {
     eval_defaults(a);
+    srv_settings set;
+    srv_settings_defaults(&set);
+    set_base(a, &set);
     for (int i = 1; i < argc; i++) {
         const char *o = argv[i], *v = NULL;
         bool takes = strcmp(o, "--help") && strcmp(o, "-h") && strcmp(o, "--list") &&
@@ -172,7 +204,8 @@ static int parse(int argc, char **argv, eval_args *a)
         if (takes && !(v = srv_arg_value("probecast eval", argc, argv, &i))) return 2;
         const srv_setting_info *d = srv_setting_by_flag(o, SRV_CLI_EVAL);
         if (d) {
-            if (!parse_setting(d, v, a)) return 2;
+            if (!parse_setting(d, v, a, &set)) return 2;
+            set_base(a, &set);
         } else if (strcmp(o, "--help") == 0 || strcmp(o, "-h") == 0) {
             eval_usage(stdout);
             return 0;
@@ -320,7 +353,8 @@ static bool run_default(eval_ctx *c, rd_scene *s, rd_gpu_scene *gs, const rd_vie
                         const float *ref, eval_row *row)
 {
     const eval_args *a = c->a;
-    rd_ddgi_settings gi = {.mode = PC_GI_DDGI, .seed = 1};
+    rd_ddgi_settings gi = a->base; /* the defaults, but for unswept flags */
+    gi.mode = PC_GI_DDGI, gi.seed = 1;
     if (rd_renderer_configure_gi(&c->r, s->bounds_min, s->bounds_max, &gi, c->err, sizeof c->err) !=
         RD_VK_OK)
         return false;
@@ -341,9 +375,12 @@ static bool run_default(eval_ctx *c, rd_scene *s, rd_gpu_scene *gs, const rd_vie
     row->rays = c->r.world.ddgi.vol.counts.w;
     row->hysteresis = RD_DDGI_DEFAULT_HYSTERESIS;
     snprintf(row->mode, sizeof row->mode, "default");
-    snprintf(row->config, sizeof row->config, "default %ux%ux%u r%u %s%u", row->probes[0],
-             row->probes[1], row->probes[2], row->rays, row->slept ? "sleeps@" : "awake@",
-             row->updates);
+    snprintf(row->config, sizeof row->config, "default %ux%ux%u r%u", row->probes[0],
+             row->probes[1], row->probes[2], row->rays);
+    append(row->config, sizeof row->config, a->base_label);
+    char at[24];
+    snprintf(at, sizeof at, " %s%u", row->slept ? "sleeps@" : "awake@", row->updates);
+    append(row->config, sizeof row->config, at);
     return true;
 }
 
@@ -428,7 +465,8 @@ static bool run_case(eval_ctx *c, const rd_hard_case *hc, unsigned f, eval_row *
         memset(row, 0, sizeof *row);
         snprintf(row->scene, sizeof row->scene, "%s", label);
         snprintf(row->expect, sizeof row->expect, "%s", hc->expect);
-        rd_ddgi_settings gi = {.seed = 1};
+        rd_ddgi_settings gi = a->base;
+        gi.mode = PC_GI_OFF, gi.seed = 1;
         unsigned updates = a->updates[a->nupdates - 1];
         if (k == 2) {
             ok = run_default(c, &s, &gs, &cam, ref, row);
@@ -456,10 +494,12 @@ static bool run_case(eval_ctx *c, const rd_hard_case *hc, unsigned f, eval_row *
             }
             ok = run_setting(c, name, &s, &gs, &cam, &gi, updates, ref, row);
             row->hysteresis = gi.has_hysteresis ? gi.hysteresis : RD_DDGI_DEFAULT_HYSTERESIS;
-            if (k >= 1)
+            if (k >= 1) {
                 snprintf(row->config, sizeof row->config, "%s %ux%ux%u r%u u%u h%.2f", row->mode,
                          row->probes[0], row->probes[1], row->probes[2], row->rays, row->updates,
                          row->hysteresis);
+                append(row->config, sizeof row->config, a->base_label);
+            }
         }
         if (!ok) {
             fprintf(stderr, "\nprobecast eval: %s: %s\n", label, c->err);

@@ -146,7 +146,8 @@ static bool run_case(eval_ctx *c, const dyn_case *dc, dyn_row *rows, unsigned *n
         return false;
     }
     rd_world_set_scene(w, &gs);
-    rd_ddgi_settings gi = {.mode = PC_GI_DDGI, .seed = 1}; /* the defaults */
+    rd_ddgi_settings gi = c->a->base; /* the defaults, but for eval's unswept flags */
+    gi.mode = PC_GI_DDGI, gi.seed = 1;
     unsigned done = 0;
     double ms = 0;
     ok = rd_world_configure_gi(w, s.bounds_min, s.bounds_max, &gi, c->err, sizeof c->err) ==

@@ -26,6 +26,11 @@ typedef struct eval_args {
     bool dynamic; /* --dynamic: the dynamic cases instead of the static suite */
     bool no_default_lighting;
     const char *replot;
+    /* the GI settings every row starts from: the defaults, with the setting flags eval does not
+     * sweep (--visibility-rays, --probe-relocation, --probe-paths); rows set mode, counts,
+     * rays, hysteresis and seed */
+    rd_ddgi_settings base;
+    char base_label[48]; /* those flags as row labels show them ("" at the defaults) */
 } eval_args;
 
 typedef struct eval_ctx {
