@@ -108,6 +108,18 @@ test('the rendering panel switches GI mode and the probe view', { timeout: 12000
   await until(async () => (await http('GET', '/v1/settings')).json.view === 'final', 'view final');
   await page.locator('#gi-modes button[data-value=ddgi]').click();
   await until(async () => (await http('GET', '/v1/settings')).json.gi_mode === 'ddgi', 'gi_mode ddgi');
+  // probe paths: shown with probes, sent as probe_paths, checked from the server's settings
+  await page.locator('#probe-paths-row').waitFor({ state: 'visible', timeout: 5000 });
+  assert.equal(await page.locator('#probe-paths button[data-value="0"]').getAttribute('aria-checked'), 'true');
+  await page.locator('#probe-paths button[data-value="3"]').click();
+  await until(async () => (await http('GET', '/v1/settings')).json.probe_paths === 3, 'probe_paths 3');
+  await until(async () => (await page.locator('#probe-paths button[data-value="3"]').getAttribute('aria-checked')) === 'true', '3 checked');
+  await page.locator('#probe-paths button[data-value="0"]').click();
+  await until(async () => (await http('GET', '/v1/settings')).json.probe_paths === 0, 'probe_paths 0');
+  await page.locator('#gi-modes button[data-value=off]').click();
+  await until(async () => await page.locator('#probe-paths-row').isHidden(), 'probe paths hidden with gi off');
+  await page.locator('#gi-modes button[data-value=ddgi]').click();
+  await until(async () => (await http('GET', '/v1/settings')).json.gi_mode === 'ddgi', 'gi_mode ddgi again');
 });
 
 /* A w x h OpenEXR file, one part, scanlines, no compression, HALF channels B, G, R (the order
