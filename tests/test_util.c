@@ -1,6 +1,7 @@
 #include "test_util.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
@@ -19,6 +20,21 @@ int test_finish(void)
 {
     fprintf(stderr, "%d checks, %d failed\n", test_checks, test_failures);
     return (test_failures == 0 && test_checks > 0) ? 0 : 1;
+}
+
+char *test_read_text(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return NULL;
+    char *s = NULL;
+    long n = fseek(f, 0, SEEK_END) == 0 ? ftell(f) : -1;
+    if (n >= 0 && fseek(f, 0, SEEK_SET) == 0 && (s = malloc((size_t)n + 1))) {
+        size_t got = fread(s, 1, (size_t)n, f);
+        s[got] = '\0';
+        if (len) *len = got;
+    }
+    fclose(f);
+    return s;
 }
 
 const char *test_tmp_path(const char *name)

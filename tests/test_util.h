@@ -42,6 +42,10 @@ uint32_t test_make_cube(float *pos, int g);
 /* Writes a scratch path under the build tree's test output folder. */
 const char *test_tmp_path(const char *name);
 
+/* The whole file at path as a NUL-terminated string (NULL when it cannot be read; the caller
+ * frees); its length in *len when len is not NULL. */
+char *test_read_text(const char *path, size_t *len);
+
 /* Writing test files. All results are malloc'd (the caller frees); out-of-memory aborts. */
 char *test_xprintf(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 /* Standard base64 of n bytes, '='-padded. */

@@ -194,9 +194,8 @@ static void set_base(eval_args *a, const srv_settings *set)
 static int parse(int argc, char **argv, eval_args *a)
 {
     eval_defaults(a);
-    srv_settings set;
+    srv_settings set; /* the unswept setting flags, for every row's base */
     srv_settings_defaults(&set);
-    set_base(a, &set);
     for (int i = 1; i < argc; i++) {
         const char *o = argv[i], *v = NULL;
         bool takes = strcmp(o, "--help") && strcmp(o, "-h") && strcmp(o, "--list") &&
@@ -205,7 +204,6 @@ static int parse(int argc, char **argv, eval_args *a)
         const srv_setting_info *d = srv_setting_by_flag(o, SRV_CLI_EVAL);
         if (d) {
             if (!parse_setting(d, v, a, &set)) return 2;
-            set_base(a, &set);
         } else if (strcmp(o, "--help") == 0 || strcmp(o, "-h") == 0) {
             eval_usage(stdout);
             return 0;
@@ -257,6 +255,7 @@ static int parse(int argc, char **argv, eval_args *a)
             return 2;
         }
     }
+    set_base(a, &set);
     return -1;
 }
 

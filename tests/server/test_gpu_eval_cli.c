@@ -9,29 +9,6 @@
 
 #include "test_util.h"
 
-/* The whole file at path (NULL when it cannot be read; the caller frees). */
-static char *read_text(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) return NULL;
-    char *text = NULL;
-    size_t len = 0, cap = 0;
-    for (;;) {
-        if (len + 4096 + 1 > cap) {
-            cap = 2 * cap + 8192;
-            char *grown = realloc(text, cap);
-            if (!grown) break;
-            text = grown;
-        }
-        size_t n = fread(text + len, 1, 4096, f);
-        len += n;
-        if (n == 0) break;
-    }
-    fclose(f);
-    if (text) text[len] = '\0';
-    return text;
-}
-
 /* Runs probecast eval with the extra options into a fresh directory; returns eval.csv's text
  * (NULL on failure; the caller frees) and the exit status in *status. */
 static char *eval(const char *options, int *status)
@@ -56,7 +33,7 @@ static char *eval(const char *options, int *status)
     }
     char csv[600];
     snprintf(csv, sizeof csv, "%s/eval.csv", dir);
-    return read_text(csv);
+    return test_read_text(csv, NULL);
 }
 
 /* The number of rows of csv whose line contains both a and b. */

@@ -21,20 +21,6 @@ typedef struct op {
 static op ops[64];
 static int nops;
 
-static char *read_text(const char *path, size_t *len)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) return NULL;
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *s = malloc((size_t)n + 1);
-    *len = fread(s, 1, (size_t)n, f);
-    s[*len] = 0;
-    fclose(f);
-    return s;
-}
-
 /* The spec is written with two-space indents: "  /path:" under paths, "    get:" for an
  * operation and "        'NNN':" for its responses. */
 static void parse_spec(const char *text)
@@ -170,7 +156,7 @@ static int first_light_id(void)
 int main(void)
 {
     size_t spec_len;
-    char *spec = read_text(PROBECAST_SOURCE_DIR "/protocol/openapi.yaml", &spec_len);
+    char *spec = test_read_text(PROBECAST_SOURCE_DIR "/protocol/openapi.yaml", &spec_len);
     CHECK(spec != NULL);
     if (!spec) return test_finish();
     parse_spec(spec);
