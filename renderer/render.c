@@ -29,9 +29,8 @@ rd_vk_result rd_renderer_configure_gi(rd_renderer *r, const float bmin[3], const
     return rd_world_configure_gi(&r->world, bmin, bmax, gi, err, errlen);
 }
 
-rd_vk_result rd_renderer_render(rd_renderer *r, rd_gpu_scene *scene,
-                                const rd_view_camera *camera, const rd_frame_settings *fs,
-                                char *err, size_t errlen)
+rd_vk_result rd_renderer_render(rd_renderer *r, rd_gpu_scene *scene, const rd_view_camera *camera,
+                                const rd_frame_settings *fs, char *err, size_t errlen)
 {
     memset(&r->stats, 0, sizeof r->stats);
     rd_world_set_scene(&r->world, scene);
@@ -54,8 +53,9 @@ rd_vk_result rd_renderer_render(rd_renderer *r, rd_gpu_scene *scene,
         .max_bounces = fs->max_bounces,
         .pathtrace_first = fs->pathtrace_first,
         .reflections = fs->reflections,
+        .near_field = fs->near_field,
     };
-    res = rd_view_render(&r->view, &r->world, camera, &vs, err, errlen);
+    res = rd_view_render_still(&r->view, &r->world, camera, &vs, err, errlen);
     rd_frame_stats_add(&r->stats, &r->world.stats);
     rd_frame_stats_add(&r->stats, &r->view.stats);
     return res;

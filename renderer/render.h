@@ -1,7 +1,7 @@
 /* render.h: the one-view convenience for offline tools (probecast render, eval, tests): a
  * world (world.h) and one view (view.h) of it, where each frame first advances the probe
- * field and then renders: [probe updates] -> primary -> shade (direct) -> [GI sampling]
- * -> tone map, with GPU timings and ray counts of all of it. The scene is passed in
+ * field and then renders: [probe updates] -> primary -> shade (direct) -> [near field, GI
+ * sampling, reflections] -> tone map, with GPU timings and ray counts of all of it. The scene is passed in
  * (rd_gpu_scene) so one renderer can draw any uploaded scene. The daemon uses world and views
  * directly.
  */
@@ -30,6 +30,7 @@ typedef struct rd_frame_settings {
     unsigned pathtrace_first; /* path tracing: samples already accumulated from an identical
                                  earlier frame (0 = start over); progressive rendering */
     unsigned reflections;     /* PC_REFLECT_* (0 = auto; rd_view_settings) */
+    unsigned near_field;      /* PC_NEAR_* (0 = off; rd_view_settings) */
     /* instead of sky when set: the environment (an image, if any, is the world's own:
      * rd_world_set_environment_image) */
     const rd_environment *env;
@@ -50,7 +51,10 @@ void rd_renderer_destroy(rd_renderer *r); /* idempotent */
 rd_vk_result rd_renderer_configure_gi(rd_renderer *r, const float bmin[3], const float bmax[3],
                                       const rd_ddgi_settings *gi, char *err, size_t errlen);
 /* Renders one frame of scene from camera into the renderer's buffers (blocking): with GI on
- * and no path tracing, settings->gi_updates probe updates (at least 1) first. */
+ * and no path tracing, settings->gi_updates probe updates (at least 1) first. The image is a
+ * still: while the view settles (rd_view_settling: its near-field history is young), it renders
+ * the frame again, without probe updates, up to PC_NEAR_SETTLE_FRAMES times; stats hold the
+ * world's updates and the last of those frames. */
 rd_vk_result rd_renderer_render(rd_renderer *r, rd_gpu_scene *scene, const rd_view_camera *camera,
                                 const rd_frame_settings *settings, char *err, size_t errlen);
 /* Reads back the last frame: tone-mapped RGBA8 (width*height*4 bytes) or linear radiance

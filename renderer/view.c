@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "shaders/ddgi_sample.spv.h"
+#include "shaders/near_field.spv.h"
 #include "shaders/pathtrace.spv.h"
 #include "shaders/primary.spv.h"
 #include "shaders/reflect.spv.h"
@@ -25,6 +26,7 @@ static const rd_pipeline_desc pipelines[] = {
     RD_PIPELINE_DESC(rd_view_passes, reflect, "reflect", pc_spv_reflect, sizeof(pc_push)),
     RD_PIPELINE_DESC(rd_view_passes, reflect_filter, "reflect filter", pc_spv_reflect_filter,
                      sizeof(pc_push)),
+    RD_PIPELINE_DESC(rd_view_passes, near_field, "near field", pc_spv_near_field, sizeof(pc_push)),
 };
 #define PIPELINE_COUNT (sizeof pipelines / sizeof pipelines[0])
 
@@ -62,8 +64,9 @@ rd_vk_result rd_view_create(rd_vk *vk, const rd_view_passes *passes, rd_view *v,
 
 static void free_images(rd_view *v)
 {
-    rd_buffer_destroy(v->vk, &v->reflect_history);
-    v->reflect_keyed = false;
+    rd_buffer_destroy(v->vk, &v->reflect.buffer);
+    rd_buffer_destroy(v->vk, &v->near.buffer);
+    v->reflect.keyed = v->near.keyed = v->near_on = false;
     rd_buffer_destroy(v->vk, &v->rgba8);
     rd_buffer_destroy(v->vk, &v->jpeg_coefs);
     rd_buffer_destroy(v->vk, &v->radiance);
@@ -181,6 +184,10 @@ static rd_vk_result prepare(rd_view *v, const rd_world *w, const rd_view_camera 
         snprintf(err, errlen, "unknown reflections mode %u", s->reflections);
         return RD_VK_ERR_UNSUPPORTED;
     }
+    if (s->near_field > PC_NEAR_ON) {
+        snprintf(err, errlen, "unknown near-field mode %u", s->near_field);
+        return RD_VK_ERR_UNSUPPORTED;
+    }
     rd_vk_result res = ensure_size(v, width, height, err, errlen);
     if (res != RD_VK_OK) return res;
     pc_globals g;
@@ -195,27 +202,22 @@ static rd_vk_result prepare(rd_view *v, const rd_world *w, const rd_view_camera 
     return RD_VK_OK;
 }
 
-/* Whether this frame traces reflections: GI on (the hits need the probe field, and GI off
- * means direct light only), reflections not turned off, a scene with glossy materials, and a
- * view mode that shows them. If so, opens the frame's reflection bookkeeping: the history
- * buffer (zeroed when created), the epoch (a new one when the history key changed) and the
- * indirect arguments, closed (x = 0) until primary.comp sees a glossy pixel. */
-static rd_vk_result reflections_begin(rd_view *v, const rd_world *w, const rd_view_settings *s,
-                                      const pc_globals *g, bool *on, char *err, size_t errlen)
+/* Opens a history for this frame: its buffer (created zeroed at the view's size when missing)
+ * and its epoch, a new one when the key (what the view sees) changed since the last frame that
+ * used it. */
+static rd_vk_result history_begin(rd_view *v, rd_view_history *h, const rd_world *w,
+                                  const pc_globals *g, char *err, size_t errlen)
 {
-    *on = w->gi && s->reflections != PC_REFLECT_OFF && s->view != PC_VIEW_IRRADIANCE &&
-          w->scene->glossy;
-    if (!*on) return RD_VK_OK;
-    if (!v->reflect_history.buffer) {
+    if (!h->buffer.buffer) {
         VkDeviceSize bytes = (VkDeviceSize)v->width * v->height * 16;
         rd_vk_result res =
-            rd_buffer_create(v->vk, &v->reflect_history, bytes, RD_MEMORY_DEVICE, err, errlen);
-        if (res == RD_VK_OK) res = rd_buffer_fill(v->vk, &v->reflect_history, 0, err, errlen);
+            rd_buffer_create(v->vk, &h->buffer, bytes, RD_MEMORY_DEVICE, err, errlen);
+        if (res == RD_VK_OK) res = rd_buffer_fill(v->vk, &h->buffer, 0, err, errlen);
         if (res != RD_VK_OK) {
-            rd_buffer_destroy(v->vk, &v->reflect_history);
+            rd_buffer_destroy(v->vk, &h->buffer);
             return res;
         }
-        v->reflect_keyed = false;
+        h->keyed = false;
     }
     rd_view_history_key key;
     memset(&key, 0, sizeof key);
@@ -226,13 +228,45 @@ static rd_vk_result reflections_begin(rd_view *v, const rd_world *w, const rd_vi
     key.env = g->env;
     key.world_changes = w->changes;
     key.gi = w->gi;
-    if (!v->reflect_keyed || memcmp(&key, &v->reflect_key, sizeof key) != 0)
-        v->reflect_epoch = (v->reflect_epoch + 1) & 0xffffffu;
-    v->reflect_key = key;
-    v->reflect_keyed = true;
+    if (!h->keyed || memcmp(&key, &h->key, sizeof key) != 0) {
+        h->epoch = (h->epoch + 1) & 0xffffffu;
+        h->frames = 0;
+    }
+    h->frames++;
+    h->key = key;
+    h->keyed = true;
+    return RD_VK_OK;
+}
+
+/* Whether this frame traces reflections: GI on (the hits need the probe field, and GI off
+ * means direct light only), reflections not turned off, a scene with glossy materials, and a
+ * view mode that shows them. If so, opens the frame's reflection bookkeeping: the history and
+ * the indirect arguments, closed (x = 0) until primary.comp sees a glossy pixel. */
+static rd_vk_result reflections_begin(rd_view *v, const rd_world *w, const rd_view_settings *s,
+                                      const pc_globals *g, bool *on, char *err, size_t errlen)
+{
+    *on = w->gi && s->reflections != PC_REFLECT_OFF && s->view != PC_VIEW_IRRADIANCE &&
+          w->scene->glossy;
+    if (!*on) return RD_VK_OK;
+    rd_vk_result res = history_begin(v, &v->reflect, w, g, err, errlen);
+    if (res != RD_VK_OK) return res;
     pc_reflect_control ctrl = {.args = {0, (v->height + PC_WG_2D_Y - 1) / PC_WG_2D_Y, 1, 0}};
     memcpy(v->reflect_ctrl.mapped, &ctrl, sizeof ctrl);
     return RD_VK_OK;
+}
+
+/* Whether this frame traces near-field rays (GI on, the setting not off) and, if so, opens
+ * their history. */
+static rd_vk_result near_begin(rd_view *v, const rd_world *w, const rd_view_settings *s,
+                               const pc_globals *g, char *err, size_t errlen)
+{
+    v->near_on = w->gi && s->near_field == PC_NEAR_ON;
+    return v->near_on ? history_begin(v, &v->near, w, g, err, errlen) : RD_VK_OK;
+}
+
+bool rd_view_settling(const rd_view *v)
+{
+    return v->near_on && v->near.frames < PC_NEAR_SETTLE_FRAMES;
 }
 
 rd_vk_result rd_view_record(rd_view *v, const rd_world *w, const rd_view_camera *camera,
@@ -246,6 +280,7 @@ rd_vk_result rd_view_record(rd_view *v, const rd_world *w, const rd_view_camera 
     bool reflect = false;
     rd_vk_result res = prepare(v, w, camera, s, &g, err, errlen);
     if (res == RD_VK_OK) res = reflections_begin(v, w, s, &g, &reflect, err, errlen);
+    if (res == RD_VK_OK) res = near_begin(v, w, s, &g, err, errlen);
     if (res != RD_VK_OK) return res;
     v->pathtrace_samples = 0; /* this frame overwrites the accumulation */
     rd_gpu_scene_record_updates(w->scene, cmd);
@@ -264,24 +299,38 @@ rd_vk_result rd_view_record(rd_view *v, const rd_world *w, const rd_view_camera 
     rd_cmd_dispatch(cmd, &p->shade, &push, gx, gy, 1);
     rd_cmd_barrier(cmd);
     rd_timer_mark(cmd, &v->timer, "shade");
+    if (v->near_on && v->near.frames <= PC_NEAR_SETTLE_FRAMES) { /* settled: the history stays */
+        pc_push np = {.globals = v->globals.address,
+                      .buf0 = v->gbuffer.address,
+                      .buf1 = v->counters.address,
+                      .buf2 = v->near.buffer.address,
+                      .params = {v->near.epoch, 0, 0, 0}};
+        rd_cmd_dispatch(cmd, &p->near_field, &np, gx, gy, 1);
+        rd_cmd_barrier(cmd);
+        rd_timer_mark(cmd, &v->timer, "near field");
+    }
     if (w->gi) {
-        push.params.x = s->reflections != PC_REFLECT_OFF; /* indirect specular */
-        rd_cmd_dispatch(cmd, &p->gi_sample, &push, gx, gy, 1);
+        pc_push gp = {.globals = v->globals.address,
+                      .buf0 = v->gbuffer.address,
+                      .buf1 = v->near_on ? v->near.buffer.address : 0,
+                      .buf2 = v->radiance.address,
+                      .params = {s->reflections != PC_REFLECT_OFF, /* indirect specular */
+                                 v->near.epoch, 0, 0}};
+        rd_cmd_dispatch(cmd, &p->gi_sample, &gp, gx, gy, 1);
         rd_cmd_barrier(cmd);
         rd_timer_mark(cmd, &v->timer, "gi sample");
-        push.params.x = 0;
     }
     if (reflect) { /* both dispatches are empty when no glossy pixel is in sight */
         const VkDeviceSize args = offsetof(pc_reflect_control, args);
         pc_push rp = {.globals = v->globals.address,
                       .buf0 = v->gbuffer.address,
                       .buf1 = v->counters.address,
-                      .buf2 = v->reflect_history.address,
-                      .params = {v->reflect_epoch, 0, 0, 0}};
+                      .buf2 = v->reflect.buffer.address,
+                      .params = {v->reflect.epoch, 0, 0, 0}};
         rd_cmd_dispatch_indirect(cmd, &p->reflect, &rp, &v->reflect_ctrl, args);
         rd_cmd_barrier(cmd);
         rd_timer_mark(cmd, &v->timer, "reflect");
-        rp.buf1 = v->reflect_history.address;
+        rp.buf1 = v->reflect.buffer.address;
         rp.buf2 = v->radiance.address;
         rd_cmd_dispatch_indirect(cmd, &p->reflect_filter, &rp, &v->reflect_ctrl, args);
         rd_cmd_barrier(cmd);
@@ -321,6 +370,15 @@ rd_vk_result rd_view_render(rd_view *v, const rd_world *w, const rd_view_camera 
     res = rd_cmd_submit_wait(v->vk, &cmd, err, errlen);
     if (res != RD_VK_OK) return res;
     return rd_view_collect(v, err, errlen);
+}
+
+rd_vk_result rd_view_render_still(rd_view *v, const rd_world *w, const rd_view_camera *camera,
+                                  const rd_view_settings *s, char *err, size_t errlen)
+{
+    rd_vk_result res = rd_view_render(v, w, camera, s, err, errlen);
+    for (unsigned k = 0; res == RD_VK_OK && rd_view_settling(v) && k < PC_NEAR_SETTLE_FRAMES; k++)
+        res = rd_view_render(v, w, camera, s, err, errlen);
+    return res;
 }
 
 rd_vk_result rd_view_read_rgba8(rd_view *v, uint8_t *out, char *err, size_t errlen)

@@ -1,6 +1,6 @@
-/* view.h: one camera's images of a world: primary pass -> shade (direct) -> [GI sampling
- * -> reflections -> reflection filter] -> tone map, or progressive path tracing, with GPU
- * timings and ray counts.
+/* view.h: one camera's images of a world: primary pass -> shade (direct) -> [near field -> GI
+ * sampling -> reflections -> reflection filter] -> tone map, or progressive path tracing, with
+ * GPU timings and ray counts.
  *
  * A view owns its per-resolution buffers and its own globals buffer; the pipelines
  * (rd_view_passes) are created once per device and shared by every view. Rendering reads the
@@ -32,18 +32,19 @@ typedef struct rd_view_settings { /* per frame */
     unsigned pathtrace_first;     /* path tracing: samples already accumulated from an identical
                                      earlier frame of this view (0 = start over) */
     unsigned reflections;         /* PC_REFLECT_* (0 = auto): indirect specular with GI on */
+    unsigned near_field;          /* PC_NEAR_* (0 = off): near-field rays with GI on */
 } rd_view_settings;
 
 /* The pipelines of a view's frame; created once per device, shared by all views. */
 typedef struct rd_view_passes {
-    rd_pipeline primary, shade, tonemap, gi_sample, pathtrace, reflect, reflect_filter;
+    rd_pipeline primary, shade, tonemap, gi_sample, pathtrace, reflect, reflect_filter, near_field;
 } rd_view_passes;
 
 rd_vk_result rd_view_passes_create(rd_vk *vk, rd_view_passes *p, char *err, size_t errlen);
 void rd_view_passes_destroy(rd_vk *vk, rd_view_passes *p); /* idempotent */
 
-/* What a view's accumulated reflections depend on; a frame whose key differs from the last
- * one starts a new history epoch. Compared bytewise (no padding). */
+/* What a view's accumulated histories (reflections, near field) depend on; a frame whose key
+ * differs from the last one starts a new history epoch. Compared bytewise (no padding). */
 typedef struct rd_view_history_key {
     pc_view view;           /* camera, size and seed; frame index and tone mapping zeroed */
     pc_scene_refs scene;    /* a new scene has new buffers */
@@ -52,21 +53,29 @@ typedef struct rd_view_history_key {
     uint64_t gi;            /* rd_world.gi */
 } rd_view_history_key;
 
+/* A per-pixel history (uvec4 per pixel: a mean and epoch << 8 | samples), created when a frame
+ * first needs it and zeroed then. It is valid for one epoch, which restarts when what the view
+ * sees may have changed (camera, size, seed, scene, environment, world changes: the key). */
+typedef struct rd_view_history {
+    rd_buffer buffer;
+    uint32_t epoch; /* 24 bits */
+    bool keyed;
+    rd_view_history_key key; /* of the last frame that used it */
+    unsigned frames;         /* frames of this epoch so far, this one included */
+} rd_view_history;
+
 typedef struct rd_view {
     rd_vk *vk;
     const rd_view_passes *passes; /* not owned; must outlive the view */
     rd_buffer globals, counters, gbuffer, radiance, rgba8;
-    /* reflections (shaders/reflect.comp): this frame's pc_reflect_control (host visible) and
-     * the per-pixel history, created when a frame first traces reflections. The history is
-     * valid for one epoch, which restarts when what the view sees may have changed (camera,
-     * size, seed, scene, environment, world changes: reflect_key). */
-    rd_buffer reflect_ctrl, reflect_history;
+    /* reflections (shaders/reflect.comp): this frame's pc_reflect_control (host visible) */
+    rd_buffer reflect_ctrl;
+    rd_view_history reflect; /* reflections' demodulated specular (reflect.comp) */
+    rd_view_history near;    /* near-field ratios (near_field.comp) */
+    bool near_on;            /* the last frame traced near-field rays */
     /* the frame's JPEG coefficients, one set per quality, when the GPU encodes
      * (renderer/jpeg_dct.h: rd_jpeg_dct_record_view creates and grows it) */
     rd_buffer jpeg_coefs;
-    uint32_t reflect_epoch;
-    bool reflect_keyed;
-    rd_view_history_key reflect_key; /* of the last frame that traced reflections */
     rd_timer timer;
     unsigned width, height; /* of the buffers (the last frame); 0 before the first */
     unsigned frame_index;
@@ -82,8 +91,10 @@ void rd_view_destroy(rd_view *v);
  * the probe field as it is (no update). Path tracing when s->pathtrace_spp > 0. A size change
  * waits for the device and reallocates the buffers. With GI on, glossy pixels trace one
  * reflection ray per frame, averaged over the frames for which camera and world stay the same
- * (reflect_key); a scene without glossy materials (rd_gpu_scene.glossy) records no reflection
- * pass, and a frame without glossy pixels in sight dispatches none. */
+ * (the history key); a scene without glossy materials (rd_gpu_scene.glossy) records no
+ * reflection pass, and a frame without glossy pixels in sight dispatches none. With GI on,
+ * near-field rays (gpu_types.h, PC_NEAR_*) correct the probe field at camera pixels, one pixel
+ * in four per frame, averaged the same way. */
 rd_vk_result rd_view_render(rd_view *v, const rd_world *w, const rd_view_camera *camera,
                             const rd_view_settings *s, char *err, size_t errlen);
 /* The same frame without waiting: records it into cmd (begun by the caller, who submits it, e.g.
@@ -94,6 +105,14 @@ rd_vk_result rd_view_render(rd_view *v, const rd_world *w, const rd_view_camera 
 rd_vk_result rd_view_record(rd_view *v, const rd_world *w, const rd_view_camera *camera,
                             const rd_view_settings *s, rd_cmd *cmd, char *err, size_t errlen);
 rd_vk_result rd_view_collect(rd_view *v, char *err, size_t errlen);
+/* Whether the view's last frame still accumulates: its near-field history has had fewer than
+ * PC_NEAR_SETTLE_FRAMES frames of this epoch. A still image (render, eval) renders frames until
+ * this is false; the server keeps a resting view rendering until then. */
+bool rd_view_settling(const rd_view *v);
+/* rd_view_render, then again while the view settles (at most PC_NEAR_SETTLE_FRAMES more
+ * frames): a still image. v->stats are the last frame's. */
+rd_vk_result rd_view_render_still(rd_view *v, const rd_world *w, const rd_view_camera *camera,
+                                  const rd_view_settings *s, char *err, size_t errlen);
 /* Reads back the last frame: tone-mapped RGBA8 (width*height*4 bytes) or linear radiance
  * (width*height*3 floats). */
 rd_vk_result rd_view_read_rgba8(rd_view *v, uint8_t *out, char *err, size_t errlen);

@@ -464,7 +464,7 @@ vec3 direct_radiance_sampled(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, float off
 
 /* Ray counting with one global atomic per workgroup. Every invocation of the workgroup must
  * call both (no early return in between). which: 0 primary, 1 shadow, 2 probe, 3 path,
- * 4 probe shadow, 5 reflection, 6 shadow map, 7 probe path. */
+ * 4 probe shadow, 5 reflection, 6 shadow map, 7 probe path, 8 near field. */
 shared uint pc_wg_rays;
 void count_rays_begin()
 {
@@ -484,7 +484,8 @@ void count_rays_end(uint64_t counters, uint which, uint rays)
         else if (which == 4u) atomicAdd(c.c.probe_shadow_rays, pc_wg_rays);
         else if (which == 5u) atomicAdd(c.c.reflect_rays, pc_wg_rays);
         else if (which == 6u) atomicAdd(c.c.shadow_map_rays, pc_wg_rays);
-        else atomicAdd(c.c.probe_path_rays, pc_wg_rays);
+        else if (which == 7u) atomicAdd(c.c.probe_path_rays, pc_wg_rays);
+        else atomicAdd(c.c.near_rays, pc_wg_rays);
     }
 }
 

@@ -15,7 +15,15 @@
  * direction and E/pi, the probe field's cosine-weighted average of radiance around d, stands
  * in for the lobe's average radiance (exact for uniform light, smooth for wide lobes). Glossier
  * pixels get theirs from reflect.comp; with params.x = 0 neither happens (the old image).
- * push: globals, buf0 = pc_gbuffer_texel[], buf2 = vec4 radiance[], params.x as above. */
+ * Near-field rays (near_field.comp; buf1 != 0) correct the field's irradiance E(P, n) at
+ * scales finer than the probe spacing: E is multiplied by the pixel's mean ratio, filtered
+ * across the neighbours that trace them in this history epoch and lie on the same surface
+ * (weights for the normals' agreement, cos^32, and the neighbour's distance from the pixel's
+ * tangent plane against the pixel footprint, as reflect_filter.comp does). The filter's
+ * radius is 2 pixels while the pixel has at most 2 samples (a fresh epoch: one pixel in four
+ * has one), then 1. Pixels without any sample in reach keep the field's value.
+ * push: globals, buf0 = pc_gbuffer_texel[], buf1 = uvec4 near history[] (0: no near-field
+ * rays), buf2 = vec4 radiance[], params.x as above, params.y = the near history's epoch. */
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
 #include "ddgi.glsl"
@@ -23,6 +31,40 @@
 layout(local_size_x = PC_WG_2D_X, local_size_y = PC_WG_2D_Y) in;
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer GBufferRef { pc_gbuffer_texel v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer RadianceRef { vec4 v[]; };
+
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer NearRef { uvec4 v[]; };
+
+/* The filtered near-field ratio of pixel px (vec3(1) without one; see above). */
+vec3 near_ratio(pc_globals g, ivec2 px, pc_gbuffer_texel t)
+{
+    if (pc.buf1 == 0ul) return vec3(1.0);
+    ivec2 size = ivec2(g.view.size.xy);
+    uint epoch = pc.params.y & 0xffffffu;
+    uvec4 h = NearRef(pc.buf1).v[px.y * size.x + px.x];
+    uint frames = (h.w >> 8) == epoch ? h.w & 0xffu : 0u;
+    int radius = frames <= 2u ? 2 : 1;
+    vec3 p = t.position.xyz, n = t.normal.xyz;
+    float footprint = t.position.w * 2.0 * length(g.view.up.xyz) / float(size.y);
+    vec3 sum = vec3(0.0);
+    float wsum = 0.0;
+    for (int dy = -radius; dy <= radius; dy++)
+        for (int dx = -radius; dx <= radius; dx++) {
+            ivec2 q = px + ivec2(dx, dy);
+            if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size))) continue;
+            uint j = uint(q.y * size.x + q.x);
+            uvec4 hq = NearRef(pc.buf1).v[j];
+            uint fq = (hq.w >> 8) == epoch ? hq.w & 0xffu : 0u;
+            if (fq == 0u) continue;
+            pc_gbuffer_texel tq = GBufferRef(pc.buf0).v[j];
+            float off = length(vec2(dx, dy));
+            float plane = abs(dot(n, tq.position.xyz - p)) / (footprint * (1.0 + off) + 1e-6);
+            float w = float(fq) * pow(max(dot(n, tq.normal.xyz), 0.0), 32.0) * exp(-plane) *
+                      (1.0 - off / (float(radius) + 1.0));
+            sum += w * uintBitsToFloat(hq.xyz);
+            wsum += w;
+        }
+    return wsum > 1e-6 ? sum / wsum : vec3(1.0);
+}
 
 void main()
 {
@@ -38,7 +80,8 @@ void main()
         vec3 v = normalize(g.view.eye.xyz - p);
         float reach = 0.5 * distance(g.view.eye.xyz, p);
         vec3 e = ddgi_irradiance(g.ddgi, g.scene, false, env_irradiance(g.env, t.normal.xyz), p,
-                                 t.normal.xyz, v, reach, DDGI_VIS_CLEAR_SIGMAS);
+                                 t.normal.xyz, v, reach, DDGI_VIS_CLEAR_SIGMAS) *
+                 near_ratio(g, ivec2(px), t);
         pc_brdf b = gbuffer_brdf(t);
         bool specular = pc.params.x != 0u && gbuffer_has_specular(t);
         float nv = clamp(dot(t.normal.xyz, v), 0.0, 1.0);

@@ -107,6 +107,26 @@ static inline float pc_u2f(uint32_t u)
 /* Spatial filter radius in pixels at roughness PC_REFLECT_MAX_ROUGHNESS (none below 0.1). */
 #define PC_REFLECT_FILTER_RADIUS 3
 
+/* Near-field rays (shaders/near_field.comp, renderer/view.c): the probe field cannot hold light
+ * that varies faster than its spacing (a room's corners, contacts under objects, the inside of
+ * a lamp shade), so camera pixels trace short cosine-sampled rays, PC_NEAR_REACH times the
+ * smallest probe spacing long, and keep per pixel the mean ratio of the irradiance they find
+ * (hits shaded, misses taken as the field's) to the field's irradiance. One pixel of each 2x2
+ * block traces per frame (PC_NEAR_INTERLEAVE frames visit all four); the history holds at most
+ * PC_NEAR_HISTORY_MAX samples per pixel, then averages exponentially over that length (it
+ * follows the field as it converges). A view settles after PC_NEAR_SETTLE_FRAMES frames of one
+ * history epoch; later frames of that epoch trace nothing and reuse the history (the ratio
+ * changes little while the probe field converges; a change of lights, nodes or camera starts a
+ * new epoch). Ratios are clamped to PC_NEAR_RATIO_MAX (a sample of a small, very bright hit
+ * would otherwise stay visible as a speck). */
+#define PC_NEAR_OFF 0u /* rd_view_settings.near_field: the probe field alone */
+#define PC_NEAR_ON 1u  /* near-field rays wherever GI is on */
+#define PC_NEAR_REACH 0.5
+#define PC_NEAR_INTERLEAVE 4u
+#define PC_NEAR_HISTORY_MAX 16u
+#define PC_NEAR_SETTLE_FRAMES (PC_NEAR_INTERLEAVE * PC_NEAR_HISTORY_MAX)
+#define PC_NEAR_RATIO_MAX 8.0
+
 /* Rays leave surfaces moved along the geometric normal by PC_RAY_OFFSET_REL times the
  * magnitudes the hit's arithmetic met (shaders/trace.glsl, ray_offset_distance): with their sum
  * about twice the largest, that is 2^-15 of it, Wächter and Binder's 256 ulps. */
@@ -497,6 +517,8 @@ PC_STRUCT(pc_counters)
     pc_u32 reflect_rays;      /* reflection rays of camera pixels and their shadow rays */
     pc_u32 shadow_map_rays;   /* rays that built lights' distance maps */
     pc_u32 probe_path_rays;   /* bounce rays of the paths that probe-ray hits continue */
+    pc_u32 near_rays;         /* near-field rays of camera pixels and their shadow rays */
+    pc_u32 pad0, pad1, pad2;
 }
 PC_END(pc_counters);
 
@@ -593,7 +615,7 @@ PC_CHECK(pc_gbuffer_texel, 96);
 PC_OFF(pc_gbuffer_texel, albedo, 48);
 PC_OFF(pc_gbuffer_texel, emission, 64);
 PC_OFF(pc_gbuffer_texel, material, 80);
-PC_CHECK(pc_counters, 32);
+PC_CHECK(pc_counters, 48);
 PC_OFF(pc_counters, probe_shadow_rays, 16);
 PC_OFF(pc_counters, reflect_rays, 20);
 PC_CHECK(pc_reflect_control, 16);

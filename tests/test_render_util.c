@@ -55,6 +55,7 @@ float *test_render(rd_vk *vk, const test_render_desc *d, pc_view *view_out,
                             .max_bounces = d->max_bounces,
                             .seed = d->seed,
                             .reflections = d->reflections,
+                            .near_field = d->near_field,
                             .sky = {d->sky[0], d->sky[1], d->sky[2]}};
     rd_vk_result res = rd_gpu_scene_create(vk, &gs, &s, err, sizeof err);
     CHECKF(res == RD_VK_OK, "%s", err);

@@ -36,6 +36,7 @@ void rd_frame_stats_add(rd_frame_stats *dst, const rd_frame_stats *src)
     dst->rays.reflect_rays += src->rays.reflect_rays;
     dst->rays.shadow_map_rays += src->rays.shadow_map_rays;
     dst->rays.probe_path_rays += src->rays.probe_path_rays;
+    dst->rays.near_rays += src->rays.near_rays;
 }
 
 void rd_frame_stats_add_timer(rd_frame_stats *dst, const rd_timer *t)

@@ -64,6 +64,7 @@ typedef enum srv_setting_type {
 #define SRV_SKY_MODE_NAMES "uniform", "gradient", "image"
 #define SRV_VISIBILITY_NAMES "all", "probes", "off"
 #define SRV_RELOCATION_NAMES "off", "on"
+#define SRV_NEAR_FIELD_NAMES "off", "on" /* PC_NEAR_OFF, PC_NEAR_ON */
 /* gi_mode beyond PC_GI_*: reference path tracing, no probes (srv_settings_to_gi maps it to
  * PC_GI_OFF) */
 #define SRV_GI_PATHTRACE 3u
@@ -148,7 +149,13 @@ typedef enum srv_setting_type {
       "bounces each probe ray's hit follows (sampling its BRDF, direct light at every vertex) "   \
       "before the probe field ends it, with irradiance blended linearly; 0 = the paper's first " \
       "hit. 3 brings builtin:interior's lamp-lit rooms from -26% to about -7% against the path " \
-      "tracer, at 2-4x the probe shading while probes are awake")
+      "tracer, at 2-4x the probe shading while probes are awake")                                 \
+    X(NEAR_FIELD, near_field, ENUM, "near_field", "--near-field", ALL, "", 0, 0, PC_NEAR_OFF,      \
+      VIEW, (SRV_NEAR_FIELD_NAMES),                                                                \
+      "near-field rays: camera pixels trace short rays (half a probe spacing) that correct the "  \
+      "probe field where light changes faster than its spacing (corners, contacts, lamp "        \
+      "shades), one pixel in four per frame, averaged while the view rests; off: the field "     \
+      "alone")
 /* clang-format on */
 
 /* Values a CPU device (lavapipe) starts with for the settings the command line did not give:

@@ -184,6 +184,8 @@ static void set_base(eval_args *a, const srv_settings *set)
     if (a->base.visibility == PC_DDGI_VIS_OFF) append(l, cap, " vis-off");
     if (a->base.visibility == PC_DDGI_VIS_PROBES) append(l, cap, " vis-probes");
     if (a->base.relocation) append(l, cap, " relocate");
+    a->near_field = set->near_field;
+    if (a->near_field == PC_NEAR_ON) append(l, cap, " near");
     if (a->base.path_bounces) {
         char p[24];
         snprintf(p, sizeof p, " paths%u", a->base.path_bounces);
@@ -320,7 +322,8 @@ static bool run_setting(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene
     if (rd_renderer_configure_gi(&c->r, s->bounds_min, s->bounds_max, gi, c->err, sizeof c->err) !=
         RD_VK_OK)
         return false;
-    rd_frame_settings fs = {.width = a->width, .height = a->height, .seed = gi->seed};
+    rd_frame_settings fs = {
+        .width = a->width, .height = a->height, .seed = gi->seed, .near_field = a->near_field};
     fs.env = &c->env;
     if (moving) {
         fs.gi_updates = updates / 2 ? updates / 2 : 1;
@@ -366,7 +369,11 @@ static bool run_default(eval_ctx *c, rd_scene *s, rd_gpu_scene *gs, const rd_vie
     row->sleep_ms = rd_frame_stats_total_ms(&c->r.world.stats);
     row->slept = rd_world_converged(&c->r.world);
     row->updates = done;
-    rd_frame_settings fs = {.width = a->width, .height = a->height, .seed = 1, .env = &c->env};
+    rd_frame_settings fs = {.width = a->width,
+                            .height = a->height,
+                            .seed = 1,
+                            .env = &c->env,
+                            .near_field = a->near_field};
     if (!measure_frame(c, gs, cam, &fs, ref, row)) return false;
     row->probes[0] = c->r.world.ddgi.vol.counts.x;
     row->probes[1] = c->r.world.ddgi.vol.counts.y;

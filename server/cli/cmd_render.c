@@ -216,6 +216,7 @@ static int parse(int argc, char **argv, render_args *a)
     a->fs.exposure_ev = a->set.exposure_ev;
     a->fs.tonemap = a->set.tonemap;
     a->fs.view = a->set.view;
+    a->fs.near_field = a->set.near_field;
     memcpy(a->fs.sky, a->set.sky, sizeof a->fs.sky);
     if (a->gi.mode == PC_GI_OFF && (a->fs.view != PC_VIEW_FINAL || a->dump)) {
         fprintf(stderr, "probecast render: --view and --dump-probes need --gi classic or ddgi\n");
@@ -270,6 +271,8 @@ static void print_timings(const rd_vk *vk, const rd_scene *s, const rd_gpu_scene
         if (strcmp(avg->pass_name[i], "probe trace") == 0) rays = avg->rays.probe_rays;
         if (strcmp(avg->pass_name[i], "path trace") == 0) rays = avg->rays.path_rays;
         if (strcmp(avg->pass_name[i], "shadow maps") == 0) rays = avg->rays.shadow_map_rays;
+        if (strcmp(avg->pass_name[i], "reflect") == 0) rays = avg->rays.reflect_rays;
+        if (strcmp(avg->pass_name[i], "near field") == 0) rays = avg->rays.near_rays;
         total += avg->pass_ms[i];
         if (rays > 0)
             printf("%-17s %10.3f %12.0f %12.1f\n", avg->pass_name[i], avg->pass_ms[i], rays,

@@ -27,9 +27,11 @@ typedef struct eval_args {
     bool no_default_lighting;
     const char *replot;
     /* the GI settings every row starts from: the defaults, with the setting flags eval does not
-     * sweep (--visibility-rays, --probe-relocation, --probe-paths); rows set mode, counts,
+     * sweep (--visibility-rays, --probe-relocation, --probe-paths; --near-field is a view
+     * setting, kept in near_field); rows set mode, counts,
      * rays, hysteresis and seed */
     rd_ddgi_settings base;
+    unsigned near_field; /* PC_NEAR_* of every row (--near-field) */
     char base_label[48]; /* those flags as row labels show them ("" at the defaults) */
 } eval_args;
 

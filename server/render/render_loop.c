@@ -247,12 +247,16 @@ static void render_view(srv_render_loop *l, srv_view *v, double now)
         }
         v->gpu_ok = true;
     }
+    /* near-field rays refine a resting view only: frames while input arrives show the probe
+     * field alone, at no cost; once the camera rests they accumulate (rd_view_settling) */
+    bool still = now - v->last_input_ms >= s->still_delay_ms;
     rd_view_settings vs = {
         .width = v->width,
         .height = v->height,
         .exposure_ev = s->exposure_ev,
         .tonemap = s->tonemap,
         .view = l->svc.world.gi ? s->view : PC_VIEW_FINAL,
+        .near_field = still ? s->near_field : PC_NEAR_OFF,
     };
     if (l->svc.pt_target) { /* progressive: add samples to the view's accumulation */
         vs.pathtrace_spp = l->vk.is_cpu ? 1 : 16;
@@ -266,7 +270,7 @@ static void render_view(srv_render_loop *l, srv_view *v, double now)
         .view_id = v->id,
         .capture_us = srv_unix_us(),
         .input_ticket = v->input_ticket,
-        .still = now - v->last_input_ms >= s->still_delay_ms,
+        .still = still,
     };
     v->dirty = v->behind_world = false;
     v->requests = 0;
@@ -292,6 +296,9 @@ static void render_view(srv_render_loop *l, srv_view *v, double now)
         vr = srv_frame_output_begin(&l->out, &cmd, err, sizeof err);
         if (vr == RD_VK_OK) {
             vr = rd_view_record(&v->gpu, &l->svc.world, &cam, &vs, cmd, err, sizeof err);
+            /* a young near-field history: keep rendering while the view rests, until it has
+             * settled (then nothing more until something changes) */
+            if (vr == RD_VK_OK && rd_view_settling(&v->gpu)) v->dirty = true;
             if (vr == RD_VK_OK)
                 vr = srv_frame_output_finish(&l->out, v, &info, quality, true, err, sizeof err);
             else

@@ -27,7 +27,7 @@ static void copy_passes(srv_pass_times *out, const rd_frame_stats *fs)
     out->count = fs->pass_count < RD_TIMER_MAX ? fs->pass_count : RD_TIMER_MAX;
     out->rays = (uint64_t)fs->rays.primary_rays + fs->rays.shadow_rays + fs->rays.probe_rays +
                 fs->rays.path_rays + fs->rays.probe_shadow_rays + fs->rays.reflect_rays +
-                fs->rays.shadow_map_rays + fs->rays.probe_path_rays;
+                fs->rays.shadow_map_rays + fs->rays.probe_path_rays + fs->rays.near_rays;
 }
 
 void srv_stats_board_frame(srv_stats_board *b, const rd_frame_stats *fs, unsigned width,
