@@ -30,7 +30,7 @@ typedef struct rd_frame_settings {
     unsigned pathtrace_first; /* path tracing: samples already accumulated from an identical
                                  earlier frame (0 = start over); progressive rendering */
     unsigned reflections;     /* PC_REFLECT_* (0 = auto; rd_view_settings) */
-    unsigned near_field;      /* PC_NEAR_* (0 = off; rd_view_settings) */
+    unsigned near_field;      /* PC_NEAR_* (0 = auto; rd_view_settings) */
     /* instead of sky when set: the environment (an image, if any, is the world's own:
      * rd_world_set_environment_image) */
     const rd_environment *env;

@@ -184,7 +184,7 @@ static rd_vk_result prepare(rd_view *v, const rd_world *w, const rd_view_camera 
         snprintf(err, errlen, "unknown reflections mode %u", s->reflections);
         return RD_VK_ERR_UNSUPPORTED;
     }
-    if (s->near_field > PC_NEAR_ON) {
+    if (s->near_field > PC_NEAR_OFF) {
         snprintf(err, errlen, "unknown near-field mode %u", s->near_field);
         return RD_VK_ERR_UNSUPPORTED;
     }
@@ -260,7 +260,7 @@ static rd_vk_result reflections_begin(rd_view *v, const rd_world *w, const rd_vi
 static rd_vk_result near_begin(rd_view *v, const rd_world *w, const rd_view_settings *s,
                                const pc_globals *g, char *err, size_t errlen)
 {
-    v->near_on = w->gi && s->near_field == PC_NEAR_ON;
+    v->near_on = w->gi && s->near_field != PC_NEAR_OFF;
     return v->near_on ? history_begin(v, &v->near, w, g, err, errlen) : RD_VK_OK;
 }
 

@@ -19,7 +19,9 @@
  * bounces (with the linear blend they need, gpu_types.h) bring it to -4..-9%, and the lamp room
  * (tests/bench/lamp_room_gltf.py) from -29% to -7% (NVIDIA H200,
  * tests/bench/results/h200/probe_paths.txt); they cost probe shading 2.5-4.5 times while probes
- * are awake, nothing once they sleep. Not yet the default: see the README.
+ * are awake, nothing once they sleep. The default (RD_DDGI_DEFAULT_PATH_BOUNCES), together
+ * with near-field rays at camera pixels (near_field.comp), which bring back the corner and
+ * contact darkening that the linear blend no longer hides.
  * Two orders (rd_ddgi.sort_hits):
  * - params.z = 1, sorted: one thread per hit of the update's binned list (ddgi_bin.comp, which
  *   already gave misses the sky and back faces nothing), in cell order: a warp shades hits that

@@ -119,8 +119,8 @@ static inline float pc_u2f(uint32_t u)
  * changes little while the probe field converges; a change of lights, nodes or camera starts a
  * new epoch). Ratios are clamped to PC_NEAR_RATIO_MAX (a sample of a small, very bright hit
  * would otherwise stay visible as a speck). */
-#define PC_NEAR_OFF 0u /* rd_view_settings.near_field: the probe field alone */
-#define PC_NEAR_ON 1u  /* near-field rays wherever GI is on */
+#define PC_NEAR_AUTO 0u /* rd_view_settings.near_field: near-field rays wherever GI is on */
+#define PC_NEAR_OFF 1u  /* the probe field alone (the renderer before near-field rays) */
 #define PC_NEAR_REACH 0.5
 #define PC_NEAR_INTERLEAVE 4u
 #define PC_NEAR_HISTORY_MAX 16u

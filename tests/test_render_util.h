@@ -20,7 +20,7 @@ typedef struct test_render_desc {
     unsigned max_bounces;
     unsigned seed;
     unsigned reflections; /* PC_REFLECT_* (0 = auto) */
-    unsigned near_field;  /* PC_NEAR_* (0 = off) */
+    unsigned near_field;  /* PC_NEAR_* (0 = auto: on) */
     unsigned frames;      /* frames rendered of the still camera (0 = 1): reflections average
                              one sample per pixel and frame */
     float sky[3];         /* radiance of rays that escape (default black) */

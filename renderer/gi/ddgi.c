@@ -225,9 +225,10 @@ rd_vk_result rd_ddgi_configure(rd_ddgi *d, const float bmin[3], const float bmax
         snprintf(err, errlen, "unknown visibility rays mode %u", s->visibility);
         return RD_VK_ERR_UNSUPPORTED;
     }
-    if (s->path_bounces > RD_DDGI_MAX_PATH_BOUNCES) {
+    unsigned bounces = s->has_path_bounces ? s->path_bounces : RD_DDGI_DEFAULT_PATH_BOUNCES;
+    if (bounces > RD_DDGI_MAX_PATH_BOUNCES) {
         snprintf(err, errlen, "probe paths take at most %u bounces (got %u)",
-                 RD_DDGI_MAX_PATH_BOUNCES, s->path_bounces);
+                 RD_DDGI_MAX_PATH_BOUNCES, bounces);
         return RD_VK_ERR_UNSUPPORTED;
     }
     if (!(hysteresis >= 0 && hysteresis <= RD_DDGI_MAX_HYSTERESIS)) {
@@ -303,9 +304,9 @@ rd_vk_result rd_ddgi_configure(rd_ddgi *d, const float bmin[3], const float bmax
     v->weights = d->weight_lists.address;
     v->relocate = s->relocation;
     v->blend_lists = d->vk->is_cpu;
-    v->path_bounces = s->path_bounces;
+    v->path_bounces = bounces;
     /* continued paths need the linear blend, first hits keep the paper's encoding (gpu_types.h) */
-    v->encoding = s->path_bounces > 0 ? 1u : PC_DDGI_ENCODING_PAPER;
+    v->encoding = bounces > 0 ? 1u : PC_DDGI_ENCODING_PAPER;
     d->configured = true;
     return rd_ddgi_reset(d, err, errlen);
 }

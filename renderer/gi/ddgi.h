@@ -18,11 +18,12 @@
  * for) and limits (rd_ddgi_configure refuses settings beyond them). The server's settings table
  * (server/api/settings.h) takes its defaults and ranges from here. */
 #define RD_DDGI_DEFAULT_HYSTERESIS 0.97f
-#define RD_DDGI_MAX_PATH_BOUNCES 8u   /* probe paths (ddgi_shade.comp) */
-#define RD_DDGI_MAX_HYSTERESIS 0.999f /* hysteresis in [0, this]; 1 would never change */
-#define RD_DDGI_DEFAULT_RAYS 256u     /* rays in 1..PC_DDGI_MAX_RAYS (shaders/gpu_types.h) */
-#define RD_DDGI_MAX_AXIS_PROBES 256u  /* probes per axis */
-#define RD_DDGI_MAX_PROBES 65535u     /* in all: a workgroup row each, the dispatch limit */
+#define RD_DDGI_MAX_PATH_BOUNCES 8u     /* probe paths (ddgi_shade.comp) */
+#define RD_DDGI_DEFAULT_PATH_BOUNCES 3u /* with near-field rays at camera pixels (gpu_types.h) */
+#define RD_DDGI_MAX_HYSTERESIS 0.999f   /* hysteresis in [0, this]; 1 would never change */
+#define RD_DDGI_DEFAULT_RAYS 256u       /* rays in 1..PC_DDGI_MAX_RAYS (shaders/gpu_types.h) */
+#define RD_DDGI_MAX_AXIS_PROBES 256u    /* probes per axis */
+#define RD_DDGI_MAX_PROBES 65535u       /* in all: a workgroup row each, the dispatch limit */
 
 typedef struct rd_ddgi_settings {
     unsigned mode;      /* PC_GI_OFF, PC_GI_CLASSIC or PC_GI_DDGI */
@@ -37,7 +38,9 @@ typedef struct rd_ddgi_settings {
     unsigned visibility;   /* PC_DDGI_VIS_* (0: ALL, the default) */
     bool relocation;       /* probes move out of geometry and off surfaces (PC_DDGI_RELOCATE_*) */
     unsigned path_bounces; /* bounces a probe ray's path takes before the field ends it (0: the
-                              paper's first hit), at most RD_DDGI_MAX_PATH_BOUNCES */
+                              paper's first hit), at most RD_DDGI_MAX_PATH_BOUNCES, used when
+                              has_path_bounces is set */
+    bool has_path_bounces; /* unset = RD_DDGI_DEFAULT_PATH_BOUNCES */
 } rd_ddgi_settings;
 
 /* Probes per state after the last update (or reset). */

@@ -238,6 +238,7 @@ void srv_settings_to_gi(const srv_settings *s, rd_ddgi_settings *gi)
     gi->visibility = s->visibility_rays;
     gi->relocation = s->probe_relocation != 0; /* "on" */
     gi->path_bounces = s->probe_paths;
+    gi->has_path_bounces = true;
 }
 
 /* ---- JSON ------------------------------------------------------------------------------- */

@@ -64,7 +64,7 @@ typedef enum srv_setting_type {
 #define SRV_SKY_MODE_NAMES "uniform", "gradient", "image"
 #define SRV_VISIBILITY_NAMES "all", "probes", "off"
 #define SRV_RELOCATION_NAMES "off", "on"
-#define SRV_NEAR_FIELD_NAMES "off", "on" /* PC_NEAR_OFF, PC_NEAR_ON */
+#define SRV_NEAR_FIELD_NAMES "on", "off" /* PC_NEAR_AUTO, PC_NEAR_OFF */
 /* gi_mode beyond PC_GI_*: reference path tracing, no probes (srv_settings_to_gi maps it to
  * PC_GI_OFF) */
 #define SRV_GI_PATHTRACE 3u
@@ -145,12 +145,12 @@ typedef enum srv_setting_type {
       "move off it, during their first updates (the 2021 paper's relocation); off: they stay on " \
       "the grid")                                                                                  \
     X(PROBE_PATHS, probe_paths, UINT, "probe_paths", "--probe-paths", ALL, "N", 0,                 \
-      RD_DDGI_MAX_PATH_BOUNCES, 0, WORLD, (NULL),                                                  \
+      RD_DDGI_MAX_PATH_BOUNCES, RD_DDGI_DEFAULT_PATH_BOUNCES, WORLD, (NULL),                       \
       "bounces each probe ray's hit follows (sampling its BRDF, direct light at every vertex) "   \
       "before the probe field ends it, with irradiance blended linearly; 0 = the paper's first " \
       "hit. 3 brings builtin:interior's lamp-lit rooms from -26% to about -7% against the path " \
       "tracer, at 2-4x the probe shading while probes are awake")                                 \
-    X(NEAR_FIELD, near_field, ENUM, "near_field", "--near-field", ALL, "", 0, 0, PC_NEAR_OFF,      \
+    X(NEAR_FIELD, near_field, ENUM, "near_field", "--near-field", ALL, "", 0, 0, PC_NEAR_AUTO,     \
       VIEW, (SRV_NEAR_FIELD_NAMES),                                                                \
       "near-field rays: camera pixels trace short rays (half a probe spacing) that correct the "  \
       "probe field where light changes faster than its spacing (corners, contacts, lamp "        \
@@ -160,7 +160,9 @@ typedef enum srv_setting_type {
 
 /* Values a CPU device (lavapipe) starts with for the settings the command line did not give:
  * X(ID, value). */
-#define SRV_SETTINGS_CPU(X) X(WIDTH, 512) X(HEIGHT, 288) X(MAX_FPS, 15) X(RAYS, 64)
+#define SRV_SETTINGS_CPU(X)                                                                        \
+    X(WIDTH, 512) X(HEIGHT, 288) X(MAX_FPS, 15) X(RAYS, 64) X(PROBE_PATHS, 0)                      \
+        X(NEAR_FIELD, PC_NEAR_OFF)
 
 /* ---- generated ------------------------------------------------------------------------------ */
 

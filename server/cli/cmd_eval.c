@@ -185,8 +185,8 @@ static void set_base(eval_args *a, const srv_settings *set)
     if (a->base.visibility == PC_DDGI_VIS_PROBES) append(l, cap, " vis-probes");
     if (a->base.relocation) append(l, cap, " relocate");
     a->near_field = set->near_field;
-    if (a->near_field == PC_NEAR_ON) append(l, cap, " near");
-    if (a->base.path_bounces) {
+    if (a->near_field == PC_NEAR_OFF) append(l, cap, " near-off");
+    if (a->base.path_bounces != RD_DDGI_DEFAULT_PATH_BOUNCES) {
         char p[24];
         snprintf(p, sizeof p, " paths%u", a->base.path_bounces);
         append(l, cap, p);

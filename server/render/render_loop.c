@@ -319,10 +319,16 @@ static void render_view(srv_render_loop *l, srv_view *v, double now)
               info.still ? "still" : "interactive", srv_mono_ms() - now);
 }
 
-/* Re-encodes a view's last image at still quality as a new frame (nothing is rendered). */
+/* Re-encodes a view's last image at still quality as a new frame (nothing is rendered). With
+ * near-field rays on, the still is rendered instead: they refine a resting view (render_view),
+ * and the frames while input arrived had none. */
 static void emit_still(srv_render_loop *l, srv_view *v)
 {
     v->need_still = false;
+    if (l->svc.world.gi && !l->svc.pt_target && l->svc.st.settings.near_field != PC_NEAR_OFF) {
+        v->dirty = true;
+        return;
+    }
     srv_frame_info info = v->last_info;
     info.frame_id = l->next_frame_id + 1;
     info.still = true;
@@ -526,9 +532,11 @@ srv_render_loop *srv_render_loop_create(const srv_render_config *cfg, rd_scene *
     if (cfg->adapt_to_cpu && l->vk.is_cpu) {
         srv_settings_adapt_to_cpu(&settings, cfg->settings_given);
         srv_info("render",
-                 "%s is a CPU device: starting at %ux%u, %u rays per probe, %u fps at most",
+                 "%s is a CPU device: starting at %ux%u, %u rays per probe, %u fps at most, "
+                 "probe paths %u, near-field rays %s",
                  l->vk.device_name, settings.width, settings.height, settings.rays_per_probe,
-                 settings.max_fps);
+                 settings.max_fps, settings.probe_paths,
+                 settings.near_field == PC_NEAR_OFF ? "off" : "on");
     }
     vr = srv_frame_output_init(&l->out, &l->vk, cfg->jpeg_path, cfg->encoders, &l->stats, &l->views,
                                err, errlen);

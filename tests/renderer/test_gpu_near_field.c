@@ -35,10 +35,11 @@ static void test_furnace(void)
                           .width = W,
                           .height = H,
                           .gi = {.mode = PC_GI_DDGI, .counts = {4, 4, 4}, .rays = 64, .seed = 1},
-                          .converge = true};
+                          .converge = true,
+                          .near_field = PC_NEAR_OFF};
     rd_frame_stats st_off, st_on, st_after;
     float *off = test_render(&vk, &d, NULL, &st_off);
-    d.near_field = PC_NEAR_ON;
+    d.near_field = PC_NEAR_AUTO;
     float *on = test_render(&vk, &d, NULL, &st_on);
     d.frames = 2; /* the second call's frame comes after the settled still */
     float *after = test_render(&vk, &d, NULL, &st_after);
@@ -67,18 +68,16 @@ static void test_furnace(void)
 
 static void test_thin_walls(void)
 {
-    test_render_desc d = {.scene = "hard:thin-walls",
-                          .width = W,
-                          .height = H,
-                          .pathtrace_spp = 2048,
-                          .seed = 1};
+    test_render_desc d = {
+        .scene = "hard:thin-walls", .width = W, .height = H, .pathtrace_spp = 2048, .seed = 1};
     float *ref = test_render(&vk, &d, NULL, NULL);
     d.pathtrace_spp = 0;
     d.seed = 5;
     d.converge = true;
-    d.gi = (rd_ddgi_settings){.mode = PC_GI_DDGI, .rays = 256, .seed = 5, .path_bounces = 3};
+    d.gi = (rd_ddgi_settings){.mode = PC_GI_DDGI, .rays = 256, .seed = 5}; /* paths 3 */
+    d.near_field = PC_NEAR_OFF;
     float *off = test_render(&vk, &d, NULL, NULL);
-    d.near_field = PC_NEAR_ON;
+    d.near_field = PC_NEAR_AUTO;
     float *on = test_render(&vk, &d, NULL, NULL);
     if (ref && off && on) {
         double r = test_image_mean(ref, PX * 3, NULL);

@@ -32,7 +32,8 @@ static float *render_lamp_room(unsigned path_bounces, unsigned spp, unsigned *up
                                   .counts = {5, 4, 5},
                                   .rays = 64,
                                   .seed = 5,
-                                  .path_bounces = path_bounces};
+                                  .path_bounces = path_bounces,
+                                  .has_path_bounces = true};
     return test_render(&vk, &d, NULL, NULL);
 }
 

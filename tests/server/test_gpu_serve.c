@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "serve_util.h"
+#include "shaders/gpu_types.h"
 #include "test_util.h"
 
 /* Tiny and quickly converging: 64x48, 8 probes of 16 rays, hysteresis 0.5 (the field sleeps
@@ -289,9 +290,38 @@ int main(void)
     const cJSON *st = cJSON_GetObjectItemCaseSensitive(s2, "stream");
     CHECK(pc_json_number(st, "viewers") == 1 && pc_json_number(st, "frames_sent") >= 5);
     CHECK(pc_json_number(cJSON_GetObjectItemCaseSensitive(s2, "encoder"), "jpegs_encoded") >= 5);
+    double frames_idle = pc_json_number(s2, "frames_rendered");
     cJSON_Delete(s1);
     cJSON_Delete(s2);
     pc_frame_free(&idle);
+
+    /* near-field rays (off on a CPU device): turned on, the resting view renders on until its
+     * history has settled (PC_NEAR_SETTLE_FRAMES frames), then nothing again */
+    CHECK(pc_api(&d, "PATCH", "/v1/settings", "{\"near_field\":\"on\"}", true, &r) == 200);
+    pc_http_response_free(&r);
+    pc_sleep_ms(300);
+    for (int i = 0; i < 1200; i++) {
+        cJSON *s = pc_api_get_json(&d, "/v1/stats");
+        bool busy = !cJSON_IsFalse(cJSON_GetObjectItemCaseSensitive(s, "rendering"));
+        cJSON_Delete(s);
+        if (!busy) break;
+        pc_sleep_ms(100);
+    }
+    s1 = pc_api_get_json(&d, "/v1/stats");
+    pc_sleep_ms(1000);
+    s2 = pc_api_get_json(&d, "/v1/stats");
+    double settled = pc_json_number(s1, "frames_rendered");
+    CHECKF(settled - frames_idle >= PC_NEAR_SETTLE_FRAMES,
+           "near-field rays on: %g frames to settle (%u expected)", settled - frames_idle,
+           PC_NEAR_SETTLE_FRAMES);
+    CHECKF(pc_json_number(s2, "frames_rendered") == settled, "settled, yet %g -> %g frames",
+           settled, pc_json_number(s2, "frames_rendered"));
+    cJSON_Delete(s1);
+    cJSON_Delete(s2);
+    CHECK(pc_api(&d, "PATCH", "/v1/settings", "{\"near_field\":\"off\"}", true, &r) == 200);
+    pc_http_response_free(&r);
+    while (pc_stream_next(&ws, 500, true, &idle)) /* drain the settling frames */
+        pc_frame_free(&idle);
 
     /* /v1/frame.jpg needs the token and is a JPEG */
     CHECK(pc_api(&d, "GET", "/v1/frame.jpg", NULL, false, &r) == 401);

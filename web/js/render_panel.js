@@ -31,8 +31,13 @@ const VIEW_LABELS = [['final', 'Final'], ['irradiance', 'Irradiance'], ['probes'
 // probe_paths values offered (the API takes 0..8; more than three bounces measured no better)
 const PATH_LABELS = [[0, 'First hit'], [1, '1'], [2, '2'], [3, '3']];
 const PATH_TITLES = {
-  0: 'Probe rays end at their first hit, as in the DDGI paper (the default)',
-  3: 'Three bounces: builtin:interior -26% -> -7% against the path tracer; probe updates cost about 2x',
+  0: 'Probe rays end at their first hit, as in the DDGI paper (the default on a CPU device)',
+  3: 'Three bounces (the default): builtin:interior -26% -> -9% against the path tracer; probe updates cost about 2x',
+};
+const NEAR_LABELS = [['on', 'On'], ['off', 'Off']];
+const NEAR_TITLES = {
+  on: 'Pixels of a resting view trace short rays for 64 frames: corners and contacts darken as they should (the default on a GPU)',
+  off: 'The probe field alone (the default on a CPU device)',
 };
 const GI_TITLES = {
   off: 'Direct light only',
@@ -65,6 +70,11 @@ export class RenderPanel {
       type: 'button', role: 'radio', 'data-value': String(v), 'aria-checked': 'false',
       title: PATH_TITLES[v] || `${v} bounce${v > 1 ? 's' : ''} before the probe field ends a probe ray`,
       onclick: () => this.patch({ probe_paths: v }),
+    }, label)));
+    this.near = $('near-field');
+    this.near.replaceChildren(...NEAR_LABELS.map(([v, label]) => h('button', {
+      type: 'button', role: 'radio', 'data-value': v, 'aria-checked': 'false', title: NEAR_TITLES[v],
+      onclick: () => this.patch({ near_field: v }),
     }, label)));
     this.setupEnvironment();
   }
@@ -174,6 +184,8 @@ export class RenderPanel {
     // a server without the setting (older) shows no control; with gi off or path traced it is moot
     $('probe-paths-row').hidden = !Number.isInteger(s.probe_paths) || !['classic', 'ddgi'].includes(s.gi_mode);
     for (const b of this.paths.querySelectorAll('button')) b.setAttribute('aria-checked', String(Number(b.dataset.value) === s.probe_paths));
+    $('near-field-row').hidden = typeof s.near_field !== 'string' || !['classic', 'ddgi'].includes(s.gi_mode);
+    for (const b of this.near.querySelectorAll('button')) b.setAttribute('aria-checked', String(b.dataset.value === s.near_field));
     if (document.activeElement !== this.exposure && !this.queue.busy('s') && Number.isFinite(s.exposure)) {
       this.exposure.value = s.exposure;
       this.exposureOut.textContent = `${Number(s.exposure).toFixed(1)} EV`;

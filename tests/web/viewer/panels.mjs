@@ -116,8 +116,17 @@ test('the rendering panel switches GI mode and the probe view', { timeout: 12000
   await until(async () => (await page.locator('#probe-paths button[data-value="3"]').getAttribute('aria-checked')) === 'true', '3 checked');
   await page.locator('#probe-paths button[data-value="0"]').click();
   await until(async () => (await http('GET', '/v1/settings')).json.probe_paths === 0, 'probe_paths 0');
+  // near-field rays: off on a CPU device, sent as near_field, checked from the server's settings
+  await page.locator('#near-field-row').waitFor({ state: 'visible', timeout: 5000 });
+  assert.equal(await page.locator('#near-field button[data-value="off"]').getAttribute('aria-checked'), 'true');
+  await page.locator('#near-field button[data-value="on"]').click();
+  await until(async () => (await http('GET', '/v1/settings')).json.near_field === 'on', 'near_field on');
+  await until(async () => (await page.locator('#near-field button[data-value="on"]').getAttribute('aria-checked')) === 'true', 'on checked');
+  await page.locator('#near-field button[data-value="off"]').click();
+  await until(async () => (await http('GET', '/v1/settings')).json.near_field === 'off', 'near_field off');
   await page.locator('#gi-modes button[data-value=off]').click();
   await until(async () => await page.locator('#probe-paths-row').isHidden(), 'probe paths hidden with gi off');
+  assert.ok(await page.locator('#near-field-row').isHidden(), 'near field hidden with gi off');
   await page.locator('#gi-modes button[data-value=ddgi]').click();
   await until(async () => (await http('GET', '/v1/settings')).json.gi_mode === 'ddgi', 'gi_mode ddgi again');
 });
