@@ -27,6 +27,38 @@ int test_vk_close(rd_vk *vk)
     return test_finish();
 }
 
+bool test_rig_open(rd_vk *vk, const char *scene, test_rig *rig)
+{
+    char err[512] = "";
+    memset(rig, 0, sizeof *rig);
+    if (!rd_procedural_build(scene, &rig->s, err, sizeof err)) {
+        CHECKF(0, "%s: %s", scene, err);
+        return false;
+    }
+    bool ok = rd_camera_for_scene(&rig->s, -1, &rig->cam, err, sizeof err) &&
+              rd_gpu_scene_create(vk, &rig->gs, &rig->s, err, sizeof err) == RD_VK_OK;
+    if (ok && rd_renderer_create(vk, &rig->r, err, sizeof err) != RD_VK_OK) {
+        rd_gpu_scene_destroy(vk, &rig->gs);
+        ok = false;
+    }
+    CHECKF(ok, "%s: %s", scene, err);
+    if (!ok) {
+        rd_scene_destroy(&rig->s);
+        return false;
+    }
+    rig->open = true;
+    return true;
+}
+
+void test_rig_close(rd_vk *vk, test_rig *rig)
+{
+    if (!rig->open) return;
+    rd_renderer_destroy(&rig->r);
+    rd_gpu_scene_destroy(vk, &rig->gs);
+    rd_scene_destroy(&rig->s);
+    rig->open = false;
+}
+
 float *test_render(rd_vk *vk, const test_render_desc *d, pc_view *view_out,
                    rd_frame_stats *stats_out)
 {

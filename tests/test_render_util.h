@@ -60,6 +60,20 @@ void test_pixel_dir(const pc_view *v, unsigned width, unsigned height, int x, in
  * both. Returns the updates to sleep; *mean gets the mean at sleep. */
 unsigned test_converge_noisy(rd_vk *vk, const char *label, rd_scene *s, const unsigned counts[3],
                              unsigned more, double max_bias, double sd_factor, double *mean);
+/* What a GPU test that drives the renderer itself sets up: a builtin scene (NAME, hard:NAME,
+ * NAME+gltf, ...), its GPU copy, a renderer and the scene's framing camera. */
+typedef struct test_rig {
+    rd_scene s;
+    rd_gpu_scene gs;
+    rd_renderer r;
+    rd_view_camera cam;
+    bool open;
+} test_rig;
+/* Builds it; false after a failed CHECK (nothing is left to close). */
+bool test_rig_open(rd_vk *vk, const char *scene, test_rig *rig);
+/* Idempotent. */
+void test_rig_close(rd_vk *vk, test_rig *rig);
+
 /* Mean of all channels; number of non-finite values. */
 double test_image_mean(const float *rgb, size_t floats, size_t *non_finite);
 

@@ -20,10 +20,13 @@ static void test_octahedral_and_rays(void)
     rd_pipeline p;
     rd_buffer in, out, globals;
     CHECKF(rd_pipeline_create(&vk, &p, "test ddgi math", pc_spv_test_ddgi_math,
-                              sizeof pc_spv_test_ddgi_math, sizeof(pc_push), err, sizeof err) == RD_VK_OK, "%s", err);
+                              sizeof pc_spv_test_ddgi_math, sizeof(pc_push), err,
+                              sizeof err) == RD_VK_OK,
+           "%s", err);
     CHECK(rd_buffer_create(&vk, &in, N * 16, RD_MEMORY_UPLOAD, err, sizeof err) == RD_VK_OK);
     CHECK(rd_buffer_create(&vk, &out, N * 16, RD_MEMORY_READBACK, err, sizeof err) == RD_VK_OK);
-    CHECK(rd_buffer_create(&vk, &globals, sizeof(pc_globals), RD_MEMORY_UPLOAD, err, sizeof err) == RD_VK_OK);
+    CHECK(rd_buffer_create(&vk, &globals, sizeof(pc_globals), RD_MEMORY_UPLOAD, err, sizeof err) ==
+          RD_VK_OK);
     /* directions: random, the 6 axes, and the octahedron's edges (x or y or z = 0) */
     float *dirs = in.mapped;
     uint64_t state = 12345;
@@ -39,11 +42,14 @@ static void test_octahedral_and_rays(void)
             if (i % 7 == 0) v[i % 3] = 0;
         }
         float len = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-        for (int k = 0; k < 3; k++) dirs[i * 4 + k] = v[k] / len;
+        for (int k = 0; k < 3; k++)
+            dirs[i * 4 + k] = v[k] / len;
         dirs[i * 4 + 3] = 0;
     }
     rd_cmd c;
-    pc_push push = {.globals = globals.address, .buf0 = in.address, .buf1 = out.address,
+    pc_push push = {.globals = globals.address,
+                    .buf0 = in.address,
+                    .buf1 = out.address,
                     .params = {0, N, 0, 0}};
     CHECK(rd_cmd_begin(&vk, &c, err, sizeof err) == RD_VK_OK);
     rd_cmd_dispatch(&c, &p, &push, N / PC_WG_1D, 1, 1);
@@ -53,7 +59,8 @@ static void test_octahedral_and_rays(void)
     double worst = 0;
     for (int i = 0; i < N; i++) {
         double dot = 0;
-        for (int k = 0; k < 3; k++) dot += (double)res[i * 4 + k] * dirs[i * 4 + k];
+        for (int k = 0; k < 3; k++)
+            dot += (double)res[i * 4 + k] * dirs[i * 4 + k];
         if (1 - dot > worst) worst = 1 - dot;
     }
     CHECKF(worst < 1e-5, "octahedral round trip error %g", worst);
@@ -66,7 +73,8 @@ static void test_octahedral_and_rays(void)
         g.ddgi.counts.w = counts[t];
         float rot[3][3];
         rd_ddgi_random_rotation(&state, rot);
-        for (int r = 0; r < 3; r++) g.ddgi.rotation[r] = (pc_vec4){rot[r][0], rot[r][1], rot[r][2], 0};
+        for (int r = 0; r < 3; r++)
+            g.ddgi.rotation[r] = (pc_vec4){rot[r][0], rot[r][1], rot[r][2], 0};
         memcpy(globals.mapped, &g, sizeof g);
         push.params.x = 1;
         CHECK(rd_cmd_begin(&vk, &c, err, sizeof err) == RD_VK_OK);
@@ -79,7 +87,8 @@ static void test_octahedral_and_rays(void)
         for (unsigned i = 0; i < counts[t]; i++) {
             const float *d = &res[i * 4];
             CHECK(fabs(sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) - 1) < 1e-5);
-            for (int k = 0; k < 3; k++) mean[k] += d[k] / counts[t];
+            for (int k = 0; k < 3; k++)
+                mean[k] += d[k] / counts[t];
             for (int a = 0; a < 4; a++)
                 if (d[0] * axes[a][0] + d[1] * axes[a][1] + d[2] * axes[a][2] > 0) upper[a]++;
         }
@@ -100,9 +109,12 @@ static void border_source(unsigned x, unsigned y, unsigned side, unsigned *sx, u
 {
     unsigned inner = side - 2, last = side - 1;
     int xb = x == 0 || x == last, yb = y == 0 || y == last;
-    if (xb && yb) *sx = x > 0 ? 1 : inner, *sy = y > 0 ? 1 : inner;
-    else if (yb) *sx = last - x, *sy = y == 0 ? 1 : inner;
-    else *sx = x == 0 ? 1 : inner, *sy = last - y;
+    if (xb && yb)
+        *sx = x > 0 ? 1 : inner, *sy = y > 0 ? 1 : inner;
+    else if (yb)
+        *sx = last - x, *sy = y == 0 ? 1 : inner;
+    else
+        *sx = x == 0 ? 1 : inner, *sy = last - y;
 }
 
 /* After real updates of the Cornell box, every border texel of both atlases holds exactly
@@ -121,7 +133,8 @@ static double warp_spread(const uint32_t *order, unsigned n)
             double phi = 2 * M_PI * fmod(i * 0.61803398874989484820, 1.0);
             double z = 1 - (2.0 * i + 1) / n, r = sqrt(fmax(0, 1 - z * z));
             d[k][0] = cos(phi) * r, d[k][1] = sin(phi) * r, d[k][2] = z;
-            for (int c = 0; c < 3; c++) m[c] += d[k][c];
+            for (int c = 0; c < 3; c++)
+                m[c] += d[k][c];
         }
         double ml = sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
         for (unsigned k = 0; k < 32; k++)
@@ -146,10 +159,11 @@ static void test_ray_order(void)
         CHECKF(perm, "ray order for %u rays is a permutation", n);
         if (n >= 256) { /* below 8 warps both orders split the sphere into halves or bands */
             double sorted = warp_spread(order, n), plain = warp_spread(identity, n);
-            printf("ray order, %u rays: mean angle to the warp's mean %.3f rad (index order %.3f)\n",
-                   n, sorted, plain);
-            CHECKF(sorted < 0.6 * plain, "%u rays: warp spread %.3f rad sorted, %.3f in index order",
-                   n, sorted, plain);
+            printf(
+                "ray order, %u rays: mean angle to the warp's mean %.3f rad (index order %.3f)\n",
+                n, sorted, plain);
+            CHECKF(sorted < 0.6 * plain,
+                   "%u rays: warp spread %.3f rad sorted, %.3f in index order", n, sorted, plain);
         }
     }
 }
@@ -157,22 +171,18 @@ static void test_ray_order(void)
 static void test_borders(void)
 {
     char e[512];
-    rd_scene s;
-    CHECK(rd_procedural_build("cornell", &s, e, sizeof e));
-    rd_gpu_scene gs;
-    rd_renderer r;
-    CHECK(rd_gpu_scene_create(&vk, &gs, &s, e, sizeof e) == RD_VK_OK);
-    CHECK(rd_renderer_create(&vk, &r, e, sizeof e) == RD_VK_OK);
+    test_rig rig;
+    if (!test_rig_open(&vk, "cornell", &rig)) return;
+    rd_renderer *r = &rig.r;
     rd_ddgi_settings gi = {.mode = PC_GI_DDGI, .counts = {3, 2, 2}, .rays = 64, .seed = 7};
-    CHECK(rd_renderer_configure_gi(&r, s.bounds_min, s.bounds_max, &gi, e, sizeof e) == RD_VK_OK);
-    rd_view_camera cam;
-    rd_camera_for_scene(&s, -1, &cam, e, sizeof e);
+    CHECK(rd_renderer_configure_gi(r, rig.s.bounds_min, rig.s.bounds_max, &gi, e, sizeof e) ==
+          RD_VK_OK);
     rd_frame_settings fs = {.width = 8, .height = 8, .gi_updates = 2};
-    CHECKF(rd_renderer_render(&r, &gs, &cam, &fs, e, sizeof e) == RD_VK_OK, "%s", e);
-    unsigned probes = rd_ddgi_probe_count(&r.world.ddgi);
+    CHECKF(rd_renderer_render(r, &rig.gs, &rig.cam, &fs, e, sizeof e) == RD_VK_OK, "%s", e);
+    unsigned probes = rd_ddgi_probe_count(&r->world.ddgi);
     CHECK(probes == 12);
     const unsigned sides[2] = {PC_DDGI_IRR_INTERIOR + 2, PC_DDGI_DIST_INTERIOR + 2};
-    rd_buffer *bufs[2] = {&r.world.ddgi.irradiance, &r.world.ddgi.distance};
+    rd_buffer *bufs[2] = {&r->world.ddgi.irradiance, &r->world.ddgi.distance};
     for (int a = 0; a < 2; a++) {
         unsigned side = sides[a];
         size_t texels = (size_t)probes * side * side;
@@ -198,16 +208,21 @@ static void test_borders(void)
         CHECKF(distinct > 0, "atlas %d interior is uniform: nothing was blended", a);
         free(t);
     }
-    rd_renderer_destroy(&r);
-    rd_gpu_scene_destroy(&vk, &gs);
-    rd_scene_destroy(&s);
+    test_rig_close(&vk, &rig);
 }
 
 static void test_furnace(void)
 {
-    test_render_desc d = {.scene = "furnace", .width = 24, .height = 16, .updates = 40,
-                          .gi = {.mode = PC_GI_DDGI, .counts = {2, 2, 2}, .rays = 96,
-                                 .hysteresis = 0.7f, .has_hysteresis = true, .seed = 1}};
+    test_render_desc d = {.scene = "furnace",
+                          .width = 24,
+                          .height = 16,
+                          .updates = 40,
+                          .gi = {.mode = PC_GI_DDGI,
+                                 .counts = {2, 2, 2},
+                                 .rays = 96,
+                                 .hysteresis = 0.7f,
+                                 .has_hysteresis = true,
+                                 .seed = 1}};
     float *img = test_render(&vk, &d, NULL, NULL);
     if (!img) return;
     size_t n = (size_t)d.width * d.height * 3, bad;
@@ -226,9 +241,16 @@ static void test_furnace(void)
 static void test_thin_wall(void)
 {
     /* 8 x 4 x 4 probes over the two rooms: cages at the shared wall straddle it */
-    test_render_desc d = {.scene = "two-rooms", .width = 24, .height = 16, .updates = 12,
-                          .gi = {.mode = PC_GI_CLASSIC, .counts = {8, 4, 4}, .rays = 64,
-                                 .hysteresis = 0.5f, .has_hysteresis = true, .seed = 3}};
+    test_render_desc d = {.scene = "two-rooms",
+                          .width = 24,
+                          .height = 16,
+                          .updates = 12,
+                          .gi = {.mode = PC_GI_CLASSIC,
+                                 .counts = {8, 4, 4},
+                                 .rays = 64,
+                                 .hysteresis = 0.5f,
+                                 .has_hysteresis = true,
+                                 .seed = 3}};
     float *classic = test_render(&vk, &d, NULL, NULL);
     d.gi.mode = PC_GI_DDGI;
     float *ddgi = test_render(&vk, &d, NULL, NULL);
@@ -240,7 +262,7 @@ static void test_thin_wall(void)
     double m0 = test_image_mean(direct, n, NULL);
     printf("dark room mean radiance: direct %g, classic %g, ddgi %g\n", m0, mc, md);
     CHECK(bad_c == 0 && bad_d == 0);
-    CHECK(m0 == 0.0);                  /* no direct light reaches the closed room */
+    CHECK(m0 == 0.0); /* no direct light reaches the closed room */
     CHECKF(mc > 0.05, "classic probes should leak light through the wall (%g)", mc);
     CHECKF(md < 0.05 * mc, "ddgi leaks: %g vs classic %g", md, mc);
     free(classic);
@@ -250,7 +272,10 @@ static void test_thin_wall(void)
 
 static void test_determinism(void)
 {
-    test_render_desc d = {.scene = "cornell", .width = 16, .height = 12, .updates = 3,
+    test_render_desc d = {.scene = "cornell",
+                          .width = 16,
+                          .height = 12,
+                          .updates = 3,
                           .gi = {.mode = PC_GI_DDGI, .counts = {3, 3, 3}, .rays = 32, .seed = 42}};
     float *a = test_render(&vk, &d, NULL, NULL);
     float *b = test_render(&vk, &d, NULL, NULL);
@@ -269,7 +294,10 @@ static void test_determinism(void)
 
 static void test_debug_views(void)
 {
-    test_render_desc d = {.scene = "cornell", .width = 16, .height = 12, .updates = 2,
+    test_render_desc d = {.scene = "cornell",
+                          .width = 16,
+                          .height = 12,
+                          .updates = 2,
                           .view = PC_VIEW_IRRADIANCE,
                           .gi = {.mode = PC_GI_DDGI, .counts = {3, 3, 3}, .rays = 32}};
     float *irr = test_render(&vk, &d, NULL, NULL);

@@ -364,40 +364,34 @@ static void test_mirrored(void)
 static void test_moving(void)
 {
     char err[512];
-    rd_scene s;
-    CHECK(rd_hard_case_build("moving", &s, err, sizeof err));
-    rd_gpu_scene gs;
-    rd_renderer r;
-    CHECK(rd_gpu_scene_create(&vk, &gs, &s, err, sizeof err) == RD_VK_OK);
-    CHECK(rd_renderer_create(&vk, &r, err, sizeof err) == RD_VK_OK);
-    rd_view_camera cam;
-    rd_camera_for_scene(&s, -1, &cam, err, sizeof err);
+    test_rig rig;
+    if (!test_rig_open(&vk, "hard:moving", &rig)) return;
+    rd_renderer *r = &rig.r;
+    rd_scene *s = &rig.s;
     rd_frame_settings fs = {.width = W, .height = H, .gi_updates = 4};
-    CHECK(rd_renderer_configure_gi(&r, s.bounds_min, s.bounds_max, &DDGI, err, sizeof err) ==
+    CHECK(rd_renderer_configure_gi(r, s->bounds_min, s->bounds_max, &DDGI, err, sizeof err) ==
           RD_VK_OK);
     float *img = malloc(PX * 12), *still = malloc(PX * 12);
     for (unsigned f = 0; f <= 4; f++) { /* move, update a few times, move again */
-        rd_hard_case_pose("moving", &s, f);
-        CHECK(rd_gpu_scene_update_instances(&vk, &gs, &s, err, sizeof err) == RD_VK_OK);
-        CHECK(rd_renderer_render(&r, &gs, &cam, &fs, err, sizeof err) == RD_VK_OK);
-        CHECK(rd_renderer_read_hdr(&r, img, err, sizeof err) == RD_VK_OK);
+        rd_hard_case_pose("moving", s, f);
+        CHECK(rd_gpu_scene_update_instances(&vk, &rig.gs, s, err, sizeof err) == RD_VK_OK);
+        CHECK(rd_renderer_render(r, &rig.gs, &rig.cam, &fs, err, sizeof err) == RD_VK_OK);
+        CHECK(rd_renderer_read_hdr(r, img, err, sizeof err) == RD_VK_OK);
         CHECKF(count_non_finite(img) == 0, "frame %u not finite", f);
     }
     fs.gi_updates = 16;
-    CHECK(rd_renderer_render(&r, &gs, &cam, &fs, err, sizeof err) == RD_VK_OK);
-    CHECK(rd_renderer_read_hdr(&r, img, err, sizeof err) == RD_VK_OK);
-    CHECK(rd_renderer_configure_gi(&r, s.bounds_min, s.bounds_max, &DDGI, err, sizeof err) ==
+    CHECK(rd_renderer_render(r, &rig.gs, &rig.cam, &fs, err, sizeof err) == RD_VK_OK);
+    CHECK(rd_renderer_read_hdr(r, img, err, sizeof err) == RD_VK_OK);
+    CHECK(rd_renderer_configure_gi(r, s->bounds_min, s->bounds_max, &DDGI, err, sizeof err) ==
           RD_VK_OK);
     fs.gi_updates = 36; /* same number of updates, all at the final pose */
-    CHECK(rd_renderer_render(&r, &gs, &cam, &fs, err, sizeof err) == RD_VK_OK);
-    CHECK(rd_renderer_read_hdr(&r, still, err, sizeof err) == RD_VK_OK);
+    CHECK(rd_renderer_render(r, &rig.gs, &rig.cam, &fs, err, sizeof err) == RD_VK_OK);
+    CHECK(rd_renderer_read_hdr(r, still, err, sizeof err) == RD_VK_OK);
     double e = rel_mse(img, still);
     printf("moving: relMSE against a field converged at the final pose %.3g\n", e);
     CHECKF(e < 0.01, "GI did not follow the moved object (relMSE %g)", e);
     free(img), free(still);
-    rd_renderer_destroy(&r);
-    rd_gpu_scene_destroy(&vk, &gs);
-    rd_scene_destroy(&s);
+    test_rig_close(&vk, &rig);
 }
 
 /* Thin walls (issue 28): a room of 5 cm walls on a sunlit terrace, lit inside only through a

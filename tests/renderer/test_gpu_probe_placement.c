@@ -21,24 +21,19 @@ static const rd_ddgi_settings DDGI = {
 static void test_thick_walls_probes(void)
 {
     char err[512];
-    rd_scene s;
-    CHECK(rd_hard_case_build("thick-walls", &s, err, sizeof err));
-    rd_gpu_scene gs;
-    rd_renderer r;
-    CHECK(rd_gpu_scene_create(&vk, &gs, &s, err, sizeof err) == RD_VK_OK);
-    CHECK(rd_renderer_create(&vk, &r, err, sizeof err) == RD_VK_OK);
+    test_rig rig;
+    if (!test_rig_open(&vk, "hard:thick-walls", &rig)) return;
+    rd_renderer *r = &rig.r;
     rd_ddgi_settings gi = DDGI;
     gi.counts[0] = 9, gi.counts[1] = 2, gi.counts[2] = 3; /* x spacing 4/9: a column at x = 0 */
-    CHECK(rd_renderer_configure_gi(&r, s.bounds_min, s.bounds_max, &gi, err, sizeof err) ==
+    CHECK(rd_renderer_configure_gi(r, rig.s.bounds_min, rig.s.bounds_max, &gi, err, sizeof err) ==
           RD_VK_OK);
-    rd_view_camera cam;
-    rd_camera_for_scene(&s, -1, &cam, err, sizeof err);
     rd_frame_settings fs = {.width = 8, .height = 8, .gi_updates = 3};
-    CHECK(rd_renderer_render(&r, &gs, &cam, &fs, err, sizeof err) == RD_VK_OK);
-    unsigned n = rd_ddgi_probe_count(&r.world.ddgi), inside = 0, off = 0, off_outside = 0;
+    CHECK(rd_renderer_render(r, &rig.gs, &rig.cam, &fs, err, sizeof err) == RD_VK_OK);
+    unsigned n = rd_ddgi_probe_count(&r->world.ddgi), inside = 0, off = 0, off_outside = 0;
     unsigned off_due = 0; /* off probes re-checked in the next update (the 4th) */
     rd_ddgi_probe_info *probes = NULL;
-    CHECK(rd_ddgi_read_probes(&r.world.ddgi, &probes, err, sizeof err) == RD_VK_OK);
+    CHECK(rd_ddgi_read_probes(&r->world.ddgi, &probes, err, sizeof err) == RD_VK_OK);
     for (unsigned i = 0; probes && i < n; i++) {
         float px = probes[i].position[0], pz = probes[i].position[2];
         bool in_wall = fabsf(px) < 0.3f && pz < 0.3f;
@@ -54,14 +49,12 @@ static void test_thick_walls_probes(void)
     /* off probes are not shaded, and traced (a few rays) only when their periodic re-check is
      * due: the next update costs less */
     fs.gi_updates = 1;
-    CHECK(rd_renderer_render(&r, &gs, &cam, &fs, err, sizeof err) == RD_VK_OK);
+    CHECK(rd_renderer_render(r, &rig.gs, &rig.cam, &fs, err, sizeof err) == RD_VK_OK);
     unsigned expect = (n - off) * gi.rays + off_due * PC_DDGI_INACTIVE_RAYS;
-    CHECKF(r.stats.rays.probe_rays == expect, "probe rays %u, expected %u", r.stats.rays.probe_rays,
-           expect);
+    CHECKF(r->stats.rays.probe_rays == expect, "probe rays %u, expected %u",
+           r->stats.rays.probe_rays, expect);
     free(probes);
-    rd_renderer_destroy(&r);
-    rd_gpu_scene_destroy(&vk, &gs);
-    rd_scene_destroy(&s);
+    test_rig_close(&vk, &rig);
 }
 
 /* Probes on surfaces (issue 28 item 1): the narrow-gap room (8 x 3 x 4 m, a 1 cm wall at x = 0)
@@ -128,22 +121,17 @@ static void test_probes_on_surfaces(void)
 static void test_relocation(void)
 {
     char err[512];
-    rd_scene s;
-    CHECK(rd_hard_case_build("narrow-gap", &s, err, sizeof err));
-    rd_gpu_scene gs;
-    rd_renderer r;
-    CHECK(rd_gpu_scene_create(&vk, &gs, &s, err, sizeof err) == RD_VK_OK);
-    CHECK(rd_renderer_create(&vk, &r, err, sizeof err) == RD_VK_OK);
-    rd_view_camera cam;
-    rd_camera_for_scene(&s, -1, &cam, err, sizeof err);
+    test_rig rig;
+    if (!test_rig_open(&vk, "hard:narrow-gap", &rig)) return;
+    rd_renderer *r = &rig.r;
     for (int relocate = 0; relocate < 2; relocate++) {
         rd_ddgi_settings gi = {
             .mode = PC_GI_DDGI, .counts = {9, 4, 5}, .rays = 64, .seed = 3, .relocation = relocate};
-        CHECK(rd_renderer_configure_gi(&r, s.bounds_min, s.bounds_max, &gi, err, sizeof err) ==
-              RD_VK_OK);
+        CHECK(rd_renderer_configure_gi(r, rig.s.bounds_min, rig.s.bounds_max, &gi, err,
+                                       sizeof err) == RD_VK_OK);
         rd_frame_settings fs = {.width = 8, .height = 8, .gi_updates = PC_DDGI_RELOCATE_BLENDS + 2};
-        CHECK(rd_renderer_render(&r, &gs, &cam, &fs, err, sizeof err) == RD_VK_OK);
-        const pc_ddgi_volume *v = &r.world.ddgi.vol;
+        CHECK(rd_renderer_render(r, &rig.gs, &rig.cam, &fs, err, sizeof err) == RD_VK_OK);
+        const pc_ddgi_volume *v = &r->world.ddgi.vol;
         const float origin[3] = {v->origin.x, v->origin.y, v->origin.z};
         const float spacing[3] = {v->spacing.x, v->spacing.y, v->spacing.z};
         float clearance =
@@ -151,8 +139,8 @@ static void test_relocation(void)
         CHECKF(fabsf(origin[0] + 4 * spacing[0]) < 1e-4f, "the middle layer at x = %g",
                origin[0] + 4 * spacing[0]);
         rd_ddgi_probe_info *probes = NULL;
-        CHECK(rd_ddgi_read_probes(&r.world.ddgi, &probes, err, sizeof err) == RD_VK_OK);
-        unsigned n = rd_ddgi_probe_count(&r.world.ddgi), in_wall = 0, off = 0, out = 0;
+        CHECK(rd_ddgi_read_probes(&r->world.ddgi, &probes, err, sizeof err) == RD_VK_OK);
+        unsigned n = rd_ddgi_probe_count(&r->world.ddgi), in_wall = 0, off = 0, out = 0;
         unsigned moved_free = 0, too_far = 0, under_edge = 0, under_kept = 0;
         for (unsigned i = 0; probes && i < n; i++) {
             unsigned c[3] = {i % 9, (i / 9) % 4, i / 36};
@@ -200,9 +188,7 @@ static void test_relocation(void)
         CHECKF(too_far == 0, "%u offsets past the limit", too_far);
         free(probes);
     }
-    rd_renderer_destroy(&r);
-    rd_gpu_scene_destroy(&vk, &gs);
-    rd_scene_destroy(&s);
+    test_rig_close(&vk, &rig);
 }
 
 /* every check, in order; `test_gpu_probe_placement NAME` runs one */
