@@ -228,6 +228,7 @@ static rd_vk_result history_begin(rd_view *v, rd_view_history *h, const rd_world
     key.env = g->env;
     key.world_changes = w->changes;
     key.gi = w->gi;
+    key.converged = rd_world_converged(w);
     if (!h->keyed || memcmp(&key, &h->key, sizeof key) != 0) {
         h->epoch = (h->epoch + 1) & 0xffffffu;
         h->frames = 0;
@@ -299,7 +300,8 @@ rd_vk_result rd_view_record(rd_view *v, const rd_world *w, const rd_view_camera 
     rd_cmd_dispatch(cmd, &p->shade, &push, gx, gy, 1);
     rd_cmd_barrier(cmd);
     rd_timer_mark(cmd, &v->timer, "shade");
-    if (v->near_on && v->near.frames <= PC_NEAR_SETTLE_FRAMES) { /* settled: the history stays */
+    /* settled (and the field asleep): the history stays */
+    if (v->near_on && (v->near.frames <= PC_NEAR_SETTLE_FRAMES || !v->near.key.converged)) {
         pc_push np = {.globals = v->globals.address,
                       .buf0 = v->gbuffer.address,
                       .buf1 = v->counters.address,

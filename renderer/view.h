@@ -51,6 +51,8 @@ typedef struct rd_view_history_key {
     pc_environment env;     /* sky, image and its irradiance */
     uint64_t world_changes; /* rd_world.changes: nodes, lights, GI settings */
     uint64_t gi;            /* rd_world.gi */
+    uint64_t converged;     /* rd_world_converged: a field that falls asleep starts a new epoch
+                               (what was averaged while it converged measured another field) */
 } rd_view_history_key;
 
 /* A per-pixel history (uvec4 per pixel: a mean and epoch << 8 | samples), created when a frame

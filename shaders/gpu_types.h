@@ -115,9 +115,9 @@ static inline float pc_u2f(uint32_t u)
  * block traces per frame (PC_NEAR_INTERLEAVE frames visit all four); the history holds at most
  * PC_NEAR_HISTORY_MAX samples per pixel, then averages exponentially over that length (it
  * follows the field as it converges). A view settles after PC_NEAR_SETTLE_FRAMES frames of one
- * history epoch; later frames of that epoch trace nothing and reuse the history (the ratio
- * changes little while the probe field converges; a change of lights, nodes or camera starts a
- * new epoch). Ratios are clamped to PC_NEAR_RATIO_MAX (a sample of a small, very bright hit
+ * history epoch; later frames of that epoch trace nothing and reuse the history, unless the
+ * probe field is still converging (it keeps tracing then, and the field's falling asleep starts
+ * a new epoch; so do changes of lights, nodes, camera or settings). Ratios are clamped to PC_NEAR_RATIO_MAX (a sample of a small, very bright hit
  * would otherwise stay visible as a speck). */
 #define PC_NEAR_AUTO 0u /* rd_view_settings.near_field: near-field rays wherever GI is on */
 #define PC_NEAR_OFF 1u  /* the probe field alone (the renderer before near-field rays) */
