@@ -154,22 +154,6 @@ static void build_tiny_emitter(rd_scene *s)
     rd_tris_commit(&t, s, "tiny-emitter");
 }
 
-/* The walls of a box room [lo, hi] facing inward, all but the -z wall (the rooms differ there). */
-static void room_walls(rd_tri_list *t, const float lo[3], const float hi[3], uint32_t mat)
-{
-    float v[8][3];
-    for (int i = 0; i < 8; i++) {
-        v[i][0] = (i & 1) ? hi[0] : lo[0];
-        v[i][1] = (i & 2) ? hi[1] : lo[1];
-        v[i][2] = (i & 4) ? hi[2] : lo[2];
-    }
-    rd_tris_quad(t, v[0], v[2], v[6], v[4], mat); /* -x wall, faces +x */
-    rd_tris_quad(t, v[1], v[5], v[7], v[3], mat); /* +x wall, faces -x */
-    rd_tris_quad(t, v[0], v[4], v[5], v[1], mat); /* floor, faces +y */
-    rd_tris_quad(t, v[2], v[3], v[7], v[6], mat); /* ceiling, faces -y */
-    rd_tris_quad(t, v[4], v[6], v[7], v[5], mat); /* +z wall, faces -z */
-}
-
 /* A closed room x, z in [-3, 3], y in [0, 3] (single-sided walls facing inward) with a 1.5 x
  * 1.2 m window in the -z wall and a 20 lux sun shining in through it onto the floor; black sky.
  * The probe rays that find the sunlit patch are few and bright: single probes stay noisy
@@ -180,7 +164,7 @@ static void build_sun_room(rd_scene *s)
     rd_tri_list t = {0};
     uint32_t white = rd_build_material(s, "white", 0.7f, 0.7f, 0.7f, 0, 0, 0);
     const float lo[3] = {-3, 0, -3}, hi[3] = {3, 3, 3};
-    room_walls(&t, lo, hi, white);
+    rd_tris_room_walls(&t, lo, hi, white, RD_WALL_NEG_Z); /* the -z wall below */
     /* the -z wall (faces +z) around the window x in [-0.75, 0.75], y in [1, 2.2] */
     static const float part[4][4] = {
         {-3, -0.75f, 0, 3}, {0.75f, 3, 0, 3}, {-0.75f, 0.75f, 0, 1}, {-0.75f, 0.75f, 2.2f, 3}};
@@ -207,7 +191,7 @@ static void build_lamp_room(rd_scene *s)
     uint32_t shade = rd_build_material(s, "lamp shade", 0.9f, 0.85f, 0.7f, 0, 0, 0);
     s->materials[shade].double_sided = true;
     const float lo[3] = {-2, 0, -2}, hi[3] = {2, 3, 2};
-    room_walls(&t, lo, hi, white);
+    rd_tris_room_walls(&t, lo, hi, white, RD_WALL_NEG_Z); /* the -z wall below */
     const float a[3] = {lo[0], lo[1], lo[2]}, b[3] = {hi[0], lo[1], lo[2]},
                 c[3] = {hi[0], hi[1], lo[2]}, d[3] = {lo[0], hi[1], lo[2]};
     rd_tris_quad(&t, a, b, c, d, white); /* -z wall, faces +z */

@@ -88,18 +88,32 @@ uint32_t rd_tris_commit(rd_tri_list *t, rd_scene *s, const char *name)
 /* Inward-facing box (a closed room seen from inside). */
 void rd_tris_room(rd_tri_list *t, const float lo[3], const float hi[3], uint32_t mat)
 {
+    rd_tris_room_walls(t, lo, hi, mat, 0);
+}
+
+void rd_tris_room_walls(rd_tri_list *t, const float lo[3], const float hi[3], uint32_t mat,
+                        unsigned omit)
+{
     float v[8][3];
     for (int i = 0; i < 8; i++) {
         v[i][0] = (i & 1) ? hi[0] : lo[0];
         v[i][1] = (i & 2) ? hi[1] : lo[1];
         v[i][2] = (i & 4) ? hi[2] : lo[2];
     }
-    rd_tris_quad(t, v[0], v[2], v[6], v[4], mat); /* -x wall, faces +x */
-    rd_tris_quad(t, v[1], v[5], v[7], v[3], mat); /* +x wall, faces -x */
-    rd_tris_quad(t, v[0], v[4], v[5], v[1], mat); /* floor, faces +y */
-    rd_tris_quad(t, v[2], v[3], v[7], v[6], mat); /* ceiling, faces -y */
-    rd_tris_quad(t, v[0], v[1], v[3], v[2], mat); /* -z wall, faces +z */
-    rd_tris_quad(t, v[4], v[6], v[7], v[5], mat); /* +z wall, faces -z */
+    static const struct {
+        unsigned bit, c[4];
+    } walls[6] = {
+        {RD_WALL_NEG_X, {0, 2, 6, 4}},   /* faces +x */
+        {RD_WALL_POS_X, {1, 5, 7, 3}},   /* faces -x */
+        {RD_WALL_FLOOR, {0, 4, 5, 1}},   /* faces +y */
+        {RD_WALL_CEILING, {2, 3, 7, 6}}, /* faces -y */
+        {RD_WALL_NEG_Z, {0, 1, 3, 2}},   /* faces +z */
+        {RD_WALL_POS_Z, {4, 6, 7, 5}},   /* faces -z */
+    };
+    for (int w = 0; w < 6; w++)
+        if (!(omit & walls[w].bit))
+            rd_tris_quad(t, v[walls[w].c[0]], v[walls[w].c[1]], v[walls[w].c[2]], v[walls[w].c[3]],
+                         mat);
 }
 
 uint32_t rd_build_material(rd_scene *s, const char *name, float r, float g, float b, float er,

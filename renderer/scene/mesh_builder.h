@@ -23,6 +23,18 @@ void rd_tris_quad(rd_tri_list *t, const float a[3], const float b[3], const floa
 void rd_tris_box(rd_tri_list *t, const float lo[3], const float hi[3], uint32_t mat);
 /* Axis-aligned box with inward-facing triangles (a closed room seen from inside). */
 void rd_tris_room(rd_tri_list *t, const float lo[3], const float hi[3], uint32_t mat);
+/* The walls of rd_tris_room, in its order, but those whose bits are set in omit (a room whose
+ * wall has an opening, built by the caller). */
+enum {
+    RD_WALL_NEG_X = 1,
+    RD_WALL_POS_X = 2,
+    RD_WALL_FLOOR = 4,
+    RD_WALL_CEILING = 8,
+    RD_WALL_NEG_Z = 16,
+    RD_WALL_POS_Z = 32
+};
+void rd_tris_room_walls(rd_tri_list *t, const float lo[3], const float hi[3], uint32_t mat,
+                        unsigned omit);
 /* UV sphere with outward-facing triangles: 2 * seg * (rings - 1) triangles. */
 void rd_tris_sphere(rd_tri_list *t, const float c[3], float r, uint32_t rings, uint32_t seg,
                     uint32_t mat);
