@@ -91,6 +91,25 @@ void rd_gltf_read_floats(const rd_gltf_accessor *a, size_t i, float *out)
     }
 }
 
+void rd_gltf_read_uints(const rd_gltf_accessor *a, size_t i, uint32_t *out)
+{
+    const unsigned char *p = element(a, i);
+    size_t size = rd_gltf_component_size(a->ctype);
+    for (int c = 0; c < a->ncomp; c++) {
+        uint32_t v = 0;
+        if (p && size == 1) {
+            v = p[c];
+        } else if (p && size == 2) {
+            uint16_t s;
+            memcpy(&s, p + c * 2, 2);
+            v = s;
+        } else if (p) {
+            memcpy(&v, p + c * 4, 4);
+        }
+        out[c] = v;
+    }
+}
+
 uint32_t rd_gltf_read_index(const rd_gltf_accessor *a, size_t i)
 {
     const unsigned char *p = element(a, i);
@@ -161,6 +180,8 @@ rd_gltf_result rd_gltf_resolve_accessor(const rd_gltf_document *d, int index, co
                                         int type, const int *ctypes, size_t nctypes,
                                         rd_gltf_accessor *c, char *err, size_t errlen)
 {
+    bool integers = (type & RD_GLTF_INTEGERS) != 0;
+    type &= ~RD_GLTF_INTEGERS;
     memset(c, 0, sizeof *c);
     c->index = -1;
     if (index < 0 || (size_t)index >= d->accessor_count)
@@ -180,7 +201,8 @@ rd_gltf_result rd_gltf_resolve_accessor(const rd_gltf_document *d, int index, co
         return rd_gltf_fail(err, errlen, RD_GLTF_ERR_INVALID,
                             "accessor %d (%s) has component type %d, which is not allowed here",
                             index, what, a->component_type);
-    if (a->component_type != RD_GLTF_FLOAT && type != RD_GLTF_TYPE_SCALAR && !a->normalized)
+    if (a->component_type != RD_GLTF_FLOAT && type != RD_GLTF_TYPE_SCALAR && !a->normalized &&
+        !integers)
         return rd_gltf_fail(err, errlen, RD_GLTF_ERR_INVALID,
                             "accessor %d (%s) holds integers but is not normalized", index, what);
     if (a->count == 0)
@@ -190,6 +212,7 @@ rd_gltf_result rd_gltf_resolve_accessor(const rd_gltf_document *d, int index, co
     c->ncomp = type == RD_GLTF_TYPE_SCALAR ? 1
                : type == RD_GLTF_TYPE_VEC2 ? 2
                : type == RD_GLTF_TYPE_VEC3 ? 3
+               : type == RD_GLTF_TYPE_MAT4 ? 16 /* float only: no column padding */
                                            : 4;
     c->elem = rd_gltf_component_size(a->component_type) * (size_t)c->ncomp;
     c->count = a->count;

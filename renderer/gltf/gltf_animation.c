@@ -1,7 +1,8 @@
 /* gltf_animation.c: a glTF document's node animations — channels, samplers and their keys,
- * read and checked (glTF 2.0 section 3.11; see gltf_import.h and gltf_document.h). Channels
- * that animate morph weights or an extension's target are skipped with one warning; so are
- * nodes outside the scene shown. */
+ * read and checked (glTF 2.0 section 3.11; see gltf_import.h and gltf_document.h): translation,
+ * rotation, scale and morph target weights. Channels that animate an extension's target, or the
+ * weights of a node without morph targets, are skipped with one warning; so are nodes outside the
+ * scene shown. */
 #include "renderer/gltf/gltf_document.h"
 
 #include <math.h>
@@ -51,16 +52,17 @@ static uint32_t interpolation(rd_gltf_str ip)
                                        : UINT32_MAX;
 }
 
-/* Validates an animation sampler for a translation/scale (VEC3 float) or rotation (VEC4 float
- * or normalized integers) channel and reads its keys into out (times and values malloc'd)
- * (glTF 2.0 section 3.11). */
+/* Validates an animation sampler for a translation/scale (VEC3 float), rotation (VEC4 float or
+ * normalized integers) or weights (SCALAR float or normalized integers, `targets` values per
+ * key) channel and reads its keys into out (times and values malloc'd) (glTF 2.0 section 3.11). */
 static rd_gltf_result anim_sampler(rd_gltf_conv *c, const char *where,
-                                   const rd_gltf_doc_anim_sampler *gs, bool rotation,
-                                   rd_anim_sampler *out)
+                                   const rd_gltf_doc_anim_sampler *gs, uint32_t path,
+                                   uint32_t targets, rd_anim_sampler *out)
 {
     static const int f[] = {RD_GLTF_FLOAT};
     static const int rot[] = {RD_GLTF_FLOAT, RD_GLTF_BYTE, RD_GLTF_UNSIGNED_BYTE, RD_GLTF_SHORT,
                               RD_GLTF_UNSIGNED_SHORT};
+    bool rotation = path == RD_ANIM_ROTATION, weights = path == RD_ANIM_WEIGHTS;
     char *err = c->err, what[300];
     size_t errlen = c->errlen;
     out->interpolation = interpolation(gs->interpolation);
@@ -77,18 +79,29 @@ static rd_gltf_result anim_sampler(rd_gltf_conv *c, const char *where,
                                                 &in, err, errlen);
     if (r != RD_GLTF_OK) return r;
     snprintf(what, sizeof what, "output of %s", where);
-    r = rotation ? rd_gltf_resolve_accessor(c->doc, gs->output, what, RD_GLTF_TYPE_VEC4, rot, 5,
-                                            &val, err, errlen)
-                 : rd_gltf_resolve_accessor(c->doc, gs->output, what, RD_GLTF_TYPE_VEC3, f, 1, &val,
-                                            err, errlen);
-    size_t keys = in.count, per_key = out->interpolation == RD_INTERP_CUBICSPLINE ? 3 : 1;
+    if (rotation)
+        r = rd_gltf_resolve_accessor(c->doc, gs->output, what, RD_GLTF_TYPE_VEC4, rot, 5, &val, err,
+                                     errlen);
+    else if (weights)
+        r = rd_gltf_resolve_accessor(c->doc, gs->output, what, RD_GLTF_TYPE_SCALAR, rot, 5, &val,
+                                     err, errlen);
+    else
+        r = rd_gltf_resolve_accessor(c->doc, gs->output, what, RD_GLTF_TYPE_VEC3, f, 1, &val, err,
+                                     errlen);
+    if (r == RD_GLTF_OK && weights && val.ctype != RD_GLTF_FLOAT && !val.normalized)
+        r = rd_gltf_fail(err, errlen, RD_GLTF_ERR_INVALID,
+                         "accessor %d (%s) holds integers but is not normalized", gs->output, what);
+    /* weights: one scalar per target and key, read as keys of `targets` components */
+    size_t keys = in.count, per_key = (out->interpolation == RD_INTERP_CUBICSPLINE ? 3 : 1) *
+                                      (weights ? (size_t)targets : 1);
     if (r == RD_GLTF_OK && (val.count / per_key != keys || val.count % per_key != 0))
         r = rd_gltf_fail(err, errlen, RD_GLTF_ERR_INVALID,
                          "%s has %zu output values for %zu input times (%s needs %zu)", where,
                          val.count, keys, gs->interpolation.s, keys * per_key);
-    out->components = rotation ? 4 : 3;
+    out->components = rotation ? 4 : weights ? targets : 3;
     if (r == RD_GLTF_OK) {
-        if (val.count <= kMaxAnimationFloats) c->anim_floats += keys + val.count * out->components;
+        if (val.count <= kMaxAnimationFloats)
+            c->anim_floats += keys + val.count * (weights ? 1 : out->components);
         if (val.count > kMaxAnimationFloats || c->anim_floats > kMaxAnimationFloats)
             r = rd_gltf_fail(err, errlen, RD_GLTF_ERR_TOO_LARGE,
                              "the animations hold more than %llu keys and values (the limit)",
@@ -97,9 +110,9 @@ static rd_gltf_result anim_sampler(rd_gltf_conv *c, const char *where,
     if (r == RD_GLTF_OK) {
         out->key_count = (uint32_t)keys;
         out->times = rd_gltf_alloc(keys, sizeof(float));
-        out->values = rd_gltf_alloc(val.count * out->components, sizeof(float));
-        r = rd_gltf_read_keys(where, &in, &val, out->components, out->times, out->values, err,
-                              errlen);
+        out->values = rd_gltf_alloc(val.count * (weights ? 1 : out->components), sizeof(float));
+        r = rd_gltf_read_keys(where, &in, &val, weights ? 1 : out->components, out->times,
+                              out->values, err, errlen);
     }
     rd_gltf_accessor_dispose(&in);
     rd_gltf_accessor_dispose(&val);
@@ -129,8 +142,8 @@ static rd_gltf_result duration(rd_gltf_conv *c, const rd_gltf_doc_animation *ga,
     return RD_GLTF_OK;
 }
 
-/* One animation's channels and samplers; target[node * 3 + path] and kept[sampler * 3 + path]
- * are SIZE_MAX / UINT32_MAX on entry and left so. */
+/* One animation's channels and samplers; target[node * 4 + path] is SIZE_MAX on entry and left
+ * so. */
 static rd_gltf_result animation(rd_gltf_conv *c, size_t ai, size_t *target, size_t *skipped_weights,
                                 size_t *skipped_other)
 {
@@ -139,12 +152,12 @@ static rd_gltf_result animation(rd_gltf_conv *c, size_t ai, size_t *target, size
     char an[RD_GLTF_LABEL_MAX], where[RD_GLTF_LABEL_MAX + 32], sw[RD_GLTF_LABEL_MAX + 32];
     rd_gltf_label("animation", ai, ga->name, an);
     size_t ns = ga->sampler_count, nc = ga->channel_count, kept_n = 0, channel_n = 0;
-    uint32_t *kept = rd_gltf_alloc(ns * 3, sizeof *kept);
-    uint8_t *used = rd_gltf_alloc(ns, 1); /* by any channel, even skipped */
+    uint32_t *kept = rd_gltf_alloc(ns * 4, sizeof *kept); /* (sampler, path) -> kept sampler */
+    uint8_t *used = rd_gltf_alloc(ns, 1);                 /* by any channel, even skipped */
     rd_anim_sampler *samplers = rd_gltf_alloc(nc, sizeof *samplers);
     rd_anim_channel *channels = rd_gltf_alloc(nc, sizeof *channels);
     size_t *touched = rd_gltf_alloc(nc, sizeof *touched), touched_n = 0;
-    memset(kept, 0xff, ns * 3 * sizeof *kept);
+    memset(kept, 0xff, ns * 4 * sizeof *kept);
     rd_gltf_result r = RD_GLTF_OK;
     for (size_t ci = 0; ci < nc && r == RD_GLTF_OK; ci++) {
         const rd_gltf_doc_channel *gc = &ga->channels[ci];
@@ -166,23 +179,23 @@ static rd_gltf_result animation(rd_gltf_conv *c, size_t ai, size_t *target, size
         uint32_t p = str_is(gc->path, "translation") ? (uint32_t)RD_ANIM_TRANSLATION
                      : str_is(gc->path, "rotation")  ? (uint32_t)RD_ANIM_ROTATION
                      : str_is(gc->path, "scale")     ? (uint32_t)RD_ANIM_SCALE
+                     : str_is(gc->path, "weights")   ? (uint32_t)RD_ANIM_WEIGHTS
                                                      : UINT32_MAX;
         if (gc->path.len == 0) {
             r = rd_gltf_fail(c->err, c->errlen, RD_GLTF_ERR_INVALID, "%s has no target path",
                              where);
             break;
         }
-        *skipped_weights += p == UINT32_MAX && str_is(gc->path, "weights");
-        *skipped_other += p == UINT32_MAX && !str_is(gc->path, "weights");
+        *skipped_other += p == UINT32_MAX;
         if (p == UINT32_MAX || node < 0) continue; /* no node: ignored, as the spec says */
-        if (d->nodes[node].transform.matrix_count != 0) {
+        if (p != RD_ANIM_WEIGHTS && d->nodes[node].transform.matrix_count != 0) {
             r = rd_gltf_fail(c->err, c->errlen, RD_GLTF_ERR_INVALID,
                              "%s animates node %d, which has a matrix; glTF allows animating only "
                              "nodes given by translation, rotation and scale",
                              where, node);
             break;
         }
-        size_t *t = &target[(size_t)node * 3 + p];
+        size_t *t = &target[(size_t)node * 4 + p];
         if (*t != SIZE_MAX) {
             r = rd_gltf_fail(c->err, c->errlen, RD_GLTF_ERR_INVALID,
                              "%s animates the %s of node %d, as channel %zu does", where,
@@ -190,15 +203,25 @@ static rd_gltf_result animation(rd_gltf_conv *c, size_t ai, size_t *target, size
             break;
         }
         *t = ci;
-        touched[touched_n++] = (size_t)node * 3 + p;
+        touched[touched_n++] = (size_t)node * 4 + p;
         if (c->node_map[node] < 0) continue; /* not in the scene shown */
-        uint32_t *k = &kept[(size_t)gc->sampler * 3 + p];
+        uint32_t targets = c->s->nodes[c->node_map[node]].weight_count;
+        if (p == RD_ANIM_WEIGHTS && targets == 0) {
+            (*skipped_weights)++; /* a node without morph targets */
+            continue;
+        }
+        uint32_t *k = &kept[(size_t)gc->sampler * 4 + p];
         if (*k == UINT32_MAX) {
             *k = (uint32_t)kept_n++;
             snprintf(sw, sizeof sw, "%s sampler %d", an, gc->sampler);
-            r = anim_sampler(c, sw, &ga->samplers[gc->sampler], p == RD_ANIM_ROTATION,
-                             &samplers[*k]);
+            r = anim_sampler(c, sw, &ga->samplers[gc->sampler], p, targets, &samplers[*k]);
             if (r != RD_GLTF_OK) break;
+        } else if (p == RD_ANIM_WEIGHTS && samplers[*k].components != targets) {
+            r = rd_gltf_fail(c->err, c->errlen, RD_GLTF_ERR_INVALID,
+                             "%s animates the %u morph weights of node %d with sampler %d, which "
+                             "another channel uses for %u weights",
+                             where, targets, node, gc->sampler, samplers[*k].components);
+            break;
         }
         channels[channel_n++] = (rd_anim_channel){(uint32_t)c->node_map[node], p, *k};
     }
@@ -229,7 +252,7 @@ static rd_gltf_result animation(rd_gltf_conv *c, size_t ai, size_t *target, size
 
 rd_gltf_result rd_gltf_conv_animations(rd_gltf_conv *c)
 {
-    size_t skipped_weights = 0, skipped_other = 0, n = c->doc->node_count * 3;
+    size_t skipped_weights = 0, skipped_other = 0, n = c->doc->node_count * 4;
     size_t *target = rd_gltf_alloc(n, sizeof *target); /* (node, path) -> channel */
     for (size_t i = 0; i < n; i++)
         target[i] = SIZE_MAX;
@@ -240,8 +263,8 @@ rd_gltf_result rd_gltf_conv_animations(rd_gltf_conv *c)
     if (r != RD_GLTF_OK) return r;
     if (skipped_weights)
         rd_scene_warn(c->s,
-                      "%zu animation channel(s) animate morph target weights, which are not "
-                      "supported; they are ignored",
+                      "%zu animation channel(s) animate the morph weights of a node whose mesh "
+                      "has no morph targets; they are ignored",
                       skipped_weights);
     if (skipped_other)
         rd_scene_warn(c->s,

@@ -1,8 +1,8 @@
 /* gltf_convert.c: a parsed glTF document (gltf_document.h) to an rd_scene — the driver that
  * walks materials, meshes, nodes, lights, cameras and animations in a fixed order and hands
- * each part to its C file (gltf_materials.c, gltf_textures.c, gltf_mesh.c, gltf_nodes.c,
- * gltf_lights.c, gltf_animation.c). Every index is checked before it is followed; the first
- * failure ends the conversion with one message. */
+ * each part to its C file (gltf_materials.c, gltf_textures.c, gltf_mesh.c, gltf_skin.c,
+ * gltf_nodes.c, gltf_lights.c, gltf_animation.c). Every index is checked before it is followed; the
+ * first failure ends the conversion with one message. */
 #include "renderer/gltf/gltf_document.h"
 
 #include <stdio.h>
@@ -60,11 +60,6 @@ static void warnings(convert *cv)
         if (!on_material)
             rd_scene_warn(cv->c.s, "extension %s is not supported and was ignored", clean);
     }
-    if (d->skin_count)
-        rd_scene_warn(cv->c.s,
-                      "the file has %zu skin(s); skinning is not supported, skinned meshes "
-                      "are drawn unskinned",
-                      d->skin_count);
 }
 
 static int compare_names(const void *a, const void *b)
@@ -151,6 +146,7 @@ static void primitive_dispose(rd_gltf_primitive *p)
     rd_gltf_accessor_dispose(&p->uv);
     rd_gltf_accessor_dispose(&p->tan);
     rd_gltf_accessor_dispose(&p->idx);
+    rd_gltf_primitive_deform_dispose(p);
 }
 
 /* Resolves a primitive's accessors and counts its triangles without reading vertex data. */
@@ -216,14 +212,13 @@ static rd_gltf_result plan_primitive(convert *cv, const rd_gltf_doc_primitive *g
                     "%s refers to material %d, but there are only %zu materials", where,
                     gp->material, d->material_count);
     pr->material = gp->material >= 0 ? (uint32_t)gp->material + 1 : 0;
-    return RD_GLTF_OK;
+    return rd_gltf_plan_deform(d, gp, where, pr, err, errlen);
 }
 
 /* Validates mesh `mesh`'s primitives into out (its triangle primitives only). */
 static rd_gltf_result plan_mesh(convert *cv, size_t mesh, plan *out)
 {
     const rd_gltf_doc_mesh *gm = &cv->c.doc->meshes[mesh];
-    bool morph = false;
     out->prims = rd_gltf_alloc(gm->primitive_count, sizeof *out->prims);
     for (size_t p = 0; p < gm->primitive_count; p++) {
         const rd_gltf_doc_primitive *gp = &gm->primitives[p];
@@ -232,7 +227,6 @@ static rd_gltf_result plan_mesh(convert *cv, size_t mesh, plan *out)
         rd_gltf_primitive pr;
         memset(&pr, 0, sizeof pr);
         pr.mode = gp->mode < 0 ? RD_GLTF_MODE_TRIANGLES : gp->mode;
-        morph = morph || gp->has_targets;
         if (pr.mode >= 0 && pr.mode <= RD_GLTF_MODE_LINE_STRIP) {
             rd_scene_warn(cv->c.s,
                           "%s draws points or lines (mode %d), which are not supported; it "
@@ -248,12 +242,6 @@ static rd_gltf_result plan_mesh(convert *cv, size_t mesh, plan *out)
         }
         out->prims[out->count++] = pr;
         out->tris += pr.tris;
-    }
-    if (morph) {
-        char name[RD_GLTF_LABEL_MAX];
-        rd_gltf_label("mesh", mesh, gm->name, name);
-        rd_scene_warn(
-            cv->c.s, "%s has morph targets, which are not supported; its base shape is used", name);
     }
     return RD_GLTF_OK;
 }
@@ -295,6 +283,9 @@ static rd_gltf_result meshes(convert *cv, plan *plans)
             rd_scene_add_mesh(cv->c.s, name_of(d->meshes[i].name), (uint32_t)plans[i].tris);
         r = rd_gltf_fill_mesh(i, plans[i].prims, plans[i].count, &cv->c.s->meshes[idx], cv->c.err,
                               cv->c.errlen);
+        if (r == RD_GLTF_OK)
+            r = rd_gltf_fill_deform(&cv->c, i, plans[i].prims, plans[i].count,
+                                    &cv->c.s->meshes[idx]);
         cv->mesh_map[i] = (int32_t)idx;
     }
     return r;
@@ -391,7 +382,7 @@ rd_gltf_result rd_gltf_convert(const rd_gltf_document *doc, rd_gltf_files *files
 {
     convert cv;
     memset(&cv, 0, sizeof cv);
-    cv.c = (rd_gltf_conv){doc, files, decoded_bytes, s, NULL, NULL, 0, err, errlen};
+    cv.c = (rd_gltf_conv){doc, files, decoded_bytes, s, NULL, NULL, 0, err, errlen, 0, 0};
     cv.max_tris = max_triangles;
     size_t nodes_n = doc->node_count;
     cv.parent = rd_gltf_alloc(nodes_n, sizeof *cv.parent);
@@ -414,6 +405,7 @@ rd_gltf_result rd_gltf_convert(const rd_gltf_document *doc, rd_gltf_files *files
     if (r == RD_GLTF_OK) r = materials(&cv);
     if (r == RD_GLTF_OK) r = meshes(&cv, plans);
     if (r == RD_GLTF_OK) r = nodes(&cv);
+    if (r == RD_GLTF_OK) r = rd_gltf_conv_skins(&cv.c, cv.mesh_map);
     if (r == RD_GLTF_OK) r = lights_and_cameras(&cv);
     if (r == RD_GLTF_OK) r = rd_gltf_conv_animations(&cv.c);
     char uerr[256];

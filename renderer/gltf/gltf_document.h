@@ -73,18 +73,34 @@ typedef struct rd_gltf_doc_material {
     size_t extension_count;
 } rd_gltf_doc_material;
 
+/* A morph target's attribute accessors (-1: not given). */
+typedef struct rd_gltf_doc_target {
+    int pos, nrm, tan; /* POSITION, NORMAL, TANGENT */
+} rd_gltf_doc_target;
+
 typedef struct rd_gltf_doc_primitive {
     int mode, indices, material;
-    bool has_targets;
     bool has_pos, has_nrm, has_uv, has_tan; /* POSITION, NORMAL, TEXCOORD_0, TANGENT */
     int pos, nrm, uv, tan;
+    int joints[2], weights[2]; /* JOINTS_0/_1, WEIGHTS_0/_1 (-1: not given) */
+    const rd_gltf_doc_target *targets;
+    size_t target_count;
 } rd_gltf_doc_primitive;
 
 typedef struct rd_gltf_doc_mesh {
     rd_gltf_str name;
     const rd_gltf_doc_primitive *primitives;
     size_t primitive_count;
+    const double *weights; /* default morph weights */
+    size_t weight_count;
 } rd_gltf_doc_mesh;
+
+typedef struct rd_gltf_doc_skin {
+    rd_gltf_str name;
+    const int *joints;
+    size_t joint_count;
+    int inverse_bind; /* accessor, -1: identities */
+} rd_gltf_doc_skin;
 
 typedef struct rd_gltf_doc_node {
     rd_gltf_str name;
@@ -93,6 +109,9 @@ typedef struct rd_gltf_doc_node {
     bool light_is_int; /* ... and its light is an integer: */
     int light;
     rd_gltf_transform transform;
+    int skin;              /* -1: none */
+    const double *weights; /* morph weights overriding the mesh's */
+    size_t weight_count;
 } rd_gltf_doc_node;
 
 typedef struct rd_gltf_doc_camera {
@@ -126,6 +145,7 @@ typedef struct rd_gltf_doc_animation {
 typedef struct rd_gltf_document {
     const rd_gltf_str *extensions_used;
     size_t extensions_used_count;
+    const rd_gltf_doc_skin *skins;
     size_t skin_count;
     int default_scene;
     const rd_gltf_str *buffers; /* buffer data (s may be NULL when len is 0) */
@@ -211,9 +231,14 @@ rd_gltf_result rd_gltf_prescan(const rd_gltf_scan *s, const rd_gltf_container *c
  * a file may require them, and they draw no "not supported" warning. */
 bool rd_gltf_extension_supported(const char *name, size_t len);
 
+/* Or'ed into rd_gltf_resolve_accessor's type: integer components that are not normalized are
+ * allowed (JOINTS_n, read with rd_gltf_read_uints). */
+#define RD_GLTF_INTEGERS 0x10000
+
 /* Resolves accessor index of d for use as `what` (in messages): its type must be `type` and its
- * component type one of ctypes; its elements (and sparse parts) must lie inside their buffer
- * views. On success c may own sparse indices: rd_gltf_accessor_dispose frees them. */
+ * component type one of ctypes (integers other than SCALAR must be normalized); its elements (and
+ * sparse parts) must lie inside their buffer views. On success c may own sparse indices:
+ * rd_gltf_accessor_dispose frees them. */
 rd_gltf_result rd_gltf_resolve_accessor(const rd_gltf_document *d, int index, const char *what,
                                         int type, const int *ctypes, size_t nctypes,
                                         rd_gltf_accessor *c, char *err, size_t errlen);
@@ -230,6 +255,8 @@ typedef struct rd_gltf_conv {
     uint64_t anim_floats; /* animation times and values kept so far */
     char *err;
     size_t errlen;
+    uint64_t deform_floats;      /* skin and morph target values kept so far (gltf_skin.c) */
+    uint64_t weights_normalised; /* skinned vertices whose weights did not sum to one */
 } rd_gltf_conv;
 
 /* Texture index of material `material` read through TEXCOORD_tex_coord as its `slot` texture:
@@ -239,6 +266,22 @@ rd_gltf_result rd_gltf_conv_texture(rd_gltf_conv *c, rd_gltf_texture_ref ref, si
                                     const char *slot, int32_t *out);
 /* The document's node animations (gltf_animation.c). */
 rd_gltf_result rd_gltf_conv_animations(rd_gltf_conv *c);
+/* A primitive's JOINTS_n/WEIGHTS_n and morph targets resolved into pr (gltf_skin.c), after its
+ * POSITION; rd_gltf_primitive_deform_dispose frees what they hold. */
+rd_gltf_result rd_gltf_plan_deform(const rd_gltf_document *d, const rd_gltf_doc_primitive *gp,
+                                   const char *where, rd_gltf_primitive *pr, char *err,
+                                   size_t errlen);
+void rd_gltf_primitive_deform_dispose(rd_gltf_primitive *pr);
+/* After rd_gltf_fill_mesh: gives out (glTF mesh `mesh`, primitives prims[0..n)) its deformation
+ * when a primitive has joints or morph targets: per-vertex joints and weights (normalised, the
+ * vertices that needed it counted in c->weights_normalised), target deltas, default weights and
+ * the rest shape. Fails on bad weights, deltas or counts, and past a memory limit. */
+rd_gltf_result rd_gltf_fill_deform(rd_gltf_conv *c, size_t mesh, const rd_gltf_primitive *prims,
+                                   size_t n, rd_mesh *out);
+/* The document's skins (gltf_skin.c), after the nodes: each skin the shown nodes use, with its
+ * joints mapped to rd nodes and its inverse bind matrices; the nodes get their skin and morph
+ * weights, checked against their meshes (mesh_map: glTF mesh -> rd mesh). */
+rd_gltf_result rd_gltf_conv_skins(rd_gltf_conv *c, const int32_t *mesh_map);
 
 /* Converts doc into s (rd_scene_update done): checks every index, accessor range and value
  * before reading a byte, decodes and reads external images through files (counting decoded

@@ -86,10 +86,17 @@ bool rd_gltf_read_sparse_indices(const unsigned char *p, int ctype, size_t n, si
                                  uint32_t *out);
 /* Element i as floats (ncomp of them; normalized integers mapped as glTF 3.11 says). */
 void rd_gltf_read_floats(const rd_gltf_accessor *a, size_t i, float *out);
+/* Element i as unsigned integers (ncomp of them; JOINTS_n). */
+void rd_gltf_read_uints(const rd_gltf_accessor *a, size_t i, uint32_t *out);
 /* Element i of an index accessor. */
 uint32_t rd_gltf_read_index(const rd_gltf_accessor *a, size_t i);
 
 /* ---- meshes (gltf_mesh.c) ------------------------------------------------------------------ */
+
+/* A morph target's validated accessors (index -1: the attribute is not given). */
+typedef struct rd_gltf_target {
+    rd_gltf_accessor pos, nrm, tan;
+} rd_gltf_target;
 
 /* A triangle primitive whose accessors were validated (counts agree, tris > 0). */
 typedef struct rd_gltf_primitive {
@@ -98,7 +105,17 @@ typedef struct rd_gltf_primitive {
     bool has_nrm, has_uv, has_tan, has_idx;
     uint64_t tris;
     uint32_t material; /* rd material: glTF material + 1, 0 for none */
+    /* skin and morph targets (gltf_skin.c): joint_sets pairs of JOINTS_n and WEIGHTS_n, and
+     * target_count targets (malloc'd) */
+    uint32_t joint_sets;
+    rd_gltf_accessor joints[2], weights[2];
+    rd_gltf_target *targets;
+    size_t target_count;
 } rd_gltf_primitive;
+
+/* The vertex (accessor element) of corner k of triangle t of pr, through its indices when it has
+ * them (not range-checked: rd_gltf_fill_mesh checks). */
+size_t rd_gltf_corner_vertex(const rd_gltf_primitive *pr, uint64_t t, int k);
 
 /* Fills out (made by rd_scene_add_mesh with the primitives' triangle count) with the
  * triangles of prims[0..n): positions (finite), normals (normalized, else the flat normal),

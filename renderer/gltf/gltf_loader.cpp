@@ -173,10 +173,10 @@ bool image_callback(tinygltf::Image *image, const int index, std::string *, std:
     char why[256];
     int w = 0, h = 0;
     image->image.clear();
-    unsigned char *px = size < 0 ? nullptr
-                                 : rd_gltf_decode_image(&ctx->decoded_bytes, ctx->files.bytes_in,
-                                                        bytes, (size_t)size, &w, &h, &f.code, why,
-                                                        sizeof why);
+    unsigned char *px = size < 0
+                            ? nullptr
+                            : rd_gltf_decode_image(&ctx->decoded_bytes, ctx->files.bytes_in, bytes,
+                                                   (size_t)size, &w, &h, &f.code, why, sizeof why);
     if (!px) {
         if (size >= 0) f.why = why;
         ctx->image_failures[index] = f;
@@ -395,7 +395,9 @@ struct Document {
     std::vector<std::vector<rd_gltf_str>> material_extensions;
     std::vector<rd_gltf_doc_material> materials;
     std::vector<std::vector<rd_gltf_doc_primitive>> primitives;
+    std::vector<std::vector<std::vector<rd_gltf_doc_target>>> targets; /* mesh, primitive */
     std::vector<rd_gltf_doc_mesh> meshes;
+    std::vector<rd_gltf_doc_skin> skins;
     std::vector<rd_gltf_doc_node> nodes;
     std::vector<rd_gltf_node_list> children, scenes;
     std::vector<rd_gltf_doc_camera> cameras;
@@ -503,14 +505,15 @@ void make_document(const Model &m, const LoadContext &ctx, Document *doc)
                                   doc->material_extensions[i].size()});
     }
     doc->primitives.resize(m.meshes.size());
+    doc->targets.resize(m.meshes.size());
     for (size_t i = 0; i < m.meshes.size(); i++) {
+        doc->targets[i].resize(m.meshes[i].primitives.size());
         for (const tinygltf::Primitive &gp : m.meshes[i].primitives) {
             rd_gltf_doc_primitive p;
             memset(&p, 0, sizeof p);
             p.mode = gp.mode;
             p.indices = gp.indices;
             p.material = gp.material;
-            p.has_targets = !gp.targets.empty();
             auto attr = [&](const char *name, bool *has, int *index) {
                 auto it = gp.attributes.find(name);
                 *has = it != gp.attributes.end();
@@ -520,11 +523,29 @@ void make_document(const Model &m, const LoadContext &ctx, Document *doc)
             attr("NORMAL", &p.has_nrm, &p.nrm);
             attr("TEXCOORD_0", &p.has_uv, &p.uv);
             attr("TANGENT", &p.has_tan, &p.tan);
+            bool has; /* skins and morph targets: -1 where not given */
+            const char *const sets[4] = {"JOINTS_0", "JOINTS_1", "WEIGHTS_0", "WEIGHTS_1"};
+            for (int k = 0; k < 4; k++)
+                attr(sets[k], &has, k < 2 ? &p.joints[k] : &p.weights[k - 2]);
+            std::vector<rd_gltf_doc_target> &tv = doc->targets[i][doc->primitives[i].size()];
+            for (const std::map<std::string, int> &t : gp.targets) {
+                auto get = [&](const char *name) {
+                    auto it = t.find(name);
+                    return it == t.end() ? -1 : it->second;
+                };
+                tv.push_back({get("POSITION"), get("NORMAL"), get("TANGENT")});
+            }
+            p.targets = tv.data();
+            p.target_count = tv.size();
             doc->primitives[i].push_back(p);
         }
-        doc->meshes.push_back(
-            {str(m.meshes[i].name), doc->primitives[i].data(), doc->primitives[i].size()});
+        const std::vector<double> &w = m.meshes[i].weights;
+        doc->meshes.push_back({str(m.meshes[i].name), doc->primitives[i].data(),
+                               doc->primitives[i].size(), w.data(), w.size()});
     }
+    for (const tinygltf::Skin &k : m.skins)
+        doc->skins.push_back(
+            {str(k.name), k.joints.data(), k.joints.size(), k.inverseBindMatrices});
     for (const tinygltf::Node &g : m.nodes) {
         rd_gltf_doc_node n;
         memset(&n, 0, sizeof n);
@@ -540,6 +561,9 @@ void make_document(const Model &m, const LoadContext &ctx, Document *doc)
         }
         n.transform = {g.matrix.data(), g.translation.data(), g.rotation.data(), g.scale.data(),
                        g.matrix.size(), g.translation.size(), g.rotation.size(), g.scale.size()};
+        n.skin = g.skin;
+        n.weights = g.weights.data();
+        n.weight_count = g.weights.size();
         doc->nodes.push_back(n);
         doc->children.push_back({g.children.data(), g.children.size()});
     }
@@ -566,7 +590,7 @@ void make_document(const Model &m, const LoadContext &ctx, Document *doc)
     }
     rd_gltf_document &d = doc->d;
     memset(&d, 0, sizeof d);
-    d.skin_count = m.skins.size();
+    set(&d.skins, &d.skin_count, doc->skins);
     d.default_scene = m.defaultScene;
     set(&d.extensions_used, &d.extensions_used_count, doc->extensions_used);
     set(&d.buffers, &d.buffer_count, doc->buffers);

@@ -8,6 +8,20 @@
 
 #include "renderer/scene/xform.h"
 
+size_t rd_gltf_corner_vertex(const rd_gltf_primitive *pr, uint64_t t, int k)
+{
+    size_t v[3];
+    if (pr->mode == RD_GLTF_MODE_TRIANGLES) {
+        v[0] = (size_t)t * 3, v[1] = (size_t)t * 3 + 1, v[2] = (size_t)t * 3 + 2;
+    } else if (pr->mode == RD_GLTF_MODE_TRIANGLE_STRIP) {
+        size_t odd = (size_t)(t % 2);
+        v[0] = (size_t)t, v[1] = (size_t)t + 1 + odd, v[2] = (size_t)t + 2 - odd;
+    } else { /* fan */
+        v[0] = (size_t)t + 1, v[1] = (size_t)t + 2, v[2] = 0;
+    }
+    return pr->has_idx ? rd_gltf_read_index(&pr->idx, v[k]) : v[k];
+}
+
 rd_gltf_result rd_gltf_fill_mesh(size_t mesh, const rd_gltf_primitive *prims, size_t n,
                                  rd_mesh *out, char *err, size_t errlen)
 {
@@ -26,27 +40,13 @@ rd_gltf_result rd_gltf_fill_mesh(size_t mesh, const rd_gltf_primitive *prims, si
     for (size_t p = 0; p < n; p++) {
         const rd_gltf_primitive *pr = &prims[p];
         for (uint64_t t = 0; t < pr->tris; t++, t_out++) {
-            size_t v[3];
-            if (pr->mode == RD_GLTF_MODE_TRIANGLES) {
-                v[0] = (size_t)t * 3, v[1] = (size_t)t * 3 + 1, v[2] = (size_t)t * 3 + 2;
-            } else if (pr->mode == RD_GLTF_MODE_TRIANGLE_STRIP) {
-                size_t odd = (size_t)(t % 2);
-                v[0] = (size_t)t, v[1] = (size_t)t + 1 + odd, v[2] = (size_t)t + 2 - odd;
-            } else { /* fan */
-                v[0] = (size_t)t + 1, v[1] = (size_t)t + 2, v[2] = 0;
-            }
             for (int k = 0; k < 3; k++) {
-                size_t vi = v[k];
-                if (pr->has_idx) {
-                    uint32_t ix = rd_gltf_read_index(&pr->idx, vi);
-                    if (ix >= pr->pos.count)
-                        return rd_gltf_fail(
-                            err, errlen, RD_GLTF_ERR_INVALID,
-                            "index %zu of mesh %zu primitive %zu is %u, out of range for %zu "
-                            "vertices",
-                            vi, mesh, p, ix, pr->pos.count);
-                    vi = ix;
-                }
+                size_t vi = rd_gltf_corner_vertex(pr, t, k);
+                if (pr->has_idx && vi >= pr->pos.count)
+                    return rd_gltf_fail(err, errlen, RD_GLTF_ERR_INVALID,
+                                        "an index of mesh %zu primitive %zu (triangle %llu) is "
+                                        "%zu, out of range for %zu vertices",
+                                        mesh, p, (unsigned long long)t, vi, pr->pos.count);
                 float *pos = &out->positions[t_out * 9 + (size_t)k * 3];
                 rd_gltf_read_floats(&pr->pos, vi, pos);
                 if (!rd_vec3_isfinite(pos))

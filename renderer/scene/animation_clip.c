@@ -70,7 +70,7 @@ static void slerp(const float *a, const float *b, double u, double out[4])
 
 /* Checks a sample and writes it as floats. A rotation is normalised first; a degenerate one
  * becomes the identity when identity_ok, else the sample is refused. */
-static bool finish(double r[4], uint32_t c, bool rotation, bool identity_ok, float *out)
+static bool finish(double *r, uint32_t c, bool rotation, bool identity_ok, float *out)
 {
     if (rotation && !quat_normalize(r)) {
         if (!identity_ok) return false;
@@ -86,12 +86,12 @@ static bool finish(double r[4], uint32_t c, bool rotation, bool identity_ok, flo
 bool rd_anim_sampler_eval(const rd_anim_sampler *sm, bool rotation, double t, float *out)
 {
     uint32_t c = sm->components, n = sm->key_count;
-    if (n == 0 || c < 1 || c > 4 || !sm->times || !sm->values) return false;
+    if (n == 0 || c < 1 || c > RD_ANIM_MAX_COMPONENTS || !sm->times || !sm->values) return false;
     rotation = rotation && c == 4;
     bool cubic = sm->interpolation == RD_INTERP_CUBICSPLINE;
     size_t stride = (size_t)c * (cubic ? 3 : 1), voff = cubic ? c : 0;
     const float *key; /* the key value at or before t (the result, or the fallback) */
-    double r[4] = {0, 0, 0, 0};
+    double r[RD_ANIM_MAX_COMPONENTS] = {0};
     bool interpolated = false;
     if (n == 1 || !(t >= (double)sm->times[0])) {
         key = sm->values + voff;
@@ -157,6 +157,9 @@ void rd_scene_animate(rd_scene *s, double t)
                 if (sm->components == 3 && rd_anim_sampler_eval(sm, false, local, v))
                     memcpy(ch->path == RD_ANIM_SCALE ? n->scale : n->translation, v,
                            3 * sizeof(float));
+            } else if (ch->path == RD_ANIM_WEIGHTS && n->weights &&
+                       sm->components == n->weight_count) {
+                rd_anim_sampler_eval(sm, false, local, n->weights); /* all or nothing */
             }
         }
     }
@@ -182,9 +185,10 @@ void rd_scene_animated_nodes(const rd_scene *s, bool *out)
         abort();
     }
     for (uint32_t ai = 0; ai < s->animation_count; ai++)
-        for (uint32_t ci = 0; ci < s->animations[ai].channel_count; ci++)
-            if (s->animations[ai].channels[ci].node < n)
-                state[s->animations[ai].channels[ci].node] = 1;
+        for (uint32_t ci = 0; ci < s->animations[ai].channel_count; ci++) {
+            const rd_anim_channel *ch = &s->animations[ai].channels[ci];
+            if (ch->node < n && ch->path != RD_ANIM_WEIGHTS) state[ch->node] = 1;
+        }
     for (uint32_t i = 0; i < n; i++) {
         /* walk up to a node whose state is known; a root, a broken parent index or a cycle
          * (rd_scene_update rejects both) counts as still */

@@ -13,6 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "renderer/scene/deform.h"
 #include "renderer/scene/xform.h"
 
 /* Above this many instance vertices rd_scene_update bounds each instance by its mesh's
@@ -116,11 +117,20 @@ void rd_scene_destroy(rd_scene *s)
         free(m->uvs);
         free(m->tangents);
         free(m->material);
+        rd_mesh_deform_free(m->deform);
     }
     free(s->meshes);
-    for (uint32_t i = 0; i < s->node_count; i++)
+    for (uint32_t i = 0; i < s->node_count; i++) {
         free(s->nodes[i].name);
+        free(s->nodes[i].weights);
+    }
     free(s->nodes);
+    for (uint32_t i = 0; i < s->skin_count; i++) {
+        free(s->skins[i].name);
+        free(s->skins[i].joints);
+        free(s->skins[i].inverse_bind);
+    }
+    free(s->skins);
     for (uint32_t i = 0; i < s->material_count; i++)
         free(s->materials[i].name);
     free(s->materials);
@@ -185,6 +195,8 @@ uint32_t rd_scene_add_node(rd_scene *s, const rd_node *n)
     uint32_t i = grow((void **)&s->nodes, &s->node_count, sizeof *s->nodes);
     s->nodes[i] = *n;
     s->nodes[i].name = xstrdup(n->name);
+    s->nodes[i].weights = n->weight_count ? xcalloc(n->weight_count, sizeof(float)) : NULL;
+    if (n->weight_count) memcpy(s->nodes[i].weights, n->weights, n->weight_count * sizeof(float));
     return i;
 }
 
@@ -220,6 +232,17 @@ static void *copy_array(const void *src, size_t count, size_t size)
     return d;
 }
 
+uint32_t rd_scene_add_skin(rd_scene *s, const rd_skin *k)
+{
+    uint32_t i = grow((void **)&s->skins, &s->skin_count, sizeof *s->skins);
+    rd_skin *d = &s->skins[i];
+    d->name = xstrdup(k->name);
+    d->joint_count = k->joint_count;
+    d->joints = copy_array(k->joints, k->joint_count, sizeof *d->joints);
+    d->inverse_bind = copy_array(k->inverse_bind, (size_t)k->joint_count * 16, sizeof(float));
+    return i;
+}
+
 uint32_t rd_scene_add_animation(rd_scene *s, const rd_animation *a)
 {
     uint32_t i = grow((void **)&s->animations, &s->animation_count, sizeof *s->animations);
@@ -231,7 +254,8 @@ uint32_t rd_scene_add_animation(rd_scene *s, const rd_animation *a)
     d->samplers = xcalloc(a->sampler_count, sizeof *d->samplers);
     for (uint32_t k = 0; k < a->sampler_count; k++) {
         const rd_anim_sampler *src = &a->samplers[k];
-        assert(src->key_count >= 1 && (src->components == 3 || src->components == 4));
+        assert(src->key_count >= 1 && src->components >= 1 &&
+               src->components <= RD_ANIM_MAX_COMPONENTS);
         assert(src->interpolation <= RD_INTERP_CUBICSPLINE);
         size_t values = (size_t)src->key_count * src->components *
                         (src->interpolation == RD_INTERP_CUBICSPLINE ? 3 : 1);
@@ -244,7 +268,7 @@ uint32_t rd_scene_add_animation(rd_scene *s, const rd_animation *a)
     d->channel_count = a->channel_count;
     d->channels = copy_array(a->channels, a->channel_count, sizeof *d->channels);
     for (uint32_t k = 0; k < a->channel_count; k++)
-        assert(a->channels[k].sampler < a->sampler_count && a->channels[k].path <= RD_ANIM_SCALE);
+        assert(a->channels[k].sampler < a->sampler_count && a->channels[k].path <= RD_ANIM_WEIGHTS);
     return i;
 }
 
@@ -462,6 +486,7 @@ bool rd_scene_update(rd_scene *s, char *err, size_t errlen)
             count++;
         }
     }
+    rd_scene_deform(s);
     update_bounds(s);
     return true;
 }

@@ -15,6 +15,37 @@
 extern "C" {
 #endif
 
+/* Per-vertex deformation of a mesh (glTF 2.0 skins and morph targets, sections 3.7.3.3 and
+ * 3.7.2.2) in flat arrays a GPU pass can upload as they are. Vertex v is corner v of the
+ * expanded triangles (v = 3 * triangle + corner), as in rd_mesh. rd_scene_update deforms the
+ * mesh (renderer/scene/deform.h): rd_mesh's positions, normals and tangents then hold the posed
+ * shape, morphed first, then skinned. Owned by its mesh. */
+typedef struct rd_mesh_deform {
+    uint32_t vertex_count; /* 3 * tri_count */
+    float *rest_positions; /* 3 floats per vertex: the shape without targets or skin */
+    float *rest_normals;   /* 3 floats per vertex */
+    float *rest_tangents;  /* 4 floats per vertex, or NULL when the mesh has no tangents */
+    /* Skin: `influences` (0, 4 or 8) joints and weights per vertex, joints[v * influences + k]
+     * indexing the joints of the skin of the node that draws the mesh; the weights sum to one,
+     * or are all zero (the vertex then stays where it is in the mesh node's space). max_joint:
+     * the largest joint a weighted influence uses. */
+    uint32_t influences;
+    uint16_t *joints;
+    float *weights;
+    uint32_t max_joint;
+    /* Morph targets: target t's delta for vertex v at [(t * vertex_count + v) * 3] (xyz, also
+     * for tangents); each array NULL when no target has that attribute. */
+    uint32_t target_count;
+    float *target_positions, *target_normals, *target_tangents;
+    float *default_weights; /* target_count: the mesh's weights (0 where not given) */
+    /* The pose last applied (deform.c): joint matrices, then weights; revision grows each time
+     * the deformed shape changes, so that consumers (the GPU scene) know which meshes to rebuild.
+     */
+    float *posed;
+    size_t posed_count;
+    uint64_t revision;
+} rd_mesh_deform;
+
 typedef struct rd_mesh {
     char *name;
     uint32_t tri_count;
@@ -24,7 +55,8 @@ typedef struct rd_mesh {
     /* 12 floats per triangle (TANGENT: xyz unit tangent, w = +-1 handedness, per vertex), or
      * NULL: the renderer then derives tangents per triangle from the UVs. Owned; malloc'd. */
     float *tangents;
-    uint32_t *material; /* material index per triangle (always valid: see default material) */
+    uint32_t *material;     /* material index per triangle (always valid: see default material) */
+    rd_mesh_deform *deform; /* NULL: the mesh is rigid */
 } rd_mesh;
 
 typedef struct rd_node {
@@ -37,7 +69,21 @@ typedef struct rd_node {
     float matrix[16]; /* used instead of TRS when has_matrix */
     bool has_matrix;
     float world[16]; /* filled by rd_scene_update */
+    uint32_t skin;   /* skin index + 1 that deforms the node's mesh; 0: none */
+    /* Morph target weights of the node's mesh (glTF node.weights, else the mesh's), animated by
+     * RD_ANIM_WEIGHTS channels; weight_count 0: the mesh's defaults. Owned (copied by
+     * rd_scene_add_node). */
+    float *weights;
+    uint32_t weight_count;
 } rd_node;
+
+/* A glTF skin: the nodes that are its joints and their inverse bind matrices. */
+typedef struct rd_skin {
+    char *name;
+    uint32_t joint_count;
+    uint32_t *joints;    /* rd node per joint */
+    float *inverse_bind; /* 16 floats per joint, column-major (identity when the file has none) */
+} rd_skin;
 
 enum { RD_ALPHA_OPAQUE = 0, RD_ALPHA_MASK = 1, RD_ALPHA_BLEND = 2 };
 enum { RD_WRAP_REPEAT = 0, RD_WRAP_CLAMP = 1, RD_WRAP_MIRROR = 2 };
@@ -107,16 +153,20 @@ typedef struct rd_instance {
     uint32_t mesh;
 } rd_instance;
 
-/* Node animation (glTF 2.0 animations targeting translation, rotation or scale).
- * renderer/scene/animation_clip.h samples them into the nodes' TRS. */
-enum { RD_ANIM_TRANSLATION = 0, RD_ANIM_ROTATION = 1, RD_ANIM_SCALE = 2 };
+/* Node animation (glTF 2.0 animations targeting translation, rotation, scale or morph weights).
+ * renderer/scene/animation_clip.h samples them into the nodes' TRS and weights. */
+enum { RD_ANIM_TRANSLATION = 0, RD_ANIM_ROTATION = 1, RD_ANIM_SCALE = 2, RD_ANIM_WEIGHTS = 3 };
+/* Most values one key holds (the morph targets a weights channel animates). */
+#define RD_ANIM_MAX_COMPONENTS 256u
 enum { RD_INTERP_LINEAR = 0, RD_INTERP_STEP = 1, RD_INTERP_CUBICSPLINE = 2 };
 
 typedef struct rd_anim_sampler {
     uint32_t interpolation; /* RD_INTERP_* */
-    uint32_t components;    /* per value: 3 (translation, scale) or 4 (quaternion x, y, z, w) */
-    uint32_t key_count;     /* >= 1 */
-    float *times;           /* key_count finite seconds >= 0, non-decreasing */
+    /* per value: 3 (translation, scale), 4 (quaternion x, y, z, w) or, for weights, the node's
+     * weight count (1 .. RD_ANIM_MAX_COMPONENTS) */
+    uint32_t components;
+    uint32_t key_count; /* >= 1 */
+    float *times;       /* key_count finite seconds >= 0, non-decreasing */
     /* key_count * components floats; CUBICSPLINE: key_count * 3 * components, each key
      * stored as in-tangent, value, out-tangent (glTF 2.0 appendix C) */
     float *values;
@@ -154,6 +204,8 @@ typedef struct rd_scene {
     uint32_t instance_count;
     rd_animation *animations;
     uint32_t animation_count;
+    rd_skin *skins;
+    uint32_t skin_count;
     char **warnings; /* human sentences about ignored features */
     uint32_t warning_count;
     float bounds_min[3], bounds_max[3]; /* world bounds of all instances (rd_scene_update) */
@@ -175,7 +227,8 @@ uint32_t rd_scene_add_texture(rd_scene *s, const rd_texture *t); /* takes owners
 /* Adds a mesh with tri_count triangles whose arrays are allocated (zeroed) for the caller to fill.
  */
 uint32_t rd_scene_add_mesh(rd_scene *s, const char *name, uint32_t tri_count);
-uint32_t rd_scene_add_node(rd_scene *s, const rd_node *n);
+uint32_t rd_scene_add_node(rd_scene *s, const rd_node *n); /* copies n->weights */
+uint32_t rd_scene_add_skin(rd_scene *s, const rd_skin *k); /* copies joints, inverse_bind */
 uint32_t rd_scene_add_light(rd_scene *s, const rd_light *l);
 uint32_t rd_scene_add_camera(rd_scene *s, const rd_camera *c);
 /* Deep-copies a (name, samplers with their times and values, channels); the copy's duration
@@ -191,7 +244,8 @@ void rd_scene_warn(rd_scene *s, const char *fmt, ...);
 void rd_mesh_fill_flat_normals(rd_mesh *m);
 
 /* Recomputes world matrices (parents before children; a cycle is an error), the instance list,
- * light and camera world placement, bounds and tri_total. Returns false with a message in
+ * light and camera world placement, the deformed meshes' shapes (deform.h: only those whose
+ * joints or weights changed), bounds and tri_total. Returns false with a message in
  * err on a broken hierarchy. */
 bool rd_scene_update(rd_scene *s, char *err, size_t errlen);
 

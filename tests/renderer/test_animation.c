@@ -408,14 +408,16 @@ static void test_invalid(void)
                    ":0,'target':{'node':2,'path':'scale'}}]}]",
                    "accessor 99");
 
-    /* not errors: weights (warning), an unknown path (warning), no node (ignored) */
+    /* not errors: weights of a node without morph targets (warning), an unknown path (warning),
+     * no node (ignored) */
     rd_scene s;
     CHECKF(load("[" WEIGHTS_ANIM ",{'samplers':[{'input':2,'output':3}],'channels':[{'sampler':0,"
                 "'target':{'path':'scale'}},{'sampler':0,'target':{'node':2,'path':'pointer'}}]}]",
                 &s) == RD_GLTF_OK,
            "%s", err);
     CHECK(s.animation_count == 0 && s.warning_count == 2);
-    CHECK(s.warning_count == 2 && strstr(s.warnings[0], "1 animation channel(s) animate morph") &&
+    CHECK(s.warning_count == 2 &&
+          strstr(s.warnings[0], "1 animation channel(s) animate the morph weights of a node") &&
           strstr(s.warnings[1], "unknown target path"));
     rd_scene_destroy(&s);
 }
