@@ -256,7 +256,7 @@ typedef struct rd_gltf_conv {
     char *err;
     size_t errlen;
     uint64_t deform_floats;      /* skin and morph target values kept so far (gltf_skin.c) */
-    uint64_t weights_normalised; /* skinned vertices whose weights did not sum to one */
+    uint64_t weights_normalised; /* skinned triangle corners whose weights did not sum to one */
 } rd_gltf_conv;
 
 /* Texture index of material `material` read through TEXCOORD_tex_coord as its `slot` texture:
@@ -274,8 +274,8 @@ rd_gltf_result rd_gltf_plan_deform(const rd_gltf_document *d, const rd_gltf_doc_
 void rd_gltf_primitive_deform_dispose(rd_gltf_primitive *pr);
 /* After rd_gltf_fill_mesh: gives out (glTF mesh `mesh`, primitives prims[0..n)) its deformation
  * when a primitive has joints or morph targets: per-vertex joints and weights (normalised, the
- * vertices that needed it counted in c->weights_normalised), target deltas, default weights and
- * the rest shape. Fails on bad weights, deltas or counts, and past a memory limit. */
+ * triangle corners that needed it counted in c->weights_normalised), target deltas, default weights
+ * and the rest shape. Fails on bad weights, deltas or counts, and past a memory limit. */
 rd_gltf_result rd_gltf_fill_deform(rd_gltf_conv *c, size_t mesh, const rd_gltf_primitive *prims,
                                    size_t n, rd_mesh *out);
 /* The document's skins (gltf_skin.c), after the nodes: each skin the shown nodes use, with its

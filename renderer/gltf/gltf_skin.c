@@ -129,7 +129,7 @@ static rd_gltf_result read_skin(rd_gltf_conv *c, size_t mesh, size_t p, const rd
             sum += w[k];
         }
     }
-    if (fabs(sum - 1.0) > tol) c->weights_normalised++;
+    if (fabs(sum - 1.0) > tol) c->weights_normalised++; /* per triangle corner */
     if (sum > 0 && sum != 1.0)
         for (uint32_t k = 0; k < nin; k++)
             wo[k] = (float)(wo[k] / sum);
@@ -334,10 +334,11 @@ rd_gltf_result rd_gltf_conv_skins(rd_gltf_conv *c, const int32_t *mesh_map)
                       name, drawers[m]);
     }
     if (r == RD_GLTF_OK && c->weights_normalised)
-        rd_scene_warn(c->s,
-                      "%llu skinned vertices have joint weights that do not sum to one; they are "
-                      "normalised",
-                      (unsigned long long)c->weights_normalised);
+        rd_scene_warn(
+            c->s,
+            "%llu skinned triangle corners have joint weights that do not sum to one; they "
+            "are normalised",
+            (unsigned long long)c->weights_normalised);
     free(skin_map);
     free(drawers);
     return r;
