@@ -111,6 +111,8 @@ static rd_vk_result upload_blas(rd_vk *vk, rd_staging *st, rd_gpu_scene *gs, rd_
     gs->mesh_bounds = p->mesh_bounds;
     gs->mesh_origin = p->mesh_origin;
     gs->mesh_local_bounds = p->mesh_local_bounds;
+    gs->mesh_revision = p->mesh_revision;
+    p->mesh_revision = NULL;
     p->mesh_root = NULL;
     p->mesh_bounds = NULL;
     p->mesh_origin = NULL;
@@ -182,6 +184,25 @@ static bool same_placement(const pc_light *a, const pc_light *b)
     return a->info.x != PC_LIGHT_SPOT || a->spot.x == b->spot.x;
 }
 
+/* Logs the box lo, hi (not empty: a singular transform's is skipped) as changed under the current
+ * geometry revision. */
+static void log_box(rd_gpu_scene *gs, const float *lo, const float *hi)
+{
+    if (!(lo[0] <= hi[0])) return;
+    if (gs->dirty_count == RD_GPU_SCENE_DIRTY_MAX) {
+        /* full: the older half goes, and maps older than it rebuild whole */
+        uint32_t drop = RD_GPU_SCENE_DIRTY_MAX / 2;
+        gs->dirty_since = gs->dirty[drop - 1].revision;
+        memmove(gs->dirty, gs->dirty + drop, sizeof gs->dirty[0] * (gs->dirty_count - drop));
+        gs->dirty_count -= drop;
+        if (gs->dirty_since == gs->geometry_revision) gs->dirty_count = 0;
+    }
+    rd_gpu_scene_dirty *d = &gs->dirty[gs->dirty_count++];
+    d->revision = gs->geometry_revision;
+    memcpy(d->lo, lo, sizeof d->lo);
+    memcpy(d->hi, hi, sizeof d->hi);
+}
+
 /* Logs where the geometry changed (gs->dirty) between the instances as last placed and inst
  * (new boxes lo, hi; n instances), under a new geometry revision when anything moved, and keeps
  * inst as the last placed. */
@@ -211,20 +232,7 @@ static void log_moves(rd_gpu_scene *gs, const pc_instance *inst, const float *lo
         world_box(m, &gs->mesh_local_bounds[gs->placed[i].info.y * 6], old_lo, old_hi);
         const float *box[2][2] = {{old_lo, old_hi}, {&lo[i * 3], &hi[i * 3]}};
         for (int b = 0; b < 2; b++) {
-            if (!(box[b][0][0] <= box[b][1][0])) continue; /* empty (a singular transform) */
-            if (gs->dirty_count == RD_GPU_SCENE_DIRTY_MAX) {
-                /* full: the older half goes, and maps older than it rebuild whole */
-                uint32_t drop = RD_GPU_SCENE_DIRTY_MAX / 2;
-                gs->dirty_since = gs->dirty[drop - 1].revision;
-                memmove(gs->dirty, gs->dirty + drop,
-                        sizeof gs->dirty[0] * (gs->dirty_count - drop));
-                gs->dirty_count -= drop;
-                if (gs->dirty_since == gs->geometry_revision) gs->dirty_count = 0;
-            }
-            rd_gpu_scene_dirty *d = &gs->dirty[gs->dirty_count++];
-            d->revision = gs->geometry_revision;
-            memcpy(d->lo, box[b][0], sizeof d->lo);
-            memcpy(d->hi, box[b][1], sizeof d->hi);
+            log_box(gs, box[b][0], box[b][1]);
         }
         gs->placed[i] = inst[i];
     }
@@ -314,6 +322,117 @@ rd_vk_result rd_gpu_scene_update_instances(rd_vk *vk, rd_gpu_scene *gs, const rd
                                            char *err, size_t errlen)
 {
     return update_instances(vk, NULL, gs, s, err, errlen);
+}
+
+bool rd_gpu_scene_mesh_stale(const rd_gpu_scene *gs, const rd_scene *s, uint32_t mesh)
+{
+    return mesh < s->mesh_count && mesh < gs->mesh_count && gs->mesh_revision &&
+           s->meshes[mesh].deform && s->meshes[mesh].deform->revision != gs->mesh_revision[mesh];
+}
+
+/* The world box (GPU frame) of instance i as last placed, with its mesh's local box as gs holds
+ * it now. */
+static void placed_box(const rd_gpu_scene *gs, uint32_t i, float lo[3], float hi[3])
+{
+    float m[16] = {0};
+    for (int r = 0; r < 3; r++) {
+        const float *row = &gs->placed[i].object_to_world[r].x;
+        m[r] = row[0], m[4 + r] = row[1], m[8 + r] = row[2], m[12 + r] = row[3];
+    }
+    m[15] = 1;
+    world_box(m, &gs->mesh_local_bounds[gs->placed[i].info.y * 6], lo, hi);
+}
+
+/* Rebuilds the BLASes of the stale meshes list[0..n) in place and logs their instances' boxes. */
+static rd_vk_result rebuild_meshes(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
+                                   const uint32_t *list, uint32_t n, char *err, size_t errlen)
+{
+    rd_bvh *bvhs = xcalloc(n, sizeof *bvhs);
+    rd_bvh_mesh *meshes = xcalloc(n, sizeof *meshes);
+    for (uint32_t k = 0; k < n; k++)
+        meshes[k] = (rd_bvh_mesh){s->meshes[list[k]].positions, s->meshes[list[k]].tri_count};
+    if (!rd_bvh_build_many(bvhs, meshes, n, NULL)) {
+        fprintf(stderr, "probecast: out of memory building a BVH\n");
+        abort();
+    }
+    free(meshes);
+    uint32_t *tri_base = xcalloc(s->mesh_count, sizeof *tri_base), base = 0;
+    for (uint32_t m = 0; m < s->mesh_count; m++)
+        tri_base[m] = base, base += s->meshes[m].tri_count;
+    /* where their instances were: a new geometry revision logs it, then where they are */
+    gs->revision = gs->geometry_revision = ++last_revision;
+    uint8_t *hit = xcalloc(s->mesh_count, 1);
+    for (uint32_t k = 0; k < n; k++)
+        hit[list[k]] = 1;
+    for (uint32_t i = 0; gs->placed && i < gs->instance_capacity; i++) {
+        if (gs->placed[i].info.y >= s->mesh_count || !hit[gs->placed[i].info.y]) continue;
+        float lo[3], hi[3];
+        placed_box(gs, i, lo, hi);
+        log_box(gs, lo, hi);
+    }
+    rd_vk_result r = RD_VK_OK;
+    for (uint32_t k = 0; k < n && r == RD_VK_OK; k++) {
+        uint32_t m = list[k], tris = s->meshes[m].tri_count;
+        const rd_bvh *bvh = &bvhs[k];
+        if (bvh->node_count > blas_slots(&s->meshes[m], 0) || bvh->prim_count != tris) {
+            snprintf(err, errlen, "the rebuilt BVH of mesh %u does not fit its slots", m);
+            r = RD_VK_ERR_VULKAN; /* a broken invariant, reported */
+            break;
+        }
+        pc_bvh_node *nodes = xcalloc(bvh->node_count, sizeof *nodes);
+        pc_tri *t = xcalloc(tris, sizeof *t);
+        pc_tri_attr *a = xcalloc(tris, sizeof *a);
+        const float zero[3] = {0, 0, 0}; /* deforming meshes have no local origin */
+        rd_gpu_scene_fill_mesh(s, m, bvh, zero, gs->mesh_root[m], tri_base[m], nodes, t, a);
+        r = rd_upload(vk, NULL, &gs->blas_nodes, sizeof *nodes * gs->mesh_root[m], nodes,
+                      sizeof *nodes * bvh->node_count, err, errlen);
+        if (r == RD_VK_OK)
+            r = rd_upload(vk, NULL, &gs->tris, sizeof *t * tri_base[m], t, sizeof *t * tris, err,
+                          errlen);
+        if (r == RD_VK_OK)
+            r = rd_upload(vk, NULL, &gs->tri_attrs, sizeof *a * tri_base[m], a, sizeof *a * tris,
+                          err, errlen);
+        free(nodes);
+        free(t);
+        free(a);
+        const pc_bvh_node *root = &bvh->nodes[0];
+        const float b[6] = {root->bmin.x, root->bmin.y, root->bmin.z,
+                            root->bmax.x, root->bmax.y, root->bmax.z};
+        memcpy(&gs->mesh_bounds[6 * m], b, sizeof b);
+        memcpy(&gs->mesh_local_bounds[6 * m], b, sizeof b);
+        gs->mesh_revision[m] = s->meshes[m].deform->revision;
+        if (bvh->depth > gs->max_blas_depth) gs->max_blas_depth = bvh->depth;
+    }
+    for (uint32_t k = 0; k < n; k++)
+        rd_bvh_destroy(&bvhs[k]);
+    free(bvhs);
+    free(tri_base);
+    free(hit);
+    return r;
+}
+
+rd_vk_result rd_gpu_scene_update_pose(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
+                                      uint32_t *rebuilt, char *err, size_t errlen)
+{
+    double t0 = now_ms();
+    uint32_t n = 0, *list = xcalloc(s->mesh_count, sizeof *list);
+    uint8_t *hit = xcalloc(s->mesh_count, 1);
+    for (uint32_t m = 0; m < s->mesh_count; m++)
+        if (rd_gpu_scene_mesh_stale(gs, s, m)) list[n++] = m, hit[m] = 1;
+    if (rebuilt) *rebuilt = n;
+    rd_vk_result r = n ? rebuild_meshes(vk, gs, s, list, n, err, errlen) : RD_VK_OK;
+    if (n) gs->deform_build_ms = now_ms() - t0;
+    if (r == RD_VK_OK) r = update_instances(vk, NULL, gs, s, err, errlen);
+    /* where the rebuilt meshes' instances are now (update_instances logs only moved ones) */
+    for (uint32_t i = 0; r == RD_VK_OK && n && i < s->instance_count; i++) {
+        if (!hit[s->instances[i].mesh] || i >= gs->instance_capacity) continue;
+        float lo[3], hi[3];
+        placed_box(gs, i, lo, hi);
+        log_box(gs, lo, hi);
+    }
+    free(list);
+    free(hit);
+    return r;
 }
 
 /* rd_gpu_scene_update_lights; a new buffer's contents are staged into st when it is given */
@@ -508,6 +627,8 @@ void rd_gpu_scene_destroy(rd_vk *vk, rd_gpu_scene *gs)
     free(gs->mesh_bounds);
     free(gs->mesh_origin);
     free(gs->mesh_local_bounds);
+    free(gs->mesh_revision);
+    gs->mesh_revision = NULL;
     free(gs->placed);
     gs->placed = NULL;
     free(gs->placed_lights);

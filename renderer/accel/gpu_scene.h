@@ -2,7 +2,9 @@
  *
  * Bottom-level BVHs are built once per mesh; the top-level BVH over instances is rebuilt
  * when nodes move (rd_gpu_scene_update_instances), so moving an object costs one small
- * rebuild and upload. Lights are a separate small upload.
+ * rebuild and upload. A mesh that deforms (skins, morph targets: scene.h rd_mesh_deform) gets
+ * room for any BVH of its triangles, and its BLAS is rebuilt on the CPU when its pose changed
+ * (rd_gpu_scene_update_pose). Lights are a separate small upload.
  */
 #ifndef RD_GPU_SCENE_H
 #define RD_GPU_SCENE_H
@@ -37,6 +39,7 @@ typedef struct rd_gpu_scene {
      * 6 floats per mesh, the BLAS root's box in that local frame. */
     float *mesh_origin;
     float *mesh_local_bounds;
+    uint64_t *mesh_revision; /* per mesh: the deform revision its BLAS shows (0: rigid) */
     uint32_t instance_capacity;
     uint32_t light_capacity;
     /* lights changed since the last recorded command buffer: written by the next one that
@@ -67,6 +70,7 @@ typedef struct rd_gpu_scene {
     pc_light *placed_lights; /* the lights as last uploaded (light_capacity of them) */
     /* statistics */
     double blas_build_ms, tlas_build_ms, upload_ms;
+    double deform_build_ms; /* the last rd_gpu_scene_update_pose's BLAS rebuilds and uploads */
     uint64_t tri_count, blas_node_count;
     uint32_t tlas_node_count, max_blas_depth;
 } rd_gpu_scene;
@@ -80,6 +84,7 @@ typedef struct rd_gpu_scene_prep {
     float *mesh_bounds;       /* 6 floats per mesh */
     float *mesh_origin;       /* 3 floats per mesh (rd_gpu_scene.mesh_origin) */
     float *mesh_local_bounds; /* 6 floats per mesh */
+    uint64_t *mesh_revision;  /* per mesh (rd_gpu_scene.mesh_revision) */
     pc_bvh_node *nodes;
     pc_tri *tris;
     pc_tri_attr *attrs;
@@ -121,6 +126,15 @@ rd_vk_result rd_gpu_scene_create(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *sc
  * matrices (call rd_scene_update first). The instance count must not change. */
 rd_vk_result rd_gpu_scene_update_instances(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *scene,
                                            char *err, size_t errlen);
+/* Whether mesh's deformed shape changed since its BLAS was built (its deform revision moved). */
+bool rd_gpu_scene_mesh_stale(const rd_gpu_scene *gs, const rd_scene *scene, uint32_t mesh);
+/* rd_gpu_scene_update_instances after a pose: first every stale deformed mesh (the CPU
+ * deformation of rd_scene_update done) gets its BLAS rebuilt on the CPU and written in place,
+ * with its triangles; the boxes its instances took before and take now are logged as changed
+ * geometry (a new geometry revision). *rebuilt (may be NULL) gets how many meshes were rebuilt,
+ * deform_ms the time it took. Rebuilding is the CPU reference for a GPU refit to come. */
+rd_vk_result rd_gpu_scene_update_pose(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *scene,
+                                      uint32_t *rebuilt, char *err, size_t errlen);
 /* Re-uploads the lights (the count may change). Within the buffer's capacity nothing waits: the
  * new values are recorded into the next command buffer that renders the scene (a light that
  * moves every frame used to cost a staging buffer and a queue wait, 1.8 ms on an H200); growing

@@ -8,6 +8,8 @@
 #include <time.h>
 
 #include "shaders/gpu_types.h"
+#include "renderer/accel/bvh.h"
+#include "renderer/scene/scene.h"
 
 static inline double now_ms(void)
 {
@@ -35,5 +37,20 @@ static inline float clamp01(float x)
 {
     return x > 0.0f ? (x < 1.0f ? x : 1.0f) : 0.0f; /* NaN -> 0 */
 }
+
+/* BLAS node slots mesh m takes in the nodes buffer: what its BVH built (built), or for a mesh
+ * that deforms the most any BVH of its triangles can take (2 n - 1), so that a rebuild after a
+ * pose change fits in place. */
+static inline uint64_t blas_slots(const rd_mesh *m, uint32_t built)
+{
+    return m->deform ? 2ull * m->tri_count : built;
+}
+
+/* Writes mesh m's BLAS (bvh, node 0 its root; vertices minus the local origin o) into nodes and
+ * its triangle records in leaf order into tris and attrs: child and leaf indices are absolute,
+ * the mesh's first node at node_base and first triangle at tri_base (gpu_scene_prep.c). */
+void rd_gpu_scene_fill_mesh(const rd_scene *s, uint32_t m, const rd_bvh *bvh, const float o[3],
+                            uint32_t node_base, uint32_t tri_base, pc_bvh_node *nodes, pc_tri *tris,
+                            pc_tri_attr *attrs);
 
 #endif

@@ -88,6 +88,44 @@ static pc_vec4 local_vertex(const float *v, const float origin[3], float w)
                      (float)((double)v[2] - origin[2]), w};
 }
 
+void rd_gpu_scene_fill_mesh(const rd_scene *s, uint32_t m, const rd_bvh *bvh, const float o[3],
+                            uint32_t node_base, uint32_t tri_base, pc_bvh_node *nodes, pc_tri *tris,
+                            pc_tri_attr *attrs)
+{
+    const rd_mesh *mesh = &s->meshes[m];
+    bool local = o[0] != 0 || o[1] != 0 || o[2] != 0;
+    for (uint32_t i = 0; i < bvh->node_count; i++) {
+        pc_bvh_node n = bvh->nodes[i];
+        uint32_t first = rd_bvh_node_first(&n), count = rd_bvh_node_count(&n);
+        n.bmin.w = pc_u2f(first + (count ? tri_base : node_base));
+        if (local) { /* empty boxes [+inf, -inf] stay empty */
+            n.bmin.x = sub_down(n.bmin.x, o[0]), n.bmax.x = sub_up(n.bmax.x, o[0]);
+            n.bmin.y = sub_down(n.bmin.y, o[1]), n.bmax.y = sub_up(n.bmax.y, o[1]);
+            n.bmin.z = sub_down(n.bmin.z, o[2]), n.bmax.z = sub_up(n.bmax.z, o[2]);
+        }
+        nodes[i] = n;
+    }
+    for (uint32_t i = 0; i < bvh->prim_count; i++) {
+        uint32_t src = bvh->prim_index[i];
+        uint32_t mat = mesh->material[src] < s->material_count ? mesh->material[src] : 0;
+        const rd_material *mm = &s->materials[mat];
+        uint32_t flags = (mm->double_sided ? PC_TRI_DOUBLE_SIDED : 0) |
+                         (mm->alpha_mode == RD_ALPHA_MASK ? PC_TRI_ALPHA_MASK : 0);
+        const float *pos = &mesh->positions[src * 9];
+        const float *n = &mesh->normals[src * 9];
+        const float *uv = &mesh->uvs[src * 6];
+        pc_tri *t = &tris[i];
+        t->v0 = local_vertex(pos, o, pc_u2f(mat));
+        t->v1 = local_vertex(pos + 3, o, pc_u2f(flags));
+        t->v2 = local_vertex(pos + 6, o, pc_u2f(src));
+        pc_tri_attr *a = &attrs[i];
+        a->n0 = v4(n, 0), a->n1 = v4(n + 3, 0), a->n2 = v4(n + 6, 0);
+        a->uv01 = (pc_vec4){uv[0], uv[1], uv[2], uv[3]};
+        a->uv2 = (pc_vec4){uv[4], uv[5], 0, 0};
+        a->tangents = pack_tangents(mesh->tangents ? &mesh->tangents[src * 12] : NULL);
+    }
+}
+
 rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *s, char *err, size_t errlen)
 {
     memset(p, 0, sizeof *p);
@@ -97,6 +135,7 @@ rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *s, char 
     p->mesh_bounds = xcalloc(s->mesh_count, 6 * sizeof(float));
     p->mesh_origin = xcalloc(s->mesh_count, 3 * sizeof(float));
     p->mesh_local_bounds = xcalloc(s->mesh_count, 6 * sizeof(float));
+    p->mesh_revision = xcalloc(s->mesh_count, sizeof *p->mesh_revision);
     rd_bvh *bvhs = xcalloc(s->mesh_count, sizeof *bvhs);
     rd_bvh_mesh *meshes = xcalloc(s->mesh_count, sizeof *meshes);
     for (uint32_t m = 0; m < s->mesh_count; m++)
@@ -116,14 +155,14 @@ rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *s, char 
         b[0] = root->bmin.x, b[1] = root->bmin.y, b[2] = root->bmin.z;
         b[3] = root->bmax.x, b[4] = root->bmax.y, b[5] = root->bmax.z;
         float *o = &p->mesh_origin[m * 3], *lb = &p->mesh_local_bounds[m * 6];
-        mesh_local_origin(b, o);
+        if (!mesh->deform) mesh_local_origin(b, o); /* a deforming mesh keeps 0: it is rebuilt */
         for (int k = 0; k < 3; k++) {
             lb[k] = sub_down(b[k], o[k]);
             lb[3 + k] = sub_up(b[3 + k], o[k]);
         }
         if (bvhs[m].depth > p->max_blas_depth) p->max_blas_depth = bvhs[m].depth;
         tri_total += mesh->tri_count;
-        node_total += bvhs[m].node_count;
+        node_total += blas_slots(mesh, bvhs[m].node_count);
     }
     p->tri_count = tri_total;
     p->node_count = node_total;
@@ -141,42 +180,11 @@ rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *s, char 
     p->attrs = xcalloc(tri_total, sizeof *p->attrs);
     uint32_t node_base = 0, tri_base = 0;
     for (uint32_t m = 0; m < s->mesh_count; m++) {
-        const rd_mesh *mesh = &s->meshes[m];
-        const rd_bvh *bvh = &bvhs[m];
-        const float *o = &p->mesh_origin[m * 3];
-        bool local = o[0] != 0 || o[1] != 0 || o[2] != 0;
-        for (uint32_t i = 0; i < bvh->node_count; i++) {
-            pc_bvh_node n = bvh->nodes[i];
-            uint32_t first = rd_bvh_node_first(&n), count = rd_bvh_node_count(&n);
-            n.bmin.w = pc_u2f(first + (count ? tri_base : node_base));
-            if (local) { /* empty boxes [+inf, -inf] stay empty */
-                n.bmin.x = sub_down(n.bmin.x, o[0]), n.bmax.x = sub_up(n.bmax.x, o[0]);
-                n.bmin.y = sub_down(n.bmin.y, o[1]), n.bmax.y = sub_up(n.bmax.y, o[1]);
-                n.bmin.z = sub_down(n.bmin.z, o[2]), n.bmax.z = sub_up(n.bmax.z, o[2]);
-            }
-            p->nodes[node_base + i] = n;
-        }
-        for (uint32_t i = 0; i < bvh->prim_count; i++) {
-            uint32_t src = bvh->prim_index[i];
-            uint32_t mat = mesh->material[src] < s->material_count ? mesh->material[src] : 0;
-            const rd_material *mm = &s->materials[mat];
-            uint32_t flags = (mm->double_sided ? PC_TRI_DOUBLE_SIDED : 0) |
-                             (mm->alpha_mode == RD_ALPHA_MASK ? PC_TRI_ALPHA_MASK : 0);
-            const float *pos = &mesh->positions[src * 9];
-            const float *n = &mesh->normals[src * 9];
-            const float *uv = &mesh->uvs[src * 6];
-            pc_tri *t = &p->tris[tri_base + i];
-            t->v0 = local_vertex(pos, o, pc_u2f(mat));
-            t->v1 = local_vertex(pos + 3, o, pc_u2f(flags));
-            t->v2 = local_vertex(pos + 6, o, pc_u2f(src));
-            pc_tri_attr *a = &p->attrs[tri_base + i];
-            a->n0 = v4(n, 0), a->n1 = v4(n + 3, 0), a->n2 = v4(n + 6, 0);
-            a->uv01 = (pc_vec4){uv[0], uv[1], uv[2], uv[3]};
-            a->uv2 = (pc_vec4){uv[4], uv[5], 0, 0};
-            a->tangents = pack_tangents(mesh->tangents ? &mesh->tangents[src * 12] : NULL);
-        }
-        node_base += bvh->node_count;
-        tri_base += mesh->tri_count;
+        rd_gpu_scene_fill_mesh(s, m, &bvhs[m], &p->mesh_origin[m * 3], node_base, tri_base,
+                               p->nodes + node_base, p->tris + tri_base, p->attrs + tri_base);
+        node_base += (uint32_t)blas_slots(&s->meshes[m], bvhs[m].node_count);
+        tri_base += s->meshes[m].tri_count;
+        p->mesh_revision[m] = s->meshes[m].deform ? s->meshes[m].deform->revision : 0;
         rd_bvh_destroy(&bvhs[m]);
     }
     free(bvhs);
@@ -190,6 +198,7 @@ void rd_gpu_scene_prep_destroy(rd_gpu_scene_prep *p)
     free(p->mesh_bounds);
     free(p->mesh_origin);
     free(p->mesh_local_bounds);
+    free(p->mesh_revision);
     free(p->nodes);
     free(p->tris);
     free(p->attrs);

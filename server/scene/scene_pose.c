@@ -32,10 +32,12 @@ static bool instance_moved(const srv_scene_service *svc, const float *before, ui
            memcmp(&before[16 * i], s->nodes[in->node].world, 16 * sizeof *before) != 0;
 }
 
-/* Poses the scene at the clock's time: the animated nodes' TRS (rd_scene_animate), world
- * matrices, the top-level BVH and, when an animated node carries a light, the lights. With
- * wake, the probes around the old and the new bounds of every instance that moved wake (and all
- * of them, gently, when a light moved). *moved: some instance or light moved. */
+/* Poses the scene at the clock's time: the animated nodes' TRS and morph weights
+ * (rd_scene_animate), world matrices and deformed meshes (rd_scene_update), the bottom-level BVHs
+ * of the meshes whose deformation changed and the top-level BVH (rd_gpu_scene_update_pose) and,
+ * when an animated node carries a light, the lights. With wake, the probes around the old and
+ * the new bounds of every instance that moved or deformed wake (and all of them, gently, when a
+ * light moved). *moved: some instance or light moved, or some mesh deformed. */
 rd_vk_result srv_scene_pose(srv_scene_service *svc, bool wake, bool *moved, char *err,
                             size_t errlen)
 {
@@ -45,7 +47,9 @@ rd_vk_result srv_scene_pose(srv_scene_service *svc, bool wake, bool *moved, char
     uint32_t n = s->instance_count, nl = s->light_count;
     float *before = malloc((n ? n : 1) * 16 * sizeof *before);        /* world matrices */
     float *light_was = malloc((nl ? nl : 1) * 6 * sizeof *light_was); /* position, direction */
-    if (!before || !light_was) abort();
+    bool *deformed = malloc((n ? n : 1) * sizeof *deformed);
+    float *was = malloc((n ? n : 1) * 6 * sizeof *was); /* deformed instances' old boxes */
+    if (!before || !light_was || !deformed || !was) abort();
     for (uint32_t i = 0; i < n; i++)
         memcpy(&before[16 * i], s->nodes[s->instances[i].node].world, 16 * sizeof *before);
     for (uint32_t i = 0; i < nl; i++) {
@@ -62,12 +66,19 @@ rd_vk_result srv_scene_pose(srv_scene_service *svc, bool wake, bool *moved, char
         goto done;
     }
     bool any = false, lights_moved = false;
-    for (uint32_t i = 0; i < n && !any; i++)
-        any = instance_moved(svc, before, i);
+    for (uint32_t i = 0; i < n; i++) { /* deformed: its mesh's BLAS is to be rebuilt */
+        deformed[i] = rd_gpu_scene_mesh_stale(&svc->gs, s, s->instances[i].mesh);
+        if (deformed[i]) { /* where it was, before the BLAS box changes */
+            srv_scene_empty_box(&was[6 * i], &was[6 * i + 3]);
+            srv_scene_grow_by_mesh(svc, s->instances[i].mesh, &before[16 * i], &was[6 * i],
+                                   &was[6 * i + 3]);
+        }
+        any = any || deformed[i] || instance_moved(svc, before, i);
+    }
     for (uint32_t i = 0; lights && i < nl; i++)
         lights_moved |= memcmp(&light_was[6 * i], s->lights[i].position, 3 * sizeof(float)) ||
                         memcmp(&light_was[6 * i + 3], s->lights[i].direction, 3 * sizeof(float));
-    if (any) vr = rd_gpu_scene_update_instances(svc->vk, &svc->gs, s, err, errlen);
+    if (any) vr = rd_gpu_scene_update_pose(svc->vk, &svc->gs, s, NULL, err, errlen);
     if (vr == RD_VK_OK && lights_moved)
         vr = rd_gpu_scene_update_lights(svc->vk, &svc->gs, s, err, errlen);
     if (vr != RD_VK_OK) goto done;
@@ -79,11 +90,14 @@ rd_vk_result srv_scene_pose(srv_scene_service *svc, bool wake, bool *moved, char
     if (lights_moved)
         srv_scene_lighting_changed(svc, PC_DDGI_WAKE_AGE_NUDGE); /* a small step a frame */
     for (uint32_t i = 0; any && i < n; i++) {
-        if (!instance_moved(svc, before, i)) continue;
+        if (!deformed[i] && !instance_moved(svc, before, i)) continue;
         const rd_instance *in = &s->instances[i];
         float lo[3], hi[3];
         srv_scene_empty_box(lo, hi); /* rd_world_wake_box grows the boxes by a probe spacing */
-        srv_scene_grow_by_mesh(svc, in->mesh, &before[16 * i], lo, hi);
+        if (deformed[i])             /* the old shape's box at the old place */
+            memcpy(lo, &was[6 * i], sizeof lo), memcpy(hi, &was[6 * i + 3], sizeof hi);
+        else
+            srv_scene_grow_by_mesh(svc, in->mesh, &before[16 * i], lo, hi);
         rd_world_wake_box(&svc->world, lo, hi, PC_DDGI_WAKE_AGE_GEOMETRY);
         srv_scene_empty_box(lo, hi);
         srv_scene_grow_by_mesh(svc, in->mesh, s->nodes[in->node].world, lo, hi);
@@ -96,6 +110,8 @@ rd_vk_result srv_scene_pose(srv_scene_service *svc, bool wake, bool *moved, char
 done:
     free(before);
     free(light_was);
+    free(deformed);
+    free(was);
     return vr;
 }
 

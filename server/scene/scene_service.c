@@ -339,8 +339,9 @@ unsigned srv_scene_service_apply(srv_scene_service *svc, srv_cmd *c)
             return 0;
         }
         char err[256];
-        /* the top-level BVH follows the node; lights attached to it move too */
-        if (rd_gpu_scene_update_instances(svc->vk, &svc->gs, &st->scene, err, sizeof err) !=
+        /* the top-level BVH follows the node (and the BLASes of meshes skinned to it); lights
+         * attached to it move too */
+        if (rd_gpu_scene_update_pose(svc->vk, &svc->gs, &st->scene, NULL, err, sizeof err) !=
             RD_VK_OK) {
             srv_cmd_fail(c, 500, SRV_ERR_GPU, err);
             return 0;
