@@ -1,0 +1,106 @@
+/* skin_builder.c: glTF test files with skins (see skin_builder.h). */
+#include "skin_builder.h"
+
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "test_util.h"
+
+/* A buffer of regions, one buffer view and one accessor each (accessor i reads view i). */
+
+/* Appends size bytes read by an accessor described by acc (componentType, count, type ...). */
+int gltf_file_add(gltf_file *f, const void *p, size_t size, const char *acc)
+{
+    CHECK(f->n + size <= sizeof f->data);
+    memcpy(f->data + f->n, p, size);
+    size_t vl = strlen(f->views), al = strlen(f->accessors);
+    snprintf(f->views + vl, sizeof f->views - vl,
+             "%s{'buffer':0,'byteOffset':%zu,'byteLength':%zu}", f->count ? "," : "", f->n, size);
+    snprintf(f->accessors + al, sizeof f->accessors - al, "%s{'bufferView':%d,%s}",
+             f->count ? "," : "", f->count, acc);
+    f->n += size;
+    while (f->n % 4)
+        f->data[f->n++] = 0;
+    return f->count++;
+}
+
+/* The glTF JSON text of f with the top-level members rest (single quotes). */
+char *gltf_file_json(const gltf_file *f, const char *rest)
+{
+    char *b64 = test_base64(f->data, f->n);
+    char *s = test_xprintf("{'asset':{'version':'2.0'},'buffers':[{'byteLength':%zu,'uri':"
+                           "'data:application/octet-stream;base64,%s'}],'bufferViews':[%s],"
+                           "'accessors':[%s],%s}",
+                           f->n, b64, f->views, f->accessors, rest);
+    char *j = test_jq(s);
+    free(s);
+    free(b64);
+    return j;
+}
+
+const float kArmPos[18] = {0, -0.1f, 0, 0, 0.1f,  0, 1, -0.1f, 0,
+                           1, 0.1f,  0, 2, -0.1f, 0, 2, 0.1f,  0};
+const uint16_t kArmIdx[12] = {0, 2, 3, 0, 3, 1, 2, 4, 5, 2, 5, 3};
+
+char *gltf_arm(int kind)
+{
+    gltf_file f;
+    memset(&f, 0, sizeof f);
+    float nrm[18], tan[24];
+    for (int v = 0; v < 6; v++) {
+        nrm[v * 3] = 0, nrm[v * 3 + 1] = 0, nrm[v * 3 + 2] = 1;
+        tan[v * 4] = 1, tan[v * 4 + 1] = 0, tan[v * 4 + 2] = 0, tan[v * 4 + 3] = 1;
+    }
+    gltf_file_add(
+        &f, kArmPos, sizeof kArmPos,
+        "'componentType':5126,'count':6,'type':'VEC3','min':[0,-0.1,0],'max':[2,0.1,0]"); /* 0 */
+    gltf_file_add(&f, nrm, sizeof nrm, "'componentType':5126,'count':6,'type':'VEC3'");   /* 1 */
+    gltf_file_add(&f, tan, sizeof tan, "'componentType':5126,'count':6,'type':'VEC4'");   /* 2 */
+    gltf_file_add(&f, kArmIdx, sizeof kArmIdx,
+                  "'componentType':5123,'count':12,'type':'SCALAR'"); /* 3 */
+    uint8_t j8[24] = {0};
+    uint16_t j16[24] = {0};
+    for (int v = 2; v < 4; v++)
+        j8[v * 4 + 1] = 1, j16[v * 4 + 1] = 1;
+    for (int v = 4; v < 6; v++)
+        j8[v * 4] = kind == ARM_BAD_JOINT ? 5 : 1, j16[v * 4] = 1;
+    if (kind == ARM_NORMALIZED)
+        gltf_file_add(&f, j16, sizeof j16, "'componentType':5123,'count':6,'type':'VEC4'"); /* 4 */
+    else
+        gltf_file_add(&f, j8, sizeof j8, "'componentType':5121,'count':6,'type':'VEC4'");
+    float w[24] = {0};
+    uint8_t w8[24] = {0};
+    float scale = kind == ARM_HALF_WEIGHTS ? 0.5f : 1.0f;
+    for (int v = 0; v < 6; v++) {
+        bool mid = v == 2 || v == 3;
+        w[v * 4] = (mid ? 0.5f : 1.0f) * scale;
+        w[v * 4 + 1] = mid ? 0.5f * scale : 0.0f;
+        w8[v * 4] = mid ? 128 : 255;
+        w8[v * 4 + 1] = mid ? 127 : 0;
+    }
+    if (kind == ARM_NORMALIZED)
+        gltf_file_add(&f, w8, sizeof w8,
+                      "'componentType':5121,'normalized':true,'count':6,'type':'VEC4'"); /* 5 */
+    else
+        gltf_file_add(&f, w, sizeof w, "'componentType':5126,'count':6,'type':'VEC4'");
+    const float ibm[32] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0,  0, 0, 1,
+                           1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, -1, 0, 0, 1};
+    gltf_file_add(&f, ibm, sizeof ibm, "'componentType':5126,'count':2,'type':'MAT4'"); /* 6 */
+    const float times[3] = {0, 1, 2};
+    gltf_file_add(&f, times, sizeof times,
+                  "'componentType':5126,'count':3,'type':'SCALAR','min':[0],'max':[2]"); /* 7 */
+    const float rot[12] = {0,           0,           0, 1, 0,           0,
+                           0.70710678f, 0.70710678f, 0, 0, 0.70710678f, 0.70710678f};
+    gltf_file_add(&f, rot, sizeof rot, "'componentType':5126,'count':3,'type':'VEC4'"); /* 8 */
+    return gltf_file_json(
+        &f, "'meshes':[{'name':'arm','primitives':[{'attributes':{'POSITION':0,'NORMAL':1,"
+            "'TANGENT':2,'JOINTS_0':4,'WEIGHTS_0':5},'indices':3}]}],"
+            "'skins':[{'joints':[1,2],'inverseBindMatrices':6,'skeleton':1}],"
+            "'nodes':[{'name':'arm','mesh':0,'skin':0,'translation':[0,0,5]},"
+            "{'name':'shoulder','children':[2]},"
+            "{'name':'elbow','translation':[1,0,0]}],'scenes':[{'nodes':[0,1]}],"
+            "'animations':[{'samplers':[{'input':7,'output':8}],'channels':[{'sampler':0,"
+            "'target':{'node':2,'path':'rotation'}}]}]");
+}

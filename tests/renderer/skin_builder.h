@@ -1,0 +1,41 @@
+/* skin_builder.h: glTF test files with skins, written in memory: a buffer of regions (one buffer
+ * view and one accessor each) turned into JSON with the buffer as a data URI, and the two-bone
+ * arm that test_skin checks on the CPU and test_gpu_render_skin renders. Results are malloc'd (the
+ * caller frees); out of memory aborts. */
+#ifndef PC_TEST_SKIN_BUILDER_H
+#define PC_TEST_SKIN_BUILDER_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+/* A buffer of regions: accessor i reads buffer view i, which holds region i. */
+typedef struct gltf_file {
+    uint8_t data[4096];
+    size_t n;
+    char views[4096], accessors[4096];
+    int count;
+} gltf_file;
+
+/* Appends size bytes (4-byte aligned) read by an accessor described by acc (its componentType,
+ * count, type ... in single quotes); returns the accessor's index. */
+int gltf_file_add(gltf_file *f, const void *p, size_t size, const char *acc);
+/* The glTF JSON text (double quotes) of f with the top-level members rest (single quotes). */
+char *gltf_file_json(const gltf_file *f, const char *rest);
+
+/* The arm: six vertices along +X at x = 0, 1, 2 (y = -0.1, 0.1), facing +Z with tangent +X; the
+ * first two follow the shoulder (joint 0, node "shoulder" at the origin), the last two the elbow
+ * (joint 1, node "elbow" at x = 1), the middle two both, half each. The elbow turns about +Z from
+ * 0 to 90 degrees over the first second (LINEAR) and stays there until 2 s; the arm's mesh node
+ * ("arm") sits at z = 5, which the skin ignores (glTF 2.0 section 3.7.3.3). */
+extern const float kArmPos[18];
+extern const uint16_t kArmIdx[12]; /* two quads, four triangles */
+
+enum {
+    ARM_FLOAT = 0,        /* JOINTS_0 unsigned bytes, WEIGHTS_0 floats */
+    ARM_NORMALIZED = 1,   /* unsigned shorts, normalized unsigned bytes (128/255 + 127/255) */
+    ARM_HALF_WEIGHTS = 2, /* float weights summing to 0.5 */
+    ARM_BAD_JOINT = 3     /* the tip bound to joint 5 of a two-joint skin */
+};
+char *gltf_arm(int kind);
+
+#endif
