@@ -104,3 +104,49 @@ char *gltf_arm(int kind)
             "'animations':[{'samplers':[{'input':7,'output':8}],'channels':[{'sampler':0,"
             "'target':{'node':2,'path':'rotation'}}]}]");
 }
+
+char *gltf_morph_cube(void)
+{
+    gltf_file f;
+    memset(&f, 0, sizeof f);
+    float pos[24], d0[24], d1[24], n1[24];
+    for (int v = 0; v < 8; v++) {
+        pos[v * 3] = v & 1 ? 1 : -1, pos[v * 3 + 1] = v & 2 ? 1 : -1,
+                pos[v * 3 + 2] = v & 4 ? 1 : -1;
+        d0[v * 3] = 1, d0[v * 3 + 1] = 0, d0[v * 3 + 2] = 0;
+        d1[v * 3] = 0, d1[v * 3 + 1] = 0, d1[v * 3 + 2] = v & 4 ? 2 : 0;
+        n1[v * 3] = v & 4 ? 1 : 0, n1[v * 3 + 1] = 0, n1[v * 3 + 2] = 0;
+    }
+    static const uint16_t idx[36] = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
+                                     2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
+    gltf_file_add(
+        &f, pos, sizeof pos,
+        "'componentType':5126,'count':8,'type':'VEC3','min':[-1,-1,-1],'max':[1,1,1]");    /* 0 */
+    gltf_file_add(&f, idx, sizeof idx, "'componentType':5123,'count':36,'type':'SCALAR'"); /* 1 */
+    gltf_file_add(&f, d0, sizeof d0, "'componentType':5126,'count':8,'type':'VEC3'");      /* 2 */
+    gltf_file_add(&f, d1, sizeof d1, "'componentType':5126,'count':8,'type':'VEC3'");      /* 3 */
+    gltf_file_add(&f, n1, sizeof n1, "'componentType':5126,'count':8,'type':'VEC3'");      /* 4 */
+    const float times[3] = {0, 1, 2};
+    gltf_file_add(&f, times, sizeof times,
+                  "'componentType':5126,'count':3,'type':'SCALAR','min':[0],'max':[2]"); /* 5 */
+    const float w[6] = {0, 0, 1, 0.5f, 0, 1};
+    gltf_file_add(&f, w, sizeof w, "'componentType':5126,'count':6,'type':'SCALAR'"); /* 6 */
+    const float cubic[18] = {0, 0, 0, 0,    1, 0,  /* key 0: in, value, out */
+                             0, 0, 1, 0.5f, 0, 0,  /* key 1 */
+                             0, 0, 0, 1,    0, 0}; /* key 2 */
+    gltf_file_add(&f, cubic, sizeof cubic,
+                  "'componentType':5126,'count':18,'type':'SCALAR'"); /* 7 */
+#define CUBE_PRIM                                                                                  \
+    "{'primitives':[{'attributes':{'POSITION':0},'indices':1,'targets':[{'POSITION':2},"           \
+    "{'POSITION':3,'NORMAL':4}]}]"
+    return gltf_file_json(
+        &f, "'meshes':[" CUBE_PRIM ",'weights':[0.25,0]}," CUBE_PRIM "}," CUBE_PRIM "}],"
+            "'nodes':[{'name':'step','mesh':0},{'name':'linear','mesh':1},"
+            "{'name':'spline','mesh':2},{'name':'fixed','mesh':0,'weights':[0,0.5]}],"
+            "'scenes':[{'nodes':[0,1,2]}],"
+            "'animations':[{'samplers':[{'input':5,'output':6,'interpolation':'STEP'},"
+            "{'input':5,'output':6},{'input':5,'output':7,'interpolation':'CUBICSPLINE'}],"
+            "'channels':[{'sampler':0,'target':{'node':0,'path':'weights'}},"
+            "{'sampler':1,'target':{'node':1,'path':'weights'}},"
+            "{'sampler':2,'target':{'node':2,'path':'weights'}}]}]");
+}

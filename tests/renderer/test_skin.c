@@ -188,61 +188,10 @@ static void test_bad_skins(void)
     }
 }
 
-/* ---- the morphing cube -------------------------------------------------------------------- */
+/* ---- the morphing cube (skin_builder.h) --------------------------------------------------- */
 
-/* The cube [-1, 1]^3 (8 vertices, 12 triangles) with two targets: 0 moves every vertex by +1 in
- * x, 1 moves the top (z = 1) by +2 in z and tilts its normals. Three nodes draw a mesh of it
- * each, their weights animated over keys at 0, 1, 2 s by STEP, LINEAR and CUBICSPLINE samplers:
- * (0, 0), (1, 0.5), (0, 1); the spline's out-tangent of key 0 is (1, 0), its other tangents 0.
- * The first mesh's default weights are (0.25, 0), a fourth node shows it with weights (0, 0.5). */
-static char *cube_json(void)
-{
-    gltf_file f;
-    memset(&f, 0, sizeof f);
-    float pos[24], d0[24], d1[24], n1[24];
-    for (int v = 0; v < 8; v++) {
-        pos[v * 3] = v & 1 ? 1 : -1, pos[v * 3 + 1] = v & 2 ? 1 : -1,
-                pos[v * 3 + 2] = v & 4 ? 1 : -1;
-        d0[v * 3] = 1, d0[v * 3 + 1] = 0, d0[v * 3 + 2] = 0;
-        d1[v * 3] = 0, d1[v * 3 + 1] = 0, d1[v * 3 + 2] = v & 4 ? 2 : 0;
-        n1[v * 3] = 0, n1[v * 3 + 1] = 0, n1[v * 3 + 2] = 0;
-    }
-    static const uint16_t idx[36] = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
-                                     2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
-    gltf_file_add(
-        &f, pos, sizeof pos,
-        "'componentType':5126,'count':8,'type':'VEC3','min':[-1,-1,-1],'max':[1,1,1]");    /* 0 */
-    gltf_file_add(&f, idx, sizeof idx, "'componentType':5123,'count':36,'type':'SCALAR'"); /* 1 */
-    gltf_file_add(&f, d0, sizeof d0, "'componentType':5126,'count':8,'type':'VEC3'");      /* 2 */
-    gltf_file_add(&f, d1, sizeof d1, "'componentType':5126,'count':8,'type':'VEC3'");      /* 3 */
-    gltf_file_add(&f, n1, sizeof n1, "'componentType':5126,'count':8,'type':'VEC3'");      /* 4 */
-    const float times[3] = {0, 1, 2};
-    gltf_file_add(&f, times, sizeof times,
-                  "'componentType':5126,'count':3,'type':'SCALAR','min':[0],'max':[2]"); /* 5 */
-    const float w[6] = {0, 0, 1, 0.5f, 0, 1};
-    gltf_file_add(&f, w, sizeof w, "'componentType':5126,'count':6,'type':'SCALAR'"); /* 6 */
-    const float cubic[18] = {0, 0, 0, 0,    1, 0,  /* key 0: in, value, out */
-                             0, 0, 1, 0.5f, 0, 0,  /* key 1 */
-                             0, 0, 0, 1,    0, 0}; /* key 2 */
-    gltf_file_add(&f, cubic, sizeof cubic,
-                  "'componentType':5126,'count':18,'type':'SCALAR'"); /* 7 */
-#define CUBE_PRIM                                                                                  \
-    "{'primitives':[{'attributes':{'POSITION':0},'indices':1,'targets':[{'POSITION':2},"           \
-    "{'POSITION':3,'NORMAL':4}]}]"
-    return gltf_file_json(
-        &f, "'meshes':[" CUBE_PRIM ",'weights':[0.25,0]}," CUBE_PRIM "}," CUBE_PRIM "}],"
-            "'nodes':[{'name':'step','mesh':0},{'name':'linear','mesh':1},"
-            "{'name':'spline','mesh':2},{'name':'fixed','mesh':0,'weights':[0,0.5]}],"
-            "'scenes':[{'nodes':[0,1,2]}],"
-            "'animations':[{'samplers':[{'input':5,'output':6,'interpolation':'STEP'},"
-            "{'input':5,'output':6},{'input':5,'output':7,'interpolation':'CUBICSPLINE'}],"
-            "'channels':[{'sampler':0,'target':{'node':0,'path':'weights'}},"
-            "{'sampler':1,'target':{'node':1,'path':'weights'}},"
-            "{'sampler':2,'target':{'node':2,'path':'weights'}}]}]");
-}
-
-/* Node `name`'s weights are (w0, w1), and its mesh's top corner (glTF vertex 7 = (1, 1, 1))
- * moved to (1 + w0, 1, 1 + 2 w1). */
+/* Node `name`'s weights are (w0, w1), its mesh's top corner (glTF vertex 7 = (1, 1, 1)) moved
+ * to (1 + w0, 1, 1 + 2 w1) and its top face's normals tilted to (w1, 0, 1) normalised. */
 static void check_cube(const rd_scene *s, const char *name, double w0, double w1, int line)
 {
     const rd_node *n = &s->nodes[node_named(s, name)];
@@ -263,12 +212,19 @@ static void check_cube(const rd_scene *s, const char *name, double w0, double w1
         }
     }
     CHECK(found > 0);
+    /* the top face's corners (triangles 2 and 3): normal (w1, 0, 1), renormalised */
+    double len = sqrt(w1 * w1 + 1);
+    const double nt[3] = {w1 / len, 0, 1 / len};
+    for (uint32_t c = 6; c < 12; c++)
+        CHECKF(near3(&m->normals[c * 3], nt, 1e-5), "%s corner %u normal (%g %g %g) (test line %d)",
+               name, c, (double)m->normals[c * 3], (double)m->normals[c * 3 + 1],
+               (double)m->normals[c * 3 + 2], line);
 }
 
 static void test_morph(void)
 {
     rd_scene s;
-    CHECKF(load(cube_json(), &s) == RD_GLTF_OK, "%s", err);
+    CHECKF(load(gltf_morph_cube(), &s) == RD_GLTF_OK, "%s", err);
     CHECKF(s.warning_count == 0, "%s", s.warnings[0]);
     CHECK(s.mesh_count == 3 && s.meshes[0].deform && s.meshes[0].deform->target_count == 2);
     CHECK(s.meshes[0].deform->target_normals && !s.meshes[0].deform->target_tangents);
@@ -289,7 +245,7 @@ static void test_morph(void)
     rd_scene_destroy(&s);
 
     /* node weights override the mesh's: the same file with "fixed" shown */
-    char *text = cube_json();
+    char *text = gltf_morph_cube();
     char *at = strstr(text, "\"nodes\":[0,1,2]");
     CHECK(at != NULL);
     if (at) memcpy(at, "\"nodes\":[3,1,2]", 15);
@@ -298,10 +254,66 @@ static void test_morph(void)
     rd_scene_destroy(&s);
 }
 
+/* Every deformed vertex, normal and tangent of s is finite. */
+static int deformed_finite(const rd_scene *s)
+{
+    for (uint32_t m = 0; m < s->mesh_count; m++) {
+        const rd_mesh *mesh = &s->meshes[m];
+        for (size_t v = 0; mesh->deform && v < (size_t)mesh->tri_count * 3; v++)
+            if (!rd_vec3_isfinite(&mesh->positions[v * 3]) ||
+                !rd_vec3_isfinite(&mesh->normals[v * 3]))
+                return 0;
+    }
+    return 1;
+}
+
+/* Random edits of the arm's and the cube's JSON (the fuzz harness's check, in every ctest run):
+ * any result but a crash, a sanitizer report or a non-empty scene after an error; what loads
+ * must pose to finite vertices at every time. */
+static void test_mutations(void)
+{
+    char *texts[2] = {gltf_arm(ARM_FLOAT), gltf_morph_cube()};
+    uint32_t rng = 2024;
+    int loaded = 0, clean = 1, finite = 1;
+    for (int t = 0; t < 2; t++) {
+        size_t n = strlen(texts[t]);
+        const char *meshes = strstr(texts[t], "\"meshes\"");
+        size_t from = meshes ? (size_t)(meshes - texts[t]) : 0; /* odd iterations: structure */
+        char *m = malloc(n + 1);
+        for (int iter = 0; iter < 1500; iter++) {
+            memcpy(m, texts[t], n + 1);
+            int edits = 1 + (int)((rng >> 8) % 3);
+            for (int e = 0; e < edits; e++) {
+                static const char alphabet[] = "0123456789-.e[]{},:\"9";
+                rng = rng * 1664525u + 1013904223u;
+                size_t lo = iter % 2 ? from : 0, at = lo + (rng >> 4) % (n - lo);
+                rng = rng * 1664525u + 1013904223u;
+                m[at] = alphabet[(rng >> 16) % (sizeof alphabet - 1)];
+            }
+            rd_scene s;
+            if (rd_gltf_load_memory(m, n, NULL, NULL, &s, err, sizeof err) == RD_GLTF_OK) {
+                loaded++;
+                for (double time = -1.0; time < 3.0; time += 0.37) {
+                    rd_scene_animate(&s, time);
+                    finite &= rd_scene_update(&s, err, sizeof err) && deformed_finite(&s);
+                }
+            } else {
+                clean &= s.nodes == NULL && s.meshes == NULL && s.skins == NULL;
+            }
+            rd_scene_destroy(&s);
+        }
+        free(m);
+        free(texts[t]);
+    }
+    CHECK(clean && finite && loaded > 0);
+    fprintf(stderr, "mutations: %d of 3000 still loaded\n", loaded);
+}
+
 int main(void)
 {
     test_arm();
     test_bad_skins();
     test_morph();
+    test_mutations();
     return test_finish();
 }
