@@ -55,6 +55,7 @@ cJSON *srv_json_node(uint32_t id, const rd_node *n)
     cJSON_AddStringToObject(j, "name", n->name ? n->name : "");
     cJSON_AddNumberToObject(j, "parent", n->parent);
     cJSON_AddNumberToObject(j, "mesh", n->mesh);
+    cJSON_AddNumberToObject(j, "skin", n->skin ? (double)n->skin - 1 : -1.0);
     srv_json_add_floats(j, "translation", n->translation, 3);
     srv_json_add_floats(j, "rotation", n->rotation, 4);
     srv_json_add_floats(j, "scale", n->scale, 3);

@@ -63,6 +63,26 @@ cJSON *srv_scene_json(const srv_scene_service *svc)
     srv_json_add_floats(bounds, "max", s->bounds_max, 3);
     cJSON_AddItemToObject(j, "nodes", srv_scene_nodes_json(s));
     cJSON_AddBoolToObject(j, "nodes_truncated", s->node_count > NODE_DOC_LIMIT);
+    /* what deforms: skins (their joint counts) and meshes with morph targets (their counts) */
+    cJSON *skins = cJSON_AddArrayToObject(j, "skins");
+    for (uint32_t i = 0; i < s->skin_count && i < NODE_DOC_LIMIT; i++) {
+        cJSON *k = cJSON_CreateObject();
+        cJSON_AddNumberToObject(k, "id", i);
+        cJSON_AddStringToObject(k, "name", s->skins[i].name ? s->skins[i].name : "");
+        cJSON_AddNumberToObject(k, "joint_count", s->skins[i].joint_count);
+        cJSON_AddItemToArray(skins, k);
+    }
+    cJSON *morphs = cJSON_AddArrayToObject(j, "morph_meshes");
+    for (uint32_t m = 0, listed = 0; m < s->mesh_count && listed < NODE_DOC_LIMIT; m++) {
+        const rd_mesh_deform *d = s->meshes[m].deform;
+        if (!d || !d->target_count) continue;
+        cJSON *k = cJSON_CreateObject();
+        cJSON_AddNumberToObject(k, "mesh", m);
+        cJSON_AddStringToObject(k, "name", s->meshes[m].name ? s->meshes[m].name : "");
+        cJSON_AddNumberToObject(k, "target_count", d->target_count);
+        cJSON_AddItemToArray(morphs, k);
+        listed++;
+    }
     cJSON *lights = cJSON_AddArrayToObject(j, "lights");
     for (uint32_t i = 0; i < s->light_count; i++)
         cJSON_AddItemToArray(lights, srv_json_light(svc->st.light_ids[i], &s->lights[i]));

@@ -105,6 +105,25 @@ char *gltf_arm(int kind)
             "'target':{'node':2,'path':'rotation'}}]}]");
 }
 
+/* The arm with a camera 4 m in front of its middle (looking down -Z). */
+char *gltf_arm_with_camera(void)
+{
+    char *text = gltf_arm(ARM_FLOAT);
+    const char *elbow = "{\"name\":\"elbow\",\"translation\":[1,0,0]}]";
+    const char *roots = "\"scenes\":[{\"nodes\":[0,1]}]";
+    char *e = strstr(text, elbow), *r = strstr(text, roots);
+    CHECK(e != NULL && r != NULL && e < r);
+    if (!e || !r || r < e) abort();
+    char *out = test_xprintf(
+        "%.*s{\"name\":\"elbow\",\"translation\":[1,0,0]},{\"name\":\"cam\",\"camera\":0,"
+        "\"translation\":[1,0.4,4]}],\"cameras\":[{\"type\":\"perspective\",\"perspective\":"
+        "{\"yfov\":0.7,\"znear\":0.05}}]%.*s\"scenes\":[{\"nodes\":[0,1,3]}]%s",
+        (int)(e - text), text, (int)(r - (e + strlen(elbow))), e + strlen(elbow),
+        r + strlen(roots));
+    free(text);
+    return out;
+}
+
 char *gltf_morph_cube(void)
 {
     gltf_file f;

@@ -37,6 +37,9 @@ enum {
     ARM_BAD_JOINT = 3     /* the tip bound to joint 5 of a two-joint skin */
 };
 char *gltf_arm(int kind);
+/* gltf_arm(ARM_FLOAT) with a camera (node "cam", yfov 0.7) 4 m in front of the arm's middle at
+ * (1, 0.4, 4), looking down -Z. */
+char *gltf_arm_with_camera(void);
 
 /* The cube [-1, 1]^3 (8 vertices, 12 triangles) with two morph targets: 0 moves every vertex by
  * +1 in x, 1 moves the top (z = 1) by +2 in z and adds (1, 0, 0) to its vertices' normals (the

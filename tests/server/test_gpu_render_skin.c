@@ -15,25 +15,6 @@
 #define W 64
 #define H 48
 
-/* The arm with a camera 4 m in front of its middle (looking down -Z). */
-static char *arm_with_camera(void)
-{
-    char *text = gltf_arm(ARM_FLOAT);
-    const char *elbow = "{\"name\":\"elbow\",\"translation\":[1,0,0]}]";
-    const char *roots = "\"scenes\":[{\"nodes\":[0,1]}]";
-    char *e = strstr(text, elbow), *r = strstr(text, roots);
-    CHECK(e != NULL && r != NULL && e < r);
-    if (!e || !r || r < e) abort();
-    char *out = test_xprintf(
-        "%.*s{\"name\":\"elbow\",\"translation\":[1,0,0]},{\"name\":\"cam\",\"camera\":0,"
-        "\"translation\":[1,0.4,4]}],\"cameras\":[{\"type\":\"perspective\",\"perspective\":"
-        "{\"yfov\":0.7,\"znear\":0.05}}]%.*s\"scenes\":[{\"nodes\":[0,1,3]}]%s",
-        (int)(e - text), text, (int)(r - (e + strlen(elbow))), e + strlen(elbow),
-        r + strlen(roots));
-    free(text);
-    return out;
-}
-
 /* Renders model at time t into lum (W x H luminances); returns false on failure, with the
  * command's output in out. */
 static bool render(const char *model, double t, float *lum, char *out, size_t outlen)
@@ -82,7 +63,7 @@ int main(void)
 {
     char model[256];
     snprintf(model, sizeof model, "%s", test_tmp_path("skinned-arm.gltf"));
-    char *text = arm_with_camera();
+    char *text = gltf_arm_with_camera();
     FILE *f = fopen(model, "w");
     CHECK(f != NULL && fputs(text, f) >= 0 && fclose(f) == 0);
     free(text);
