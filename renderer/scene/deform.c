@@ -176,7 +176,7 @@ void rd_scene_deform(rd_scene *s)
         const float *w = n->weight_count == nt && n->weights ? n->weights : d->default_weights;
         if (nt) memcpy(&inputs[(size_t)jc * 16], w, nt * sizeof(float));
         if (d->posed && d->posed_count == count &&
-            memcmp(d->posed, inputs, count * sizeof *inputs) == 0)
+            (count == 0 || memcmp(d->posed, inputs, count * sizeof *inputs) == 0))
             continue;
         rd_mesh_deform_apply(m, w, nt, k ? inputs : NULL, jc);
         free(d->posed);
