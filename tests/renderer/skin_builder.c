@@ -63,7 +63,7 @@ char *gltf_arm(int kind)
     uint8_t j8[24] = {0};
     uint16_t j16[24] = {0};
     for (int v = 2; v < 4; v++)
-        j8[v * 4 + 1] = 1, j16[v * 4 + 1] = 1;
+        j8[v * 4 + 1] = kind == ARM_TWO_SETS ? 0 : 1, j16[v * 4 + 1] = 1;
     for (int v = 4; v < 6; v++)
         j8[v * 4] = kind == ARM_BAD_JOINT ? 5 : 1, j16[v * 4] = 1;
     if (kind == ARM_NORMALIZED)
@@ -76,7 +76,7 @@ char *gltf_arm(int kind)
     for (int v = 0; v < 6; v++) {
         bool mid = v == 2 || v == 3;
         w[v * 4] = (mid ? 0.5f : 1.0f) * scale;
-        w[v * 4 + 1] = mid ? 0.5f * scale : 0.0f;
+        w[v * 4 + 1] = mid && kind != ARM_TWO_SETS ? 0.5f * scale : 0.0f;
         w8[v * 4] = mid ? 128 : 255;
         w8[v * 4 + 1] = mid ? 127 : 0;
     }
@@ -94,15 +94,26 @@ char *gltf_arm(int kind)
     const float rot[12] = {0,           0,           0, 1, 0,           0,
                            0.70710678f, 0.70710678f, 0, 0, 0.70710678f, 0.70710678f};
     gltf_file_add(&f, rot, sizeof rot, "'componentType':5126,'count':3,'type':'VEC4'"); /* 8 */
-    return gltf_file_json(
-        &f, "'meshes':[{'name':'arm','primitives':[{'attributes':{'POSITION':0,'NORMAL':1,"
-            "'TANGENT':2,'JOINTS_0':4,'WEIGHTS_0':5},'indices':3}]}],"
-            "'skins':[{'joints':[1,2],'inverseBindMatrices':6,'skeleton':1}],"
-            "'nodes':[{'name':'arm','mesh':0,'skin':0,'translation':[0,0,5]},"
-            "{'name':'shoulder','children':[2]},"
-            "{'name':'elbow','translation':[1,0,0]}],'scenes':[{'nodes':[0,1]}],"
-            "'animations':[{'samplers':[{'input':7,'output':8}],'channels':[{'sampler':0,"
-            "'target':{'node':2,'path':'rotation'}}]}]");
+    /* ARM_TWO_SETS: the middle vertices' elbow half in JOINTS_1 / WEIGHTS_1 */
+    uint8_t j1[24] = {0};
+    float w1[24] = {0};
+    for (int v = 2; v < 4; v++)
+        j1[v * 4] = 1, w1[v * 4] = 0.5f;
+    gltf_file_add(&f, j1, sizeof j1, "'componentType':5121,'count':6,'type':'VEC4'"); /* 9 */
+    gltf_file_add(&f, w1, sizeof w1, "'componentType':5126,'count':6,'type':'VEC4'"); /* 10 */
+    char *rest =
+        test_xprintf("'meshes':[{'name':'arm','primitives':[{'attributes':{'POSITION':0,'NORMAL':1,"
+                     "'TANGENT':2,'JOINTS_0':4,'WEIGHTS_0':5%s},'indices':3}]}],"
+                     "'skins':[{'joints':[1,2],'inverseBindMatrices':6,'skeleton':1}],"
+                     "'nodes':[{'name':'arm','mesh':0,'skin':0,'translation':[0,0,5]},"
+                     "{'name':'shoulder','children':[2]},"
+                     "{'name':'elbow','translation':[1,0,0]}],'scenes':[{'nodes':[0,1]}],"
+                     "'animations':[{'samplers':[{'input':7,'output':8}],'channels':[{'sampler':0,"
+                     "'target':{'node':2,'path':'rotation'}}]}]",
+                     kind == ARM_TWO_SETS ? ",'JOINTS_1':9,'WEIGHTS_1':10" : "");
+    char *j = gltf_file_json(&f, rest);
+    free(rest);
+    return j;
 }
 
 /* The arm with a camera 4 m in front of its middle (looking down -Z). */

@@ -34,7 +34,8 @@ enum {
     ARM_FLOAT = 0,        /* JOINTS_0 unsigned bytes, WEIGHTS_0 floats */
     ARM_NORMALIZED = 1,   /* unsigned shorts, normalized unsigned bytes (128/255 + 127/255) */
     ARM_HALF_WEIGHTS = 2, /* float weights summing to 0.5 */
-    ARM_BAD_JOINT = 3     /* the tip bound to joint 5 of a two-joint skin */
+    ARM_BAD_JOINT = 3,    /* the tip bound to joint 5 of a two-joint skin */
+    ARM_TWO_SETS = 4      /* as ARM_FLOAT, the middle's elbow half in JOINTS_1 / WEIGHTS_1 */
 };
 char *gltf_arm(int kind);
 /* gltf_arm(ARM_FLOAT) with a camera (node "cam", yfov 0.7) 4 m in front of the arm's middle at

@@ -126,6 +126,13 @@ static void test_arm(void)
     rd_gpu_scene_prep_destroy(&prep);
     rd_scene_destroy(&s);
 
+    /* a second set of influences: eight per vertex, the elbow's half in JOINTS_1 */
+    CHECKF(load(gltf_arm(ARM_TWO_SETS), &s) == RD_GLTF_OK, "%s", err);
+    CHECK(s.warning_count == 0 && s.meshes[0].deform && s.meshes[0].deform->influences == 8);
+    pose(&s, 0.5);
+    check_arm(&s, M_PI / 4, 0.5, 1e-5, __LINE__);
+    rd_scene_destroy(&s);
+
     /* unsigned short joints, normalized unsigned byte weights (128/255 on the elbow) */
     CHECKF(load(gltf_arm(ARM_NORMALIZED), &s) == RD_GLTF_OK, "%s", err);
     CHECK(s.warning_count == 0);
