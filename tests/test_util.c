@@ -124,3 +124,16 @@ char *test_jq(const char *s)
     }
     return d;
 }
+
+void test_mutate_json(char *m, const char *text, size_t n, size_t from, uint32_t *rng)
+{
+    static const char alphabet[] = "0123456789-.e[]{},:\"9";
+    memcpy(m, text, n + 1);
+    int edits = 1 + (int)((*rng >> 8) % 3);
+    for (int e = 0; e < edits && from < n; e++) {
+        *rng = *rng * 1664525u + 1013904223u;
+        size_t at = from + (*rng >> 4) % (n - from);
+        *rng = *rng * 1664525u + 1013904223u;
+        m[at] = alphabet[(*rng >> 16) % (sizeof alphabet - 1)];
+    }
+}

@@ -52,5 +52,9 @@ char *test_xprintf(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 char *test_base64(const uint8_t *p, size_t n);
 /* Test JSON is written with single quotes; this turns them into double quotes. */
 char *test_jq(const char *s);
+/* The n bytes of text (and its '\0') copied into m with one to three random bytes at or after
+ * `from` replaced by JSON punctuation or digits (a mutation test's edit); rng: the generator's
+ * state, advanced. */
+void test_mutate_json(char *m, const char *text, size_t n, size_t from, uint32_t *rng);
 
 #endif

@@ -288,15 +288,7 @@ static void test_mutations(void)
         size_t from = meshes ? (size_t)(meshes - texts[t]) : 0; /* odd iterations: structure */
         char *m = malloc(n + 1);
         for (int iter = 0; iter < 1500; iter++) {
-            memcpy(m, texts[t], n + 1);
-            int edits = 1 + (int)((rng >> 8) % 3);
-            for (int e = 0; e < edits; e++) {
-                static const char alphabet[] = "0123456789-.e[]{},:\"9";
-                rng = rng * 1664525u + 1013904223u;
-                size_t lo = iter % 2 ? from : 0, at = lo + (rng >> 4) % (n - lo);
-                rng = rng * 1664525u + 1013904223u;
-                m[at] = alphabet[(rng >> 16) % (sizeof alphabet - 1)];
-            }
+            test_mutate_json(m, texts[t], n, iter % 2 ? from : 0, &rng);
             rd_scene s;
             if (rd_gltf_load_memory(m, n, NULL, NULL, &s, err, sizeof err) == RD_GLTF_OK) {
                 loaded++;

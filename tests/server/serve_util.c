@@ -14,6 +14,9 @@
 #include <turbojpeg.h>
 #include <unistd.h>
 
+#include "server/cli/image_io.h"
+#include "test_util.h"
+
 void pc_sleep_ms(int ms)
 {
     struct timespec ts = {ms / 1000, (long)(ms % 1000) * 1000000L};
@@ -396,4 +399,33 @@ char *pc_make_gltf(float box_x)
     }
     uri[o] = 0;
     return scene_json(box_x, uri);
+}
+
+float *pc_render_luminance(const char *model, const char *options, uint32_t w, uint32_t h,
+                           char *out, size_t outlen)
+{
+    const char *hdr = test_tmp_path("render-luminance.pfm");
+    char cmd[2048];
+    snprintf(cmd, sizeof cmd, "'%s' render '%s' --width %u --height %u --hdr '%s' %s 2>&1",
+             PROBECAST_EXE, model, w, h, hdr, options);
+    remove(hdr);
+    FILE *p = popen(cmd, "r");
+    out[0] = '\0';
+    if (!p) return NULL;
+    size_t n = fread(out, 1, outlen - 1, p);
+    out[n] = '\0';
+    int status = pclose(p);
+    CHECKF(WIFEXITED(status) && WEXITSTATUS(status) == 0, "%s\n%s", cmd, out);
+    float *rgb = NULL;
+    uint32_t iw = 0, ih = 0;
+    char err[256];
+    if (rd_image_read_pfm(hdr, &rgb, &iw, &ih, err, sizeof err) != RD_IMAGE_OK || iw != w ||
+        ih != h) {
+        CHECKF(0, "%s: %s", cmd, err);
+        free(rgb);
+        return NULL;
+    }
+    for (size_t i = 0; i < (size_t)w * h; i++)
+        rgb[i] = 0.2126f * rgb[3 * i] + 0.7152f * rgb[3 * i + 1] + 0.0722f * rgb[3 * i + 2];
+    return rgb; /* the first w * h floats */
 }

@@ -76,4 +76,10 @@ char *pc_make_gltf(float box_x);
 
 void pc_sleep_ms(int ms);
 
+/* Runs `probecast render MODEL --width w --height h --hdr FILE OPTIONS` (the executable, as a user
+ * runs it) and checks that it exits 0 with a w x h image: its luminances (malloc'd; the caller
+ * frees) or NULL, and its stdout and stderr in out. */
+float *pc_render_luminance(const char *model, const char *options, uint32_t w, uint32_t h,
+                           char *out, size_t outlen);
+
 #endif

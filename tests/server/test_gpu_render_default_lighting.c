@@ -7,10 +7,9 @@
 #include <png.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/wait.h>
 
 #include "renderer/gltf_builder.h"
-#include "server/cli/image_io.h"
+#include "serve_util.h"
 #include "test_util.h"
 
 #define W 48
@@ -63,32 +62,14 @@ static bool write_text(const char *path, const char *text)
  * (-1 on failure) and its stdout and stderr in out. */
 static double render(const char *model, const char *options, char *out, size_t outlen)
 {
-    const char *hdr = test_tmp_path("default-lighting.pfm");
-    char cmd[2048];
-    snprintf(cmd, sizeof cmd,
-             "'%s' render '%s' --width %d --height %d --probes 2,2,2 --rays 16 --frames 4 "
-             "--seed 1 --hdr '%s' %s 2>&1",
-             PROBECAST_EXE, model, W, H, hdr, options);
-    remove(hdr);
-    FILE *p = popen(cmd, "r");
-    out[0] = '\0';
-    if (!p) return -1;
-    size_t n = fread(out, 1, outlen - 1, p);
-    out[n] = '\0';
-    int status = pclose(p);
-    CHECKF(WIFEXITED(status) && WEXITSTATUS(status) == 0, "%s\n%s", cmd, out);
-    float *rgb = NULL;
-    uint32_t w = 0, h = 0;
-    char err[256];
-    if (rd_image_read_pfm(hdr, &rgb, &w, &h, err, sizeof err) != RD_IMAGE_OK || w != W || h != H) {
-        CHECKF(0, "%s: %s", cmd, err);
-        free(rgb);
-        return -1;
-    }
+    char all[512];
+    snprintf(all, sizeof all, "--probes 2,2,2 --rays 16 --frames 4 --seed 1 %s", options);
+    float *lum = pc_render_luminance(model, all, W, H, out, outlen);
+    if (!lum) return -1;
     double sum = 0;
     for (size_t i = 0; i < (size_t)W * H; i++)
-        sum += 0.2126 * rgb[3 * i] + 0.7152 * rgb[3 * i + 1] + 0.0722 * rgb[3 * i + 2];
-    free(rgb);
+        sum += lum[i];
+    free(lum);
     return sum / (W * H);
 }
 

@@ -6,10 +6,9 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/wait.h>
 
 #include "renderer/skin_builder.h"
-#include "server/cli/image_io.h"
+#include "serve_util.h"
 #include "test_util.h"
 
 #define W 64
@@ -19,32 +18,12 @@
  * command's output in out. */
 static bool render(const char *model, double t, float *lum, char *out, size_t outlen)
 {
-    const char *hdr = test_tmp_path("skinned-arm.pfm");
-    char cmd[2048];
-    snprintf(cmd, sizeof cmd,
-             "'%s' render '%s' --width %d --height %d --probes 2,2,2 --rays 16 --frames 2 "
-             "--seed 1 --time %g --hdr '%s' 2>&1",
-             PROBECAST_EXE, model, W, H, t, hdr);
-    remove(hdr);
-    FILE *p = popen(cmd, "r");
-    out[0] = '\0';
-    if (!p) return false;
-    size_t n = fread(out, 1, outlen - 1, p);
-    out[n] = '\0';
-    int status = pclose(p);
-    CHECKF(WIFEXITED(status) && WEXITSTATUS(status) == 0, "%s\n%s", cmd, out);
-    float *rgb = NULL;
-    uint32_t w = 0, h = 0;
-    char err[256];
-    if (rd_image_read_pfm(hdr, &rgb, &w, &h, err, sizeof err) != RD_IMAGE_OK || w != W || h != H) {
-        CHECKF(0, "%s: %s", cmd, err);
-        free(rgb);
-        return false;
-    }
-    for (size_t i = 0; i < (size_t)W * H; i++)
-        lum[i] = 0.2126f * rgb[3 * i] + 0.7152f * rgb[3 * i + 1] + 0.0722f * rgb[3 * i + 2];
-    free(rgb);
-    return true;
+    char options[128];
+    snprintf(options, sizeof options, "--probes 2,2,2 --rays 16 --frames 2 --seed 1 --time %g", t);
+    float *l = pc_render_luminance(model, options, W, H, out, outlen);
+    if (l) memcpy(lum, l, sizeof(float) * W * H);
+    free(l);
+    return l != NULL;
 }
 
 /* Pixels whose luminance differs by more than a tenth of the brighter image's largest. */
