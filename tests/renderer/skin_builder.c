@@ -166,9 +166,23 @@ char *gltf_morph_cube(void)
                              0, 0, 0, 1,    0, 0}; /* key 2 */
     gltf_file_add(&f, cubic, sizeof cubic,
                   "'componentType':5126,'count':18,'type':'SCALAR'"); /* 7 */
+    float tan[32];
+    for (int v = 0; v < 8; v++)
+        tan[v * 4] = 1, tan[v * 4 + 1] = 0, tan[v * 4 + 2] = 0, tan[v * 4 + 3] = 1;
+    gltf_file_add(&f, tan, sizeof tan, "'componentType':5126,'count':8,'type':'VEC4'"); /* 8 */
+    /* target 1's TANGENT: (0, 1, 0) on the top four vertices, a sparse accessor over zeros */
+    const uint8_t top[4] = {4, 5, 6, 7};
+    const float up[12] = {0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0};
+    gltf_file_add(&f, top, sizeof top, "'componentType':5121,'count':4,'type':'SCALAR'"); /* 9 */
+    gltf_file_add(&f, up, sizeof up, "'componentType':5126,'count':4,'type':'VEC3'");     /* 10 */
+    size_t al = strlen(f.accessors);
+    snprintf(f.accessors + al, sizeof f.accessors - al,
+             ",{'componentType':5126,'count':8,'type':'VEC3','sparse':{'count':4,'indices':"
+             "{'bufferView':9,'componentType':5121},'values':{'bufferView':10}}}"); /* 11 */
+    f.count++;
 #define CUBE_PRIM                                                                                  \
-    "{'primitives':[{'attributes':{'POSITION':0},'indices':1,'targets':[{'POSITION':2},"           \
-    "{'POSITION':3,'NORMAL':4}]}]"
+    "{'primitives':[{'attributes':{'POSITION':0,'TANGENT':8},'indices':1,'targets':[{'POSITION':"  \
+    "2},{'POSITION':3,'NORMAL':4,'TANGENT':11}]}]"
     return gltf_file_json(
         &f, "'meshes':[" CUBE_PRIM ",'weights':[0.25,0]}," CUBE_PRIM "}," CUBE_PRIM "}],"
             "'nodes':[{'name':'step','mesh':0},{'name':'linear','mesh':1},"

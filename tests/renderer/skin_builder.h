@@ -43,8 +43,9 @@ char *gltf_arm(int kind);
 char *gltf_arm_with_camera(void);
 
 /* The cube [-1, 1]^3 (8 vertices, 12 triangles) with two morph targets: 0 moves every vertex by
- * +1 in x, 1 moves the top (z = 1) by +2 in z and adds (1, 0, 0) to its vertices' normals (the
- * flat normals of triangles 2 and 3, the top face: (0, 0, 1)). Three nodes ("step",
+ * +1 in x, 1 moves the top (z = 1) by +2 in z, adds (1, 0, 0) to its vertices' normals (the
+ * flat normals of triangles 2 and 3, the top face: (0, 0, 1)) and (0, 1, 0) to their tangents
+ * (all (1, 0, 0, 1); the delta a sparse accessor). Three nodes ("step",
  * "linear", "spline") draw a mesh of it each, their weights animated over keys at 0, 1, 2 s by
  * STEP, LINEAR and CUBICSPLINE samplers: (0, 0), (1, 0.5), (0, 1); the spline's out-tangent of
  * key 0 is (1, 0), its other tangents 0. The first mesh's default weights are (0.25, 0); a fourth

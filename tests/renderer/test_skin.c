@@ -198,7 +198,8 @@ static void test_bad_skins(void)
 /* ---- the morphing cube (skin_builder.h) --------------------------------------------------- */
 
 /* Node `name`'s weights are (w0, w1), its mesh's top corner (glTF vertex 7 = (1, 1, 1)) moved
- * to (1 + w0, 1, 1 + 2 w1) and its top face's normals tilted to (w1, 0, 1) normalised. */
+ * to (1 + w0, 1, 1 + 2 w1), its top face's normals tilted to (w1, 0, 1) and tangents to
+ * (1, w1, 0), normalised. */
 static void check_cube(const rd_scene *s, const char *name, double w0, double w1, int line)
 {
     const rd_node *n = &s->nodes[node_named(s, name)];
@@ -226,6 +227,14 @@ static void check_cube(const rd_scene *s, const char *name, double w0, double w1
         CHECKF(near3(&m->normals[c * 3], nt, 1e-5), "%s corner %u normal (%g %g %g) (test line %d)",
                name, c, (double)m->normals[c * 3], (double)m->normals[c * 3 + 1],
                (double)m->normals[c * 3 + 2], line);
+    /* and their tangents (1, w1, 0), renormalised, handedness kept */
+    double tl = sqrt(1 + w1 * w1);
+    const double tt[3] = {1 / tl, w1 / tl, 0};
+    for (uint32_t c = 6; c < 12; c++)
+        CHECKF(near3(&m->tangents[c * 4], tt, 1e-5) && m->tangents[c * 4 + 3] == 1.0f,
+               "%s corner %u tangent (%g %g %g) (test line %d)", name, c,
+               (double)m->tangents[c * 4], (double)m->tangents[c * 4 + 1],
+               (double)m->tangents[c * 4 + 2], line);
 }
 
 static void test_morph(void)
@@ -234,7 +243,7 @@ static void test_morph(void)
     CHECKF(load(gltf_morph_cube(), &s) == RD_GLTF_OK, "%s", err);
     CHECKF(s.warning_count == 0, "%s", s.warnings[0]);
     CHECK(s.mesh_count == 3 && s.meshes[0].deform && s.meshes[0].deform->target_count == 2);
-    CHECK(s.meshes[0].deform->target_normals && !s.meshes[0].deform->target_tangents);
+    CHECK(s.meshes[0].deform->target_normals && s.meshes[0].deform->target_tangents);
     CHECK(s.animation_count == 1 && s.animations[0].sampler_count == 3 &&
           s.animations[0].samplers[0].components == 2);
     /* as loaded: the first mesh's default weights; "fixed" is not in the scene shown */
