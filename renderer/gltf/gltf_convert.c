@@ -277,6 +277,7 @@ static rd_gltf_result meshes(convert *cv, plan *plans)
                      (unsigned long long)cv->max_tris, i);
     }
     free(used);
+    cv->c.tris_left = r == RD_GLTF_OK ? cv->max_tris - total : 0;
     for (size_t i = 0; i < d->mesh_count && r == RD_GLTF_OK; i++) {
         if (plans[i].tris == 0) continue; /* unused, or nothing but points and lines */
         uint32_t idx =
@@ -382,7 +383,7 @@ rd_gltf_result rd_gltf_convert(const rd_gltf_document *doc, rd_gltf_files *files
 {
     convert cv;
     memset(&cv, 0, sizeof cv);
-    cv.c = (rd_gltf_conv){doc, files, decoded_bytes, s, NULL, NULL, 0, err, errlen, 0, 0};
+    cv.c = (rd_gltf_conv){doc, files, decoded_bytes, s, NULL, NULL, 0, err, errlen, 0, 0, 0};
     cv.max_tris = max_triangles;
     size_t nodes_n = doc->node_count;
     cv.parent = rd_gltf_alloc(nodes_n, sizeof *cv.parent);

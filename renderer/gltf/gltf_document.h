@@ -257,6 +257,7 @@ typedef struct rd_gltf_conv {
     size_t errlen;
     uint64_t deform_floats;      /* skin and morph target values kept so far (gltf_skin.c) */
     uint64_t weights_normalised; /* skinned triangle corners whose weights did not sum to one */
+    uint64_t tris_left; /* triangles the scene may still take (copies of deforming meshes) */
 } rd_gltf_conv;
 
 /* Texture index of material `material` read through TEXCOORD_tex_coord as its `slot` texture:
@@ -280,7 +281,8 @@ rd_gltf_result rd_gltf_fill_deform(rd_gltf_conv *c, size_t mesh, const rd_gltf_p
                                    size_t n, rd_mesh *out);
 /* The document's skins (gltf_skin.c), after the nodes: each skin the shown nodes use, with its
  * joints mapped to rd nodes and its inverse bind matrices; the nodes get their skin and morph
- * weights, checked against their meshes (mesh_map: glTF mesh -> rd mesh). */
+ * weights, checked against their meshes (mesh_map: glTF mesh -> rd mesh), and every node after
+ * the first that deforms a mesh gets a copy of it. */
 rd_gltf_result rd_gltf_conv_skins(rd_gltf_conv *c, const int32_t *mesh_map);
 
 /* Converts doc into s (rd_scene_update done): checks every index, accessor range and value

@@ -159,6 +159,21 @@ static rd_gltf_result read_targets(rd_gltf_conv *c, size_t mesh, size_t p,
     return RD_GLTF_OK;
 }
 
+/* Counts the values a deformation of nv vertices holds against the file's limit (the message
+ * names glTF mesh `mesh`). */
+static rd_gltf_result charge(rd_gltf_conv *c, uint64_t nv, uint32_t influences, size_t targets,
+                             bool tn, bool tt, size_t mesh)
+{
+    uint64_t values = nv * (influences * 2 + targets * 3 * (1 + tn + tt) + 10);
+    c->deform_floats += values;
+    if (values > kMaxDeformValues || c->deform_floats > kMaxDeformValues)
+        return rd_gltf_fail(c->err, c->errlen, RD_GLTF_ERR_TOO_LARGE,
+                            "the skins and morph targets hold more than %llu values (the limit), "
+                            "counting mesh %zu",
+                            (unsigned long long)kMaxDeformValues, mesh);
+    return RD_GLTF_OK;
+}
+
 rd_gltf_result rd_gltf_fill_deform(rd_gltf_conv *c, size_t mesh, const rd_gltf_primitive *prims,
                                    size_t n, rd_mesh *out)
 {
@@ -183,14 +198,8 @@ rd_gltf_result rd_gltf_fill_deform(rd_gltf_conv *c, size_t mesh, const rd_gltf_p
                             "mesh %zu has %zu weights for %zu morph targets", mesh,
                             gm->weight_count, targets);
     if (sets == 0 && targets == 0) return RD_GLTF_OK;
-    uint64_t nv = (uint64_t)out->tri_count * 3;
-    uint64_t values = nv * (sets * 8 + targets * 3 * (1 + tn + tt) + 10);
-    c->deform_floats += values;
-    if (values > kMaxDeformValues || c->deform_floats > kMaxDeformValues)
-        return rd_gltf_fail(c->err, c->errlen, RD_GLTF_ERR_TOO_LARGE,
-                            "the skins and morph targets hold more than %llu values (the limit), "
-                            "counting mesh %zu",
-                            (unsigned long long)kMaxDeformValues, mesh);
+    rd_gltf_result r = charge(c, (uint64_t)out->tri_count * 3, sets * 4, targets, tn, tt, mesh);
+    if (r != RD_GLTF_OK) return r;
     rd_mesh_deform *d = rd_mesh_deform_create(out, sets * 4, (uint32_t)targets, tn, tt);
     for (size_t t = 0; t < gm->weight_count; t++)
         if (!rd_gltf_to_float(gm->weights[t], &d->default_weights[t]))
@@ -271,9 +280,58 @@ static rd_gltf_result add_skin(rd_gltf_conv *c, size_t k, int32_t *skin_map)
     return r;
 }
 
-/* glTF node gi's skin and morph weights onto its rd node. */
+/* Gives rd node `node` (glTF node gi, drawing glTF mesh gm) a copy of deforming mesh rm, which
+ * another node already poses: skins and weights belong to nodes, so each posed shape is a mesh
+ * of its own. The copies count against the file's triangle and deformation limits. */
+static rd_gltf_result own_copy(rd_gltf_conv *c, size_t gi, int gm, uint32_t rm, uint32_t node)
+{
+    rd_scene *s = c->s;
+    const rd_mesh_deform *d = s->meshes[rm].deform;
+    uint32_t tris = s->meshes[rm].tri_count;
+    if (tris > c->tris_left)
+        return rd_gltf_fail(c->err, c->errlen, RD_GLTF_ERR_TOO_LARGE,
+                            "node %zu deforms mesh %d, which other nodes deform too; its copy "
+                            "takes the scene past its triangle limit",
+                            gi, gm);
+    c->tris_left -= tris;
+    rd_gltf_result r = charge(c, d->vertex_count, d->influences, d->target_count,
+                              d->target_normals != NULL, d->target_tangents != NULL, (size_t)gm);
+    if (r != RD_GLTF_OK) return r;
+    uint32_t nm = rd_scene_add_mesh(s, s->meshes[rm].name, tris); /* may move s->meshes */
+    const rd_mesh *src = &s->meshes[rm];
+    rd_mesh *dst = &s->meshes[nm];
+    size_t nv = d->vertex_count, nt = d->target_count;
+    memcpy(dst->positions, src->positions, nv * 3 * sizeof(float));
+    memcpy(dst->normals, src->normals, nv * 3 * sizeof(float));
+    memcpy(dst->uvs, src->uvs, nv * 2 * sizeof(float));
+    memcpy(dst->material, src->material, tris * sizeof(uint32_t));
+    if (src->tangents) {
+        dst->tangents = rd_gltf_alloc(nv * 4, sizeof(float));
+        memcpy(dst->tangents, src->tangents, nv * 4 * sizeof(float));
+    }
+    rd_mesh_deform *o = rd_mesh_deform_create(
+        dst, d->influences, d->target_count, d->target_normals != NULL, d->target_tangents != NULL);
+    memcpy(o->rest_positions, d->rest_positions, nv * 3 * sizeof(float));
+    memcpy(o->rest_normals, d->rest_normals, nv * 3 * sizeof(float));
+    if (d->rest_tangents) memcpy(o->rest_tangents, d->rest_tangents, nv * 4 * sizeof(float));
+    if (d->influences) {
+        memcpy(o->joints, d->joints, nv * d->influences * sizeof *o->joints);
+        memcpy(o->weights, d->weights, nv * d->influences * sizeof *o->weights);
+    }
+    o->max_joint = d->max_joint;
+    float *const from[3] = {d->target_positions, d->target_normals, d->target_tangents};
+    float *const to[3] = {o->target_positions, o->target_normals, o->target_tangents};
+    for (int k = 0; k < 3; k++)
+        if (from[k] && to[k]) memcpy(to[k], from[k], nv * 3 * nt * sizeof(float));
+    if (nt) memcpy(o->default_weights, d->default_weights, nt * sizeof(float));
+    s->nodes[node].mesh = (int32_t)nm;
+    return RD_GLTF_OK;
+}
+
+/* glTF node gi's skin and morph weights onto its rd node; posed[rm]: some node already poses
+ * rd mesh rm (a second one gets a copy of its own). */
 static rd_gltf_result node_deform(rd_gltf_conv *c, size_t gi, const int32_t *mesh_map,
-                                  int32_t *skin_map, uint32_t *drawers)
+                                  int32_t *skin_map, uint8_t *posed)
 {
     const rd_gltf_doc_node *gn = &c->doc->nodes[gi];
     rd_node *n = &c->s->nodes[c->node_map[gi]];
@@ -309,30 +367,24 @@ static rd_gltf_result node_deform(rd_gltf_conv *c, size_t gi, const int32_t *mes
                                 gn->mesh, d->max_joint, gn->skin, gi, k->joint_count);
         if (d && d->influences) n->skin = (uint32_t)skin_map[gn->skin] + 1;
     }
-    if (d && (n->skin || nt)) drawers[rm]++;
-    return RD_GLTF_OK;
+    if (!d || (!n->skin && !nt)) return RD_GLTF_OK;
+    if (!posed[rm]) {
+        posed[rm] = 1;
+        return RD_GLTF_OK;
+    }
+    return own_copy(c, gi, gn->mesh, (uint32_t)rm, (uint32_t)c->node_map[gi]);
 }
 
 rd_gltf_result rd_gltf_conv_skins(rd_gltf_conv *c, const int32_t *mesh_map)
 {
     const rd_gltf_document *d = c->doc;
     int32_t *skin_map = rd_gltf_alloc(d->skin_count, sizeof *skin_map);
-    uint32_t *drawers = rd_gltf_alloc(c->s->mesh_count, sizeof *drawers);
+    uint8_t *posed = rd_gltf_alloc(c->s->mesh_count, 1);
     for (size_t k = 0; k < d->skin_count; k++)
         skin_map[k] = -1;
     rd_gltf_result r = RD_GLTF_OK;
     for (size_t gi = 0; gi < d->node_count && r == RD_GLTF_OK; gi++)
-        if (c->node_map[gi] >= 0) r = node_deform(c, gi, mesh_map, skin_map, drawers);
-    for (uint32_t m = 0; r == RD_GLTF_OK && m < c->s->mesh_count; m++) {
-        if (drawers[m] < 2) continue;
-        const char *mn = c->s->meshes[m].name ? c->s->meshes[m].name : "";
-        char name[128];
-        rd_gltf_clean(mn, strlen(mn), 64, name);
-        rd_scene_warn(c->s,
-                      "mesh '%s' is skinned or morphed by %u nodes; all of them show the pose of "
-                      "the last one",
-                      name, drawers[m]);
-    }
+        if (c->node_map[gi] >= 0) r = node_deform(c, gi, mesh_map, skin_map, posed);
     if (r == RD_GLTF_OK && c->weights_normalised)
         rd_scene_warn(
             c->s,
@@ -340,6 +392,6 @@ rd_gltf_result rd_gltf_conv_skins(rd_gltf_conv *c, const int32_t *mesh_map)
             "are normalised",
             (unsigned long long)c->weights_normalised);
     free(skin_map);
-    free(drawers);
+    free(posed);
     return r;
 }

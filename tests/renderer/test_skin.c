@@ -260,14 +260,37 @@ static void test_morph(void)
     check_cube(&s, "spline", 0.5, 0.75, __LINE__); /* zero tangents: the midpoint */
     rd_scene_destroy(&s);
 
-    /* node weights override the mesh's: the same file with "fixed" shown */
+    /* node weights override the mesh's: the same file with "fixed" shown, which draws the mesh
+     * "step" draws: each gets a copy of its own and keeps its own pose */
     char *text = gltf_morph_cube();
-    char *at = strstr(text, "\"nodes\":[0,1,2]");
+    char *at = strstr(text, "\"nodes\":[0,1,2]}");
     CHECK(at != NULL);
-    if (at) memcpy(at, "\"nodes\":[3,1,2]", 15);
-    CHECKF(load(text, &s) == RD_GLTF_OK, "%s", err);
+    char *edited = test_xprintf("%.*s\"nodes\":[0,1,2,3]}%s", (int)(at - text), text,
+                                at ? at + strlen("\"nodes\":[0,1,2]}") : "");
+    free(text);
+    CHECKF(load(edited, &s) == RD_GLTF_OK, "%s", err);
+    CHECK(s.warning_count == 0 && s.mesh_count == 4);
+    uint32_t step = node_named(&s, "step"), fixed = node_named(&s, "fixed");
+    CHECK(s.nodes[step].mesh != s.nodes[fixed].mesh && s.meshes[s.nodes[fixed].mesh].deform);
     check_cube(&s, "fixed", 0, 0.5, __LINE__);
+    check_cube(&s, "step", 0.25, 0, __LINE__);
+    pose(&s, 1.5);
+    check_cube(&s, "fixed", 0, 0.5, __LINE__);
+    check_cube(&s, "step", 1, 0.5, __LINE__);
     rd_scene_destroy(&s);
+
+    /* the copies count against the triangle limit: 4 meshes of 12 triangles need 48 */
+    rd_gltf_options small = {.max_triangles = 40};
+    text = gltf_morph_cube();
+    at = strstr(text, "\"nodes\":[0,1,2]}");
+    edited = test_xprintf("%.*s\"nodes\":[0,1,2,3]}%s", (int)(at - text), text,
+                          at ? at + strlen("\"nodes\":[0,1,2]}") : "");
+    free(text);
+    CHECK(rd_gltf_load_memory(edited, strlen(edited), NULL, &small, &s, err, sizeof err) ==
+          RD_GLTF_ERR_TOO_LARGE);
+    CHECKF(strstr(err, "node 3 deforms mesh 0, which other nodes deform too"), "%s", err);
+    CHECK(s.meshes == NULL);
+    free(edited);
 }
 
 /* Every deformed vertex, normal and tangent of s is finite. */
