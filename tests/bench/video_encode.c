@@ -30,8 +30,13 @@
  *       [--degrees 1.5] [--warmup 16] [--qualities 40,50,60,70,80,90] [--bitrates 1,2,4,8,16]
  *       [--codecs vp8,vp9,av1] [--threads 1] [--device SELECTOR] [--machine NAME] [--out DIR]
  *
- * On lavapipe (two cores) keep it small: --sizes 320x180 --frames 30 (results/lavapipe/). On
- * an NVIDIA GPU: --sizes 1280x720,1920x1080 --threads 1 and again with --threads 4.
+ * On lavapipe (two cores) keep it small; tests/bench/results/lavapipe/video_encode.* came from
+ *   probecast_videobench --sizes 320x180 --frames 30 --threads 1 --bitrates 1,2,4,8,16,32,64,128
+ *       --machine "2-core CPU machine (lavapipe)" --out tests/bench/results/lavapipe
+ * (about 2.5 minutes, mostly rendering; small frames carry more detail a pixel, so the video
+ * rates that reach JPEG's quality lie above 16 Mbit/s scaled). On an NVIDIA GPU:
+ *   --sizes 1280x720,1920x1080 --threads 1, and again with --threads 4 (encode cost per core
+ *   against wall time), --out tests/bench/results/h200 (or h100).
  */
 #include <errno.h>
 #include <math.h>
