@@ -12,12 +12,6 @@
 #include <vpx/vp8cx.h>
 #include <vpx/vpx_encoder.h>
 
-/* Default speeds. VP8 cpu-used -6 is the speed WebRTC's VP8 encoder uses on desktop CPUs, and
- * VP9 7 sits in libvpx's realtime range (5..9; higher is faster); AV1 preset 10 in the fast
- * half of SVT-AV1's 0..13. Not tuned yet: srv_video_desc.speed overrides them. */
-#define VP8_SPEED 6u
-#define VP9_SPEED 7u
-#define AV1_PRESET 10u
 /* SVT-AV1 1.4.1 refuses a side under 64 ("Source Width must be at least 64") and an odd one
  * ("Source Width must be even for YUV_420 colorspace"). */
 #define AV1_MIN_SIDE 64u
@@ -455,9 +449,9 @@ static srv_video_result check_desc(srv_video_desc *d, char *err, size_t err_size
     if (!d->threads) d->threads = 1;
     if (!d->fps) d->fps = 60;
     static const unsigned speed[][3] = {
-        [SRV_VIDEO_VP8] = {VP8_SPEED, 4, 16},
-        [SRV_VIDEO_VP9] = {VP9_SPEED, 5, 9},
-        [SRV_VIDEO_AV1] = {AV1_PRESET, 8, 13},
+        [SRV_VIDEO_VP8] = {SRV_VIDEO_VP8_SPEED, 4, 16},
+        [SRV_VIDEO_VP9] = {SRV_VIDEO_VP9_SPEED, 5, 9},
+        [SRV_VIDEO_AV1] = {SRV_VIDEO_AV1_SPEED, 8, 13},
     };
     if (!d->speed) d->speed = speed[d->codec][0];
     if (d->threads > SRV_VIDEO_MAX_THREADS || d->fps > 240 || d->speed < speed[d->codec][1] ||

@@ -57,6 +57,12 @@ const char *srv_video_codec_name(srv_video_codec c); /* "vp8", "vp9", "av1"; NUL
 #define SRV_VIDEO_MIN_KBPS 50u
 #define SRV_VIDEO_MAX_KBPS 100000u
 #define SRV_VIDEO_MAX_THREADS 64u
+/* Default speeds. VP8 cpu-used -6 is the speed WebRTC's VP8 encoder uses on desktop CPUs, and
+ * VP9 7 sits in libvpx's realtime range (5..9; higher is faster); AV1 preset 10 in the fast
+ * half of SVT-AV1's 0..13. Not tuned yet (probecast_videobench --vp8-speed and so on). */
+#define SRV_VIDEO_VP8_SPEED 6u
+#define SRV_VIDEO_VP9_SPEED 7u
+#define SRV_VIDEO_AV1_SPEED 10u
 
 /* Zero means the default for every member but codec, width, height and bitrate_kbps. */
 typedef struct srv_video_desc {

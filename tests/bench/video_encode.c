@@ -28,7 +28,9 @@
  *
  *   probecast_videobench [--scenes cornell,interior] [--sizes 1280x720,1920x1080] [--frames 60]
  *       [--degrees 1.5] [--warmup 16] [--qualities 40,50,60,70,80,90] [--bitrates 1,2,4,8,16]
- *       [--codecs vp8,vp9,av1] [--threads 1] [--device SELECTOR] [--machine NAME] [--out DIR]
+ *       [--codecs vp8,vp9,av1] [--threads 1] [--vp8-speed 4..16] [--vp9-speed 5..9]
+ *       [--av1-preset 8..13] [--device SELECTOR] [--machine NAME] [--out DIR]
+ * (speeds: srv_video_desc.speed; unset, SRV_VIDEO_*_SPEED)
  *
  * On lavapipe (two cores) keep it small; tests/bench/results/lavapipe/video_encode.* came from
  *   probecast_videobench --sizes 320x180 --frames 30 --threads 1 --bitrates 1,2,4,8,16,32,64,128
@@ -67,12 +69,14 @@ typedef struct options {
     unsigned bitrate_count;
     srv_video_codec codecs[3];
     unsigned codec_count;
+    unsigned speed[4]; /* by srv_video_codec: 0 = the encoder's default */
     const char *device, *machine, *out;
 } options;
 
 typedef struct result {
     const char *codec;
     unsigned setting; /* JPEG quality or kbit/s */
+    unsigned speed;   /* the video encoder's speed (JPEG: 0) */
     double bytes_mean, bytes_key, bytes_inter, mbps, psnr_y, psnr_rgb, ms_mean, ms_p95;
 } result;
 
@@ -171,7 +175,7 @@ static void run_jpeg(uint8_t **frames, unsigned n, unsigned w, unsigned h, unsig
         }
         py[f] = psnr_plane(yuv, w, ysrc, w, w, h, 1.0);
     }
-    r->codec = "jpeg", r->setting = q;
+    r->codec = "jpeg", r->setting = q, r->speed = 0;
     fill_result(r, bytes, ms, py, pc, n);
     free(bytes), free(ms), free(py), free(pc), free(rgba), free(yuv), free(ysrc);
     tjDestroy(c);
@@ -217,7 +221,7 @@ static void take_packet(video_run *v, const srv_video_packet *p)
 }
 
 static bool run_video(uint8_t **frames, unsigned n, unsigned w, unsigned h, srv_video_codec codec,
-                      unsigned kbps, unsigned threads, result *r)
+                      unsigned kbps, unsigned threads, unsigned speed, result *r)
 {
     char err[256];
     srv_video_encoder *e = NULL;
@@ -226,6 +230,7 @@ static bool run_video(uint8_t **frames, unsigned n, unsigned w, unsigned h, srv_
                            .height = h,
                            .bitrate_kbps = kbps,
                            .threads = threads,
+                           .speed = speed,
                            .fps = 60};
     if (srv_video_encoder_create(&desc, &e, err, sizeof err) != SRV_VIDEO_OK) {
         fprintf(stderr, "%s: %s\n", srv_video_codec_name(codec), err);
@@ -260,7 +265,7 @@ static bool run_video(uint8_t **frames, unsigned n, unsigned w, unsigned h, srv_
         fprintf(stderr, "%s: %u packets for %u frames\n", srv_video_codec_name(codec), v.got, n);
         exit(1);
     }
-    r->codec = srv_video_codec_name(codec), r->setting = kbps;
+    r->codec = srv_video_codec_name(codec), r->setting = kbps, r->speed = speed;
     fill_result(r, v.bytes, ms, v.py, v.pc, n);
     if (!v.dec) r->psnr_y = r->psnr_rgb = NAN;
     video_decoder_close(v.dec);
@@ -475,6 +480,12 @@ static bool parse(int argc, char **argv, options *o)
                 for (int c = SRV_VIDEO_VP8; c <= SRV_VIDEO_AV1; c++)
                     if (!strcmp(items[k], srv_video_codec_name((srv_video_codec)c)))
                         o->codecs[o->codec_count++] = (srv_video_codec)c;
+        } else if (!strcmp(a, "--vp8-speed")) {
+            o->speed[SRV_VIDEO_VP8] = (unsigned)atoi(v);
+        } else if (!strcmp(a, "--vp9-speed")) {
+            o->speed[SRV_VIDEO_VP9] = (unsigned)atoi(v);
+        } else if (!strcmp(a, "--av1-preset")) {
+            o->speed[SRV_VIDEO_AV1] = (unsigned)atoi(v);
         } else if (!strcmp(a, "--frames")) {
             o->frames = (unsigned)atoi(v);
         } else if (!strcmp(a, "--warmup")) {
@@ -516,6 +527,10 @@ int main(int argc, char **argv)
                  .machine = "unnamed machine",
                  .out = "."};
     if (!parse(argc, argv, &o)) return 2;
+    static const unsigned defaults[4] = {0, SRV_VIDEO_VP8_SPEED, SRV_VIDEO_VP9_SPEED,
+                                         SRV_VIDEO_AV1_SPEED};
+    for (int c = SRV_VIDEO_VP8; c <= SRV_VIDEO_AV1; c++)
+        if (!o.speed[c]) o.speed[c] = defaults[c];
     if (mkdir(o.out, 0777) != 0 && errno != EEXIST) {
         fprintf(stderr, "cannot create %s\n", o.out);
         return 1;
@@ -532,13 +547,16 @@ int main(int argc, char **argv)
         fprintf(stderr, "cannot write %s\n", path);
         return 1;
     }
-    fprintf(csv, "machine,device,cores,scene,width,height,frames,codec,setting,threads,bytes_mean,"
-                 "bytes_key,bytes_inter,mbps_60,psnr_y_db,psnr_rgb_db,encode_ms_mean,"
-                 "encode_ms_p95\n");
+    fprintf(csv,
+            "machine,device,cores,scene,width,height,frames,codec,setting,threads,speed,bytes_mean,"
+            "bytes_key,bytes_inter,mbps_60,psnr_y_db,psnr_rgb_db,encode_ms_mean,"
+            "encode_ms_p95\n");
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
     printf("# video against JPEG, %s (%ld cores), %s; %u frames an orbit (%.2f degrees a frame), "
-           "video on %u thread(s) at 60 fps, JPEG on 1; PSNR means over frames\n",
-           o.machine, cores, vk.device_name, o.frames, o.degrees, o.threads);
+           "video on %u thread(s) at 60 fps (speeds: VP8 %u, VP9 %u, AV1 preset %u), JPEG on 1; "
+           "PSNR means over frames\n",
+           o.machine, cores, vk.device_name, o.frames, o.degrees, o.threads, o.speed[SRV_VIDEO_VP8],
+           o.speed[SRV_VIDEO_VP9], o.speed[SRV_VIDEO_AV1]);
     for (unsigned si = 0; si < o.scene_count; si++)
         for (unsigned zi = 0; zi < o.size_count; zi++) {
             unsigned w = o.sizes[zi][0], h = o.sizes[zi][1], n = o.frames;
@@ -559,7 +577,7 @@ int main(int argc, char **argv)
                     if (kbps < SRV_VIDEO_MIN_KBPS) kbps = SRV_VIDEO_MIN_KBPS;
                     if (kbps > SRV_VIDEO_MAX_KBPS) kbps = SRV_VIDEO_MAX_KBPS;
                     if (run_video(frames, n, w, h, o.codecs[c], (unsigned)(kbps + 0.5), o.threads,
-                                  &res[count]))
+                                  o.speed[o.codecs[c]], &res[count]))
                         count++;
                 }
             for (unsigned i = 0; i < count; i++) {
@@ -569,10 +587,10 @@ int main(int argc, char **argv)
                        r->codec, r->setting, jpeg ? "q" : "k", r->bytes_mean, r->bytes_key,
                        r->bytes_inter, r->mbps, r->psnr_y, r->psnr_rgb, r->ms_mean, r->ms_p95);
                 fprintf(csv,
-                        "\"%s\",\"%s\",%ld,%s,%u,%u,%u,%s,%u,%u,%.1f,%.0f,%.1f,%.3f,%.3f,%.3f,"
-                        "%.3f,%.3f\n",
+                        "\"%s\",\"%s\",%ld,%s,%u,%u,%u,%s,%u,%u,%u,%.1f,%.0f,%.1f,%.3f,%.3f,"
+                        "%.3f,%.3f,%.3f\n",
                         o.machine, vk.device_name, cores, o.scenes[si], w, h, n, r->codec,
-                        r->setting, jpeg ? 1 : o.threads, r->bytes_mean, r->bytes_key,
+                        r->setting, jpeg ? 1 : o.threads, r->speed, r->bytes_mean, r->bytes_key,
                         r->bytes_inter, r->mbps, r->psnr_y, r->psnr_rgb, r->ms_mean, r->ms_p95);
             }
             fflush(stdout);
