@@ -35,8 +35,10 @@
  * On lavapipe (two cores) keep it small; tests/bench/results/lavapipe/video_encode.* came from
  *   probecast_videobench --sizes 320x180 --frames 30 --threads 1 --bitrates 1,2,4,8,16,32,64,128
  *       --machine "2-core CPU machine (lavapipe)" --out tests/bench/results/lavapipe
- * (about 2.5 minutes, mostly rendering; small frames carry more detail a pixel, so the video
- * rates that reach JPEG's quality lie above 16 Mbit/s scaled). On an NVIDIA GPU:
+ * and video_encode_640x360.* from --scenes cornell --sizes 640x360 --frames 20
+ * --bitrates 2,4,8,16,32,64 (into a scratch --out, files renamed)
+ * (each a few minutes at most, mostly rendering; small frames carry more detail a pixel, so the
+ * video rates that reach JPEG's quality lie above 16 Mbit/s scaled). On an NVIDIA GPU:
  *   --sizes 1280x720,1920x1080 --threads 1, and again with --threads 4 (encode cost per core
  *   against wall time), --out tests/bench/results/h200 (or h100).
  */
