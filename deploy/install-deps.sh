@@ -15,6 +15,7 @@ packages=(
   libopenexr-dev           # OpenEXR 3 (OpenEXRCore, its C API): .exr environment images
   libmicrohttpd-dev libwebsockets-dev libcjson-dev  # probecast serve: HTTP API, frame stream, JSON
   libssl-dev               # checks --tls-cert/--tls-key (OpenSSL, which libwebsockets links)
+  libvpx-dev libsvtav1enc-dev  # video frames: VP8/VP9 (libvpx 1.12) and AV1 (SVT-AV1 1.4.1) encoders
 )
 
 missing=()

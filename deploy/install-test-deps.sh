@@ -6,14 +6,16 @@
 # deploy/systemd/probecast.service; no running systemd needed), and Node.js with
 # tests/deploy/lint/node_modules (Redocly CLI and kubernetes-models, pinned by its
 # package-lock.json; they lint protocol/openapi.yaml and deploy/kubernetes), and clang with
-# its libFuzzer runtime (tests/fuzz/run.sh). Idempotent.
+# its libFuzzer runtime (tests/fuzz/run.sh), and dav1d's library (test_video_encoder decodes
+# the AV1 encoder's packets with it; the daemon only encodes). Idempotent.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 lint="$root/tests/deploy/lint"
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 
-packages=(python3 python3-prometheus-client nginx-light openssl systemd clang libclang-rt-14-dev)
+packages=(python3 python3-prometheus-client nginx-light openssl systemd clang libclang-rt-14-dev
+          libdav1d-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
