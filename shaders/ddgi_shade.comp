@@ -81,7 +81,7 @@ void main()
         vec3 dir = ddgi_ray_dir(vol, ray);
         pc_surface sf = surface_at(g.scene, hit, dir);
         uint seed = pcg(slot ^ pcg(vol.info.y * 0x9E3779B9u + 0x632BE5ABu));
-        vec3 radiance = vec3(0.0), throughput = vec3(1.0);
+        vec3 radiance = vec3(0.0), throughput = vec3(1.0), n0 = vec3(0.0);
         for (uint depth = 0u;; depth++) {
             pc_brdf b = surface_brdf(sf);
             vec3 v = -dir;
@@ -98,10 +98,14 @@ void main()
             if (depth == vol.path_bounces) {
                 if (pc.params.y == 0u) break; /* no field yet */
                 /* probe-ray hits start at the probe, in free space (no limit on the bias along
-                 * v); a continued path's hits, half their segment */
-                vec3 indirect = ddgi_irradiance(vol, g.scene, true, env_irradiance(g.env, sf.normal),
-                                                sf.position, sf.normal, v,
-                                                depth == 0u ? 1e30 : 0.5 * hit.t, 0.0);
+                 * v); a continued path's hits, half their segment and the rest along the
+                 * previous vertex's normal */
+                vec3 sky_e = env_irradiance(g.env, sf.normal);
+                vec3 indirect = depth == 0u
+                    ? ddgi_irradiance(vol, g.scene, true, sky_e, sf.position, sf.normal, v, 1e30,
+                                      0.0)
+                    : ddgi_irradiance_at_hit(vol, g.scene, true, sky_e, sf.position, sf.normal,
+                                             dir, hit.t, n0, 0.0);
                 vec3 albedo = brdf_hit_albedo(g.brdf_albedo, b, clamp(dot(sf.normal, v), 0.0, 1.0));
                 radiance += throughput * sf.occlusion * min(albedo, vec3(0.9)) / PC_PI * indirect;
                 break;
@@ -113,6 +117,7 @@ void main()
             throughput *= weight;
             if (all(equal(throughput, vec3(0.0)))) break;
             path_rays++;
+            n0 = sf.normal;
             if (!trace_ray(g.scene, offset_ray_origin(sf.position, sf.geom_normal, sf.offset), dir,
                            0.0, 1e30, 0u, hit)) {
                 radiance += throughput * env_radiance(g.env, dir);

@@ -36,7 +36,7 @@ layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer GB
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer HistoryRef { uvec4 v[]; };
 
 /* Radiance leaving the first surface along l within reach toward the pixel; false on a miss. */
-bool near_radiance(pc_globals g, vec3 origin, vec3 l, float reach, inout uint s, inout uint rays,
+bool near_radiance(pc_globals g, vec3 origin, vec3 n0, vec3 l, float reach, inout uint s, inout uint rays,
                    out vec3 radiance)
 {
     pc_hit hit;
@@ -51,8 +51,8 @@ bool near_radiance(pc_globals g, vec3 origin, vec3 l, float reach, inout uint s,
     pc_brdf b = surface_brdf(sf);
     vec3 direct = direct_radiance_sampled(g.scene, sf.position, sf.normal, sf.geom_normal,
                                           sf.offset, -l, b, rnd(s), rays);
-    vec3 e = ddgi_irradiance(g.ddgi, g.scene, false, env_irradiance(g.env, sf.normal), sf.position,
-                             sf.normal, -l, 0.5 * hit.t, DDGI_VIS_CLEAR_SIGMAS);
+    vec3 e = ddgi_irradiance_at_hit(g.ddgi, g.scene, false, env_irradiance(g.env, sf.normal),
+                                    sf.position, sf.normal, l, hit.t, n0, DDGI_VIS_CLEAR_SIGMAS);
     vec3 a = brdf_hit_albedo(g.brdf_albedo, b, clamp(dot(sf.normal, -l), 0.0, 1.0));
     radiance = sf.emission + direct + sf.occlusion * a / PC_PI * e;
     return true;
@@ -87,7 +87,7 @@ void main()
             float near =
                 PC_NEAR_REACH * min(g.ddgi.spacing.x, min(g.ddgi.spacing.y, g.ddgi.spacing.z));
             if (dot(l, ng) > 0.0 &&
-                near_radiance(g, offset_ray_origin(p, ng, t.albedo.w), l, near, s, rays, lh)) {
+                near_radiance(g, offset_ray_origin(p, ng, t.albedo.w), n, l, near, s, rays, lh)) {
                 vec3 floor_e = vec3(max(max3(e) / 64.0, 1e-12));
                 ratio = min(PC_PI * lh / max(e, floor_e), vec3(PC_NEAR_RATIO_MAX));
             }

@@ -32,7 +32,7 @@ layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer GB
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer HistoryRef { uvec4 v[]; };
 
 /* Radiance arriving at the pixel's surface along l (see above). */
-vec3 incoming(pc_globals g, vec3 origin, vec3 l, inout uint rays)
+vec3 incoming(pc_globals g, vec3 origin, vec3 n0, vec3 l, inout uint rays)
 {
     pc_hit hit;
     rays++;
@@ -45,8 +45,8 @@ vec3 incoming(pc_globals g, vec3 origin, vec3 l, inout uint rays)
     pc_brdf b = surface_brdf(sf);
     vec3 direct =
         direct_radiance(g.scene, sf.position, sf.normal, sf.geom_normal, sf.offset, -l, b, rays);
-    vec3 e = ddgi_irradiance(g.ddgi, g.scene, false, env_irradiance(g.env, sf.normal), sf.position,
-                             sf.normal, -l, 0.5 * hit.t, 0.0);
+    vec3 e = ddgi_irradiance_at_hit(g.ddgi, g.scene, false, env_irradiance(g.env, sf.normal),
+                                    sf.position, sf.normal, l, hit.t, n0, 0.0);
     vec3 a = brdf_hit_albedo(g.brdf_albedo, b, clamp(dot(sf.normal, -l), 0.0, 1.0));
     return sf.emission + direct + sf.occlusion * a / PC_PI * e;
 }
@@ -69,7 +69,7 @@ void main()
             vec3 l, weight, sample_value = vec3(0.0);
             if (brdf_sample_specular(b, n, v, u, l, weight) && dot(l, t.geom_normal.xyz) > 0.0)
                 sample_value = weight * incoming(g, offset_ray_origin(p, t.geom_normal.xyz,
-                                                                      t.albedo.w), l, rays);
+                                                                      t.albedo.w), n, l, rays);
             vec3 albedo = brdf_specular_albedo(g.brdf_albedo, b, clamp(dot(n, v), 0.0, 1.0));
             sample_value /= max(albedo, vec3(1e-4));
             if (any(isnan(sample_value)) || any(isinf(sample_value))) sample_value = vec3(0.0);

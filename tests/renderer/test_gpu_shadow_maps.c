@@ -8,8 +8,8 @@
  * answer is the same for every point within MARGIN (two map texels or more); the shadow ray must
  * match everywhere.
  * 2. What is built when: a new scene whose updates shade few hits traces shadow rays first
- *    (rent before buy); built maps stay: an update of an unchanged scene builds nothing (no
- *    rays); a colour change builds nothing.
+ *    (rent before buy); built maps stay: an update of an unchanged scene builds nothing (rays
+ *    only for the few hits whose texels straddle a shadow edge); a colour change builds nothing.
  * 3. The pay rule, per light: while a light moves every update and an update shades far fewer
  *    hits than its map has texels, hits that chose it trace shadow rays instead of rebuilding
  *    (the sun keeps its map); once the light stays still long enough for the rebuild to pay,
@@ -220,8 +220,11 @@ int main(void)
            w.ddgi.vol.control.w);
     CHECKF(w.stats.rays.shadow_map_rays == map_rays, "%u map rays, want %llu",
            w.stats.rays.shadow_map_rays, (unsigned long long)map_rays);
-    CHECKF(w.stats.rays.probe_shadow_rays == 0, "%u probe shadow rays with every light mapped",
-           w.stats.rays.probe_shadow_rays);
+    /* with every light mapped, rays only for the few hits whose texels straddle a shadow edge */
+    const unsigned edge_max = rd_ddgi_probe_count(&w.ddgi) * gi.rays / 20;
+    CHECKF(w.stats.rays.probe_shadow_rays <= edge_max,
+           "%u probe shadow rays with every light mapped (at most %u)",
+           w.stats.rays.probe_shadow_rays, edge_max);
     CHECK(!w.ddgi.sort_hits);
     check_light(&h, &w, &s, 0, "point light");
     check_light(&h, &w, &s, 1, "sun");
@@ -287,7 +290,7 @@ int main(void)
     VK_CHECK(rd_gpu_scene_update_instances(&vk, &gs, &s, err, sizeof err));
     VK_CHECK(rd_world_update(&w, 1, err, sizeof err));
     CHECKF(w.shadow_maps.builds == builds && w.shadow_maps.complete &&
-               w.stats.rays.probe_shadow_rays == 0,
+               w.stats.rays.probe_shadow_rays <= edge_max,
            "an update that moves nothing: builds %llu -> %llu, %u shadow rays",
            (unsigned long long)builds, (unsigned long long)w.shadow_maps.builds,
            w.stats.rays.probe_shadow_rays);
