@@ -77,6 +77,9 @@ typedef struct viewer {
     unsigned video_max_kbps;  /* the viewer's cap (0: none) */
     uint64_t video_queued_id; /* newest frame handed to the video encoder */
     uint64_t acked_bytes;     /* payload bytes of acknowledged frames since the last tick */
+    uint64_t sent_bytes;      /* payload bytes sent since the last tick */
+    double encode_ms;         /* smoothed video encode time */
+    double sent_kbps;         /* over the last tick */
     /* closing */
     int close_code;
     char close_reason[64];

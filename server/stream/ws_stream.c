@@ -229,6 +229,8 @@ static int send_some(srv_ws_stream *ws, viewer *v)
         if (o) {
             f = srv_frame_ref(o->frame);
             v->cur_video = o;
+            v->encode_ms =
+                v->encode_ms > 0 ? 0.8 * v->encode_ms + 0.2 * o->encode_ms : o->encode_ms;
             v->cur_data = o->data;
             v->cur_size = o->size;
             h.encode_us = o->encode_us;
@@ -301,6 +303,7 @@ static int send_some(srv_ws_stream *ws, viewer *v)
         v->sent[v->sent_head].id = v->last_sent_id;
         v->sent[v->sent_head].ms = now;
         v->sent[v->sent_head].bytes = v->cur_size;
+        v->sent_bytes += v->cur_size;
         v->sent_head = (v->sent_head + 1) % SENT_RING;
         srv_frame_unref(v->cur);
         v->cur = NULL;
@@ -502,9 +505,25 @@ static void on_tick(lws_sorted_usec_list_t *sul)
     if (dt > 0)
         ws->stats.bandwidth_bps = (double)(ws->stats.bytes_sent - ws->bytes_at_tick) * 8 / dt;
     ws->bytes_at_tick = ws->stats.bytes_sent;
-    pthread_mutex_unlock(&ws->stats_mu);
-    for (viewer *v = ws->viewers; v; v = v->next)
+    unsigned n = 0, video = 0;
+    for (viewer *v = ws->viewers; v; v = v->next) {
+        v->sent_kbps = dt > 0 ? (double)v->sent_bytes * 8 / 1000 / dt : 0;
+        v->sent_bytes = 0;
         srv_ws_video_tick(v, dt);
+        video += v->video != NULL;
+        if (n < SRV_WS_STATS_VIEWERS)
+            ws->stats.per_viewer[n++] = (srv_ws_viewer_stats){
+                .viewer = v->id,
+                .view = v->watching,
+                .format = v->video ? v->format : PROTO_FORMAT_JPEG,
+                .target_kbps = v->video ? srv_video_stream_kbps(v->video) : 0,
+                .sent_kbps = v->sent_kbps,
+                .encode_ms = v->video ? v->encode_ms : 0,
+            };
+    }
+    ws->stats.viewer_count = n;
+    ws->stats.video_viewers = video;
+    pthread_mutex_unlock(&ws->stats_mu);
     ws->tick_ms = now;
     for (viewer *v = ws->viewers; v; v = v->next)
         if (!v->cur && v->acked_any && now - v->last_ack_ms >= ACK_STALL_MS)

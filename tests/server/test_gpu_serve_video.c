@@ -150,6 +150,41 @@ int main(void)
     CHECKF(ca.stills >= 1, "the still after the camera stops is JPEG: %u", ca.stills);
     CHECKF(cj.jpeg >= 5 && cj.video == 0, "JPEG viewer: %u JPEG, %u video", cj.jpeg, cj.video);
 
+    /* reported: /v1/stats lists the video viewer as vp9 with a target and an encode time, the
+     * other as jpeg; /metrics has the per-viewer series (the numbers are those of the last
+     * second's tick: move again so that it sees frames) */
+    move(&a, dec, &ca, &j, &cj, 1200, &seq);
+    cJSON *stats = pc_api_get_json(&d, "/v1/stats");
+    const cJSON *st = cJSON_GetObjectItemCaseSensitive(stats, "stream");
+    const cJSON *list = cJSON_GetObjectItemCaseSensitive(st, "viewers_detail");
+    CHECK(cJSON_IsArray(list) && cJSON_GetArraySize(list) == 2);
+    CHECK(pc_json_number(st, "video_viewers") == 1);
+    const cJSON *it;
+    unsigned vp9 = 0, jpeg = 0;
+    cJSON_ArrayForEach(it, list)
+    {
+        const cJSON *f = cJSON_GetObjectItemCaseSensitive(it, "format");
+        double view = pc_json_number(it, "view");
+        if (cJSON_IsString(f) && strcmp(f->valuestring, "vp9") == 0) {
+            vp9++;
+            CHECKF(view == av && pc_json_number(it, "target_kbps") >= 50 &&
+                       pc_json_number(it, "target_kbps") <= 2000 &&
+                       pc_json_number(it, "encode_ms") > 0,
+                   "vp9 viewer: view %g, target %g kbit/s, encode %g ms", view,
+                   pc_json_number(it, "target_kbps"), pc_json_number(it, "encode_ms"));
+        } else if (cJSON_IsString(f) && strcmp(f->valuestring, "jpeg") == 0) {
+            jpeg++;
+            CHECK(view == jv && pc_json_number(it, "target_kbps") == 0);
+        }
+    }
+    CHECKF(vp9 == 1 && jpeg == 1, "formats listed: %u vp9, %u jpeg", vp9, jpeg);
+    cJSON_Delete(stats);
+    pc_http_response m = {0};
+    CHECK(pc_api(&d, "GET", "/metrics", NULL, true, &m) == 200 && m.body &&
+          strstr(m.body, "probecast_viewer_encode_seconds{viewer=") &&
+          strstr(m.body, "format=\"vp9\"") && strstr(m.body, "probecast_stream_video_viewers 1"));
+    pc_http_response_free(&m);
+
     /* a resize: the first frame of the new size is a key frame, and decodes */
     CHECK(pc_ws_send_text(&a, "{\"type\":\"resize\",\"width\":80,\"height\":60}") == 0);
     memset(&ca, 0, sizeof ca);
