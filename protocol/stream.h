@@ -1,7 +1,8 @@
 /* stream.h: the binary frame message of the WebSocket stream (/v1/stream), versions 1 and 2.
  *
  * Every binary message the server sends is one frame: a little-endian header of
- * header_size bytes (64) followed by exactly jpeg_size bytes of baseline JPEG. Versions 1 and 2
+ * header_size bytes (64) followed by exactly jpeg_size bytes of payload: baseline JPEG, or one
+ * VP9/VP8 packet (format) for a version-2 viewer that asked for video. Versions 1 and 2
  * share the layout; the version is the connection's protocol version (2: each connection owns a
  * view and view_id says which one a frame shows; 1: everybody shares view 0).
  * Readers skip header_size bytes, so later versions may append fields without breaking them;
