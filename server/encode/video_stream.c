@@ -106,8 +106,9 @@ static void *run(void *arg)
         s->encoding = false;
         s->ready = o;
         if (!o) s->failed = true;
+        bool tell = !s->stopping;
         pthread_mutex_unlock(&s->mu);
-        s->on_ready(s->user); /* a packet, or a failure the sender must see */
+        if (tell) s->on_ready(s->user); /* a packet, or a failure the sender must see */
         pthread_mutex_lock(&s->mu);
     }
     pthread_mutex_unlock(&s->mu);
