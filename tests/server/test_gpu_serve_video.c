@@ -77,7 +77,8 @@ static void drain(pc_ws *ws, int ms, video_decoder *dec, counts *c)
 }
 
 /* Moves both viewers' cameras every 15 ms for ms, draining both; then the stills. */
-static void move(pc_ws *a, video_decoder *dec, counts *ca, pc_ws *j, counts *cj, int ms, int *seq)
+static void move(pc_ws *a, video_decoder *dec, counts *ca, pc_ws *j, video_decoder *jdec,
+                 counts *cj, int ms, int *seq)
 {
     double end = pc_now_ms() + ms;
     char msg[160];
@@ -90,10 +91,10 @@ static void move(pc_ws *a, video_decoder *dec, counts *ca, pc_ws *j, counts *cj,
         pc_ws_send_text(a, msg);
         pc_ws_send_text(j, msg);
         drain(a, 8, dec, ca);
-        drain(j, 7, NULL, cj);
+        drain(j, 7, jdec, cj);
     }
     drain(a, 800, dec, ca);
-    drain(j, 300, NULL, cj);
+    drain(j, 300, jdec, cj);
 }
 
 /* Sends a video request that must be refused: an error message comes back, frames stay JPEG. */
@@ -127,7 +128,7 @@ int main(void)
     refused(&a, "{\"type\":\"video\",\"codec\":\"vp9\",\"max_kbps\":0}");
     refused(&a, "{\"type\":\"video\",\"codec\":\"vp9\",\"max_kbps\":1000000000}");
     memset(&ca, 0, sizeof ca);
-    move(&a, NULL, &ca, &j, &cj, 800, &seq);
+    move(&a, NULL, &ca, &j, NULL, &cj, 800, &seq);
     printf("after bad requests: %u JPEG, %u video frames\n", ca.jpeg, ca.video);
     CHECKF(ca.jpeg >= 3 && ca.video == 0, "JPEG kept: %u JPEG, %u video", ca.jpeg, ca.video);
 
@@ -138,7 +139,7 @@ int main(void)
     CHECK(pc_ws_send_text(&a, "{\"type\":\"video\",\"codec\":\"vp9\",\"max_kbps\":2000}") == 0);
     memset(&ca, 0, sizeof ca);
     memset(&cj, 0, sizeof cj);
-    move(&a, dec, &ca, &j, &cj, 2000, &seq);
+    move(&a, dec, &ca, &j, NULL, &cj, 2000, &seq);
     printf("video viewer: %u VP9 (%u key, %u decoded, %u not), %u JPEG (%u stills); JPEG "
            "viewer: %u JPEG, %u video\n",
            ca.video, ca.keys, ca.decoded, ca.bad_decode, ca.jpeg, ca.stills, cj.jpeg, cj.video);
@@ -153,7 +154,7 @@ int main(void)
     /* reported: /v1/stats lists the video viewer as vp9 with a target and an encode time, the
      * other as jpeg; /metrics has the per-viewer series (the numbers are those of the last
      * second's tick: move again so that it sees frames) */
-    move(&a, dec, &ca, &j, &cj, 1200, &seq);
+    move(&a, dec, &ca, &j, NULL, &cj, 1200, &seq);
     cJSON *stats = pc_api_get_json(&d, "/v1/stats");
     const cJSON *st = cJSON_GetObjectItemCaseSensitive(stats, "stream");
     const cJSON *list = cJSON_GetObjectItemCaseSensitive(st, "viewers_detail");
@@ -189,18 +190,44 @@ int main(void)
     CHECK(pc_ws_send_text(&a, "{\"type\":\"resize\",\"width\":80,\"height\":60}") == 0);
     memset(&ca, 0, sizeof ca);
     ca.width_seen = 80;
-    move(&a, dec, &ca, &j, &cj, 1500, &seq);
+    move(&a, dec, &ca, &j, NULL, &cj, 1500, &seq);
     printf("after resize: %u VP9 (%u key, %u decoded), first of the new size key: %d\n", ca.video,
            ca.keys, ca.decoded, ca.first_sized_key);
     CHECK(ca.saw_sized_video && ca.first_sized_key);
     CHECKF(ca.decoded == ca.video && ca.bad_decode == 0, "all decode after resize: %u of %u",
            ca.decoded, ca.video);
 
+    /* a new follower on video: its first VP9 frame of A's view is a key frame, and all decode */
+    pc_ws fw;
+    uint32_t fv;
+    CHECK(pc_stream_open_v2(&d, &fw, &fv));
+    counts cf = {0};
+    drain(&fw, 500, NULL, &cf);
+    video_decoder *fdec = NULL;
+    CHECK(video_decoder_open(&fdec, SRV_VIDEO_VP9, err, sizeof err));
+    CHECK(pc_ws_send_text(&fw, "{\"type\":\"video\",\"codec\":\"vp9\",\"max_kbps\":null}") == 0);
+    char follow[64];
+    snprintf(follow, sizeof follow, "{\"type\":\"follow\",\"view\":%u}", av);
+    CHECK(pc_ws_send_text(&fw, follow) == 0);
+    cJSON *following = pc_stream_next_text(&fw, 3000, "following");
+    CHECK(following != NULL);
+    cJSON_Delete(following);
+    memset(&cf, 0, sizeof cf);
+    move(&a, dec, &ca, &fw, fdec, &cf, 1500, &seq);
+    printf("follower: %u VP9 (%u key, %u decoded), %u JPEG\n", cf.video, cf.keys, cf.decoded,
+           cf.jpeg);
+    CHECKF(cf.video >= 3 && cf.first_video_key, "follower: %u VP9, first key %u", cf.video,
+           cf.first_video_key);
+    CHECKF(cf.decoded == cf.video && cf.bad_decode == 0, "follower decodes: %u of %u", cf.decoded,
+           cf.video);
+    video_decoder_close(fdec);
+    pc_ws_close(&fw);
+
     /* codec null: back to JPEG */
     CHECK(pc_ws_send_text(&a, "{\"type\":\"video\",\"codec\":null,\"max_kbps\":null}") == 0);
     drain(&a, 300, NULL, &ca);
     memset(&ca, 0, sizeof ca);
-    move(&a, NULL, &ca, &j, &cj, 800, &seq);
+    move(&a, NULL, &ca, &j, NULL, &cj, 800, &seq);
     CHECKF(ca.jpeg >= 3 && ca.video == 0, "JPEG again: %u JPEG, %u video", ca.jpeg, ca.video);
 
     video_decoder_close(dec);
