@@ -139,7 +139,8 @@ void srv_ws_video_stop(viewer *v);
  * without video; a still, or a frame without pixels, with it), or neither (nothing new, or the
  * encoder is busy: its ready callback wakes the service thread). */
 void srv_ws_video_next(srv_ws_stream *ws, viewer *v, srv_video_out **out, srv_frame **jpeg);
-/* Once a second: v's target bitrate from its acknowledged bytes and lag. */
-void srv_ws_video_tick(viewer *v, double seconds);
+/* Once a second, with stats_mu held: each viewer's sent bitrate, its video target bitrate from
+ * its acknowledged bytes and lag, and the per-viewer stats. */
+void srv_ws_video_tick(srv_ws_stream *ws, double seconds);
 
 #endif

@@ -505,24 +505,7 @@ static void on_tick(lws_sorted_usec_list_t *sul)
     if (dt > 0)
         ws->stats.bandwidth_bps = (double)(ws->stats.bytes_sent - ws->bytes_at_tick) * 8 / dt;
     ws->bytes_at_tick = ws->stats.bytes_sent;
-    unsigned n = 0, video = 0;
-    for (viewer *v = ws->viewers; v; v = v->next) {
-        v->sent_kbps = dt > 0 ? (double)v->sent_bytes * 8 / 1000 / dt : 0;
-        v->sent_bytes = 0;
-        srv_ws_video_tick(v, dt);
-        video += v->video != NULL;
-        if (n < SRV_WS_STATS_VIEWERS)
-            ws->stats.per_viewer[n++] = (srv_ws_viewer_stats){
-                .viewer = v->id,
-                .view = v->watching,
-                .format = v->video ? v->format : PROTO_FORMAT_JPEG,
-                .target_kbps = v->video ? srv_video_stream_kbps(v->video) : 0,
-                .sent_kbps = v->sent_kbps,
-                .encode_ms = v->video ? v->encode_ms : 0,
-            };
-    }
-    ws->stats.viewer_count = n;
-    ws->stats.video_viewers = video;
+    srv_ws_video_tick(ws, dt);
     pthread_mutex_unlock(&ws->stats_mu);
     ws->tick_ms = now;
     for (viewer *v = ws->viewers; v; v = v->next)

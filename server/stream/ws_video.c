@@ -90,7 +90,7 @@ void srv_ws_video_next(srv_ws_stream *ws, viewer *v, srv_video_out **out, srv_fr
     *jpeg = f;
 }
 
-void srv_ws_video_tick(viewer *v, double seconds)
+static void viewer_tick(viewer *v, double seconds)
 {
     uint64_t acked = v->acked_bytes;
     v->acked_bytes = 0;
@@ -109,4 +109,26 @@ void srv_ws_video_tick(viewer *v, double seconds)
     if (next > cap) next = cap;
     if (next < SRV_VIDEO_MIN_KBPS) next = SRV_VIDEO_MIN_KBPS;
     if ((unsigned)next != cur) srv_video_stream_set_kbps(v->video, (unsigned)next);
+}
+
+void srv_ws_video_tick(srv_ws_stream *ws, double seconds)
+{
+    unsigned n = 0, video = 0;
+    for (viewer *v = ws->viewers; v; v = v->next) {
+        v->sent_kbps = seconds > 0 ? (double)v->sent_bytes * 8 / 1000 / seconds : 0;
+        v->sent_bytes = 0;
+        viewer_tick(v, seconds);
+        video += v->video != NULL;
+        if (n < SRV_WS_STATS_VIEWERS)
+            ws->stats.per_viewer[n++] = (srv_ws_viewer_stats){
+                .viewer = v->id,
+                .view = v->watching,
+                .format = v->video ? v->format : PROTO_FORMAT_JPEG,
+                .target_kbps = v->video ? srv_video_stream_kbps(v->video) : 0,
+                .sent_kbps = v->sent_kbps,
+                .encode_ms = v->video ? v->encode_ms : 0,
+            };
+    }
+    ws->stats.viewer_count = n;
+    ws->stats.video_viewers = video;
 }
