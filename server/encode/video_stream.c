@@ -211,3 +211,16 @@ unsigned srv_video_stream_kbps(srv_video_stream *s)
     pthread_mutex_unlock(&s->mu);
     return kbps;
 }
+
+unsigned srv_video_next_kbps(unsigned cur, double acked_kbps, bool lagging, unsigned cap)
+{
+    if (!cap) cap = SRV_VIDEO_DEFAULT_MAX_KBPS;
+    double next = cur;
+    if (lagging)
+        next = 0.85 * (acked_kbps < cur ? acked_kbps : cur);
+    else if (acked_kbps > 0)
+        next = cur * 1.25;
+    if (next > cap) next = cap;
+    if (next < SRV_VIDEO_MIN_KBPS) next = SRV_VIDEO_MIN_KBPS;
+    return (unsigned)next;
+}

@@ -54,4 +54,13 @@ void srv_video_stream_force_key(srv_video_stream *s);
 void srv_video_stream_set_kbps(srv_video_stream *s, unsigned kbps);
 unsigned srv_video_stream_kbps(srv_video_stream *s);
 
+/* Rate control, once a second (a pure rule, unit-tested): the next target from the current
+ * one, the payload kbit/s the viewer acknowledged over that second, whether its acks lag (the
+ * JPEG path's lag signal, server/stream/ws_stream.c), and the cap (0: none; then
+ * SRV_VIDEO_DEFAULT_MAX_KBPS). Lagging: 85 % of what got through (at most the current target);
+ * keeping up with frames acknowledged: a quarter more; no acks: unchanged. Clamped to
+ * SRV_VIDEO_MIN_KBPS..cap. */
+#define SRV_VIDEO_DEFAULT_MAX_KBPS 20000u
+unsigned srv_video_next_kbps(unsigned cur, double acked_kbps, bool lagging, unsigned cap);
+
 #endif

@@ -9,11 +9,9 @@
 
 #include "server/base/log.h"
 
-/* Where the target starts and what it may reach without a cap from the viewer: VP9 matched JPEG
- * q60 at about 1.25 Mbit/s at 640x360 (tests/bench/results/lavapipe/video_encode*.txt); Selkies
- * quotes 8-12 Mbit/s for 1080p60. */
+/* Where the target starts: VP9 matched JPEG q60 at about 1.25 Mbit/s at 640x360
+ * (tests/bench/results/lavapipe/video_encode*.txt); Selkies quotes 8-12 Mbit/s for 1080p60. */
 #define START_KBPS 4000u
-#define DEFAULT_MAX_KBPS 20000u
 
 static srv_video_codec codec_of(unsigned format)
 {
@@ -34,7 +32,7 @@ void srv_ws_video_set(srv_ws_stream *ws, viewer *v, unsigned format, unsigned ma
         srv_ws_video_stop(v);
         return;
     }
-    unsigned cap = max_kbps ? max_kbps : DEFAULT_MAX_KBPS;
+    unsigned cap = max_kbps ? max_kbps : SRV_VIDEO_DEFAULT_MAX_KBPS;
     v->video_max_kbps = max_kbps;
     if (v->video && v->format == format) {
         /* the same codec again: a new cap, and a key frame (a viewer asks again to resync) */
@@ -95,20 +93,11 @@ static void viewer_tick(viewer *v, double seconds)
     uint64_t acked = v->acked_bytes;
     v->acked_bytes = 0;
     if (!v->video || seconds <= 0) return;
-    unsigned cap = v->video_max_kbps ? v->video_max_kbps : DEFAULT_MAX_KBPS;
     unsigned cur = srv_video_stream_kbps(v->video);
-    double acked_kbps = (double)acked * 8 / 1000 / seconds;
-    double next = cur;
-    if (v->cap < 100) {
-        /* acks lag (the JPEG path's quality cap is on): the link is full, so aim below what got
-         * through */
-        next = 0.85 * (acked_kbps < cur ? acked_kbps : cur);
-    } else if (acked > 0) {
-        next = cur * 1.25; /* acks keep up: probe upwards */
-    }
-    if (next > cap) next = cap;
-    if (next < SRV_VIDEO_MIN_KBPS) next = SRV_VIDEO_MIN_KBPS;
-    if ((unsigned)next != cur) srv_video_stream_set_kbps(v->video, (unsigned)next);
+    /* acks lag when the JPEG path's lag-driven quality cap is on (lag over 20 ms) */
+    unsigned next = srv_video_next_kbps(cur, (double)acked * 8 / 1000 / seconds, v->cap < 100,
+                                        v->video_max_kbps);
+    if (next != cur) srv_video_stream_set_kbps(v->video, next);
 }
 
 void srv_ws_video_tick(srv_ws_stream *ws, double seconds)
