@@ -17,8 +17,16 @@ const char *proto_strerror(proto_result r)
         return "unsupported frame header version";
     case PROTO_ERR_HEADER_SIZE:
         return "frame header size too small";
+    case PROTO_ERR_FORMAT:
+        return "unknown payload format";
     }
     return "unknown error";
+}
+
+const char *proto_format_name(unsigned format)
+{
+    static const char *const names[PROTO_FORMAT_COUNT] = {"jpeg", "vp8", "vp9"};
+    return format < PROTO_FORMAT_COUNT ? names[format] : NULL;
 }
 
 static void put16(uint8_t *p, uint16_t v)
@@ -79,6 +87,7 @@ void proto_frame_header_pack(const proto_frame_header *h, uint8_t out[PROTO_STRE
     put32(out + 56, h->jpeg_size);
     out[60] = h->quality;
     out[61] = h->flags;
+    out[62] = h->format;
 }
 
 proto_result proto_frame_header_unpack(const uint8_t *msg, size_t len, proto_frame_header *h,
@@ -104,6 +113,8 @@ proto_result proto_frame_header_unpack(const uint8_t *msg, size_t len, proto_fra
     h->jpeg_size = get32(msg + 56);
     h->quality = msg[60];
     h->flags = msg[61];
+    h->format = msg[62];
+    if (h->format >= PROTO_FORMAT_COUNT) return PROTO_ERR_FORMAT;
     if (len - h->header_size < h->jpeg_size) return PROTO_ERR_SHORT;
     if (jpeg) *jpeg = msg + h->header_size;
     return PROTO_OK;

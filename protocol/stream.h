@@ -1,7 +1,8 @@
 /* stream.h: the binary frame message of the WebSocket stream (/v1/stream), versions 1 and 2.
  *
  * Every binary message the server sends is one frame: a little-endian header of
- * header_size bytes (64) followed by exactly jpeg_size bytes of baseline JPEG. Versions 1 and 2
+ * header_size bytes (64) followed by exactly jpeg_size bytes of payload: baseline JPEG, or one
+ * VP9/VP8 packet (format) for a version-2 viewer that asked for video. Versions 1 and 2
  * share the layout; the version is the connection's protocol version (2: each connection owns a
  * view and view_id says which one a frame shows; 1: everybody shares view 0).
  * Readers skip header_size bytes, so later versions may append fields without breaking them;
@@ -20,10 +21,14 @@
  *       48    4 height       pixels
  *       52    4 input_seq    the last "seq" of this client's camera messages that the frame
  *                            reflects (0 before the first one)
- *       56    4 jpeg_size    bytes of JPEG after the header
- *       60    1 quality      JPEG quality 1..100
- *       61    1 flags        bit 0: still (full quality, input has stopped)
- *       62    2 reserved     0
+ *       56    4 jpeg_size    bytes of the payload (JPEG, or one video packet) after the header
+ *       60    1 quality      JPEG quality 1..100 (0 for a video packet)
+ *       61    1 flags        bit 0: still (full quality, input has stopped);
+ *                            bit 1: key frame (a video packet decodable on its own)
+ *       62    1 format       0 JPEG, 1 VP8, 2 VP9 (version 2; never other than 0 for a viewer
+ *                            that did not ask for video, so version 1 and JPEG-only viewers
+ *                            see the same bytes as before)
+ *       63    1 reserved     0
  */
 #ifndef PROTO_STREAM_H
 #define PROTO_STREAM_H
@@ -37,6 +42,19 @@
 #define PROTO_STREAM_VERSION_MIN 1u /* the oldest still spoken */
 #define PROTO_STREAM_HEADER_SIZE 64u
 #define PROTO_STREAM_FLAG_STILL 1u
+#define PROTO_STREAM_FLAG_KEY 2u
+
+/* The payload's format (byte 62). AV1 is left out of the live stream: SVT-AV1 1.4.1 holds each
+ * packet back a frame and cannot force key frames in low-delay mode (video_encoder.h). */
+typedef enum proto_format {
+    PROTO_FORMAT_JPEG = 0,
+    PROTO_FORMAT_VP8 = 1,
+    PROTO_FORMAT_VP9 = 2,
+} proto_format;
+#define PROTO_FORMAT_COUNT 3u
+
+/* "jpeg", "vp8", "vp9" (NULL for anything else). */
+const char *proto_format_name(unsigned format);
 
 typedef struct proto_frame_header {
     uint16_t version;
@@ -46,9 +64,10 @@ typedef struct proto_frame_header {
     uint32_t view_id;
     uint32_t width, height;
     uint32_t input_seq;
-    uint32_t jpeg_size;
+    uint32_t jpeg_size; /* payload bytes (JPEG or video packet) */
     uint8_t quality;
     uint8_t flags;
+    uint8_t format; /* proto_format */
 } proto_frame_header;
 
 typedef enum proto_result {
@@ -57,6 +76,7 @@ typedef enum proto_result {
     PROTO_ERR_MAGIC,       /* not a probecast frame */
     PROTO_ERR_VERSION,     /* a version this code does not read */
     PROTO_ERR_HEADER_SIZE, /* header_size smaller than version 1's */
+    PROTO_ERR_FORMAT,      /* a payload format this code does not read */
 } proto_result;
 
 const char *proto_strerror(proto_result r);

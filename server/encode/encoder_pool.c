@@ -135,8 +135,12 @@ static srv_frame **latest_slot(srv_encoder_pool *p, uint32_t view_id, bool creat
 static void job_done(srv_encoder_pool *p, srv_frame *f)
 {
     if (--f->remaining > 0) return;
-    srv_image_unref(f->image);
-    f->image = NULL;
+    /* a published frame keeps its RGBA8 pixels for the video encoders (video_stream.h); on the
+     * CPU path its view holds the same image anyway (its last image, for stills) */
+    if (f->image->coef_sets || f->abandoned) {
+        srv_image_unref(f->image);
+        f->image = NULL;
+    }
     stripe_sets_free(f);
     bool ok = !f->abandoned;
     for (unsigned i = 0; ok && i < f->variant_count; i++)

@@ -53,8 +53,10 @@ typedef struct srv_frame {
     uint64_t encode_us; /* Unix time when its last variant was done */
     unsigned variant_count;
     srv_jpeg variants[SRV_MAX_VARIANTS]; /* ascending quality */
-    /* encoder-private */
+    /* the RGBA8 pixels it was encoded from, kept once published for the video encoders
+     * (video_stream.h); NULL when the GPU computed its coefficients */
     srv_image *image;
+    /* encoder-private */
     unsigned remaining; /* jobs not finished or dropped */
     bool abandoned;
     struct srv_stripe_set *stripe_sets; /* one per variant when encoded in stripes, else NULL */

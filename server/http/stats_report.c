@@ -1,6 +1,8 @@
 /* stats_report.c: the numbers of /v1/stats and /metrics. */
 #include "server/http/stats_report.h"
 
+#include "protocol/stream.h"
+
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -112,6 +114,19 @@ cJSON *srv_stats_json(const srv_stats_snapshot *s)
     cJSON_AddNumberToObject(st, "connections_closed_for_abuse",
                             (double)s->stream.connections_closed_for_abuse);
     cJSON_AddNumberToObject(st, "inputs_dropped", (double)s->stream.inputs_dropped);
+    cJSON_AddNumberToObject(st, "video_viewers", s->stream.video_viewers);
+    cJSON *pv = cJSON_AddArrayToObject(st, "viewers_detail");
+    for (unsigned i = 0; i < s->stream.viewer_count; i++) {
+        const srv_ws_viewer_stats *v = &s->stream.per_viewer[i];
+        cJSON *o = cJSON_CreateObject();
+        cJSON_AddNumberToObject(o, "viewer", v->viewer);
+        cJSON_AddNumberToObject(o, "view", v->view);
+        cJSON_AddStringToObject(o, "format", proto_format_name(v->format));
+        cJSON_AddNumberToObject(o, "target_kbps", v->target_kbps);
+        cJSON_AddNumberToObject(o, "sent_kbps", round(v->sent_kbps * 10) / 10);
+        cJSON_AddNumberToObject(o, "encode_ms", round(v->encode_ms * 1000) / 1000);
+        cJSON_AddItemToArray(pv, o);
+    }
     cJSON *h = cJSON_AddObjectToObject(j, "http");
     cJSON_AddNumberToObject(h, "requests", (double)s->http.requests);
     cJSON_AddNumberToObject(h, "status_2xx", (double)s->http.status_2xx);
@@ -254,6 +269,31 @@ char *srv_stats_prometheus(const srv_stats_snapshot *s)
            s->stream.lag_ms_max / 1000.0);
     metric(&t, "probecast_stream_inputs_dropped_total", "counter",
            "Viewer messages the render queue had no room for.", (double)s->stream.inputs_dropped);
+    metric(&t, "probecast_stream_video_viewers", "gauge", "Viewers sent video (VP8 or VP9).",
+           s->stream.video_viewers);
+    put(&t, "# HELP probecast_viewer_bitrate_bits_per_second Payload bits per second sent to each "
+            "viewer over the last second (target=\"0\") and its video encoder's target "
+            "(target=\"1\"; 0 for JPEG).\n"
+            "# TYPE probecast_viewer_bitrate_bits_per_second gauge\n");
+    for (unsigned i = 0; i < s->stream.viewer_count; i++) {
+        const srv_ws_viewer_stats *v = &s->stream.per_viewer[i];
+        for (int target = 0; target < 2; target++)
+            put(&t,
+                "probecast_viewer_bitrate_bits_per_second{viewer=\"%u\",view=\"%u\","
+                "format=\"%s\",target=\"%d\"} %.17g\n",
+                v->viewer, v->view, proto_format_name(v->format), target,
+                target ? v->target_kbps * 1000.0 : v->sent_kbps * 1000);
+    }
+    put(&t, "# HELP probecast_viewer_encode_seconds Smoothed video encode time of a frame per "
+            "viewer (0 for JPEG viewers: the shared JPEG encoders make their frames).\n"
+            "# TYPE probecast_viewer_encode_seconds gauge\n");
+    for (unsigned i = 0; i < s->stream.viewer_count; i++) {
+        const srv_ws_viewer_stats *v = &s->stream.per_viewer[i];
+        put(&t,
+            "probecast_viewer_encode_seconds{viewer=\"%u\",view=\"%u\",format=\"%s\"} "
+            "%.17g\n",
+            v->viewer, v->view, proto_format_name(v->format), v->encode_ms / 1000);
+    }
     metric(&t, "probecast_http_connections", "gauge", "HTTP connections open (stream included).",
            s->http.connections_open);
     metric(&t, "probecast_http_connections_refused_total", "counter",

@@ -5,7 +5,11 @@
 #include <math.h>
 #include <string.h>
 
+#include <stdio.h>
+
+#include "protocol/stream.h"
 #include "server/api/api_json.h"
+#include "server/encode/video_encoder.h"
 
 #define BAD(...) (srv_api_fail(e, 400, SRV_ERR_INVALID_FIELD, __VA_ARGS__), false)
 
@@ -129,10 +133,79 @@ bool srv_json_viewer_msg(const char *text, size_t len, srv_viewer_msg *out, srv_
         }
         if (ok && has != 3)
             ok = BAD("A quality message needs 'jpeg' and 'max_fps' (a number, or null).");
+    } else if (strcmp(type->valuestring, "video") == 0) {
+        /* only the types are checked here: a codec or cap that cannot be served is answered
+         * with an error message (srv_viewer_video_request), not by closing */
+        out->type = SRV_VIEWER_VIDEO;
+        out->max_kbps = -1;
+        unsigned has = 0;
+        const cJSON *it;
+        cJSON_ArrayForEach(it, j)
+        {
+            if (it == type) continue;
+            if (strcmp(it->string, "codec") == 0) {
+                ok = srv_json_once(&has, 1, it, e);
+                if (ok && cJSON_IsString(it))
+                    snprintf(out->codec, sizeof out->codec, "%s", it->valuestring);
+                else if (ok && !cJSON_IsNull(it))
+                    ok = BAD("Field 'codec' must be a string or null.");
+            } else if (strcmp(it->string, "max_kbps") == 0) {
+                ok = srv_json_once(&has, 2, it, e);
+                if (ok && cJSON_IsNumber(it) && isfinite(it->valuedouble))
+                    out->max_kbps = it->valuedouble;
+                else if (ok && !cJSON_IsNull(it))
+                    ok = BAD("Field 'max_kbps' must be a number or null.");
+            } else
+                ok = BAD("Unknown video message field '%s'.", it->string);
+            if (!ok) break;
+        }
+        if (ok && has != 3)
+            ok = BAD("A video message needs 'codec' (a string, or null) and 'max_kbps' (a number, "
+                     "or null).");
     } else {
-        ok = BAD("Unknown message type '%.40s' (camera, resize, follow, ack or quality).",
+        ok = BAD("Unknown message type '%.40s' (camera, resize, follow, ack, quality or video).",
                  type->valuestring);
     }
     cJSON_Delete(j);
     return ok;
+}
+
+bool srv_viewer_video_request(const srv_viewer_msg *m, unsigned *format, unsigned *max_kbps,
+                              char *why, size_t why_size)
+{
+    *format = PROTO_FORMAT_JPEG;
+    *max_kbps = 0;
+    if (m->codec[0]) {
+        if (strcmp(m->codec, "vp9") == 0)
+            *format = PROTO_FORMAT_VP9;
+        else if (strcmp(m->codec, "vp8") == 0)
+            *format = PROTO_FORMAT_VP8;
+        else {
+            /* names only printable characters of what was sent */
+            char shown[sizeof m->codec];
+            size_t i = 0;
+            for (; m->codec[i] && i + 1 < sizeof shown; i++)
+                shown[i] = m->codec[i] >= 0x20 && m->codec[i] < 0x7f && m->codec[i] != '"' &&
+                                   m->codec[i] != '\\'
+                               ? m->codec[i]
+                               : '?';
+            shown[i] = 0;
+            snprintf(why, why_size, "Unknown codec '%s' (vp9, vp8, or null for JPEG).", shown);
+            return false;
+        }
+    }
+    if (m->max_kbps >= 0) {
+        if (m->max_kbps != floor(m->max_kbps) || m->max_kbps < SRV_VIDEO_MIN_KBPS ||
+            m->max_kbps > SRV_VIDEO_MAX_KBPS) {
+            snprintf(why, why_size, "Field 'max_kbps' must be an integer in %u..%u, or null.",
+                     SRV_VIDEO_MIN_KBPS, SRV_VIDEO_MAX_KBPS);
+            return false;
+        }
+        *max_kbps = (unsigned)m->max_kbps;
+    } else if (m->max_kbps != -1) {
+        snprintf(why, why_size, "Field 'max_kbps' must be an integer in %u..%u, or null.",
+                 SRV_VIDEO_MIN_KBPS, SRV_VIDEO_MAX_KBPS);
+        return false;
+    }
+    return true;
 }

@@ -8,6 +8,7 @@
 #include <pthread.h>
 #include <stdatomic.h>
 
+#include "server/encode/video_stream.h"
 #include "server/stream/viewer_msg.h"
 #include "protocol/stream.h"
 #include "server/stream/ws_stream.h"
@@ -43,7 +44,7 @@ typedef struct viewer {
     } inputs[INPUT_RING];
     unsigned input_head, input_count;
     uint32_t evicted_seq;
-    uint32_t timed_seq;  /* newest input whose first frame gave a latency sample */
+    uint32_t timed_seq;    /* newest input whose first frame gave a latency sample */
     uint64_t cur_input_us; /* the input the current frame is the first to reflect, else 0 */
     uint64_t cur_send_us;
     /* receive */
@@ -54,19 +55,31 @@ typedef struct viewer {
     /* send */
     uint8_t *tx; /* LWS_PRE + FRAGMENT_BYTES */
     srv_frame *cur;
-    const srv_jpeg *cur_jpeg;
+    const uint8_t *cur_data; /* the payload: a JPEG variant of cur, or cur_video's packet */
+    size_t cur_size;
+    srv_video_out *cur_video;
     size_t cur_pos; /* bytes of the current message sent (header included) */
     uint8_t cur_header[PROTO_STREAM_HEADER_SIZE];
     uint64_t last_sent_id; /* of the watched view (frame ids are global over views) */
     struct {
         uint64_t id;
         double ms;
+        size_t bytes;
     } sent[SENT_RING];
     unsigned sent_head;
     uint64_t acked_id;
     bool acked_any;
     double lag_ms, last_ack_ms;
     unsigned cap; /* quality cap from lag (100 = none) */
+    /* video (protocol/stream.md, "video" message): NULL while the viewer gets JPEG */
+    srv_video_stream *video;
+    unsigned format;          /* proto_format of the video stream */
+    unsigned video_max_kbps;  /* the viewer's cap (0: none) */
+    uint64_t video_queued_id; /* newest frame handed to the video encoder */
+    uint64_t acked_bytes;     /* payload bytes of acknowledged frames since the last tick */
+    uint64_t sent_bytes;      /* payload bytes sent since the last tick */
+    double encode_ms;         /* smoothed video encode time */
+    double sent_kbps;         /* over the last tick */
     /* closing */
     int close_code;
     char close_reason[64];
@@ -119,5 +132,15 @@ int srv_ws_send_text(srv_ws_stream *ws, viewer *v, char *text);
 void srv_ws_watch(srv_ws_stream *ws, viewer *v, uint32_t view);
 void srv_ws_release_followers(srv_ws_stream *ws, uint32_t view);
 void srv_ws_handle_message(srv_ws_stream *ws, viewer *v);
+/* Video (ws_video.c): starts, changes or (format JPEG) stops v's video stream. */
+void srv_ws_video_set(srv_ws_stream *ws, viewer *v, unsigned format, unsigned max_kbps);
+void srv_ws_video_stop(viewer *v);
+/* What v is sent next: a video packet (*out), a frame to send as JPEG (*jpeg: every frame
+ * without video; a still, or a frame without pixels, with it), or neither (nothing new, or the
+ * encoder is busy: its ready callback wakes the service thread). */
+void srv_ws_video_next(srv_ws_stream *ws, viewer *v, srv_video_out **out, srv_frame **jpeg);
+/* Once a second, with stats_mu held: each viewer's sent bitrate, its video target bitrate from
+ * its acknowledged bytes and lag, and the per-viewer stats. */
+void srv_ws_video_tick(srv_ws_stream *ws, double seconds);
 
 #endif

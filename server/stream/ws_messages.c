@@ -118,6 +118,8 @@ void srv_ws_watch(srv_ws_stream *ws, viewer *v, uint32_t view)
     srv_render_post(ws->cfg.loop, c);
     v->watching = view;
     v->last_sent_id = 0; /* frame ids of another view are not comparable */
+    v->video_queued_id = 0;
+    if (v->video) srv_video_stream_force_key(v->video); /* another picture: start it clean */
     srv_ws_queue_textf(v, "{\"type\":\"following\",\"view\":%u}", view);
     lws_callback_on_writable(v->wsi);
 }
@@ -212,6 +214,21 @@ void srv_ws_handle_message(srv_ws_stream *ws, viewer *v)
         post_input(ws, v, c);
         break;
     }
+    case SRV_VIEWER_VIDEO: {
+        if (v->version < 2) {
+            srv_ws_close_viewer(v, LWS_CLOSE_STATUS_POLICY_VIOLATION, "video needs probecast.v2");
+            break;
+        }
+        unsigned format, max_kbps;
+        char why[160];
+        if (!srv_viewer_video_request(&m, &format, &max_kbps, why, sizeof why)) {
+            /* a request that cannot be done: the viewer keeps what it had */
+            srv_ws_queue_textf(v, "{\"type\":\"error\",\"message\":\"%s\"}", why);
+            break;
+        }
+        srv_ws_video_set(ws, v, format, max_kbps);
+        break;
+    }
     case SRV_VIEWER_ACK: {
         double now = srv_mono_ms();
         for (unsigned i = 0; i < SENT_RING; i++) {
@@ -221,6 +238,8 @@ void srv_ws_handle_message(srv_ws_stream *ws, viewer *v)
             v->acked_any = true;
             v->last_ack_ms = now;
             if (m.frame > v->acked_id) v->acked_id = m.frame;
+            v->acked_bytes += v->sent[i].bytes;
+            v->sent[i].bytes = 0; /* counted once */
             unsigned cap = srv_ws_cap_from_lag(v->lag_ms);
             if (cap != v->cap) {
                 v->cap = cap;

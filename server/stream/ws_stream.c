@@ -197,6 +197,7 @@ static uint32_t seq_for(const viewer *v, uint32_t view, uint64_t ticket)
 /* Whether a newer frame than the viewer's last one is published. */
 static bool has_new_frame(srv_ws_stream *ws, const viewer *v)
 {
+    if (v->video) return true; /* a packet may be ready (a spurious wake sends nothing) */
     srv_frame *f = srv_encoder_latest(ws->cfg.encoders, v->watching);
     bool fresh = f && f->info.frame_id > v->last_sent_id;
     srv_frame_unref(f);
@@ -220,28 +221,38 @@ static int send_some(srv_ws_stream *ws, viewer *v)
         char *text = srv_ws_next_text(ws, v);
         if (text) return srv_ws_send_text(ws, v, text);
         if (flow_blocked(v, now)) return 0;
-        srv_frame *f = srv_encoder_latest(ws->cfg.encoders, v->watching);
-        if (!f || f->info.frame_id <= v->last_sent_id) {
-            srv_frame_unref(f);
-            return 0;
+        srv_video_out *o;
+        srv_frame *f;
+        srv_ws_video_next(ws, v, &o, &f);
+        if (!o && !f) return 0;
+        proto_frame_header h = {.send_us = srv_unix_us(), .version = (uint16_t)v->version};
+        if (o) {
+            f = srv_frame_ref(o->frame);
+            v->cur_video = o;
+            v->encode_ms =
+                v->encode_ms > 0 ? 0.8 * v->encode_ms + 0.2 * o->encode_ms : o->encode_ms;
+            v->cur_data = o->data;
+            v->cur_size = o->size;
+            h.encode_us = o->encode_us;
+            h.format = (uint8_t)v->format;
+            h.flags = o->key ? PROTO_STREAM_FLAG_KEY : 0;
+        } else {
+            const srv_jpeg *jpeg = srv_frame_pick(f, v->cap);
+            v->cur_data = jpeg->data;
+            v->cur_size = jpeg->size;
+            h.encode_us = f->encode_us;
+            h.quality = (uint8_t)jpeg->quality;
+            h.flags = f->info.still ? PROTO_STREAM_FLAG_STILL : 0;
         }
         v->cur = f;
-        v->cur_jpeg = srv_frame_pick(f, v->cap);
         v->cur_pos = 0;
-        proto_frame_header h = {
-            .frame_id = f->info.frame_id,
-            .capture_us = f->info.capture_us,
-            .encode_us = f->encode_us,
-            .send_us = srv_unix_us(),
-            .view_id = f->info.view_id,
-            .width = f->width,
-            .height = f->height,
-            .input_seq = seq_for(v, f->info.view_id, f->info.input_ticket),
-            .jpeg_size = (uint32_t)v->cur_jpeg->size,
-            .quality = (uint8_t)v->cur_jpeg->quality,
-            .flags = f->info.still ? PROTO_STREAM_FLAG_STILL : 0,
-        };
-        h.version = (uint16_t)v->version;
+        h.frame_id = f->info.frame_id;
+        h.capture_us = f->info.capture_us;
+        h.view_id = f->info.view_id;
+        h.width = f->width;
+        h.height = f->height;
+        h.input_seq = seq_for(v, f->info.view_id, f->info.input_ticket);
+        h.jpeg_size = (uint32_t)v->cur_size;
         proto_frame_header_pack(&h, v->cur_header);
         /* the first frame to reflect a new input gives a latency sample when fully sent */
         int k = input_for(v, f->info.view_id, f->info.input_ticket);
@@ -256,7 +267,7 @@ static int send_some(srv_ws_stream *ws, viewer *v)
             ws->stats.frames_skipped += f->info.frame_id - v->last_sent_id - 1;
         pthread_mutex_unlock(&ws->stats_mu);
     }
-    size_t total = PROTO_STREAM_HEADER_SIZE + v->cur_jpeg->size;
+    size_t total = PROTO_STREAM_HEADER_SIZE + v->cur_size;
     size_t chunk = total - v->cur_pos < FRAGMENT_BYTES ? total - v->cur_pos : FRAGMENT_BYTES;
     uint8_t *out = v->tx + LWS_PRE;
     size_t filled = 0;
@@ -265,7 +276,7 @@ static int send_some(srv_ws_stream *ws, viewer *v)
         memcpy(out, v->cur_header + v->cur_pos, filled);
     }
     size_t jpeg_off = v->cur_pos + filled - PROTO_STREAM_HEADER_SIZE;
-    memcpy(out + filled, v->cur_jpeg->data + jpeg_off, chunk - filled);
+    memcpy(out + filled, v->cur_data + jpeg_off, chunk - filled);
     bool first = v->cur_pos == 0, last = v->cur_pos + chunk == total;
     int mode = first ? LWS_WRITE_BINARY : LWS_WRITE_CONTINUATION;
     if (!last) mode |= LWS_WRITE_NO_FIN;
@@ -280,7 +291,7 @@ static int send_some(srv_ws_stream *ws, viewer *v)
             .input_us = v->cur_input_us,
             .capture_us = v->cur->info.capture_us,
             .ready_us = v->cur->info.ready_us,
-            .encode_us = v->cur->encode_us,
+            .encode_us = v->cur_video ? v->cur_video->encode_us : v->cur->encode_us,
             .send_us = v->cur_send_us,
             .done_us = srv_unix_us(),
         };
@@ -291,9 +302,13 @@ static int send_some(srv_ws_stream *ws, viewer *v)
         v->last_sent_id = v->cur->info.frame_id;
         v->sent[v->sent_head].id = v->last_sent_id;
         v->sent[v->sent_head].ms = now;
+        v->sent[v->sent_head].bytes = v->cur_size;
+        v->sent_bytes += v->cur_size;
         v->sent_head = (v->sent_head + 1) % SENT_RING;
         srv_frame_unref(v->cur);
         v->cur = NULL;
+        srv_video_out_free(v->cur_video);
+        v->cur_video = NULL;
     }
     if (v->cur || has_new_frame(ws, v)) lws_callback_on_writable(v->wsi);
     return 0;
@@ -408,6 +423,9 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
         }
         srv_frame_unref(v->cur);
         v->cur = NULL;
+        srv_video_out_free(v->cur_video);
+        v->cur_video = NULL;
+        srv_ws_video_stop(v);
         free(v->tx);
         v->tx = NULL;
         v->wsi = NULL;
@@ -487,6 +505,7 @@ static void on_tick(lws_sorted_usec_list_t *sul)
     if (dt > 0)
         ws->stats.bandwidth_bps = (double)(ws->stats.bytes_sent - ws->bytes_at_tick) * 8 / dt;
     ws->bytes_at_tick = ws->stats.bytes_sent;
+    srv_ws_video_tick(ws, dt);
     pthread_mutex_unlock(&ws->stats_mu);
     ws->tick_ms = now;
     for (viewer *v = ws->viewers; v; v = v->next)

@@ -39,14 +39,27 @@ typedef struct srv_ws_config {
     srv_snapshot *snapshot;
 } srv_ws_config;
 
+/* One viewer's frame format (issue 26), as of the last tick (once a second). */
+#define SRV_WS_STATS_VIEWERS 64
+typedef struct srv_ws_viewer_stats {
+    uint32_t viewer, view; /* the connection, and the view it watches */
+    unsigned format;       /* proto_format it is sent (stills are JPEG in every format) */
+    unsigned target_kbps;  /* video: the encoder's target bitrate; 0 for JPEG */
+    double sent_kbps;      /* payload kbit/s sent over the last second */
+    double encode_ms;      /* video: smoothed encode time of a frame; 0 for JPEG */
+} srv_ws_viewer_stats;
+
 typedef struct srv_ws_stats {
     unsigned viewers;
     uint64_t frames_sent, frames_skipped, bytes_sent, messages_received, events_sent;
     uint64_t connections_rejected, connections_closed_for_abuse;
-    uint64_t inputs_dropped; /* viewer messages the render queue had no room for (a flood) */
-    double bandwidth_bps; /* bits per second sent over the last second */
-    double lag_ms_max;    /* largest smoothed viewer lag */
+    uint64_t inputs_dropped;     /* viewer messages the render queue had no room for (a flood) */
+    double bandwidth_bps;        /* bits per second sent over the last second */
+    double lag_ms_max;           /* largest smoothed viewer lag */
     srv_latency_summary latency; /* input-to-frame stages (server/render/latency_stats.h) */
+    unsigned viewer_count;       /* of per_viewer: the first SRV_WS_STATS_VIEWERS viewers */
+    unsigned video_viewers;      /* viewers on a video format (all of them, not only listed) */
+    srv_ws_viewer_stats per_viewer[SRV_WS_STATS_VIEWERS];
 } srv_ws_stats;
 
 typedef struct srv_ws_stream srv_ws_stream;

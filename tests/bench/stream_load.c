@@ -9,13 +9,16 @@
  * viewer 0 drives the camera, the others watch.
  * Every viewer acknowledges every frame (as the browser viewer does). After a warm-up, frames
  * and bytes per viewer are counted for --seconds; /v1/stats gives the GPU time of a view's
- * frame and of a world update. Prints a table and writes a CSV. A benchmark, not a test:
+ * frame and of a world update. --format video (own mode) asks every viewer's frames as VP9
+ * (protocol/stream.md, the video message; stills stay JPEG); the table's Mbit/s/viewer column
+ * compares it with JPEG. Prints a table and writes a CSV. A benchmark, not a test:
  * nothing is asserted. For many large views start the daemon with enough --max-views and
  * --max-total-pixels (50 views of 1920x1080 need 104 M pixels).
  *
  *   probecast_loadtest [--http 127.0.0.1:8080] [--ws H:P (default: the --http address)] [--token T]
  *                      [--mode own|shared] [--sizes 1280x720,1920x1080] [--viewers 1,10,50]
- *                      [--seconds 10] [--warmup 2] [--csv tests/bench/results/stream_load.csv]
+ *                      [--seconds 10] [--warmup 2] [--format jpeg|video]
+ *                      [--csv tests/bench/results/stream_load.csv]
  */
 #include <math.h>
 #include <pthread.h>
@@ -38,6 +41,7 @@ static unsigned http_port = 8080, ws_port = 0; /* 0: the stream at the --http ad
 static bool ws_given = false;
 static const char *token = NULL;
 static bool own_views = true;
+static bool video = false; /* --format video: own-view viewers ask for VP9 */
 
 typedef struct viewer {
     int index;
@@ -91,6 +95,8 @@ static void *viewer_main(void *arg)
         snprintf(msg, sizeof msg, "{\"type\":\"resize\",\"width\":%u,\"height\":%u,\"dpr\":1}",
                  v->w, v->h);
         pc_ws_send_text(&v->ws, msg);
+        if (video)
+            pc_ws_send_text(&v->ws, "{\"type\":\"video\",\"codec\":\"vp9\",\"max_kbps\":null}");
     } else if (v->index != 0) {
         while (!atomic_load(&v->stop))
             next_frame(v, 500, &h);
@@ -322,6 +328,9 @@ int main(int argc, char **argv)
             seconds = atof(v);
         } else if (strcmp(o, "--warmup") == 0 && ++i) {
             warmup = atof(v);
+        } else if (strcmp(o, "--format") == 0 && ++i) {
+            if (strcmp(v, "jpeg") != 0 && strcmp(v, "video") != 0) return 2;
+            video = strcmp(v, "video") == 0;
         } else if (strcmp(o, "--csv") == 0 && ++i) {
             csv = v;
         } else {
@@ -329,7 +338,7 @@ int main(int argc, char **argv)
                     "usage: probecast_loadtest [--http H:P] [--ws H:P] [--token T] [--mode "
                     "own|shared]\n"
                     "                          [--sizes WxH,...] [--viewers N,...] [--seconds S]\n"
-                    "                          [--warmup S] [--csv FILE]\n");
+                    "                          [--warmup S] [--format jpeg|video] [--csv FILE]\n");
             return strcmp(o, "--help") == 0 ? 0 : 2;
         }
     }
@@ -353,32 +362,44 @@ int main(int argc, char **argv)
 
     FILE *f = fopen(csv, "w");
     if (f)
-        fprintf(f, "mode,width,height,viewers,connected,viewer_fps_mean,viewer_fps_min,server_fps,"
-                   "latency_p50_ms,latency_p99_ms,latency_max_ms,latency_samples,stream_mbit_s,"
-                   "view_gpu_ms,world_gpu_ms,world_ticks_per_s,encode_ms\n");
-    printf("mode: %s\n", own_views ? "own (every viewer its own view and camera)"
-                                   : "shared (one view, viewer 0 drives)");
-    printf("\n%-10s %7s %10s %10s %10s %9s %9s %9s %8s %9s %8s %8s %8s %9s\n", "size", "viewers",
-           "fps/viewer", "fps(min)", "server fps", "lat p50", "lat p99", "lat max", "samples",
-           "Mbit/s", "view ms", "world ms", "ticks/s", "encode ms");
+        fprintf(
+            f,
+            "mode,format,width,height,viewers,connected,viewer_fps_mean,viewer_fps_min,server_fps,"
+            "latency_p50_ms,latency_p99_ms,latency_max_ms,latency_samples,stream_mbit_s,"
+            "view_gpu_ms,world_gpu_ms,world_ticks_per_s,encode_ms,mbit_s_per_viewer\n");
+    if (video && !own_views) {
+        fprintf(stderr, "--format video needs --mode own (version-2 viewers)\n");
+        return 2;
+    }
+    printf("mode: %s; format: %s\n",
+           own_views ? "own (every viewer its own view and camera)"
+                     : "shared (one view, viewer 0 drives)",
+           video ? "video (VP9; stills JPEG)" : "jpeg");
+    printf("\n%-10s %7s %10s %10s %10s %9s %9s %9s %8s %9s %9s %8s %8s %8s %9s\n", "size",
+           "viewers", "fps/viewer", "fps(min)", "server fps", "lat p50", "lat p99", "lat max",
+           "samples", "Mbit/s", "Mb/s/vwr", "view ms", "world ms", "ticks/s", "encode ms");
     for (int s = 0; s < nsizes; s++) {
         for (int k = 0; k < nviewers; k++) {
             row rw;
             if (!run(sizes[s][0], sizes[s][1], viewers[k], seconds, warmup, &rw)) continue;
             char size[24];
             snprintf(size, sizeof size, "%ux%u", rw.w, rw.h);
-            printf("%-10s %7u %10.2f %10.2f %10.2f %9.1f %9.1f %9.1f %8u %9.2f %8.2f %8.2f %8.1f "
-                   "%9.2f\n",
+            double per_viewer = rw.connected ? rw.mbps / rw.connected : 0;
+            printf("%-10s %7u %10.2f %10.2f %10.2f %9.1f %9.1f %9.1f %8u %9.2f %9.3f %8.2f %8.2f "
+                   "%8.1f %9.2f\n",
                    size, rw.connected, rw.fps_mean, rw.fps_min, rw.server_fps, rw.lat_p50,
-                   rw.lat_p99, rw.lat_max, rw.samples, rw.mbps, rw.gpu_ms, rw.world_ms,
+                   rw.lat_p99, rw.lat_max, rw.samples, rw.mbps, per_viewer, rw.gpu_ms, rw.world_ms,
                    rw.ticks_per_s, rw.encode_ms);
             fflush(stdout);
             if (f)
                 fprintf(
-                    f, "%s,%u,%u,%u,%u,%.3f,%.3f,%.3f,%.2f,%.2f,%.2f,%u,%.3f,%.3f,%.3f,%.3f,%.3f\n",
-                    own_views ? "own" : "shared", rw.w, rw.h, rw.viewers, rw.connected, rw.fps_mean,
-                    rw.fps_min, rw.server_fps, rw.lat_p50, rw.lat_p99, rw.lat_max, rw.samples,
-                    rw.mbps, rw.gpu_ms, rw.world_ms, rw.ticks_per_s, rw.encode_ms);
+                    f,
+                    "%s,%s,%u,%u,%u,%u,%.3f,%.3f,%.3f,%.2f,%.2f,%.2f,%u,%.3f,%.3f,%.3f,%.3f,%.3f,"
+                    "%.4f\n",
+                    own_views ? "own" : "shared", video ? "video" : "jpeg", rw.w, rw.h, rw.viewers,
+                    rw.connected, rw.fps_mean, rw.fps_min, rw.server_fps, rw.lat_p50, rw.lat_p99,
+                    rw.lat_max, rw.samples, rw.mbps, rw.gpu_ms, rw.world_ms, rw.ticks_per_s,
+                    rw.encode_ms, per_viewer);
         }
     }
     if (f) {

@@ -76,5 +76,18 @@ int main(void)
     CHECK(proto_frame_header_unpack(longer, sizeof longer, &r, &jpeg) == PROTO_OK);
     CHECK(jpeg == longer + 80);
     CHECK(strcmp(proto_strerror(PROTO_ERR_MAGIC), "ok") != 0);
+
+    /* a VP9 key frame (byte 62: format; flag bit 1: key); an unknown format is refused */
+    h.version = 2;
+    h.format = PROTO_FORMAT_VP9;
+    h.quality = 0;
+    h.flags = PROTO_STREAM_FLAG_KEY;
+    proto_frame_header_pack(&h, msg);
+    CHECK(msg[61] == 2 && msg[62] == 2 && msg[63] == 0);
+    CHECK(proto_frame_header_unpack(msg, sizeof msg, &r, NULL) == PROTO_OK);
+    CHECK(r.format == PROTO_FORMAT_VP9 && (r.flags & PROTO_STREAM_FLAG_KEY) && r.quality == 0);
+    msg[62] = PROTO_FORMAT_COUNT;
+    CHECK(proto_frame_header_unpack(msg, sizeof msg, &r, NULL) == PROTO_ERR_FORMAT);
+    CHECK(strcmp(proto_format_name(PROTO_FORMAT_VP9), "vp9") == 0 && !proto_format_name(3));
     return test_finish();
 }

@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "server/stream/viewer_msg.h"
+#include "protocol/stream.h"
 #include "test_util.h"
 
 static void test_viewer_messages(void)
@@ -78,9 +79,63 @@ static void test_quality_message(void)
                "rejected: %s", bad[i]);
 }
 
+/* The video message: codec and max_kbps required (each may be null); malformed ones fail the
+ * parse (the connection closes), while an unknown codec or a cap out of range parse and are then
+ * refused by srv_viewer_video_request (an error message; the viewer keeps JPEG). */
+static void test_video_message(void)
+{
+    srv_viewer_msg m;
+    srv_api_error e;
+    unsigned format, kbps;
+    char why[160];
+    const char *q = "{\"type\":\"video\",\"codec\":\"vp9\",\"max_kbps\":3000}";
+    CHECK(srv_json_viewer_msg(q, strlen(q), &m, &e) && m.type == SRV_VIEWER_VIDEO);
+    CHECK(srv_viewer_video_request(&m, &format, &kbps, why, sizeof why) &&
+          format == PROTO_FORMAT_VP9 && kbps == 3000);
+    q = "{\"type\":\"video\",\"codec\":\"vp8\",\"max_kbps\":null}";
+    CHECK(srv_json_viewer_msg(q, strlen(q), &m, &e) &&
+          srv_viewer_video_request(&m, &format, &kbps, why, sizeof why) &&
+          format == PROTO_FORMAT_VP8 && kbps == 0);
+    q = "{\"type\":\"video\",\"codec\":null,\"max_kbps\":null}";
+    CHECK(srv_json_viewer_msg(q, strlen(q), &m, &e) &&
+          srv_viewer_video_request(&m, &format, &kbps, why, sizeof why) &&
+          format == PROTO_FORMAT_JPEG);
+    const char *refused[] = {
+        "{\"type\":\"video\",\"codec\":\"h264\",\"max_kbps\":null}",
+        "{\"type\":\"video\",\"codec\":\"av1\",\"max_kbps\":null}",
+        "{\"type\":\"video\",\"codec\":\"VP9\",\"max_kbps\":null}",
+        "{\"type\":\"video\",\"codec\":\"vp9\",\"max_kbps\":0}",
+        "{\"type\":\"video\",\"codec\":\"vp9\",\"max_kbps\":49}",
+        "{\"type\":\"video\",\"codec\":\"vp9\",\"max_kbps\":100001}",
+        "{\"type\":\"video\",\"codec\":\"vp9\",\"max_kbps\":1e12}",
+        "{\"type\":\"video\",\"codec\":\"vp9\",\"max_kbps\":-5}",
+        "{\"type\":\"video\",\"codec\":\"vp9\",\"max_kbps\":500.5}",
+    };
+    for (size_t i = 0; i < sizeof refused / sizeof refused[0]; i++) {
+        CHECKF(srv_json_viewer_msg(refused[i], strlen(refused[i]), &m, &e), "parses: %s",
+               refused[i]);
+        why[0] = 0;
+        CHECKF(!srv_viewer_video_request(&m, &format, &kbps, why, sizeof why) && why[0] &&
+                   !strchr(why, '"'),
+               "refused: %s", refused[i]);
+    }
+    const char *bad[] = {
+        "{\"type\":\"video\"}",
+        "{\"type\":\"video\",\"codec\":\"vp9\"}",
+        "{\"type\":\"video\",\"max_kbps\":100}",
+        "{\"type\":\"video\",\"codec\":9,\"max_kbps\":100}",
+        "{\"type\":\"video\",\"codec\":\"vp9\",\"max_kbps\":\"100\"}",
+        "{\"type\":\"video\",\"codec\":\"vp9\",\"max_kbps\":100,\"fps\":1}",
+        "{\"type\":\"video\",\"codec\":\"vp9\",\"codec\":\"vp8\",\"max_kbps\":100}",
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++)
+        CHECKF(!srv_json_viewer_msg(bad[i], strlen(bad[i]), &m, &e), "rejects: %s", bad[i]);
+}
+
 int main(void)
 {
     test_viewer_messages();
     test_quality_message();
+    test_video_message();
     return test_finish();
 }

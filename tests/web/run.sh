@@ -2,7 +2,8 @@
 # Browser tests of the viewer (web/): starts `probecast serve` (the executable given as $1) on
 # free loopback ports with a tiny render size and a scratch --data-dir, runs
 # `node --test viewer.test.mjs` against it in Debian's headless Chromium (playwright-core), then
-# stops the daemon; then `node --test scene.test.mjs`, which runs a daemon of its own.
+# stops the daemon; then `node --test scene.test.mjs` and `video.test.mjs`, which run daemons of
+# their own.
 # viewer.test.mjs imports the topic files under viewer/ (stream, camera, panels, layout, views,
 # daemon) in order: they are one session in one process on one page. The viewer tests
 # themselves kill and restart the daemon (same ports and data dir), so the daemon's pid lives in
@@ -135,6 +136,12 @@ status=0
   cd "$here"
   export PCWEB_EXE="$exe" PCWEB_OUT="$out" PCWEB_CHROMIUM="$chromium" PCWEB_ROOT="$root"
   node --test --test-reporter=spec scene.test.mjs
+) || status=$?
+# The video path (WebCodecs VP9 decode into the canvas) with a daemon of its own.
+(
+  cd "$here"
+  export PCWEB_EXE="$exe" PCWEB_OUT="$out" PCWEB_CHROMIUM="$chromium" PCWEB_ROOT="$root"
+  node --test --test-reporter=spec video.test.mjs
 ) || status=$?
 
 stop_daemon

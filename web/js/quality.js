@@ -14,6 +14,12 @@
 // further (the server's max_fps and its lag-based quality cap still apply on top). A new view
 // starts without caps, so they are sent again after every welcome; a version-1 server has no
 // such message and the panel's choices are disabled.
+//
+// Format (version 2): auto and video ask for VP9 (else VP8) video when this browser's
+// VideoDecoder supports it (video.js); JPEG never does. The viewer falls back to JPEG by itself
+// when the decoder fails. Stills after the camera stops stay JPEG in every mode.
+
+import { probeVideoCodec } from './video.js';
 
 const RESIZE_DEBOUNCE_MS = 150;
 const INTERACTIVE_PIXELS = 0.5;    // share of the pixels asked for while the camera moves
@@ -25,6 +31,8 @@ export const JPEG_CAPS = [null, 90, 75, 50]; // null: auto (the server's qualiti
 export const FPS_CAPS = [null, 60, 30, 15];  // null: auto (the server's max_fps)
 const KEY_JPEG = 'probecast.quality.jpeg';
 const KEY_FPS = 'probecast.quality.fps';
+const KEY_FORMAT = 'probecast.quality.format';
+export const FORMATS = ['auto', 'video', 'jpeg'];
 
 const $ = (id) => document.getElementById(id);
 
@@ -191,6 +199,18 @@ export class QualityPanel {
     this.seg = $('res-scale');
     this.jpegSeg = $('jpeg-cap');
     this.fpsSeg = $('fps-cap');
+    this.formatSeg = $('video-mode');
+    const stream = caps.stream;
+    const stored = localStorage.getItem(KEY_FORMAT);
+    stream.setVideo({ mode: FORMATS.includes(stored) ? stored : 'auto' });
+    probeVideoCodec().then((codec) => { this.codec = codec; stream.setVideo({ codec }); this.show(); });
+    for (const b of this.formatSeg.querySelectorAll('button'))
+      b.addEventListener('click', () => {
+        localStorage.setItem(KEY_FORMAT, b.dataset.value);
+        stream.setVideo({ mode: b.dataset.value });
+        this.show();
+      });
+    stream.addEventListener('video', () => this.show());
     this.toggle = $('interactive-res');
     this.out = $('res-out');
     for (const b of this.seg.querySelectorAll('button')) {
@@ -209,7 +229,8 @@ export class QualityPanel {
 
   /* Version 1 servers have no per-view caps: their choices are disabled. */
   setAvailable(on) {
-    for (const b of [...this.jpegSeg.querySelectorAll('button'), ...this.fpsSeg.querySelectorAll('button')]) {
+    for (const b of [...this.jpegSeg.querySelectorAll('button'), ...this.fpsSeg.querySelectorAll('button'),
+      ...this.formatSeg.querySelectorAll('button')]) {
       b.disabled = !on;
       b.title = on ? '' : 'This server shares one view among viewers (protocol version 1): no per-viewer caps';
     }
@@ -223,9 +244,12 @@ export class QualityPanel {
       b.setAttribute('aria-checked', String(capValue(b) === this.caps.jpeg));
     for (const b of this.fpsSeg.querySelectorAll('button'))
       b.setAttribute('aria-checked', String(capValue(b) === this.caps.maxFps));
+    const stream = this.caps.stream;
+    for (const b of this.formatSeg.querySelectorAll('button'))
+      b.setAttribute('aria-checked', String(b.dataset.value === stream.videoMode));
     const s = this.size.lastSent;
     const asked = s ? `asked ${Math.round(s.width * s.dpr)}×${Math.round(s.height * s.dpr)}` : 'asked –';
-    const got = header ? ` · rendering ${header.width}×${header.height}${header.still ? '' : ' (moving)'} · q${header.quality}` : '';
+    const got = header ? ` · rendering ${header.width}×${header.height}${header.still ? '' : ' (moving)'} · ${header.format ? ['jpeg', 'vp8', 'vp9'][header.format] || 'video' : 'q' + header.quality}` : '';
     this.out.textContent = asked + got;
   }
 }

@@ -69,7 +69,8 @@ export class StatsPanel {
       ? `${fixed((header.encodeUs - header.captureUs) / 1000, 1)} ms <small>+ ${fixed((header.sendUs - header.encodeUs) / 1000, 1)} wait</small>`
       : '–';
     f.kbps.textContent = `${client.kbps >= 10000 ? (client.kbps / 1000).toFixed(1) + ' Mbit/s' : fixed(client.kbps, 0) + ' kbit/s'}`;
-    f.frame.innerHTML = header ? `#${header.frameId} <small>q${header.quality}${header.still ? ' still' : ''}</small>` : '–';
+    const kind = (h) => (h.format ? `${['jpeg', 'vp8', 'vp9'][h.format] || 'video'}${h.key ? ' key' : ''}` : `q${h.quality}`);
+    f.frame.innerHTML = header ? `#${header.frameId} <small>${kind(header)}${header.still ? ' still' : ''}</small>` : '–';
     f.size.innerHTML = header ? `${header.width}×${header.height}${header.version >= 2 ? ` <small>view ${header.viewId}</small>` : ''}` : '–';
     this.takeLatencies();
     this.drawGraphs();

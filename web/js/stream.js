@@ -1,12 +1,16 @@
 // stream.js: the frame stream (protocol/stream.md, version 2; version 1 as a fallback):
 // WebSocket, the server's text messages (welcome, events, following, errors), header parsing,
 // JPEG decoding off the main thread, drawing, acknowledgements, input sequence numbers, follow
-// requests and reconnects.
+// requests and reconnects; video frames (format VP9/VP8) go to video.js's WebCodecs decoder.
+
+import { CODECS, FORMAT_JPEG, VideoPath } from './video.js';
 
 export const MAGIC = 0x52464350; // 'PCFR' read as a little-endian uint32
 export const HEADER_V1_SIZE = 64;
 export const SUBPROTOCOL = 'probecast.v2';
 const FLAG_STILL = 1;
+const FLAG_KEY = 2;
+export const VIDEO_MODES = ['auto', 'video', 'jpeg'];
 const BACKOFF_MIN_MS = 250;
 const BACKOFF_MAX_MS = 5000;
 const CONNECT_TIMEOUT_MS = 5000;
@@ -39,6 +43,8 @@ export function parseHeader(buf) {
     jpegSize: v.getUint32(56, true),
     quality: v.getUint8(60),
     still: (v.getUint8(61) & FLAG_STILL) !== 0,
+    key: (v.getUint8(61) & FLAG_KEY) !== 0,
+    format: v.getUint8(62), // 0 JPEG, 1 VP8, 2 VP9 (only after this viewer asked for video)
   };
   if (headerSize + h.jpegSize > buf.byteLength) throw new Error('truncated frame');
   return h;
@@ -179,6 +185,12 @@ export class FrameStream extends EventTarget {
     this.recent = [];        // [{ t, bytes, drawn }] over the last WINDOW_MS
     this.latencies = [];     // [{ t, ms }] input-to-frame samples
     this.lastHeader = null;
+    // Video (version 2): videoMode 'auto' and 'video' ask for video when videoCodec (the codec
+    // this browser decodes, probeVideoCodec) is known; 'jpeg' never. videoMaxKbps caps it.
+    this.videoMode = 'auto';
+    this.videoCodec = null;
+    this.videoMaxKbps = null;
+    this.videoFailed = false; // the decoder failed on this page: JPEG until the mode changes
   }
 
   /* What belongs to one connection: its protocol, views, world documents and frame order. */
@@ -190,6 +202,8 @@ export class FrameStream extends EventTarget {
     this.pendingFollow = false;
     this.welcome = null;
     this.world = {};         // what -> the latest 'event' document of this connection
+    if (this.video) this.video.close();
+    this.video = null;       // VideoPath while this connection asked for video
     this.resetFrames();
   }
 
@@ -199,6 +213,7 @@ export class FrameStream extends EventTarget {
     this.frameView = null;   // the view of the frames newestId and drawnId count
     this.decoding = false;
     this.pending = null;
+    this.awaitKey = false;   // a video packet was missed: a key frame was asked for
   }
 
   /* Whether this connection watches a view other than its own. */
@@ -329,6 +344,70 @@ export class FrameStream extends EventTarget {
     return this.send({ type: 'quality', jpeg: cap(jpeg, 100), max_fps: cap(maxFps, 240) });
   }
 
+  /* Chooses between video and JPEG ('auto' | 'video' | 'jpeg'; codec: 'vp9', 'vp8' or null
+   * when the browser decodes neither) and asks the server at once when connected. */
+  setVideo({ mode = this.videoMode, codec = this.videoCodec, maxKbps = this.videoMaxKbps } = {}) {
+    if (mode !== this.videoMode) this.videoFailed = false;
+    this.videoMode = VIDEO_MODES.includes(mode) ? mode : 'auto';
+    this.videoCodec = codec && CODECS[codec] ? codec : null;
+    this.videoMaxKbps = maxKbps;
+    this.requestVideo();
+  }
+
+  /* Whether this connection should get video now. */
+  get wantsVideo() { return this.videoMode !== 'jpeg' && !!this.videoCodec && !this.videoFailed; }
+
+  /* Sends the video request the mode calls for (version 2, after the welcome); a repeated
+   * request also makes the server send a key frame. */
+  requestVideo() {
+    if (this.protocol !== 2 || this.ownView === null) return false;
+    if (!this.wantsVideo) {
+      if (!this.video) return false;
+      this.video.close();
+      this.video = null;
+      this.emit('video', { active: false, codec: null });
+      return this.send({ type: 'video', codec: null, max_kbps: null });
+    }
+    if (!this.video || this.video.codec !== this.videoCodec) {
+      if (this.video) this.video.close();
+      this.video = new VideoPath(this.videoCodec, {
+        onFrame: (h, frame) => this.presentVideo(h, frame),
+        onError: (e) => this.videoError(e),
+      });
+      this.emit('video', { active: true, codec: this.videoCodec });
+    }
+    const kbps = this.videoMaxKbps ? Math.max(50, Math.min(100000, Math.round(this.videoMaxKbps))) : null;
+    return this.send({ type: 'video', codec: this.videoCodec, max_kbps: kbps });
+  }
+
+  /* The decoder failed: JPEG from now on (the server is told), until the mode changes. */
+  videoError(e) {
+    this.counters.decodeErrors++;
+    this.videoFailed = true;
+    this.video = null;
+    this.send({ type: 'video', codec: null, max_kbps: null });
+    this.emit('video', { active: false, codec: null, error: String((e && e.message) || e) });
+  }
+
+  /* A video packet: decoded in order; one that cannot be fed asks for a key frame. */
+  onVideo(h, data) {
+    if (!this.video || h.format !== this.video.format) { this.counters.stale++; return; }
+    if (!this.video.decode(h, data) && this.video && !this.video.closed) {
+      this.counters.skipped++;
+      if (!this.awaitKey) {
+        this.awaitKey = true;
+        this.requestVideo();
+      }
+    } else if (h.key) {
+      this.awaitKey = false;
+    }
+  }
+
+  presentVideo(h, frame) {
+    if (h.viewId !== this.frameView || h.frameId <= this.drawnId) { frame.close(); return; }
+    this.present(h, frame);
+  }
+
   /* Watches view id (null or the own id: the own view again). Frames of the requested view are
    * drawn from now on; the server's 'following' confirms, an 'error' reverts. False when not
    * possible (not connected, version 1, before the welcome). */
@@ -354,7 +433,11 @@ export class FrameStream extends EventTarget {
     this.counters.received++;
     this.recent.push({ t: now, bytes: data.byteLength, drawn: false });
     if (this.attempt) this.attempt = 0; // frames flow: the next outage starts from the short backoff
-    if (this.expectView !== null && h.viewId !== this.expectView) { this.counters.stale++; return; } // a view left behind
+    if (this.expectView !== null && h.viewId !== this.expectView) {
+      this.counters.stale++; // a view left behind
+      if (h.format !== FORMAT_JPEG && this.video) this.video.resync();
+      return;
+    }
     if (h.viewId !== this.frameView) {
       // Another view from now on: its frame ids are not comparable with the last view's.
       this.newestId = 0;
@@ -363,6 +446,7 @@ export class FrameStream extends EventTarget {
     }
     if (h.frameId <= this.newestId) { this.counters.stale++; return; }
     this.newestId = h.frameId;
+    if (h.format !== FORMAT_JPEG) { this.onVideo(h, data); return; }
     const job = { h, gen, blob: new Blob([new Uint8Array(data, h.headerSize, h.jpegSize)], { type: 'image/jpeg' }) };
     if (this.decoding) {
       if (this.pending) this.counters.skipped++;
@@ -383,6 +467,7 @@ export class FrameStream extends EventTarget {
         this.welcome = m;
         this.ownView = this.watching = this.expectView = m.view;
         this.emit('welcome', m);
+        this.requestVideo(); // a new view: ask again
         break;
       case 'event':
         if (!WORLD_KINDS.includes(m.what) || !m.data || typeof m.data !== 'object') return;
