@@ -2,7 +2,9 @@
  * (rd_mesh_deform_apply, run by rd_scene_update) on the two-bone arm (four and eight influences)
  * and the morphing cube that skin_builder writes, at several poses: positions, normals and
  * tangents within float tolerance. Runs with the validation layer on under ctest. */
+#include "renderer/accel/bvh.h"
 #include "renderer/accel/gpu_deform.h"
+#include "renderer/accel/gpu_refit.h"
 #include "renderer/gltf/gltf_loader.h"
 #include "renderer/scene/animation_clip.h"
 #include "renderer/scene/deform.h"
@@ -11,10 +13,86 @@
 #include "test_util.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 static char err[512];
+static int close_to(const float *a, const float *b, size_t n, float tol)
+{
+    for (size_t i = 0; i < n; i++)
+        if (!(fabsf(a[i] - b[i]) <= tol)) return 0;
+    return 1;
+}
+
+static rd_gpu_refitter g_refit;
+static double g_worst_sah_ratio = 0;
+
+/* The BVH of the rest shape refitted on the GPU over the GPU's deformed positions p (nt
+ * triangles) against a fresh CPU build over p: the same closest hit (triangle and t) ray by ray,
+ * rays from a sphere around the box through points inside it. */
+static void check_refit(rd_vk *vk, const rd_gpu_deform_mesh *gm, const rd_mesh_deform *d,
+                        const float *p, const char *what)
+{
+    uint32_t nt = d->vertex_count / 3;
+    rd_bvh rest, fresh;
+    CHECK(rd_bvh_build_triangles(&rest, d->rest_positions, nt, NULL));
+    CHECK(rd_bvh_build_triangles(&fresh, p, nt, NULL));
+    rd_gpu_refit_blas b;
+    rd_vk_result r = rd_gpu_refit_blas_create(vk, &b, &rest, err, sizeof err);
+    CHECKF(r == RD_VK_OK, "%s", err);
+    rd_cmd c;
+    r = rd_cmd_begin(vk, &c, err, sizeof err);
+    CHECKF(r == RD_VK_OK, "%s", err);
+    rd_gpu_refit_record(&c, &g_refit, &b, gm->out.address + gm->out_positions);
+    r = rd_cmd_submit_wait(vk, &c, err, sizeof err);
+    CHECKF(r == RD_VK_OK, "%s", err);
+    CHECK(rd_buffer_download(vk, &b.nodes, 0, rest.nodes, rest.node_count * sizeof(pc_bvh_node),
+                             err, sizeof err) == RD_VK_OK);
+    float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
+    for (uint32_t i = 0; i < nt * 3; i++)
+        for (int k = 0; k < 3; k++) {
+            lo[k] = fminf(lo[k], p[i * 3 + k]);
+            hi[k] = fmaxf(hi[k], p[i * 3 + k]);
+        }
+    CHECKF(close_to(&rest.nodes[0].bmin.x, lo, 3, 0) && close_to(&rest.nodes[0].bmax.x, hi, 3, 0),
+           "%s: refitted root box", what);
+    uint32_t state = 7u, rays = 0, hits = 0, bad = 0;
+    for (int i = 0; i < 400; i++) {
+        float u[6];
+        for (int k = 0; k < 6; k++) {
+            state = state * 1664525u + 1013904223u;
+            u[k] = (float)(state >> 8) / 16777216.0f;
+        }
+        float ctr[3], org[3], dir[3], target[3], rad = 0;
+        for (int k = 0; k < 3; k++) {
+            ctr[k] = 0.5f * (lo[k] + hi[k]);
+            rad += (hi[k] - lo[k]) * (hi[k] - lo[k]);
+        }
+        float z = 2 * u[0] - 1, ph = 6.2831853f * u[1], s = sqrtf(fmaxf(0, 1 - z * z));
+        float sd[3] = {s * cosf(ph), s * sinf(ph), z};
+        for (int k = 0; k < 3; k++) {
+            org[k] = ctr[k] + 2 * sqrtf(rad) * sd[k];
+            target[k] = lo[k] + u[3 + k] * (hi[k] - lo[k]);
+            dir[k] = target[k] - org[k];
+        }
+        float ta = 0, tb = 0;
+        int64_t ha = rd_bvh_closest_triangle(&rest, p, org, dir, 0, 1e30f, &ta);
+        int64_t hb = rd_bvh_closest_triangle(&fresh, p, org, dir, 0, 1e30f, &tb);
+        rays++;
+        hits += hb >= 0;
+        bad += ha != hb || (ha >= 0 && ta != tb);
+    }
+    CHECKF(bad == 0 && hits > 0, "%s: %u of %u rays differ after refit (%u hits)", what, bad, rays,
+           hits);
+    double sah_refit = rd_bvh_sah_cost(&rest), sah_fresh = rd_bvh_sah_cost(&fresh);
+    if (sah_fresh > 0 && sah_refit / sah_fresh > g_worst_sah_ratio)
+        g_worst_sah_ratio = sah_refit / sah_fresh;
+    rd_gpu_refit_blas_destroy(vk, &b);
+    rd_gpu_refit_blas_destroy(vk, &b); /* idempotent */
+    rd_bvh_destroy(&rest);
+    rd_bvh_destroy(&fresh);
+}
 
 static int load(char *text, rd_scene *s)
 {
@@ -22,13 +100,6 @@ static int load(char *text, rd_scene *s)
     rd_gltf_result r = rd_gltf_load_memory(text, strlen(text), NULL, NULL, s, err, sizeof err);
     free(text);
     return r == RD_GLTF_OK;
-}
-
-static int close_to(const float *a, const float *b, size_t n, float tol)
-{
-    for (size_t i = 0; i < n; i++)
-        if (!(fabsf(a[i] - b[i]) <= tol)) return 0;
-    return 1;
 }
 
 /* Every deforming instance of s posed on the GPU from s's current pose, checked against the
@@ -76,6 +147,7 @@ static int check_scene(rd_vk *vk, const rd_gpu_deformer *g, const rd_scene *s, c
                   RD_VK_OK);
             CHECKF(close_to(t, m->tangents, nv * 4, 1e-5f), "%s: tangents differ", what);
         }
+        check_refit(vk, &gm, d, p, what);
         free(p);
         free(nn);
         free(t);
@@ -112,11 +184,16 @@ int main(void)
     rd_gpu_deformer g;
     rc = rd_gpu_deformer_create(&vk, &g, err, sizeof err);
     CHECKF(rc == RD_VK_OK, "%s", err);
-    if (rc == RD_VK_OK) {
+    rd_vk_result rr = rd_gpu_refitter_create(&vk, &g_refit, err, sizeof err);
+    CHECKF(rr == RD_VK_OK, "%s", err);
+    if (rc == RD_VK_OK && rr == RD_VK_OK) {
         run_file(&vk, &g, gltf_arm(ARM_FLOAT), "arm", 1);
         run_file(&vk, &g, gltf_arm(ARM_TWO_SETS), "arm, eight influences", 1);
         run_file(&vk, &g, gltf_morph_cube(), "morph cube", 3);
     }
+    fprintf(stderr, "worst SAH cost of a refitted BVH over a fresh build: %.3f\n",
+            g_worst_sah_ratio);
+    rd_gpu_refitter_destroy(&vk, &g_refit);
     rd_gpu_deformer_destroy(&vk, &g);
     rd_gpu_deformer_destroy(&vk, &g); /* idempotent */
     CHECK(rd_vk_validation_messages(&vk) == 0);
