@@ -102,8 +102,48 @@ static int load(char *text, rd_scene *s)
     return r == RD_GLTF_OK;
 }
 
-/* Every deforming instance of s posed on the GPU from s's current pose, checked against the
- * CPU's result in the mesh arrays; returns how many meshes were checked. */
+/* Mesh m posed on the GPU (weights, joint matrices as rd_mesh_deform_apply takes them) against
+ * the CPU's result already in m's arrays, then its rest BVH refitted (check_refit). */
+static void check_mesh(rd_vk *vk, const rd_gpu_deformer *g, const rd_mesh *m, const float *weights,
+                       uint32_t weight_count, const float *mats, uint32_t jc, const char *what)
+{
+    const rd_mesh_deform *d = m->deform;
+    rd_gpu_deform_mesh gm;
+    rd_vk_result r = rd_gpu_deform_mesh_create(vk, &gm, m, jc, err, sizeof err);
+    CHECKF(r == RD_VK_OK, "%s", err);
+    if (r != RD_VK_OK) return;
+    rd_gpu_deform_set_pose(&gm, d, weights, weight_count, mats, jc);
+    rd_cmd c;
+    r = rd_cmd_begin(vk, &c, err, sizeof err);
+    CHECKF(r == RD_VK_OK, "%s", err);
+    rd_gpu_deform_record(&c, g, &gm);
+    r = rd_cmd_submit_wait(vk, &c, err, sizeof err);
+    CHECKF(r == RD_VK_OK, "%s", err);
+
+    size_t nv = d->vertex_count;
+    float *p = malloc(nv * 3 * sizeof(float)), *nn = malloc(nv * 3 * sizeof(float));
+    float *t = malloc(nv * 4 * sizeof(float));
+    CHECK(p && nn && t);
+    CHECK(rd_buffer_download(vk, &gm.out, gm.out_positions, p, nv * 12, err, sizeof err) ==
+          RD_VK_OK);
+    CHECK(rd_buffer_download(vk, &gm.out, gm.out_normals, nn, nv * 12, err, sizeof err) ==
+          RD_VK_OK);
+    CHECKF(close_to(p, m->positions, nv * 3, 1e-5f), "%s: positions differ", what);
+    CHECKF(close_to(nn, m->normals, nv * 3, 1e-5f), "%s: normals differ", what);
+    if (gm.has_tangents && m->tangents) {
+        CHECK(rd_buffer_download(vk, &gm.out, gm.out_tangents, t, nv * 16, err, sizeof err) ==
+              RD_VK_OK);
+        CHECKF(close_to(t, m->tangents, nv * 4, 1e-5f), "%s: tangents differ", what);
+    }
+    check_refit(vk, &gm, d, p, what);
+    free(p);
+    free(nn);
+    free(t);
+    rd_gpu_deform_mesh_destroy(vk, &gm);
+    rd_gpu_deform_mesh_destroy(vk, &gm); /* idempotent */
+}
+
+/* Every deforming instance of s posed from s's current pose; returns how many were checked. */
 static int check_scene(rd_vk *vk, const rd_gpu_deformer *g, const rd_scene *s, const char *what)
 {
     int checked = 0;
@@ -119,44 +159,66 @@ static int check_scene(rd_vk *vk, const rd_gpu_deformer *g, const rd_scene *s, c
         float *mats = calloc((size_t)jc * 16 + 1, sizeof(float));
         CHECK(mats != NULL);
         if (k) rd_skin_joint_matrices(s, k, node, mats);
-
-        rd_gpu_deform_mesh gm;
-        rd_vk_result r = rd_gpu_deform_mesh_create(vk, &gm, m, jc, err, sizeof err);
-        CHECKF(r == RD_VK_OK, "%s", err);
-        rd_gpu_deform_set_pose(&gm, d, n->weights, n->weight_count, k ? mats : NULL, jc);
-        rd_cmd c;
-        r = rd_cmd_begin(vk, &c, err, sizeof err);
-        CHECKF(r == RD_VK_OK, "%s", err);
-        rd_gpu_deform_record(&c, g, &gm);
-        r = rd_cmd_submit_wait(vk, &c, err, sizeof err);
-        CHECKF(r == RD_VK_OK, "%s", err);
-
-        size_t nv = d->vertex_count;
-        float *p = malloc(nv * 3 * sizeof(float)), *nn = malloc(nv * 3 * sizeof(float));
-        float *t = malloc(nv * 4 * sizeof(float));
-        CHECK(p && nn && t);
-        CHECK(rd_buffer_download(vk, &gm.out, gm.out_positions, p, nv * 12, err, sizeof err) ==
-              RD_VK_OK);
-        CHECK(rd_buffer_download(vk, &gm.out, gm.out_normals, nn, nv * 12, err, sizeof err) ==
-              RD_VK_OK);
-        CHECKF(close_to(p, m->positions, nv * 3, 1e-5f), "%s: positions differ (mesh %u)", what,
-               s->instances[i].mesh);
-        CHECKF(close_to(nn, m->normals, nv * 3, 1e-5f), "%s: normals differ", what);
-        if (gm.has_tangents && m->tangents) {
-            CHECK(rd_buffer_download(vk, &gm.out, gm.out_tangents, t, nv * 16, err, sizeof err) ==
-                  RD_VK_OK);
-            CHECKF(close_to(t, m->tangents, nv * 4, 1e-5f), "%s: tangents differ", what);
-        }
-        check_refit(vk, &gm, d, p, what);
-        free(p);
-        free(nn);
-        free(t);
+        check_mesh(vk, g, m, n->weights, n->weight_count, k ? mats : NULL, jc, what);
         free(mats);
-        rd_gpu_deform_mesh_destroy(vk, &gm);
-        rd_gpu_deform_mesh_destroy(vk, &gm); /* idempotent */
         checked++;
     }
     return checked;
+}
+
+/* A bumpy sheet of cols x rows quads along +X in [0, 2], skinned to two joints (the second
+ * turning about +Z at x = 1, the weights ramping over x in [0.7, 1.3]), bent to each of a few
+ * angles: enough triangles for a BVH of several levels, and a large bend for the SAH ratio. */
+static void run_sheet(rd_vk *vk, const rd_gpu_deformer *g, uint32_t cols, uint32_t rows)
+{
+    rd_mesh m;
+    memset(&m, 0, sizeof m);
+    m.tri_count = cols * rows * 2;
+    size_t nv = (size_t)m.tri_count * 3;
+    m.positions = calloc(nv * 3, sizeof(float));
+    m.normals = calloc(nv * 3, sizeof(float));
+    CHECK(m.positions && m.normals);
+    size_t c = 0;
+    for (uint32_t y = 0; y < rows; y++)
+        for (uint32_t x = 0; x < cols; x++) {
+            const uint32_t q[6][2] = {{x, y}, {x + 1, y},     {x + 1, y + 1},
+                                      {x, y}, {x + 1, y + 1}, {x, y + 1}};
+            for (int k = 0; k < 6; k++, c++) {
+                float px = 2.0f * (float)q[k][0] / (float)cols;
+                float py = (float)q[k][1] / (float)rows - 0.5f;
+                m.positions[c * 3] = px;
+                m.positions[c * 3 + 1] = py;
+                m.positions[c * 3 + 2] = 0.1f * sinf(9 * px) * cosf(7 * py);
+                m.normals[c * 3 + 2] = 1;
+            }
+        }
+    rd_mesh_deform *d = rd_mesh_deform_create(&m, 4, 0, false, false);
+    rd_mesh_deform_keep_rest(&m);
+    for (size_t v = 0; v < nv; v++) {
+        float w = (m.positions[v * 3] - 0.7f) / 0.6f;
+        w = w < 0 ? 0 : w > 1 ? 1 : w;
+        d->joints[v * 4] = 0;
+        d->joints[v * 4 + 1] = 1;
+        d->weights[v * 4] = 1 - w;
+        d->weights[v * 4 + 1] = w;
+    }
+    d->max_joint = 1;
+    const double angles[] = {0, 30, 90, 150};
+    for (size_t i = 0; i < sizeof angles / sizeof angles[0]; i++) {
+        double a = angles[i] * M_PI / 180;
+        float mats[32] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+        float cs = (float)cos(a), sn = (float)sin(a);
+        /* joint 1: rotate about +Z around (1, 0, 0), column-major */
+        const float j1[16] = {cs, sn, 0, 0, -sn, cs, 0, 0, 0, 0, 1, 0, 1 - cs, -sn, 0, 1};
+        memcpy(mats + 16, j1, sizeof j1);
+        rd_mesh_deform_apply(&m, NULL, 0, mats, 2);
+        char what[64];
+        snprintf(what, sizeof what, "sheet %ux%u at %g degrees", cols, rows, angles[i]);
+        check_mesh(vk, g, &m, NULL, 0, mats, 2, what);
+    }
+    rd_mesh_deform_free(m.deform);
+    free(m.positions);
+    free(m.normals);
 }
 
 static void run_file(rd_vk *vk, const rd_gpu_deformer *g, char *text, const char *what,
@@ -190,6 +252,7 @@ int main(void)
         run_file(&vk, &g, gltf_arm(ARM_FLOAT), "arm", 1);
         run_file(&vk, &g, gltf_arm(ARM_TWO_SETS), "arm, eight influences", 1);
         run_file(&vk, &g, gltf_morph_cube(), "morph cube", 3);
+        run_sheet(&vk, &g, 32, 8);
     }
     fprintf(stderr, "worst SAH cost of a refitted BVH over a fresh build: %.3f\n",
             g_worst_sah_ratio);
