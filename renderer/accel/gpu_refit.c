@@ -1,6 +1,7 @@
 /* gpu_refit.c: BLAS refit on the GPU, one dispatch per level (see gpu_refit.h). */
 #include "renderer/accel/gpu_refit.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -98,4 +99,10 @@ void rd_gpu_refit_record(rd_cmd *c, const rd_gpu_refitter *g, const rd_gpu_refit
         if (n) rd_cmd_dispatch(c, &g->refit, &push, (n + PC_WG_1D - 1) / PC_WG_1D, 1, 1);
         rd_cmd_barrier(c);
     }
+}
+
+bool rd_gpu_refit_should_rebuild(double sah_refitted, double sah_fresh)
+{
+    if (!(sah_fresh > 0) || !isfinite(sah_fresh) || !isfinite(sah_refitted)) return true;
+    return sah_refitted > RD_GPU_REFIT_REBUILD_SAH_RATIO * sah_fresh;
 }

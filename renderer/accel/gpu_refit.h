@@ -8,6 +8,7 @@
 #ifndef RD_GPU_REFIT_H
 #define RD_GPU_REFIT_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "renderer/accel/bvh.h"
@@ -33,6 +34,18 @@ typedef struct rd_gpu_refit_blas {
 rd_vk_result rd_gpu_refit_blas_create(rd_vk *vk, rd_gpu_refit_blas *b, const rd_bvh *bvh, char *err,
                                       size_t errlen);
 void rd_gpu_refit_blas_destroy(rd_vk *vk, rd_gpu_refit_blas *b); /* idempotent */
+
+/* When a refitted tree has degraded enough to rebuild: its SAH cost (rd_bvh_sah_cost over a
+ * read-back of b's nodes) over a fresh CPU build's of the same deformed mesh past this ratio.
+ * Measured with probecast_deformbench (a sheet skinned to two joints, bent 10-150 degrees from
+ * its rest pose): 1.01-1.29 for 8 K and 66 K triangles, the worst at 150 degrees, where the
+ * bend folds the tree's rest-pose split planes over each other; 1.25 rebuilds only such folds.
+ * A rough choice: the trace cost of a ratio has not been measured on the GPU yet. */
+#define RD_GPU_REFIT_REBUILD_SAH_RATIO 1.25
+
+/* true when the refitted tree (SAH cost sah_refitted) should be rebuilt, given a fresh build's
+ * cost sah_fresh: the ratio above passed (a zero or non-finite cost: rebuild too). */
+bool rd_gpu_refit_should_rebuild(double sah_refitted, double sah_fresh);
 
 /* Records the refit of b over positions (device address of 9 floats per triangle, the mesh's
  * original triangle order, e.g. rd_gpu_deform_mesh's out positions), a barrier after each level. */
