@@ -1,6 +1,7 @@
 /* gpu_refit.c: BLAS refit on the GPU, one dispatch per level (see gpu_refit.h). */
 #include "renderer/accel/gpu_refit.h"
 
+#include <assert.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -48,6 +49,7 @@ rd_vk_result rd_gpu_refit_blas_create(rd_vk *vk, rd_gpu_refit_blas *b, const rd_
         if (rd_bvh_node_count(&bvh->nodes[i]) != 0 || np == 0) continue;
         uint32_t c = rd_bvh_node_first(&bvh->nodes[i]);
         if (c + 1 >= nn) continue;
+        assert(c > i); /* the builder stores children after their parent */
         depth[c] = depth[c + 1] = depth[i] + 1;
         if (depth[c] > max_depth) max_depth = depth[c];
     }
