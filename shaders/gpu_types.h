@@ -544,6 +544,29 @@ PC_STRUCT(pc_pick_result)
 }
 PC_END(pc_pick_result);
 
+/* Push constants of deform.comp (renderer/accel/gpu_deform.c): the flat per-vertex arrays of one
+ * deforming mesh (uploaded once), the pose (joint matrices, 16 floats each, column-major, and
+ * morph weights; uploaded per pose) and the outputs. An address of 0: that array is absent.
+ * counts: x vertices, y influences per vertex (0, 4 or 8), z morph targets, w joints. */
+PC_STRUCT(pc_deform_push)
+{
+    pc_uvec4 counts;         /* first: a uvec4 sits on 16 bytes */
+    pc_u64 rest_positions;   /* 3 floats per vertex */
+    pc_u64 rest_normals;     /* 3 floats per vertex */
+    pc_u64 rest_tangents;    /* 4 floats per vertex */
+    pc_u64 joints;           /* `influences` uints per vertex */
+    pc_u64 weights;          /* `influences` floats per vertex */
+    pc_u64 target_positions; /* 3 floats per vertex and target, target-major */
+    pc_u64 target_normals;
+    pc_u64 target_tangents;
+    pc_u64 joint_mats;    /* 16 floats per joint */
+    pc_u64 morph_weights; /* one float per target */
+    pc_u64 out_positions; /* 3 floats per vertex */
+    pc_u64 out_normals;   /* 3 floats per vertex */
+    pc_u64 out_tangents;  /* 4 floats per vertex */
+}
+PC_END(pc_deform_push);
+
 /* Push constants shared by all passes: address of pc_globals plus pass-specific words. */
 PC_STRUCT(pc_push)
 {
@@ -624,6 +647,9 @@ PC_OFF(pc_pick_result, normal, 16);
 PC_OFF(pc_pick_result, info, 32);
 PC_CHECK(pc_push, 48);
 PC_OFF(pc_push, params, 32);
+PC_CHECK(pc_deform_push, 120);
+PC_OFF(pc_deform_push, rest_positions, 16);
+PC_OFF(pc_deform_push, out_tangents, 112);
 #undef PC_CHECK
 #undef PC_OFF
 #endif

@@ -1,0 +1,110 @@
+/* gpu_refit.c: BLAS refit on the GPU, one dispatch per level (see gpu_refit.h). */
+#include "renderer/accel/gpu_refit.h"
+
+#include <assert.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "shaders/gpu_types.h"
+#include "shaders/refit.spv.h"
+
+static const rd_pipeline_desc kPipelines[] = {
+    RD_PIPELINE_DESC(rd_gpu_refitter, refit, "refit", pc_spv_refit, (uint32_t)sizeof(pc_push)),
+};
+#define PIPELINE_COUNT (sizeof kPipelines / sizeof kPipelines[0])
+
+rd_vk_result rd_gpu_refitter_create(rd_vk *vk, rd_gpu_refitter *g, char *err, size_t errlen)
+{
+    memset(g, 0, sizeof *g);
+    return rd_pipelines_create(vk, g, kPipelines, PIPELINE_COUNT, err, errlen);
+}
+
+void rd_gpu_refitter_destroy(rd_vk *vk, rd_gpu_refitter *g)
+{
+    rd_pipelines_destroy(vk, g, kPipelines, PIPELINE_COUNT);
+}
+
+static void *xcalloc(size_t n, size_t size)
+{
+    void *p = calloc(n ? n : 1, size);
+    if (!p) {
+        fprintf(stderr, "probecast: out of memory (%zu x %zu bytes of BLAS refit)\n", n, size);
+        abort();
+    }
+    return p;
+}
+
+rd_vk_result rd_gpu_refit_blas_create(rd_vk *vk, rd_gpu_refit_blas *b, const rd_bvh *bvh, char *err,
+                                      size_t errlen)
+{
+    memset(b, 0, sizeof *b);
+    uint32_t nn = bvh->node_count, np = bvh->prim_count;
+    b->node_count = nn;
+    b->prim_count = np;
+    /* depth of every node (parents come before children in the builder's order) */
+    uint32_t *depth = xcalloc(nn, sizeof *depth), max_depth = 0;
+    for (uint32_t i = 0; i < nn; i++) {
+        if (rd_bvh_node_count(&bvh->nodes[i]) != 0 || np == 0) continue;
+        uint32_t c = rd_bvh_node_first(&bvh->nodes[i]);
+        if (c + 1 >= nn) continue;
+        assert(c > i); /* the builder stores children after their parent */
+        depth[c] = depth[c + 1] = depth[i] + 1;
+        if (depth[c] > max_depth) max_depth = depth[c];
+    }
+    b->level_count = np ? max_depth + 1 : 0;
+    b->level_start = xcalloc((size_t)b->level_count + 1, sizeof *b->level_start);
+    uint32_t *topo = xcalloc((size_t)nn + np, sizeof *topo);
+    uint32_t at = 0;
+    for (uint32_t l = 0; l < b->level_count; l++) {
+        b->level_start[l] = at;
+        uint32_t want = max_depth - l; /* deepest first */
+        for (uint32_t i = 0; i < nn; i++)
+            if (depth[i] == want) topo[at++] = i;
+    }
+    b->level_start[b->level_count] = at;
+    memcpy(topo + nn, bvh->prim_index, (size_t)np * sizeof *topo);
+    free(depth);
+
+    size_t node_bytes = (size_t)nn * sizeof(pc_bvh_node), topo_bytes = ((size_t)nn + np) * 4;
+    rd_vk_result r = rd_buffer_create(vk, &b->nodes, node_bytes, RD_MEMORY_DEVICE, err, errlen);
+    if (r == RD_VK_OK) r = rd_buffer_upload(vk, &b->nodes, 0, bvh->nodes, node_bytes, err, errlen);
+    if (r == RD_VK_OK)
+        r = rd_buffer_create(vk, &b->topology, topo_bytes, RD_MEMORY_DEVICE, err, errlen);
+    if (r == RD_VK_OK) r = rd_buffer_upload(vk, &b->topology, 0, topo, topo_bytes, err, errlen);
+    free(topo);
+    if (r != RD_VK_OK) rd_gpu_refit_blas_destroy(vk, b);
+    return r;
+}
+
+void rd_gpu_refit_blas_destroy(rd_vk *vk, rd_gpu_refit_blas *b)
+{
+    rd_buffer_destroy(vk, &b->topology);
+    rd_buffer_destroy(vk, &b->nodes);
+    free(b->level_start);
+    b->level_start = NULL;
+    b->level_count = 0;
+}
+
+void rd_gpu_refit_record(rd_cmd *c, const rd_gpu_refitter *g, const rd_gpu_refit_blas *b,
+                         VkDeviceAddress positions)
+{
+    for (uint32_t l = 0; l < b->level_count; l++) {
+        uint32_t n = b->level_start[l + 1] - b->level_start[l];
+        pc_push push = {
+            .buf0 = b->nodes.address,
+            .buf1 = b->topology.address,
+            .buf2 = positions,
+            .params = {n, b->level_start[l], b->node_count, 0},
+        };
+        if (n) rd_cmd_dispatch(c, &g->refit, &push, (n + PC_WG_1D - 1) / PC_WG_1D, 1, 1);
+        rd_cmd_barrier(c);
+    }
+}
+
+bool rd_gpu_refit_should_rebuild(double sah_refitted, double sah_fresh)
+{
+    if (!(sah_fresh > 0) || !isfinite(sah_fresh) || !isfinite(sah_refitted)) return true;
+    return sah_refitted > RD_GPU_REFIT_REBUILD_SAH_RATIO * sah_fresh;
+}

@@ -1,0 +1,55 @@
+/* gpu_refit.h: a BLAS refitted on the GPU for a deformed mesh (shaders/refit.comp): the node
+ * boxes recomputed bottom-up over the topology the CPU builder made, one dispatch per level
+ * (deepest first; a level's nodes only read deeper ones, so no atomics and a deterministic
+ * result; depth is ~log2(triangles / 4) + a few, so ~20-40 small dispatches per mesh). The nodes
+ * keep pc_bvh_node's layout and w words, so the traversal reads them as it reads a CPU build.
+ * Quality: rd_bvh_sah_cost of the refitted tree against a fresh build decides when to rebuild
+ * (the caller's policy). Not yet wired into rd_gpu_scene_update_pose. */
+#ifndef RD_GPU_REFIT_H
+#define RD_GPU_REFIT_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "renderer/accel/bvh.h"
+#include "renderer/vk/vk_compute.h"
+
+typedef struct rd_gpu_refitter {
+    rd_pipeline refit;
+} rd_gpu_refitter;
+
+rd_vk_result rd_gpu_refitter_create(rd_vk *vk, rd_gpu_refitter *g, char *err, size_t errlen);
+void rd_gpu_refitter_destroy(rd_vk *vk, rd_gpu_refitter *g); /* idempotent */
+
+/* One BLAS on the GPU: its nodes (indices relative to the buffer's start) and its topology
+ * (node indices by level, deepest level first, then the leaf-order -> triangle map). */
+typedef struct rd_gpu_refit_blas {
+    rd_buffer nodes;
+    rd_buffer topology;
+    uint32_t node_count, prim_count, level_count;
+    uint32_t *level_start; /* level_count + 1 entries into the topology's node list */
+} rd_gpu_refit_blas;
+
+/* Uploads bvh (built over the mesh's triangles, rd_bvh_build_triangles). */
+rd_vk_result rd_gpu_refit_blas_create(rd_vk *vk, rd_gpu_refit_blas *b, const rd_bvh *bvh, char *err,
+                                      size_t errlen);
+void rd_gpu_refit_blas_destroy(rd_vk *vk, rd_gpu_refit_blas *b); /* idempotent */
+
+/* When a refitted tree has degraded enough to rebuild: its SAH cost (rd_bvh_sah_cost over a
+ * read-back of b's nodes) over a fresh CPU build's of the same deformed mesh past this ratio.
+ * Measured with probecast_deformbench (a sheet skinned to two joints, bent 10-150 degrees from
+ * its rest pose): 1.01-1.29 for 8 K and 66 K triangles, the worst at 150 degrees, where the
+ * bend folds the tree's rest-pose split planes over each other; 1.25 rebuilds only such folds.
+ * A rough choice: the trace cost of a ratio has not been measured on the GPU yet. */
+#define RD_GPU_REFIT_REBUILD_SAH_RATIO 1.25
+
+/* true when the refitted tree (SAH cost sah_refitted) should be rebuilt, given a fresh build's
+ * cost sah_fresh: the ratio above passed (a zero or non-finite cost: rebuild too). */
+bool rd_gpu_refit_should_rebuild(double sah_refitted, double sah_fresh);
+
+/* Records the refit of b over positions (device address of 9 floats per triangle, the mesh's
+ * original triangle order, e.g. rd_gpu_deform_mesh's out positions), a barrier after each level. */
+void rd_gpu_refit_record(rd_cmd *c, const rd_gpu_refitter *g, const rd_gpu_refit_blas *b,
+                         VkDeviceAddress positions);
+
+#endif
