@@ -119,6 +119,12 @@ struct srv_ws_stream {
 };
 
 void srv_ws_close_viewer(viewer *v, int code, const char *reason);
+/* ws_handshake.c: NULL to accept the upgrade, else the reason it is refused (logged); the
+ * client's address (for a connection handed over by the HTTP API, the one it came from there);
+ * whether it offered protocol version 2 (a view of its own). */
+const char *srv_ws_handshake_refusal(srv_ws_stream *ws, struct lws *wsi);
+void srv_ws_peer_ip(struct lws *wsi, char *ip, size_t n);
+bool srv_ws_offers_v2(struct lws *wsi);
 void srv_ws_update_caps(srv_ws_stream *ws);
 unsigned srv_ws_cap_from_lag(double lag_ms);
 void srv_ws_queue_text(viewer *v, char *text);
