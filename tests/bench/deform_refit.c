@@ -13,6 +13,7 @@
 #include "renderer/accel/gpu_deform.h"
 #include "renderer/accel/gpu_refit.h"
 #include "renderer/scene/deform.h"
+#include "tests/renderer/skinned_sheet.h"
 
 static char err[512];
 
@@ -23,39 +24,6 @@ static double now_ms(void)
     return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
 }
 
-static void sheet(rd_mesh *m, uint32_t cols, uint32_t rows)
-{
-    memset(m, 0, sizeof *m);
-    m->tri_count = cols * rows * 2;
-    size_t nv = (size_t)m->tri_count * 3, c = 0;
-    m->positions = calloc(nv * 3, sizeof(float));
-    m->normals = calloc(nv * 3, sizeof(float));
-    if (!m->positions || !m->normals) abort();
-    for (uint32_t y = 0; y < rows; y++)
-        for (uint32_t x = 0; x < cols; x++) {
-            const uint32_t q[6][2] = {{x, y}, {x + 1, y},     {x + 1, y + 1},
-                                      {x, y}, {x + 1, y + 1}, {x, y + 1}};
-            for (int k = 0; k < 6; k++, c++) {
-                float px = 2.0f * (float)q[k][0] / (float)cols;
-                float py = (float)q[k][1] / (float)rows - 0.5f;
-                m->positions[c * 3] = px;
-                m->positions[c * 3 + 1] = py;
-                m->positions[c * 3 + 2] = 0.1f * sinf(9 * px) * cosf(7 * py);
-                m->normals[c * 3 + 2] = 1;
-            }
-        }
-    rd_mesh_deform *d = rd_mesh_deform_create(m, 4, 0, false, false);
-    rd_mesh_deform_keep_rest(m);
-    for (size_t v = 0; v < nv; v++) {
-        float w = (m->positions[v * 3] - 0.7f) / 0.6f;
-        w = w < 0 ? 0 : w > 1 ? 1 : w;
-        d->joints[v * 4 + 1] = 1;
-        d->weights[v * 4] = 1 - w;
-        d->weights[v * 4 + 1] = w;
-    }
-    d->max_joint = 1;
-}
-
 static int run(rd_vk *vk, const rd_gpu_deformer *gd, const rd_gpu_refitter *gr, rd_timer *tm,
                uint32_t tris)
 {
@@ -63,7 +31,7 @@ static int run(rd_vk *vk, const rd_gpu_deformer *gd, const rd_gpu_refitter *gr, 
     if (rows < 1) rows = 1;
     uint32_t cols = (tris / 2 + rows - 1) / rows;
     rd_mesh m;
-    sheet(&m, cols, rows);
+    pc_skinned_sheet(&m, cols, rows);
     rd_bvh rest, fresh;
     if (!rd_bvh_build_triangles(&rest, m.deform->rest_positions, m.tri_count, NULL)) abort();
     rd_gpu_deform_mesh gm;

@@ -10,6 +10,7 @@
 #include "renderer/scene/deform.h"
 #include "renderer/vk/vk_context.h"
 #include "skin_builder.h"
+#include "skinned_sheet.h"
 #include "test_util.h"
 
 #include <math.h>
@@ -170,43 +171,13 @@ static int check_scene(rd_vk *vk, const rd_gpu_deformer *g, const rd_scene *s, c
     return checked;
 }
 
-/* A bumpy sheet of cols x rows quads along +X in [0, 2], skinned to two joints (the second
- * turning about +Z at x = 1, the weights ramping over x in [0.7, 1.3]), bent to each of a few
- * angles: enough triangles for a BVH of several levels, and a large bend for the SAH ratio. */
+/* The skinned sheet (skinned_sheet.h) bent to each of a few angles: enough triangles for a BVH
+ * of several levels, and a large bend for the SAH ratio. */
 static void run_sheet(rd_vk *vk, const rd_gpu_deformer *g, uint32_t cols, uint32_t rows)
 {
     rd_mesh m;
-    memset(&m, 0, sizeof m);
-    m.tri_count = cols * rows * 2;
-    size_t nv = (size_t)m.tri_count * 3;
-    m.positions = calloc(nv * 3, sizeof(float));
-    m.normals = calloc(nv * 3, sizeof(float));
-    CHECK(m.positions && m.normals);
-    size_t c = 0;
-    for (uint32_t y = 0; y < rows; y++)
-        for (uint32_t x = 0; x < cols; x++) {
-            const uint32_t q[6][2] = {{x, y}, {x + 1, y},     {x + 1, y + 1},
-                                      {x, y}, {x + 1, y + 1}, {x, y + 1}};
-            for (int k = 0; k < 6; k++, c++) {
-                float px = 2.0f * (float)q[k][0] / (float)cols;
-                float py = (float)q[k][1] / (float)rows - 0.5f;
-                m.positions[c * 3] = px;
-                m.positions[c * 3 + 1] = py;
-                m.positions[c * 3 + 2] = 0.1f * sinf(9 * px) * cosf(7 * py);
-                m.normals[c * 3 + 2] = 1;
-            }
-        }
-    rd_mesh_deform *d = rd_mesh_deform_create(&m, 4, 0, false, false);
-    rd_mesh_deform_keep_rest(&m);
-    for (size_t v = 0; v < nv; v++) {
-        float w = (m.positions[v * 3] - 0.7f) / 0.6f;
-        w = w < 0 ? 0 : w > 1 ? 1 : w;
-        d->joints[v * 4] = 0;
-        d->joints[v * 4 + 1] = 1;
-        d->weights[v * 4] = 1 - w;
-        d->weights[v * 4 + 1] = w;
-    }
-    d->max_joint = 1;
+    pc_skinned_sheet(&m, cols, rows);
+    CHECK(m.positions && m.normals && m.deform);
     const double angles[] = {0, 30, 90, 150};
     for (size_t i = 0; i < sizeof angles / sizeof angles[0]; i++) {
         double a = angles[i] * M_PI / 180;
