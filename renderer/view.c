@@ -69,6 +69,7 @@ static void free_images(rd_view *v)
     v->reflect.keyed = v->near.keyed = v->near_on = false;
     rd_buffer_destroy(v->vk, &v->rgba8);
     rd_buffer_destroy(v->vk, &v->jpeg_coefs);
+    rd_buffer_destroy(v->vk, &v->i420);
     rd_buffer_destroy(v->vk, &v->radiance);
     rd_buffer_destroy(v->vk, &v->gbuffer);
     v->width = v->height = 0;

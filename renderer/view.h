@@ -78,6 +78,9 @@ typedef struct rd_view {
     /* the frame's JPEG coefficients, one set per quality, when the GPU encodes
      * (renderer/jpeg_dct.h: rd_jpeg_dct_record_view creates and grows it) */
     rd_buffer jpeg_coefs;
+    /* the frame as I420 for video viewers (renderer/video_i420.h: rd_video_i420_record_view
+     * creates and grows it) */
+    rd_buffer i420;
     rd_timer timer;
     unsigned width, height; /* of the buffers (the last frame); 0 before the first */
     unsigned frame_index;

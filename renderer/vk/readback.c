@@ -92,6 +92,14 @@ rd_vk_result rd_readback_finish(rd_readback *rb, const rd_buffer *src, size_t by
                                 unsigned height, const void *info, size_t info_size, char *err,
                                 size_t errlen)
 {
+    const rd_readback_part part = {src, bytes};
+    return rd_readback_finish_parts(rb, &part, 1, width, height, info, info_size, err, errlen);
+}
+
+rd_vk_result rd_readback_finish_parts(rd_readback *rb, const rd_readback_part *parts, unsigned n,
+                                      unsigned width, unsigned height, const void *info,
+                                      size_t info_size, char *err, size_t errlen)
+{
     rd_readback_slot *s = rb->open;
     if (!s) {
         rd_vk_errorf(err, errlen, "rd_readback_finish without rd_readback_begin.");
@@ -103,11 +111,16 @@ rd_vk_result rd_readback_finish(rd_readback *rb, const rd_buffer *src, size_t by
                      RD_READBACK_INFO_MAX);
         return RD_VK_ERR_UNSUPPORTED;
     }
-    if (bytes > src->size) {
-        rd_readback_abort(rb);
-        rd_vk_errorf(err, errlen, "Readback of %llu bytes from a %llu-byte buffer.",
-                     (unsigned long long)bytes, (unsigned long long)src->size);
-        return RD_VK_ERR_VULKAN;
+    size_t bytes = 0;
+    for (unsigned i = 0; i < n; i++) {
+        if (parts[i].bytes > parts[i].src->size) {
+            rd_readback_abort(rb);
+            rd_vk_errorf(err, errlen, "Readback of %llu bytes from a %llu-byte buffer.",
+                         (unsigned long long)parts[i].bytes,
+                         (unsigned long long)parts[i].src->size);
+            return RD_VK_ERR_VULKAN;
+        }
+        bytes += parts[i].bytes;
     }
     /* grow only: frames of several views share the ring, so sizes alternate */
     if (s->buffer.buffer == VK_NULL_HANDLE || s->buffer.size < bytes) {
@@ -129,8 +142,13 @@ rd_vk_result rd_readback_finish(rd_readback *rb, const rd_buffer *src, size_t by
         };
         vkCmdPipelineBarrier(s->cmd.cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
                              VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 1, &before, 0, NULL, 0, NULL);
-        VkBufferCopy region = {.srcOffset = 0, .dstOffset = 0, .size = bytes};
-        vkCmdCopyBuffer(s->cmd.cb, src->buffer, s->buffer.buffer, 1, &region);
+        VkDeviceSize at = 0;
+        for (unsigned i = 0; i < n; i++) {
+            if (!parts[i].bytes) continue;
+            VkBufferCopy region = {.srcOffset = 0, .dstOffset = at, .size = parts[i].bytes};
+            vkCmdCopyBuffer(s->cmd.cb, parts[i].src->buffer, s->buffer.buffer, 1, &region);
+            at += parts[i].bytes;
+        }
     }
     /* the copy's writes become visible to the host; and every later command (the next frame's
      * passes writing src) waits for the copy to have read src */

@@ -73,6 +73,15 @@ rd_vk_result rd_readback_finish(rd_readback *rb, const rd_buffer *src, size_t by
                                 unsigned height, const void *info, size_t info_size, char *err,
                                 size_t errlen);
 void rd_readback_abort(rd_readback *rb);
+/* rd_readback_finish of several sources, copied end to end into the slot in order (a frame's
+ * JPEG coefficients, then its I420 planes). */
+typedef struct rd_readback_part {
+    const rd_buffer *src;
+    size_t bytes; /* the first bytes of src */
+} rd_readback_part;
+rd_vk_result rd_readback_finish_parts(rd_readback *rb, const rd_readback_part *parts, unsigned n,
+                                      unsigned width, unsigned height, const void *info,
+                                      size_t info_size, char *err, size_t errlen);
 
 /* info: the slot's copy of the submitted record (aligned to 16 bytes, valid during the call);
  * data: the bytes copied, valid during the call; slot: the slot's index. Return true to keep it

@@ -126,6 +126,7 @@ typedef enum srv_cmd_kind {
     SRV_CMD_VIEW_OPEN,       /* a stream connection's own view (id chosen by the stream) */
     SRV_CMD_VIEW_CLOSE,      /* its connection left: free the view */
     SRV_CMD_VIEW_WATCH,      /* delta connections more (or fewer) show view `view` */
+    SRV_CMD_VIEW_VIDEO,      /* delta of view `view`'s watchers more (or fewer) take video */
     SRV_CMD_FRAME_REQUEST,   /* GET /v1/frame.jpg: reply {"after": frame id} to wait past */
     SRV_CMD_SET_ENVIRONMENT, /* PUT/DELETE /v1/environment: env_image, or NULL to drop it */
     SRV_CMD_PICK,            /* POST /v1/views/{id}/pick: what lies under pick[] in view */

@@ -137,7 +137,8 @@ static void job_done(srv_encoder_pool *p, srv_frame *f)
     if (--f->remaining > 0) return;
     /* a published frame keeps its RGBA8 pixels for the video encoders (video_stream.h); on the
      * CPU path its view holds the same image anyway (its last image, for stills) */
-    if (f->image->coef_sets || f->abandoned) {
+    bool pixels = !f->image->coef_sets || f->image->i420_y_stride; /* RGBA8 or I420 */
+    if (!pixels || f->abandoned) {
         srv_image_unref(f->image);
         f->image = NULL;
     }
@@ -434,7 +435,9 @@ void srv_encoder_submit(srv_encoder_pool *p, srv_image *img, const srv_frame_inf
     /* qualities: base, and min(base, cap) per cap, ascending and unique; coefficients come
      * with theirs */
     unsigned q[SRV_MAX_VARIANTS], n;
-    if (img->coef_sets) {
+    if (info->video_only) {
+        n = 0; /* published at once below, for the video encoders */
+    } else if (img->coef_sets) {
         n = img->coef_sets < SRV_MAX_VARIANTS ? img->coef_sets : SRV_MAX_VARIANTS;
         memcpy(q, img->coef_quality, n * sizeof q[0]);
     } else {
@@ -448,7 +451,7 @@ void srv_encoder_submit(srv_encoder_pool *p, srv_image *img, const srv_frame_inf
     unsigned min_px = p->stripe_min_pixels ? p->stripe_min_pixels : SRV_STRIPE_MIN_PIXELS;
     srv_jpeg_plan plan;
     unsigned stripes = 1;
-    if (p->thread_count > 1 && (uint64_t)img->width * img->height >= min_px &&
+    if (n > 0 && p->thread_count > 1 && (uint64_t)img->width * img->height >= min_px &&
         srv_jpeg_plan_make(&plan, img->width, img->height, p->thread_count,
                            SRV_STRIPE_MIN_MCU_ROWS) == SRV_JPEG_OK &&
         plan.stripe_count > 1) {
@@ -478,6 +481,13 @@ void srv_encoder_submit(srv_encoder_pool *p, srv_image *img, const srv_frame_inf
             p->tail = j;
             link = &j->next;
         }
+    }
+    if (n == 0) { /* video only: nothing to encode */
+        p->stats.frames_video_only++;
+        f->remaining = 1;
+        job_done(p, f);
+        pthread_mutex_unlock(&p->mu);
+        return;
     }
     /* variant after variant, each one's stripes top to bottom */
     for (unsigned k = 0; k < n * stripes; k++) {
@@ -516,7 +526,8 @@ srv_frame *srv_encoder_wait_frame(srv_encoder_pool *p, uint32_t view_id, uint64_
     srv_frame *f = NULL;
     for (;;) {
         srv_frame **slot = latest_slot(p, view_id, false);
-        if (slot && *slot && (*slot)->info.frame_id > after_id) {
+        /* a frame with JPEG (not one made for video viewers only) */
+        if (slot && *slot && (*slot)->info.frame_id > after_id && (*slot)->variant_count > 0) {
             f = srv_frame_ref(*slot);
             break;
         }

@@ -37,6 +37,9 @@ typedef struct srv_frame_info {
     uint64_t ready_us;     /* Unix time when its pixels reached the encoders */
     uint64_t input_ticket; /* every input command with a ticket up to this one is reflected */
     bool still;            /* produced after input stopped (full quality) */
+    /* every watcher of its view takes it as video: published with no JPEG (variant_count 0),
+     * for its image only */
+    bool video_only;
 } srv_frame_info;
 
 typedef struct srv_jpeg {
@@ -73,8 +76,9 @@ typedef struct srv_encoder_stats {
     uint64_t frames_published, frames_dropped, jpegs_encoded, bytes_encoded;
     double encode_ms_avg; /* exponential moving average per JPEG (wall: first stripe to join) */
     double encode_ms_last;
-    uint64_t jpegs_striped;  /* of jpegs_encoded, those encoded in stripes */
-    uint64_t jpegs_from_gpu; /* of jpegs_encoded, those entropy-coded from GPU coefficients */
+    uint64_t jpegs_striped;     /* of jpegs_encoded, those encoded in stripes */
+    uint64_t jpegs_from_gpu;    /* of jpegs_encoded, those entropy-coded from GPU coefficients */
+    uint64_t frames_video_only; /* of frames_published, those without JPEG (video_only) */
 } srv_encoder_stats;
 
 /* Called (from an encoder thread) after a frame is published. Must be quick and thread-safe. */
@@ -106,10 +110,11 @@ void srv_encoder_submit(srv_encoder_pool *p, srv_image *img, const srv_frame_inf
 void srv_encoder_set_stripe_min_pixels(srv_encoder_pool *p, unsigned pixels);
 /* Sets the lag-driven caps the viewers currently need (see SRV_CAP_*). */
 void srv_encoder_set_caps(srv_encoder_pool *p, uint32_t mask);
-/* The newest published frame of view view_id (a new reference) or NULL. */
+/* The newest published frame of view view_id (a new reference) or NULL. A frame made for video
+ * viewers only (srv_frame_info.video_only) has no JPEG: variant_count 0. */
 srv_frame *srv_encoder_latest(srv_encoder_pool *p, uint32_t view_id);
-/* Waits up to timeout_ms for a published frame of view_id newer than after_id; returns it (a new
- * reference) or NULL on timeout. */
+/* Waits up to timeout_ms for a published frame of view_id newer than after_id, with JPEG (not
+ * video only); returns it (a new reference) or NULL on timeout. */
 srv_frame *srv_encoder_wait_frame(srv_encoder_pool *p, uint32_t view_id, uint64_t after_id,
                                   unsigned timeout_ms);
 /* Drops the view's published frame (the view was freed). */

@@ -512,14 +512,38 @@ void srv_video_encoder_destroy(srv_video_encoder *e)
     free(e);
 }
 
-srv_video_result srv_video_encode(srv_video_encoder *e, const uint8_t *rgba, size_t stride,
-                                  bool force_key, srv_video_packet *out, char *err, size_t err_size)
+/* Where a frame comes from: RGBA8 pixels (converted here) or I420 planes (copied). */
+typedef struct frame_source {
+    const uint8_t *rgba;
+    size_t stride;
+    const uint8_t *y, *cb, *cr;
+    size_t y_stride, c_stride;
+} frame_source;
+
+static void copy_plane(const uint8_t *src, size_t src_stride, unsigned w, unsigned h, uint8_t *dst,
+                       size_t dst_stride)
 {
-    if (err && err_size) err[0] = '\0';
-    if (!e || !rgba || !out || stride < (size_t)e->d.width * 4)
-        return fail(SRV_VIDEO_BAD_ARG, err, err_size,
-                    "no encoder, pixels or packet, or a stride "
-                    "under width * 4");
+    for (unsigned j = 0; j < h; j++)
+        memcpy(dst + j * dst_stride, src + j * src_stride, w);
+}
+
+/* The frame into the encoder's planes (Y, Cb, Cr with their strides). */
+static void fill_planes(const srv_video_encoder *e, const frame_source *f, uint8_t *y,
+                        size_t y_stride, uint8_t *cb, uint8_t *cr, size_t c_stride)
+{
+    unsigned w = e->d.width, h = e->d.height;
+    if (f->rgba) {
+        srv_video_rgba_to_i420(f->rgba, f->stride, w, h, y, y_stride, cb, cr, c_stride);
+        return;
+    }
+    copy_plane(f->y, f->y_stride, w, h, y, y_stride);
+    copy_plane(f->cb, f->c_stride, (w + 1) / 2, (h + 1) / 2, cb, c_stride);
+    copy_plane(f->cr, f->c_stride, (w + 1) / 2, (h + 1) / 2, cr, c_stride);
+}
+
+static srv_video_result encode_source(srv_video_encoder *e, const frame_source *f, bool force_key,
+                                      srv_video_packet *out, char *err, size_t err_size)
+{
     memset(out, 0, sizeof *out);
     unsigned w = e->d.width, h = e->d.height;
     bool key = force_key || e->frames == 0;
@@ -529,7 +553,7 @@ srv_video_result srv_video_encode(srv_video_encoder *e, const uint8_t *rgba, siz
         uint8_t *y = e->planes, *cb = y + (size_t)e->cw * e->ch;
         uint8_t *cr = cb + (size_t)e->cw * e->ch / 4;
         unsigned cw = e->cw / 2;
-        srv_video_rgba_to_i420(rgba, stride, w, h, y, e->cw, cb, cr, cw);
+        fill_planes(e, f, y, e->cw, cb, cr, cw);
         pad_plane(y, e->cw, w, h, e->cw, e->ch);
         pad_plane(cb, cw, (w + 1) / 2, (h + 1) / 2, cw, e->ch / 2);
         pad_plane(cr, cw, (w + 1) / 2, (h + 1) / 2, cw, e->ch / 2);
@@ -538,9 +562,9 @@ srv_video_result srv_video_encode(srv_video_encoder *e, const uint8_t *rgba, siz
         if (r == SRV_VIDEO_OK) r = svt_encode_frame(e, err, err_size);
     } else {
         vpx_image_t *im = &e->img;
-        srv_video_rgba_to_i420(rgba, stride, w, h, im->planes[VPX_PLANE_Y],
-                               (size_t)im->stride[VPX_PLANE_Y], im->planes[VPX_PLANE_U],
-                               im->planes[VPX_PLANE_V], (size_t)im->stride[VPX_PLANE_U]);
+        fill_planes(e, f, im->planes[VPX_PLANE_Y], (size_t)im->stride[VPX_PLANE_Y],
+                    im->planes[VPX_PLANE_U], im->planes[VPX_PLANE_V],
+                    (size_t)im->stride[VPX_PLANE_U]);
         r = vpx_encode_frame(e, key, err, err_size);
     }
     if (r) return r;
@@ -551,6 +575,31 @@ srv_video_result srv_video_encode(srv_video_encoder *e, const uint8_t *rgba, siz
     out->data = e->buf, out->size = e->buf_size, out->key = e->buf_key;
     out->frame = e->buf_frame;
     return SRV_VIDEO_OK;
+}
+
+srv_video_result srv_video_encode(srv_video_encoder *e, const uint8_t *rgba, size_t stride,
+                                  bool force_key, srv_video_packet *out, char *err, size_t err_size)
+{
+    if (err && err_size) err[0] = '\0';
+    if (!e || !rgba || !out || stride < (size_t)e->d.width * 4)
+        return fail(SRV_VIDEO_BAD_ARG, err, err_size,
+                    "no encoder, pixels or packet, or a stride "
+                    "under width * 4");
+    const frame_source f = {.rgba = rgba, .stride = stride};
+    return encode_source(e, &f, force_key, out, err, err_size);
+}
+
+srv_video_result srv_video_encode_i420(srv_video_encoder *e, const uint8_t *y, size_t y_stride,
+                                       const uint8_t *cb, const uint8_t *cr, size_t c_stride,
+                                       bool force_key, srv_video_packet *out, char *err,
+                                       size_t err_size)
+{
+    if (err && err_size) err[0] = '\0';
+    if (!e || !y || !cb || !cr || !out || y_stride < e->d.width || c_stride < (e->d.width + 1) / 2)
+        return fail(SRV_VIDEO_BAD_ARG, err, err_size,
+                    "no encoder, planes or packet, or a stride under the plane's width");
+    const frame_source f = {.y = y, .cb = cb, .cr = cr, .y_stride = y_stride, .c_stride = c_stride};
+    return encode_source(e, &f, force_key, out, err, err_size);
 }
 
 srv_video_result srv_video_flush(srv_video_encoder *e, srv_video_packet *out, char *err,

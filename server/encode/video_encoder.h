@@ -100,6 +100,13 @@ void srv_video_encoder_destroy(srv_video_encoder *e);
 srv_video_result srv_video_encode(srv_video_encoder *e, const uint8_t *rgba, size_t stride,
                                   bool force_key, srv_video_packet *out, char *err,
                                   size_t err_size);
+/* srv_video_encode of a frame already in I420 (BT.601 limited range, as srv_video_rgba_to_i420
+ * writes it; e.g. by the GPU: renderer/video_i420.h): the Y plane (width x height bytes, rows
+ * y_stride apart), Cb and Cr ((width + 1) / 2 x (height + 1) / 2, rows c_stride apart). */
+srv_video_result srv_video_encode_i420(srv_video_encoder *e, const uint8_t *y, size_t y_stride,
+                                       const uint8_t *cb, const uint8_t *cr, size_t c_stride,
+                                       bool force_key, srv_video_packet *out, char *err,
+                                       size_t err_size);
 /* The packet of the last frame still inside the encoder (AV1; size 0 when none, and always for
  * VP8 and VP9). AV1's stream ends: the next frame starts a new one with a key frame. */
 srv_video_result srv_video_flush(srv_video_encoder *e, srv_video_packet *out, char *err,

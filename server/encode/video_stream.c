@@ -59,9 +59,16 @@ static srv_video_out *encode(srv_video_stream *s, srv_frame *f, unsigned kbps, b
         r = SRV_VIDEO_OK; /* on failure the old rate stays */
     }
     srv_video_packet p = {0};
-    if (r == SRV_VIDEO_OK)
-        r = srv_video_encode(s->enc, f->image->data, (size_t)f->width * 4, key, &p, err,
-                             sizeof err);
+    const srv_image *img = f->image;
+    if (r == SRV_VIDEO_OK && img->i420_y_stride) { /* planes the GPU made */
+        const uint8_t *y = img->data + img->i420_at;
+        const uint8_t *cb = y + (size_t)img->i420_y_stride * img->height;
+        const uint8_t *cr = cb + (size_t)img->i420_c_stride * ((img->height + 1) / 2);
+        r = srv_video_encode_i420(s->enc, y, img->i420_y_stride, cb, cr, img->i420_c_stride, key,
+                                  &p, err, sizeof err);
+    } else if (r == SRV_VIDEO_OK) {
+        r = srv_video_encode(s->enc, img->data, (size_t)f->width * 4, key, &p, err, sizeof err);
+    }
     if (r == SRV_VIDEO_OK && p.size == 0) {
         r = SRV_VIDEO_LIBRARY;
         snprintf(err, sizeof err, "no packet for a frame");
@@ -153,8 +160,9 @@ void srv_video_stream_destroy(srv_video_stream *s)
 
 bool srv_video_stream_submit(srv_video_stream *s, srv_frame *f)
 {
-    if (!f->image || f->image->coef_sets || f->image->width != f->width ||
-        f->image->height != f->height)
+    const srv_image *img = f->image; /* RGBA8 pixels or I420 planes */
+    if (!img || (img->coef_sets && !img->i420_y_stride) || img->width != f->width ||
+        img->height != f->height)
         return false;
     pthread_mutex_lock(&s->mu);
     srv_frame_unref(s->pending);

@@ -43,6 +43,7 @@ cJSON *srv_stats_json(const srv_stats_snapshot *s)
     cJSON_AddNumberToObject(enc, "jpegs_from_gpu", (double)s->encoder.jpegs_from_gpu);
     cJSON_AddNumberToObject(enc, "frames_published", (double)s->encoder.frames_published);
     cJSON_AddNumberToObject(enc, "frames_dropped", (double)s->encoder.frames_dropped);
+    cJSON_AddNumberToObject(enc, "frames_video_only", (double)s->encoder.frames_video_only);
     cJSON *w = cJSON_AddObjectToObject(j, "world");
     cJSON_AddNumberToObject(w, "ticks", (double)r->world_ticks);
     cJSON_AddNumberToObject(w, "probe_updates", (double)r->world_updates_total);

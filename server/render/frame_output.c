@@ -17,6 +17,7 @@ typedef struct output_record {
     unsigned quality;   /* before the lag-driven caps */
     unsigned coef_sets; /* 0: RGBA8 pixels; else JPEG coefficients at these qualities */
     unsigned char coef_quality[SRV_MAX_VARIANTS];
+    bool i420;  /* I420 planes follow the coefficients */
     bool timed; /* the view's passes ran in the same submission */
 } output_record;
 _Static_assert(sizeof(output_record) <= RD_READBACK_INFO_MAX, "fits a readback slot");
@@ -53,6 +54,11 @@ rd_vk_result srv_frame_output_init(srv_frame_output *o, rd_vk *vk, srv_jpeg_path
             r = RD_VK_OK;
         }
     }
+    if (o->gpu) { /* without it, video viewers of the GPU path get JPEG */
+        char why[256];
+        o->i420_ok = rd_video_i420_create(vk, &o->i420, why, sizeof why) == RD_VK_OK;
+        if (!o->i420_ok) srv_warn("render", "I420 pass unavailable (%s): video is off", why);
+    }
     srv_info("render", "JPEG: %s",
              o->gpu ? "colour, DCT and quantisation on the GPU, entropy coding on the encoders"
                     : "libjpeg-turbo on the encoders");
@@ -64,6 +70,7 @@ void srv_frame_output_dispose(srv_frame_output *o)
     if (!o->vk) return;
     rd_readback_dispose(&o->rb);
     rd_jpeg_dct_destroy(o->vk, &o->dct);
+    rd_video_i420_destroy(o->vk, &o->i420);
     memset(o, 0, sizeof *o);
 }
 
@@ -91,25 +98,40 @@ rd_vk_result srv_frame_output_finish(srv_frame_output *o, srv_view *v, const srv
                                      unsigned quality, bool timed, char *err, size_t errlen)
 {
     output_record r = {.info = *info, .quality = quality, .timed = timed};
-    const rd_view *g = &v->gpu;
-    const rd_buffer *src = &g->rgba8;
-    size_t bytes = (size_t)g->width * g->height * 4;
-    if (o->gpu) {
+    rd_view *g = &v->gpu;
+    if (!o->gpu) { /* the pixels: libjpeg-turbo and the video encoders both take them */
+        const rd_readback_part px = {&g->rgba8, (size_t)g->width * g->height * 4};
+        return rd_readback_finish_parts(&o->rb, &px, 1, g->width, g->height, &r, sizeof r, err,
+                                        errlen);
+    }
+    /* what the encoders need: JPEG coefficients unless every watcher takes video, I420 planes
+     * when some watcher does (never for a still: it goes out as JPEG) */
+    r.i420 = o->i420_ok && v->video_watchers > 0 && !info->still;
+    if (!r.i420) r.info.video_only = false;
+    rd_readback_part parts[2];
+    unsigned n_parts = 0;
+    rd_vk_result vr = RD_VK_OK;
+    if (!r.info.video_only) {
         unsigned q[SRV_MAX_VARIANTS];
         unsigned n = srv_encoder_qualities(o->encoders, quality, q);
-        rd_vk_result vr =
-            rd_jpeg_dct_record_view(&o->dct, &v->gpu, &o->rb.open->cmd, q, n, timed, err, errlen);
-        if (vr != RD_VK_OK) {
-            rd_readback_abort(&o->rb);
-            return vr;
-        }
+        vr = rd_jpeg_dct_record_view(&o->dct, g, &o->rb.open->cmd, q, n, timed, err, errlen);
         r.coef_sets = n;
         for (unsigned i = 0; i < n; i++)
             r.coef_quality[i] = (unsigned char)q[i];
-        src = &g->jpeg_coefs;
-        bytes = (size_t)n * rd_jpeg_coef_bytes(g->width, g->height);
+        parts[n_parts++] =
+            (rd_readback_part){&g->jpeg_coefs, (size_t)n * rd_jpeg_coef_bytes(g->width, g->height)};
     }
-    return rd_readback_finish(&o->rb, src, bytes, g->width, g->height, &r, sizeof r, err, errlen);
+    if (vr == RD_VK_OK && r.i420) {
+        vr = rd_video_i420_record_view(&o->i420, g, &o->rb.open->cmd, timed, err, errlen);
+        parts[n_parts++] =
+            (rd_readback_part){&g->i420, (size_t)rd_i420_layout_of(g->width, g->height).bytes};
+    }
+    if (vr != RD_VK_OK) {
+        rd_readback_abort(&o->rb);
+        return vr;
+    }
+    return rd_readback_finish_parts(&o->rb, parts, n_parts, g->width, g->height, &r, sizeof r, err,
+                                    errlen);
 }
 
 bool srv_frame_output_again(srv_frame_output *o, srv_view *v, const srv_frame_info *info,
@@ -170,6 +192,12 @@ static bool on_copy(void *user, const void *blob, unsigned w, unsigned h, const 
     img->coef_sets = r.coef_sets;
     for (unsigned i = 0; i < r.coef_sets; i++)
         img->coef_quality[i] = r.coef_quality[i];
+    if (r.i420) {
+        rd_i420_layout il = rd_i420_layout_of(w, h);
+        img->i420_at = (size_t)r.coef_sets * rd_jpeg_coef_bytes(w, h);
+        img->i420_y_stride = il.y_stride;
+        img->i420_c_stride = il.c_stride;
+    }
     r.info.ready_us = srv_unix_us();
     v->last_info = r.info;
     srv_encoder_submit(o->encoders, img, &r.info, r.quality);

@@ -11,8 +11,12 @@
  *  - GPU: the JPEG pass (renderer/jpeg_dct.h) runs in the frame's command buffer, transforming
  *    once and quantising at every quality the frame is sent at (the encoders' lag-driven
  *    variants, srv_encoder_qualities), and its coefficients are copied, 3 bytes a pixel a
- *    quality; the encoders only entropy-code them (server/encode/jpeg_coefs.h), about 40% of the CPU
- *    time of encoding the pixels.
+ *    quality; the encoders only entropy-code them (server/encode/jpeg_coefs.h), about 40% of the
+ * CPU time of encoding the pixels. When some watcher of the view takes video, an I420 pass
+ *    (renderer/video_i420.h) runs too and its planes follow the coefficients, 1.5 bytes a
+ *    pixel, for the video encoders; a moving frame that every watcher takes as video
+ *    (srv_frame_info.video_only) gets only the planes.
+ * On the CPU path video encoders read the RGBA8 pixels.
  * A still (the last frame at still quality once input stops) re-encodes the view's last image:
  * the RGBA8 image kept on the CPU, or on the GPU path the JPEG pass over the view's image,
  * which still holds that frame (nothing rendered the view since).
@@ -25,6 +29,7 @@
 #include "server/encode/encoder_pool.h"
 #include "server/render/render_stats.h"
 #include "renderer/jpeg_dct.h"
+#include "renderer/video_i420.h"
 #include "renderer/vk/readback.h"
 #include "server/render/views.h"
 
@@ -43,6 +48,8 @@ typedef struct srv_frame_output {
     rd_readback rb;
     bool gpu; /* the GPU JPEG path is on */
     rd_jpeg_dct dct;
+    rd_video_i420 i420; /* GPU path: frames as I420 for video viewers */
+    bool i420_ok;
     srv_encoder_pool *encoders;
     srv_stats_board *stats;
     srv_views *views;

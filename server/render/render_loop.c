@@ -186,6 +186,12 @@ static void apply_view_cmd(srv_render_loop *l, srv_cmd *c, double now)
                           : (unsigned)((int)v->watchers + c->delta);
         publish_view(l, v, true);
         return;
+    case SRV_CMD_VIEW_VIDEO:
+        if (!v) return;
+        v->video_watchers = c->delta < 0 && (unsigned)-c->delta > v->video_watchers
+                                ? 0
+                                : (unsigned)((int)v->video_watchers + c->delta);
+        return;
     case SRV_CMD_FRAME_REQUEST: {
         if (!v) return;
         uint64_t after;
@@ -271,6 +277,9 @@ static void render_view(srv_render_loop *l, srv_view *v, double now)
         .capture_us = srv_unix_us(),
         .input_ticket = v->input_ticket,
         .still = still,
+        /* a moving frame that no watcher takes as JPEG (a still always goes out as one) */
+        .video_only =
+            !still && v->video_watchers >= v->watchers && v->video_watchers > 0 && v->requests == 0,
     };
     v->dirty = v->behind_world = false;
     v->requests = 0;
@@ -332,6 +341,7 @@ static void emit_still(srv_render_loop *l, srv_view *v)
     srv_frame_info info = v->last_info;
     info.frame_id = l->next_frame_id + 1;
     info.still = true;
+    info.video_only = false; /* a still goes out as JPEG to every watcher */
     if (!srv_frame_output_again(&l->out, v, &info,
                                 srv_view_quality(v, l->svc.st.settings.quality_still)))
         return;

@@ -23,6 +23,7 @@ typedef struct srv_view {
     srv_camera camera;
     unsigned width, height;
     unsigned watchers;           /* connections showing it */
+    unsigned video_watchers;     /* of them, those sent video (the rest JPEG) */
     unsigned requests;           /* GET /v1/frame.jpg waiting for a frame of it */
     bool dirty;                  /* owes a frame */
     bool behind_world;           /* has not shown the world's last tick */

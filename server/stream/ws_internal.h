@@ -76,10 +76,14 @@ typedef struct viewer {
     unsigned format;          /* proto_format of the video stream */
     unsigned video_max_kbps;  /* the viewer's cap (0: none) */
     uint64_t video_queued_id; /* newest frame handed to the video encoder */
-    uint64_t acked_bytes;     /* payload bytes of acknowledged frames since the last tick */
-    uint64_t sent_bytes;      /* payload bytes sent since the last tick */
-    double encode_ms;         /* smoothed video encode time */
-    double sent_kbps;         /* over the last tick */
+    /* the view whose video watchers count this viewer (render loop: srv_view.video_watchers);
+     * 0 with video_counted false */
+    bool video_counted;
+    uint32_t video_counted_view;
+    uint64_t acked_bytes; /* payload bytes of acknowledged frames since the last tick */
+    uint64_t sent_bytes;  /* payload bytes sent since the last tick */
+    double encode_ms;     /* smoothed video encode time */
+    double sent_kbps;     /* over the last tick */
     /* closing */
     int close_code;
     char close_reason[64];
@@ -140,7 +144,10 @@ void srv_ws_release_followers(srv_ws_stream *ws, uint32_t view);
 void srv_ws_handle_message(srv_ws_stream *ws, viewer *v);
 /* Video (ws_video.c): starts, changes or (format JPEG) stops v's video stream. */
 void srv_ws_video_set(srv_ws_stream *ws, viewer *v, unsigned format, unsigned max_kbps);
-void srv_ws_video_stop(viewer *v);
+void srv_ws_video_stop(srv_ws_stream *ws, viewer *v);
+/* Tells the render loop when v starts or stops taking video of the view it watches (call after
+ * either changes): a view all of whose watchers take video skips the JPEG of moving frames. */
+void srv_ws_video_count(srv_ws_stream *ws, viewer *v);
 /* What v is sent next: a video packet (*out), a frame to send as JPEG (*jpeg: every frame
  * without video; a still, or a frame without pixels, with it), or neither (nothing new, or the
  * encoder is busy: its ready callback wakes the service thread). */

@@ -120,6 +120,7 @@ void srv_ws_watch(srv_ws_stream *ws, viewer *v, uint32_t view)
     v->last_sent_id = 0; /* frame ids of another view are not comparable */
     v->video_queued_id = 0;
     if (v->video) srv_video_stream_force_key(v->video); /* another picture: start it clean */
+    srv_ws_video_count(ws, v);
     srv_ws_queue_textf(v, "{\"type\":\"following\",\"view\":%u}", view);
     lws_callback_on_writable(v->wsi);
 }

@@ -118,7 +118,7 @@ static bool has_new_frame(srv_ws_stream *ws, const viewer *v)
 {
     if (v->video) return true; /* a packet may be ready (a spurious wake sends nothing) */
     srv_frame *f = srv_encoder_latest(ws->cfg.encoders, v->watching);
-    bool fresh = f && f->info.frame_id > v->last_sent_id;
+    bool fresh = f && f->info.frame_id > v->last_sent_id && f->variant_count > 0;
     srv_frame_unref(f);
     return fresh;
 }
@@ -344,7 +344,7 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
         v->cur = NULL;
         srv_video_out_free(v->cur_video);
         v->cur_video = NULL;
-        srv_ws_video_stop(v);
+        srv_ws_video_stop(ws, v);
         free(v->tx);
         v->tx = NULL;
         v->wsi = NULL;

@@ -18,18 +18,41 @@ static srv_video_codec codec_of(unsigned format)
     return format == PROTO_FORMAT_VP8 ? SRV_VIDEO_VP8 : SRV_VIDEO_VP9;
 }
 
-void srv_ws_video_stop(viewer *v)
+static void post_video_delta(srv_ws_stream *ws, uint32_t view, int delta)
+{
+    srv_cmd *c = srv_cmd_new(SRV_CMD_VIEW_VIDEO);
+    c->view = view;
+    c->delta = delta;
+    srv_render_post(ws->cfg.loop, c);
+}
+
+void srv_ws_video_count(srv_ws_stream *ws, viewer *v)
+{
+    bool want = v->video != NULL;
+    if (v->video_counted && (!want || v->video_counted_view != v->watching)) {
+        post_video_delta(ws, v->video_counted_view, -1);
+        v->video_counted = false;
+    }
+    if (want && !v->video_counted) {
+        post_video_delta(ws, v->watching, 1);
+        v->video_counted = true;
+        v->video_counted_view = v->watching;
+    }
+}
+
+void srv_ws_video_stop(srv_ws_stream *ws, viewer *v)
 {
     srv_video_stream_destroy(v->video);
     v->video = NULL;
     v->format = PROTO_FORMAT_JPEG;
     v->video_queued_id = 0;
+    srv_ws_video_count(ws, v);
 }
 
 void srv_ws_video_set(srv_ws_stream *ws, viewer *v, unsigned format, unsigned max_kbps)
 {
     if (format == PROTO_FORMAT_JPEG) {
-        srv_ws_video_stop(v);
+        srv_ws_video_stop(ws, v);
         return;
     }
     unsigned cap = max_kbps ? max_kbps : SRV_VIDEO_DEFAULT_MAX_KBPS;
@@ -40,7 +63,7 @@ void srv_ws_video_set(srv_ws_stream *ws, viewer *v, unsigned format, unsigned ma
         srv_video_stream_force_key(v->video);
         return;
     }
-    srv_ws_video_stop(v);
+    srv_ws_video_stop(ws, v);
     v->video = srv_video_stream_create(codec_of(format), START_KBPS < cap ? START_KBPS : cap,
                                        srv_ws_frame_ready, ws);
     if (!v->video) {
@@ -49,6 +72,7 @@ void srv_ws_video_set(srv_ws_stream *ws, viewer *v, unsigned format, unsigned ma
         return;
     }
     v->format = format;
+    srv_ws_video_count(ws, v);
     srv_info("stream", "viewer %u: %s video (cap %u kbit/s)", v->id, proto_format_name(format),
              cap);
 }
@@ -61,7 +85,7 @@ void srv_ws_video_next(srv_ws_stream *ws, viewer *v, srv_video_out **out, srv_fr
         *out = srv_video_stream_take(v->video);
         if (*out) return;
         if (srv_video_stream_failed(v->video)) {
-            srv_ws_video_stop(v);
+            srv_ws_video_stop(ws, v);
             srv_ws_queue_textf(v, "{\"type\":\"error\",\"message\":\"Video encoding failed; "
                                   "frames are JPEG again.\"}");
         }
@@ -84,6 +108,10 @@ void srv_ws_video_next(srv_ws_stream *ws, viewer *v, srv_video_out **out, srv_fr
             srv_frame_unref(f);
             return;
         }
+    }
+    if (!f->variant_count) { /* a moving frame made for video viewers only (no JPEG) */
+        srv_frame_unref(f);
+        return;
     }
     *jpeg = f;
 }

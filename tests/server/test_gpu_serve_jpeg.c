@@ -10,6 +10,8 @@
  *    stops, a still at the still quality re-encoded from the view's image (nothing rendered),
  *    and a viewer's JPEG cap re-encodes the still under the cap (the stream may carry a lower
  *    lag variant to a slow viewer; GET /v1/frame.jpg?view= gives the still's best one);
+ *  - a viewer taking VP9 on the GPU path gets it from the I420 pass, with no JPEG made for its
+ *    view's moving frames, and GET /v1/frame.jpg of that view still gets a JPEG;
  *  - a path other than auto, gpu or cpu (flag or $PROBECAST_JPEG) is refused at start (exit 2).
  * The frames here are small, so encoded whole; striped coefficient frames are covered by
  * test_encoder_pool and test_gpu_jpeg, the lag-driven variants by test_gpu_serve_lag run on the
@@ -192,6 +194,56 @@ static void check_stills(pc_daemon *d)
     pc_ws_close(&ws);
 }
 
+/* On the GPU daemon, a viewer that takes VP9: its moving frames come as VP9 of the view's (odd)
+ * size, made from the GPU's I420 planes with no JPEG (the view's only watcher takes video), and
+ * GET /v1/frame.jpg of that view still answers with a JPEG. */
+static void check_video(pc_daemon *d)
+{
+    pc_ws ws;
+    uint32_t view = 0;
+    CHECK(pc_stream_open_v2(d, &ws, &view));
+    CHECK(pc_ws_send_text(&ws, "{\"type\":\"video\",\"codec\":\"vp9\",\"max_kbps\":null}") == 0);
+    unsigned vp9 = 0, sized = 0;
+    for (int i = 0; i < 40; i++) {
+        char msg[160];
+        snprintf(msg, sizeof msg,
+                 "{\"type\":\"camera\",\"seq\":%d,\"position\":[%g,1,3.5],\"target\":[0,1,0]}",
+                 i + 1, 0.02 * i);
+        CHECK(pc_ws_send_text(&ws, msg) == 0);
+        double end = pc_now_ms() + 40;
+        for (int left; (left = (int)(end - pc_now_ms())) > 0;) {
+            uint8_t *data;
+            size_t len;
+            int op = pc_ws_recv(&ws, left, &data, &len);
+            if (op <= 0) break;
+            proto_frame_header h;
+            const uint8_t *payload;
+            if (op != 2 || proto_frame_header_unpack(data, len, &h, &payload) != PROTO_OK) continue;
+            vp9 += h.format == PROTO_FORMAT_VP9;
+            sized += h.format == PROTO_FORMAT_VP9 && h.width == W && h.height == H;
+            char ack[96];
+            snprintf(ack, sizeof ack, "{\"type\":\"ack\",\"frame\":%llu}",
+                     (unsigned long long)h.frame_id);
+            pc_ws_send_text(&ws, ack);
+        }
+    }
+    printf("video viewer on the GPU path: %u VP9 frames (%u of %ux%u)\n", vp9, sized, W, H);
+    CHECKF(vp9 >= 3 && sized == vp9, "VP9 frames from the GPU's planes: %u (%u sized)", vp9, sized);
+    cJSON *stats = pc_api_get_json(d, "/v1/stats");
+    const cJSON *enc = cJSON_GetObjectItemCaseSensitive(stats, "encoder");
+    CHECKF(pc_json_number(enc, "frames_video_only") >= 1, "frames without JPEG: %g",
+           pc_json_number(enc, "frames_video_only"));
+    cJSON_Delete(stats);
+    char path[64];
+    snprintf(path, sizeof path, "/v1/frame.jpg?view=%u", view);
+    unsigned quality = 0;
+    uint64_t id = 0;
+    uint8_t *rgb = get_frame(d, path, &quality, &id, "a JPEG of a video viewer's view");
+    CHECK(rgb != NULL && quality >= 1);
+    free(rgb);
+    pc_ws_close(&ws);
+}
+
 /* probecast serve with a bad --jpeg or $PROBECAST_JPEG exits 2 with a message naming it. */
 static void check_refused(const char *env, const char *flag)
 {
@@ -241,6 +293,7 @@ int main(void)
     check_stats(&cpu, "cpu", false);
     check_stats(&gpu, "gpu", true);
     check_stills(&gpu);
+    check_video(&gpu);
     check_stats(&gpu, "gpu", true);
     CHECKF(pc_daemon_stop(&cpu) == 0, "the cpu daemon exits cleanly");
     CHECKF(pc_daemon_stop(&gpu) == 0, "the gpu daemon exits cleanly");

@@ -156,6 +156,10 @@ int main(void)
      * second's tick: move again so that it sees frames) */
     move(&a, dec, &ca, &j, NULL, &cj, 1200, &seq);
     cJSON *stats = pc_api_get_json(&d, "/v1/stats");
+    /* the video viewer's view is watched by it alone: its moving frames were made without JPEG */
+    const cJSON *enc = cJSON_GetObjectItemCaseSensitive(stats, "encoder");
+    CHECKF(pc_json_number(enc, "frames_video_only") >= 5, "frames without JPEG: %g",
+           pc_json_number(enc, "frames_video_only"));
     const cJSON *st = cJSON_GetObjectItemCaseSensitive(stats, "stream");
     const cJSON *list = cJSON_GetObjectItemCaseSensitive(st, "viewers_detail");
     CHECK(cJSON_IsArray(list) && cJSON_GetArraySize(list) == 2);
