@@ -68,6 +68,10 @@ static void serve_usage(FILE *f)
         "  --max-total-pixels N   pixels over all views (default 16777216)\n"
         "  --web-dir DIR          viewer files served at / (default: web/ of the source tree)\n"
         "  --encoders N           JPEG encoder threads (default: the CPU cores, 2 to 16)\n"
+        "  --vp9-speed N          VP9 viewers' encoder speed, 5 (better) to 9 (faster)\n"
+        "                         (default 9: libvpx's cpu-used)\n"
+        "  --video-threads N      threads of each video viewer's encoder (default: one a\n"
+        "                         million pixels, 1 to 4)\n"
         "  --jpeg auto|gpu|cpu    where JPEGs are transformed and quantised: gpu (a compute\n"
         "                         pass; the encoders only entropy-code), cpu (libjpeg-turbo\n"
         "                         encodes the pixels); auto: gpu unless the device is the CPU\n"
@@ -89,6 +93,7 @@ typedef struct serve_args {
     size_t max_upload;
     unsigned max_viewers, max_per_ip, http_connections, idle_timeout, encoders, max_views,
         max_total_pixels;
+    unsigned vp9_speed, video_threads; /* 0: the encoder's defaults */
     srv_settings settings;
     unsigned given; /* SRV_SET_* chosen on the command line */
     int animate;    /* -1 default, 0 off, 1 on */
@@ -229,6 +234,10 @@ static int parse(int argc, char **argv, serve_args *a)
             NEED_VALUE if (!srv_arg_uint(o, v, 1, 3600, &a->idle_timeout)) return 2;
         } else if (IS("--encoders")) {
             NEED_VALUE if (!srv_arg_uint(o, v, 1, 64, &a->encoders)) return 2;
+        } else if (IS("--vp9-speed")) {
+            NEED_VALUE if (!srv_arg_uint(o, v, 5, 9, &a->vp9_speed)) return 2;
+        } else if (IS("--video-threads")) {
+            NEED_VALUE if (!srv_arg_uint(o, v, 1, 16, &a->video_threads)) return 2;
         } else if (IS("--jpeg")) {
             NEED_VALUE
             a->jpeg_given = true;
@@ -462,6 +471,8 @@ int srv_serve(int argc, char **argv)
         .loop = loop,
         .encoders = enc,
         .snapshot = snap,
+        .vp9_speed = a.vp9_speed,
+        .video_threads = a.video_threads,
     };
     ws = srv_ws_create(&ws_cfg, err, sizeof err);
     if (!ws) {

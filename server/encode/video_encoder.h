@@ -57,11 +57,13 @@ const char *srv_video_codec_name(srv_video_codec c); /* "vp8", "vp9", "av1"; NUL
 #define SRV_VIDEO_MIN_KBPS 50u
 #define SRV_VIDEO_MAX_KBPS 100000u
 #define SRV_VIDEO_MAX_THREADS 64u
-/* Default speeds. VP8 cpu-used -6 is the speed WebRTC's VP8 encoder uses on desktop CPUs, and
- * VP9 7 sits in libvpx's realtime range (5..9; higher is faster); AV1 preset 10 in the fast
- * half of SVT-AV1's 0..13. Not tuned yet (probecast_videobench --vp8-speed and so on). */
+/* Default speeds. VP8 cpu-used -6 is the speed WebRTC's VP8 encoder uses on desktop CPUs; AV1
+ * preset 10 sits in the fast half of SVT-AV1's 0..13. VP9 9, the fastest of libvpx's realtime
+ * range (5..9), by measurement (tests/bench/results/h200/video_load_stop41.txt, the H200 host's
+ * 16 Xeon cores): ten 1080p viewers got 39.8 fps each at 9 against 26.1 at 7 (probecast_loadtest,
+ * closed loop), for 0.4-0.9 dB less PSNR at equal bits (probecast_videobench). */
 #define SRV_VIDEO_VP8_SPEED 6u
-#define SRV_VIDEO_VP9_SPEED 7u
+#define SRV_VIDEO_VP9_SPEED 9u
 #define SRV_VIDEO_AV1_SPEED 10u
 
 /* Zero means the default for every member but codec, width, height and bitrate_kbps. */

@@ -23,6 +23,7 @@ struct srv_video_stream {
     srv_video_codec codec;
     srv_video_encoder *enc;
     unsigned enc_w, enc_h, enc_kbps;
+    unsigned speed, threads;
 };
 
 void srv_video_out_free(srv_video_out *o)
@@ -49,8 +50,15 @@ static srv_video_out *encode(srv_video_stream *s, srv_frame *f, unsigned kbps, b
     if (!s->enc || s->enc_w != f->width || s->enc_h != f->height) {
         srv_video_encoder_destroy(s->enc);
         s->enc = NULL;
-        srv_video_desc d = {
-            .codec = s->codec, .width = f->width, .height = f->height, .bitrate_kbps = kbps};
+        pthread_mutex_lock(&s->mu);
+        srv_video_desc d = {.codec = s->codec,
+                            .width = f->width,
+                            .height = f->height,
+                            .bitrate_kbps = kbps,
+                            .speed = s->speed,
+                            .threads = s->threads ? s->threads
+                                                  : srv_video_threads_for(f->width, f->height)};
+        pthread_mutex_unlock(&s->mu);
         r = srv_video_encoder_create(&d, &s->enc, err, sizeof err);
         s->enc_w = f->width, s->enc_h = f->height, s->enc_kbps = kbps;
     } else if (kbps != s->enc_kbps) {
@@ -196,6 +204,20 @@ bool srv_video_stream_failed(srv_video_stream *s)
     bool failed = s->failed;
     pthread_mutex_unlock(&s->mu);
     return failed;
+}
+
+unsigned srv_video_threads_for(unsigned width, unsigned height)
+{
+    unsigned t = (unsigned)((uint64_t)width * height / 1000000u);
+    return t < 1 ? 1 : t > 4 ? 4 : t;
+}
+
+void srv_video_stream_tune(srv_video_stream *s, unsigned speed, unsigned threads)
+{
+    pthread_mutex_lock(&s->mu);
+    s->speed = speed;
+    s->threads = threads;
+    pthread_mutex_unlock(&s->mu);
 }
 
 void srv_video_stream_force_key(srv_video_stream *s)

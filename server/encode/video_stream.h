@@ -38,6 +38,14 @@ typedef struct srv_video_stream srv_video_stream;
  * NULL when the thread cannot be started. */
 srv_video_stream *srv_video_stream_create(srv_video_codec codec, unsigned kbps,
                                           void (*ready)(void *user), void *user);
+/* The encoder's speed and threads (srv_video_desc; 0: defaults), from the next encoder it
+ * makes on (set before the first frame). */
+void srv_video_stream_tune(srv_video_stream *s, unsigned speed, unsigned threads);
+/* Encoder threads when none are set: one a million pixels, 1 to 4 (1080p: 2). On the H200
+ * host's cores ten 1080p VP9 viewers got 53 fps each with 2 threads against 40 with 1
+ * (tests/bench/results/h200/video_load_stop41.txt); a thread pool per viewer would share the
+ * cores better, but libvpx's threads are its own. */
+unsigned srv_video_threads_for(unsigned width, unsigned height);
 /* Stops and joins the thread, frees what it holds (NULL is fine). */
 void srv_video_stream_destroy(srv_video_stream *s);
 /* Queues f (a reference is taken) in place of any frame waiting. false (nothing queued) when f

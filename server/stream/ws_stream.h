@@ -37,6 +37,7 @@ typedef struct srv_ws_config {
     srv_render_loop *loop;
     srv_encoder_pool *encoders;
     srv_snapshot *snapshot;
+    unsigned vp9_speed, video_threads; /* video viewers' encoders (0: defaults) */
 } srv_ws_config;
 
 /* One viewer's frame format (issue 26), as of the last tick (once a second). */

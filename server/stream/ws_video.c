@@ -66,6 +66,10 @@ void srv_ws_video_set(srv_ws_stream *ws, viewer *v, unsigned format, unsigned ma
     srv_ws_video_stop(ws, v);
     v->video = srv_video_stream_create(codec_of(format), START_KBPS < cap ? START_KBPS : cap,
                                        srv_ws_frame_ready, ws);
+    if (v->video && format == PROTO_FORMAT_VP9)
+        srv_video_stream_tune(v->video, ws->cfg.vp9_speed, ws->cfg.video_threads);
+    else if (v->video)
+        srv_video_stream_tune(v->video, 0, ws->cfg.video_threads);
     if (!v->video) {
         srv_ws_queue_textf(v, "{\"type\":\"error\",\"message\":\"Video is not available now; "
                               "frames stay JPEG.\"}");
