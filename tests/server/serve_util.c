@@ -429,3 +429,12 @@ float *pc_render_luminance(const char *model, const char *options, uint32_t w, u
         rgb[i] = 0.2126f * rgb[3 * i] + 0.7152f * rgb[3 * i + 1] + 0.0722f * rgb[3 * i + 2];
     return rgb; /* the first w * h floats */
 }
+
+void pc_camera_msg(char *out, size_t size, int seq, double px, double py, double pz, double tx,
+                   double ty, double tz)
+{
+    snprintf(out, size,
+             "{\"type\":\"camera\",\"seq\":%d,\"position\":[%.4f,%.4f,%.4f],"
+             "\"target\":[%.4f,%.4f,%.4f]}",
+             seq, px, py, pz, tx, ty, tz);
+}

@@ -48,6 +48,9 @@ bool pc_stream_open(pc_daemon *d, pc_ws *ws);
 /* Opens the stream with protocol version 2 (a view of its own) and reads the welcome message;
  * *view is the connection's view id. */
 bool pc_stream_open_v2(pc_daemon *d, pc_ws *ws, uint32_t *view);
+/* A viewer's camera message (protocol/stream.md) with input sequence seq into out. */
+void pc_camera_msg(char *out, size_t size, int seq, double px, double py, double pz, double tx,
+                   double ty, double tz);
 /* The next text message whose "type" is type (any type when NULL), skipping frames and other
  * messages; NULL on timeout. Caller deletes. */
 cJSON *pc_stream_next_text(pc_ws *ws, int timeout_ms, const char *type);

@@ -161,9 +161,7 @@ static void check_stills(pc_daemon *d)
     pc_frame_free(&f);
     for (int i = 0; i < 5; i++) {
         char msg[160];
-        snprintf(msg, sizeof msg,
-                 "{\"type\":\"camera\",\"seq\":%d,\"position\":[%g,1,3.5],\"target\":[0,1,0]}",
-                 i + 1, 0.1 * i);
+        pc_camera_msg(msg, sizeof msg, i + 1, 0.1 * i, 1, 3.5, 0, 1, 0);
         CHECK(pc_ws_send_text(&ws, msg) == 0);
         pc_sleep_ms(30);
     }
@@ -206,9 +204,7 @@ static void check_video(pc_daemon *d)
     unsigned vp9 = 0, sized = 0;
     for (int i = 0; i < 40; i++) {
         char msg[160];
-        snprintf(msg, sizeof msg,
-                 "{\"type\":\"camera\",\"seq\":%d,\"position\":[%g,1,3.5],\"target\":[0,1,0]}",
-                 i + 1, 0.02 * i);
+        pc_camera_msg(msg, sizeof msg, i + 1, 0.02 * i, 1, 3.5, 0, 1, 0);
         CHECK(pc_ws_send_text(&ws, msg) == 0);
         double end = pc_now_ms() + 40;
         for (int left; (left = (int)(end - pc_now_ms())) > 0;) {

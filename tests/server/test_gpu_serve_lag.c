@@ -36,9 +36,8 @@ int main(void)
         if (now >= next_input) { /* viewer A drives the camera, 10 inputs a second */
             char msg[160];
             seq++;
-            snprintf(msg, sizeof msg,
-                     "{\"type\":\"camera\",\"seq\":%u,\"position\":[%g,1.5,4],\"target\":[0,1,0]}",
-                     seq, (double)(seq % 20) * 0.1 - 1.0);
+            pc_camera_msg(msg, sizeof msg, (int)seq, (double)(seq % 20) * 0.1 - 1.0, 1.5, 4, 0, 1,
+                          0);
             CHECK(pc_ws_send_text(&a, msg) == 0);
             next_input = now + 100;
         }

@@ -64,10 +64,7 @@ static void move_both(viewer *a, viewer *b, int ms, int *seq)
     char msg[160];
     for (int i = 0; pc_now_ms() < end; i++) {
         ++*seq;
-        snprintf(msg, sizeof msg,
-                 "{\"type\":\"camera\",\"seq\":%d,\"position\":[%.3f,1.5,3.5],"
-                 "\"target\":[0,0.5,0]}",
-                 *seq, -1.0 + 0.01 * (i % 200));
+        pc_camera_msg(msg, sizeof msg, *seq, -1.0 + 0.01 * (i % 200), 1.5, 3.5, 0, 0.5, 0);
         send(a, msg);
         send(b, msg);
         drain(a, 5, a->view);

@@ -84,10 +84,7 @@ static void move(pc_ws *a, video_decoder *dec, counts *ca, pc_ws *j, video_decod
     char msg[160];
     for (int i = 0; pc_now_ms() < end; i++) {
         ++*seq;
-        snprintf(msg, sizeof msg,
-                 "{\"type\":\"camera\",\"seq\":%d,\"position\":[%.3f,1.5,3.5],"
-                 "\"target\":[0,0.5,0]}",
-                 *seq, -1.0 + 0.01 * (i % 200));
+        pc_camera_msg(msg, sizeof msg, *seq, -1.0 + 0.01 * (i % 200), 1.5, 3.5, 0, 0.5, 0);
         pc_ws_send_text(a, msg);
         pc_ws_send_text(j, msg);
         drain(a, 8, dec, ca);

@@ -272,9 +272,7 @@ int main(void)
     send(&b, "{\"type\":\"resize\",\"width\":1600,\"height\":1200}");
     int answered = 0;
     for (int i = 0; i < 6; i++) {
-        snprintf(msg, sizeof msg,
-                 "{\"type\":\"camera\",\"seq\":%d,\"position\":[%d,2,3],\"target\":[0,0.5,0]}",
-                 10 + i, i - 3);
+        pc_camera_msg(msg, sizeof msg, 10 + i, i - 3, 2, 3, 0, 0.5, 0);
         send(&b, msg);
         /* a short client timeout: an answer that waited behind a lavapipe frame would miss it */
         if (pc_http("127.0.0.1", d.http_port, "GET", "/v1/settings", NULL, NULL, 0, &r, 1500) ==
