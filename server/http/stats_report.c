@@ -141,6 +141,12 @@ cJSON *srv_stats_json(const srv_stats_snapshot *s)
     cJSON *scene = cJSON_AddObjectToObject(j, "scene");
     cJSON_AddNumberToObject(scene, "generation", (double)r->scene_generation);
     cJSON_AddNumberToObject(scene, "triangles", (double)r->triangles);
+    cJSON *df = cJSON_AddObjectToObject(scene, "deform");
+    cJSON_AddNumberToObject(df, "deform_build_ms", round(r->deform_build_ms * 1000) / 1000);
+    cJSON_AddNumberToObject(df, "deform_ms", round(r->deform_ms * 1000) / 1000);
+    cJSON_AddNumberToObject(df, "refit_ms", round(r->refit_ms * 1000) / 1000);
+    cJSON_AddNumberToObject(df, "refits", (double)r->deform_refits);
+    cJSON_AddNumberToObject(df, "rebuilds", (double)r->deform_rebuilds);
     cJSON *mem = cJSON_AddObjectToObject(j, "memory");
     cJSON_AddNumberToObject(mem, "rss_bytes", (double)s->memory.rss_bytes);
     cJSON_AddNumberToObject(mem, "peak_rss_bytes", (double)s->memory.peak_rss_bytes);
