@@ -7,7 +7,9 @@
  * point light that casts the sheet's shadow on the backdrop. At each pose after the
  * first: the GPU's triangle records hold the CPU deformation's positions, normals and tangents,
  * the refitted nodes bound their children and triangles with the root box the scene's bounds,
- * and the images traced through both scenes agree (different trees, the same hits). */
+ * and the images traced through both scenes agree (different trees, the same hits). The same
+ * records and trees for skin_builder's morphing cubes (morph targets with normal and tangent
+ * deltas). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -91,10 +93,19 @@ static bool build_scene(rd_scene *s)
 /* Both scenes' triangle records against the CPU deformation of s: the GPU's positions and
  * normals exactly where the CPU wrote them (float tolerance), tangents within a unit of their
  * 16-bit octahedral code, w words and UVs as the CPU build wrote them. */
-static void check_records(rd_vk *vk, const rd_scene *s, const rd_gpu_scene *gpu,
+/* The first triangle record of mesh m. */
+static uint32_t tri_base(const rd_scene *s, uint32_t m)
+{
+    uint32_t base = 0;
+    for (uint32_t i = 0; i < m; i++)
+        base += s->meshes[i].tri_count;
+    return base;
+}
+
+static void check_records(rd_vk *vk, const rd_scene *s, uint32_t mesh, const rd_gpu_scene *gpu,
                           const rd_gpu_scene *cpu, const char *what)
 {
-    uint32_t n = s->meshes[SHEET].tri_count, base = s->meshes[0].tri_count;
+    uint32_t n = s->meshes[mesh].tri_count, base = tri_base(s, mesh);
     pc_tri *tg = calloc(n, sizeof *tg), *tc = calloc(n, sizeof *tc);
     pc_tri_attr *ag = calloc(n, sizeof *ag), *ac = calloc(n, sizeof *ac);
     uint32_t *at = calloc(n, sizeof *at); /* original triangle -> the CPU scene's record */
@@ -109,7 +120,7 @@ static void check_records(rd_vk *vk, const rd_scene *s, const rd_gpu_scene *gpu,
                              sizeof err) == RD_VK_OK);
     for (uint32_t i = 0; i < n; i++)
         at[pc_f2u(tc[i].v2.w) < n ? pc_f2u(tc[i].v2.w) : 0] = i;
-    const float *p = s->meshes[SHEET].positions, *nn = s->meshes[SHEET].normals;
+    const float *p = s->meshes[mesh].positions, *nn = s->meshes[mesh].normals;
     uint32_t bad_pos = 0, bad_attr = 0, bad_tan = 0;
     float worst = 0;
     for (uint32_t i = 0; i < n; i++) {
@@ -156,10 +167,11 @@ static void check_records(rd_vk *vk, const rd_scene *s, const rd_gpu_scene *gpu,
 
 /* The refitted tree in gpu's node buffer: every reachable node bounds its children's boxes or
  * its triangles' vertices (absolute indices), and the root is the scene's box of the mesh. */
-static void check_tree(rd_vk *vk, const rd_gpu_scene *gs, const rd_scene *s, const char *what)
+static void check_tree(rd_vk *vk, const rd_gpu_scene *gs, const rd_scene *s, uint32_t mesh,
+                       const char *what)
 {
     uint64_t nn = gs->blas_node_count, all = gs->tri_count;
-    uint32_t tris = s->meshes[SHEET].tri_count, base = s->meshes[0].tri_count;
+    uint32_t tris = s->meshes[mesh].tri_count, base = tri_base(s, mesh);
     pc_bvh_node *nodes = calloc(nn, sizeof *nodes);
     pc_tri *t = calloc(all, sizeof *t);
     if (!nodes || !t) abort();
@@ -167,10 +179,11 @@ static void check_tree(rd_vk *vk, const rd_gpu_scene *gs, const rd_scene *s, con
           RD_VK_OK);
     CHECK(rd_buffer_download(vk, &gs->tris, 0, t, all * sizeof *t, err, sizeof err) == RD_VK_OK);
     uint32_t stack[128], top = 0, bad = 0, seen = 0, leaf_tris = 0;
-    CHECKF(gs->mesh_root[SHEET] > 0 && base > 0, "%s: the sheet's BLAS comes second", what);
-    stack[top++] = gs->mesh_root[SHEET];
-    const pc_bvh_node *root = &nodes[gs->mesh_root[SHEET]];
-    const float *b = &gs->mesh_bounds[6 * SHEET];
+    CHECKF(mesh == 0 || (gs->mesh_root[mesh] > 0 && base > 0),
+           "%s: mesh %u's BLAS and triangles come after others'", what, mesh);
+    stack[top++] = gs->mesh_root[mesh];
+    const pc_bvh_node *root = &nodes[gs->mesh_root[mesh]];
+    const float *b = &gs->mesh_bounds[6 * mesh];
     CHECKF(root->bmin.x == b[0] && root->bmin.y == b[1] && root->bmin.z == b[2] &&
                root->bmax.x == b[3] && root->bmax.y == b[4] && root->bmax.z == b[5],
            "%s: the mesh's bounds are its refitted root box", what);
@@ -241,6 +254,45 @@ static int differing(const float *a, const float *b, float *peak)
     return n;
 }
 
+/* skin_builder's morphing cubes (three meshes, morph targets with normal and tangent deltas, no
+ * skin) posed both ways at a few times: records and trees as for the sheet. */
+static void morph_cubes(rd_vk *vk)
+{
+    rd_scene s;
+    rd_gpu_scene gpu = {0}, cpu = {0};
+    char *text = gltf_morph_cube();
+    rd_gltf_result g = rd_gltf_load_memory(text, strlen(text), NULL, NULL, &s, err, sizeof err);
+    free(text);
+    CHECKF(g == RD_GLTF_OK && s.mesh_count >= 3, "cubes: %s", err);
+    if (g != RD_GLTF_OK) return;
+    CHECKF(rd_scene_update(&s, err, sizeof err), "%s", err);
+    VK_CHECK(rd_gpu_scene_create(vk, &gpu, &s, err, sizeof err));
+    setenv("PROBECAST_DEFORM", "cpu", 1);
+    VK_CHECK(rd_gpu_scene_create(vk, &cpu, &s, err, sizeof err));
+    unsetenv("PROBECAST_DEFORM");
+    const double times[] = {0.5, 1.0, 1.5, 0.25};
+    for (size_t p = 0; p < sizeof times / sizeof times[0]; p++) {
+        char what[64];
+        rd_scene_animate(&s, times[p]);
+        CHECKF(rd_scene_update(&s, err, sizeof err), "%s", err);
+        VK_CHECK(rd_gpu_scene_update_pose(vk, &gpu, &s, NULL, err, sizeof err));
+        VK_CHECK(rd_gpu_scene_update_pose(vk, &cpu, &s, NULL, err, sizeof err));
+        for (uint32_t m = 0; m < 3; m++) {
+            snprintf(what, sizeof what, "cube %u at %.2f s", m, times[p]);
+            check_records(vk, &s, m, &gpu, &cpu, what);
+            check_tree(vk, &gpu, &s, m, what);
+        }
+    }
+    printf("cubes: %llu refits, %llu rebuilds\n", (unsigned long long)gpu.deform_refits,
+           (unsigned long long)gpu.deform_rebuilds);
+    CHECKF(gpu.deform_refits >= 3, "the cubes were refitted on the GPU (%llu times)",
+           (unsigned long long)gpu.deform_refits);
+done:
+    rd_gpu_scene_destroy(vk, &gpu);
+    rd_gpu_scene_destroy(vk, &cpu);
+    rd_scene_destroy(&s);
+}
+
 int main(void)
 {
     rd_vk vk;
@@ -288,8 +340,8 @@ int main(void)
             "%s: the first pose rebuilt, the later ones refitted (%llu refits, %llu rebuilds)",
             what, (unsigned long long)gpu.deform_refits, (unsigned long long)gpu.deform_rebuilds);
         CHECK(cpu.deform_refits == 0 && cpu.deform_rebuilds == p + 1);
-        check_records(&vk, &s, &gpu, &cpu, what);
-        check_tree(&vk, &gpu, &s, what);
+        check_records(&vk, &s, SHEET, &gpu, &cpu, what);
+        check_tree(&vk, &gpu, &s, SHEET, what);
         float *a = render(&vk, &rg, &gpu, &cam), *b = render(&vk, &rc, &cpu, &cam), peak;
         int diff = differing(a, b, &peak);
         printf("%s: %d pixels differ between the GPU and CPU paths (peak %g)\n", what, diff, peak);
@@ -305,6 +357,7 @@ int main(void)
         free(a);
         free(b);
     }
+    morph_cubes(&vk);
 done:
     free(first);
     rd_renderer_destroy(&rg);
