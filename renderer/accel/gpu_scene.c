@@ -430,6 +430,14 @@ rd_vk_result rd_gpu_scene_update_pose(rd_vk *vk, rd_gpu_scene *gs, const rd_scen
     rd_vk_result r = RD_VK_OK;
     if (ng) {
         r = rd_gpu_scene_deform_run(vk, gs, s, gpu, ng, degraded, err, errlen);
+        if (r != RD_VK_OK && r != RD_VK_ERR_DEVICE_LOST && !vk->device_lost) {
+            /* the GPU path failed (no pipeline, no memory): the CPU takes these meshes, now and
+             * from now on */
+            fprintf(stderr, "probecast: deforming meshes go to the CPU: %s\n", err);
+            gs->deform_on_cpu = true;
+            memset(degraded, 1, ng);
+            r = RD_VK_OK;
+        }
         for (uint32_t k = 0; r == RD_VK_OK && k < ng; k++) /* refitted too far: rebuilt now */
             if (degraded[k]) list[n++] = gpu[k];
     } else if (n) {

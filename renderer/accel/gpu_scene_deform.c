@@ -107,7 +107,13 @@ rd_vk_result rd_gpu_scene_deform_built(rd_vk *vk, rd_gpu_scene *gs, const rd_sce
     if (r == RD_VK_OK)
         r = rd_gpu_refit_blas_create_at(vk, &dm->refit, bvh, gs->blas_nodes.address,
                                         gs->mesh_root[m], tri_base, err, errlen);
-    if (r != RD_VK_OK) return r;
+    if (r != RD_VK_OK) { /* the mesh stays on the CPU path; a lost device is reported */
+        rd_gpu_deform_mesh_destroy(vk, &dm->dm);
+        rd_gpu_refit_blas_destroy(vk, &dm->refit);
+        if (r == RD_VK_ERR_DEVICE_LOST || vk->device_lost) return r;
+        fprintf(stderr, "probecast: deforming mesh %u is rebuilt on the CPU: %s\n", m, err);
+        return RD_VK_OK;
+    }
     dm->refits = 0;
     dm->tri_base = tri_base;
     dm->ready = true;
@@ -126,7 +132,13 @@ static rd_vk_result make_pipelines(rd_vk *vk, rd_gpu_scene_deform *g, char *err,
     if (r == RD_VK_OK) r = rd_gpu_refitter_create(vk, &g->refitter, err, errlen);
     if (r == RD_VK_OK) r = rd_pipelines_create(vk, g, kPipelines, 1, err, errlen);
     if (r == RD_VK_OK) r = rd_timer_create(vk, &g->timer, err, errlen);
-    g->pipelines = r == RD_VK_OK; /* else destroyed with the scene (all idempotent) */
+    g->pipelines = r == RD_VK_OK;
+    if (r != RD_VK_OK) { /* all idempotent: the next pose tries again from nothing */
+        rd_timer_destroy(vk, &g->timer);
+        rd_pipeline_destroy(vk, &g->tris);
+        rd_gpu_refitter_destroy(vk, &g->refitter);
+        rd_gpu_deformer_destroy(vk, &g->deformer);
+    }
     return r;
 }
 
