@@ -219,14 +219,14 @@ static void check_tree(rd_vk *vk, const rd_gpu_scene *gs, const rd_scene *s, uin
         }
     }
     CHECKF(bad == 0 && leaf_tris == tris,
-           "%s: %u boxes do not bound their contents (%u of %u "
-           "triangles reached)",
-           what, bad, leaf_tris, tris);
+           "%s: %u boxes do not bound their contents (%u of %u triangles reached)", what, bad,
+           leaf_tris, tris);
     free(nodes);
     free(t);
 }
 
-static float *render(rd_vk *vk, rd_renderer *r, rd_gpu_scene *gs, const rd_view_camera *cam)
+/* One frame of gs (direct light, no GI) through r: linear RGB, W x H (the caller frees). */
+static float *render(rd_renderer *r, rd_gpu_scene *gs, const rd_view_camera *cam)
 {
     float *rgb = calloc((size_t)W * H * 3, sizeof(float));
     if (!rgb) abort();
@@ -234,7 +234,6 @@ static float *render(rd_vk *vk, rd_renderer *r, rd_gpu_scene *gs, const rd_view_
     rd_vk_result res = rd_renderer_render(r, gs, cam, &fs, err, sizeof err);
     if (res == RD_VK_OK) res = rd_renderer_read_hdr(r, rgb, err, sizeof err);
     CHECKF(res == RD_VK_OK, "render: %s", err);
-    (void)vk;
     return rgb;
 }
 
@@ -342,7 +341,7 @@ int main(void)
         CHECK(cpu.deform_refits == 0 && cpu.deform_rebuilds == p + 1);
         check_records(&vk, &s, SHEET, &gpu, &cpu, what);
         check_tree(&vk, &gpu, &s, SHEET, what);
-        float *a = render(&vk, &rg, &gpu, &cam), *b = render(&vk, &rc, &cpu, &cam), peak;
+        float *a = render(&rg, &gpu, &cam), *b = render(&rc, &cpu, &cam), peak;
         int diff = differing(a, b, &peak);
         printf("%s: %d pixels differ between the GPU and CPU paths (peak %g)\n", what, diff, peak);
         CHECKF(peak > 0 && diff <= 2, "%s: the refitted scene's image differs in %d pixels", what,
