@@ -2,11 +2,13 @@
 // node of the level takes the union of its triangles' boxes (a leaf) or of its children's (an
 // interior node, whose children sit on deeper levels, already refitted), keeping the topology
 // and the w words of pc_bvh_node. One dispatch per level, no atomics.
-// Push constants (pc_push): buf0 = nodes (pc_bvh_node, indices relative to buf0),
-// buf1 = topology (uints: nodes by level, then prim_index: leaf order -> original triangle),
-// buf2 = deformed positions (9 floats per triangle, original order);
+// Push constants (pc_push): buf0 = the node array the indices count from (pc_bvh_node: a BLAS of
+// its own, or a scene's whole blas_nodes, whose child and leaf indices are absolute),
+// buf1 = topology (uints: node indices by level, then prim_index: leaf order -> original
+// triangle), buf2 = deformed positions (9 floats per triangle, original order);
 // params.x = nodes in this level, params.y = its first entry in buf1, params.z = prim_index's
-// first entry in buf1.
+// first entry in buf1, params.w = the BLAS's first triangle (leaf indices minus it index
+// prim_index).
 #version 460
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
@@ -51,7 +53,7 @@ void main()
     } else {
         Floats p = Floats(pc.buf2);
         for (uint k = 0; k < count; k++) {
-            uint t = topo.v[pc.params.z + first + k];
+            uint t = topo.v[pc.params.z + first - pc.params.w + k];
             for (uint c = 0; c < 3; c++) {
                 vec3 v = vec3(p.v[9 * t + 3 * c], p.v[9 * t + 3 * c + 1], p.v[9 * t + 3 * c + 2]);
                 lo = min(lo, v);

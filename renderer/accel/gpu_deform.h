@@ -3,8 +3,8 @@
  * The per-vertex arrays (rest shape, joints and weights, morph deltas) go up once at create; a
  * pose uploads only the joint matrices and the morph weights. The outputs are flat arrays
  * (3 floats per vertex for positions and normals, 4 for tangents) in a device buffer whose
- * addresses the caller reads (a BLAS refit or a triangle-record writer comes next).
- * Not yet wired into rd_gpu_scene_update_pose: first slice of issue 24 item 3. */
+ * addresses the caller reads: gpu_scene_deform.c writes a scene's triangle records from them and
+ * refits the mesh's BLAS over them (rd_gpu_scene_update_pose). */
 #ifndef RD_GPU_DEFORM_H
 #define RD_GPU_DEFORM_H
 

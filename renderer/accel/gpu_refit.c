@@ -36,10 +36,13 @@ static void *xcalloc(size_t n, size_t size)
     return p;
 }
 
-rd_vk_result rd_gpu_refit_blas_create(rd_vk *vk, rd_gpu_refit_blas *b, const rd_bvh *bvh, char *err,
-                                      size_t errlen)
+/* The topology of bvh (node indices plus node_base), uploaded; nodes: upload bvh's own too. */
+static rd_vk_result blas_create(rd_vk *vk, rd_gpu_refit_blas *b, const rd_bvh *bvh, bool nodes,
+                                uint32_t node_base, uint32_t tri_base, char *err, size_t errlen)
 {
     memset(b, 0, sizeof *b);
+    b->node_base = node_base;
+    b->tri_base = tri_base;
     uint32_t nn = bvh->node_count, np = bvh->prim_count;
     b->node_count = nn;
     b->prim_count = np;
@@ -61,20 +64,40 @@ rd_vk_result rd_gpu_refit_blas_create(rd_vk *vk, rd_gpu_refit_blas *b, const rd_
         b->level_start[l] = at;
         uint32_t want = max_depth - l; /* deepest first */
         for (uint32_t i = 0; i < nn; i++)
-            if (depth[i] == want) topo[at++] = i;
+            if (depth[i] == want) topo[at++] = node_base + i;
     }
     b->level_start[b->level_count] = at;
     memcpy(topo + nn, bvh->prim_index, (size_t)np * sizeof *topo);
     free(depth);
 
     size_t node_bytes = (size_t)nn * sizeof(pc_bvh_node), topo_bytes = ((size_t)nn + np) * 4;
-    rd_vk_result r = rd_buffer_create(vk, &b->nodes, node_bytes, RD_MEMORY_DEVICE, err, errlen);
-    if (r == RD_VK_OK) r = rd_buffer_upload(vk, &b->nodes, 0, bvh->nodes, node_bytes, err, errlen);
+    rd_vk_result r = RD_VK_OK;
+    if (nodes) {
+        r = rd_buffer_create(vk, &b->nodes, node_bytes, RD_MEMORY_DEVICE, err, errlen);
+        if (r == RD_VK_OK)
+            r = rd_buffer_upload(vk, &b->nodes, 0, bvh->nodes, node_bytes, err, errlen);
+        b->node_address = b->nodes.address;
+    }
     if (r == RD_VK_OK)
         r = rd_buffer_create(vk, &b->topology, topo_bytes, RD_MEMORY_DEVICE, err, errlen);
     if (r == RD_VK_OK) r = rd_buffer_upload(vk, &b->topology, 0, topo, topo_bytes, err, errlen);
     free(topo);
     if (r != RD_VK_OK) rd_gpu_refit_blas_destroy(vk, b);
+    return r;
+}
+
+rd_vk_result rd_gpu_refit_blas_create(rd_vk *vk, rd_gpu_refit_blas *b, const rd_bvh *bvh, char *err,
+                                      size_t errlen)
+{
+    return blas_create(vk, b, bvh, true, 0, 0, err, errlen);
+}
+
+rd_vk_result rd_gpu_refit_blas_create_at(rd_vk *vk, rd_gpu_refit_blas *b, const rd_bvh *bvh,
+                                         VkDeviceAddress node_address, uint32_t node_base,
+                                         uint32_t tri_base, char *err, size_t errlen)
+{
+    rd_vk_result r = blas_create(vk, b, bvh, false, node_base, tri_base, err, errlen);
+    b->node_address = r == RD_VK_OK ? node_address : 0;
     return r;
 }
 
@@ -93,10 +116,10 @@ void rd_gpu_refit_record(rd_cmd *c, const rd_gpu_refitter *g, const rd_gpu_refit
     for (uint32_t l = 0; l < b->level_count; l++) {
         uint32_t n = b->level_start[l + 1] - b->level_start[l];
         pc_push push = {
-            .buf0 = b->nodes.address,
+            .buf0 = b->node_address,
             .buf1 = b->topology.address,
             .buf2 = positions,
-            .params = {n, b->level_start[l], b->node_count, 0},
+            .params = {n, b->level_start[l], b->node_count, b->tri_base},
         };
         if (n) rd_cmd_dispatch(c, &g->refit, &push, (n + PC_WG_1D - 1) / PC_WG_1D, 1, 1);
         rd_cmd_barrier(c);

@@ -4,7 +4,8 @@
  * result; depth is ~log2(triangles / 4) + a few, so ~20-40 small dispatches per mesh). The nodes
  * keep pc_bvh_node's layout and w words, so the traversal reads them as it reads a CPU build.
  * Quality: rd_bvh_sah_cost of the refitted tree against a fresh build decides when to rebuild
- * (the caller's policy). Not yet wired into rd_gpu_scene_update_pose. */
+ * (the caller's policy). gpu_scene_deform.c refits a deforming mesh's BLAS in place in the
+ * scene's node buffer (rd_gpu_refit_blas_create_at). */
 #ifndef RD_GPU_REFIT_H
 #define RD_GPU_REFIT_H
 
@@ -21,18 +22,30 @@ typedef struct rd_gpu_refitter {
 rd_vk_result rd_gpu_refitter_create(rd_vk *vk, rd_gpu_refitter *g, char *err, size_t errlen);
 void rd_gpu_refitter_destroy(rd_vk *vk, rd_gpu_refitter *g); /* idempotent */
 
-/* One BLAS on the GPU: its nodes (indices relative to the buffer's start) and its topology
- * (node indices by level, deepest level first, then the leaf-order -> triangle map). */
+/* One BLAS on the GPU: its topology (node indices by level, deepest level first, then the
+ * leaf-order -> triangle map) and where its nodes are: node index i (as pc_bvh_node's child
+ * indices count) at node_address + 32 i, its node 0 at index node_base, its first triangle at
+ * tri_base (leaf indices count from it). */
 typedef struct rd_gpu_refit_blas {
-    rd_buffer nodes;
+    rd_buffer nodes; /* its own nodes (rd_gpu_refit_blas_create); none with _create_at */
     rd_buffer topology;
+    VkDeviceAddress node_address;
+    uint32_t node_base, tri_base;
     uint32_t node_count, prim_count, level_count;
     uint32_t *level_start; /* level_count + 1 entries into the topology's node list */
 } rd_gpu_refit_blas;
 
-/* Uploads bvh (built over the mesh's triangles, rd_bvh_build_triangles). */
+/* Uploads bvh (built over the mesh's triangles, rd_bvh_build_triangles) into nodes of its own
+ * (indices relative to their start: node_base and tri_base 0). */
 rd_vk_result rd_gpu_refit_blas_create(rd_vk *vk, rd_gpu_refit_blas *b, const rd_bvh *bvh, char *err,
                                       size_t errlen);
+/* Uploads only bvh's topology, for nodes already on the GPU at node_address as a scene holds
+ * them (rd_gpu_scene_fill_mesh: bvh's node i at index node_base + i, child indices plus
+ * node_base, leaf indices plus tri_base, all counted from node_address). The refit writes those
+ * nodes in place; b does not own them. */
+rd_vk_result rd_gpu_refit_blas_create_at(rd_vk *vk, rd_gpu_refit_blas *b, const rd_bvh *bvh,
+                                         VkDeviceAddress node_address, uint32_t node_base,
+                                         uint32_t tri_base, char *err, size_t errlen);
 void rd_gpu_refit_blas_destroy(rd_vk *vk, rd_gpu_refit_blas *b); /* idempotent */
 
 /* When a refitted tree has degraded enough to rebuild: its SAH cost (rd_bvh_sah_cost over a

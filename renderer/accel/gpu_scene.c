@@ -343,7 +343,7 @@ static void placed_box(const rd_gpu_scene *gs, uint32_t i, float lo[3], float hi
     world_box(m, &gs->mesh_local_bounds[gs->placed[i].info.y * 6], lo, hi);
 }
 
-/* Rebuilds the BLASes of the stale meshes list[0..n) in place and logs their instances' boxes. */
+/* Rebuilds the BLASes of the stale meshes list[0..n) on the CPU and writes them in place. */
 static rd_vk_result rebuild_meshes(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
                                    const uint32_t *list, uint32_t n, char *err, size_t errlen)
 {
@@ -359,17 +359,6 @@ static rd_vk_result rebuild_meshes(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *
     uint32_t *tri_base = xcalloc(s->mesh_count, sizeof *tri_base), base = 0;
     for (uint32_t m = 0; m < s->mesh_count; m++)
         tri_base[m] = base, base += s->meshes[m].tri_count;
-    /* where their instances were: a new geometry revision logs it, then where they are */
-    gs->revision = gs->geometry_revision = ++last_revision;
-    uint8_t *hit = xcalloc(s->mesh_count, 1);
-    for (uint32_t k = 0; k < n; k++)
-        hit[list[k]] = 1;
-    for (uint32_t i = 0; gs->placed && i < gs->instance_capacity; i++) {
-        if (gs->placed[i].info.y >= s->mesh_count || !hit[gs->placed[i].info.y]) continue;
-        float lo[3], hi[3];
-        placed_box(gs, i, lo, hi);
-        log_box(gs, lo, hi);
-    }
     rd_vk_result r = RD_VK_OK;
     for (uint32_t k = 0; k < n && r == RD_VK_OK; k++) {
         uint32_t m = list[k], tris = s->meshes[m].tri_count;
@@ -395,6 +384,10 @@ static rd_vk_result rebuild_meshes(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *
         free(nodes);
         free(t);
         free(a);
+        /* the GPU refits the tree this build made from now on */
+        if (r == RD_VK_OK)
+            r = rd_gpu_scene_deform_built(vk, gs, s, m, bvh, tri_base[m], err, errlen);
+        gs->deform_rebuilds++;
         const pc_bvh_node *root = &bvh->nodes[0];
         const float b[6] = {root->bmin.x, root->bmin.y, root->bmin.z,
                             root->bmax.x, root->bmax.y, root->bmax.z};
@@ -407,7 +400,6 @@ static rd_vk_result rebuild_meshes(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *
         rd_bvh_destroy(&bvhs[k]);
     free(bvhs);
     free(tri_base);
-    free(hit);
     return r;
 }
 
@@ -416,22 +408,55 @@ rd_vk_result rd_gpu_scene_update_pose(rd_vk *vk, rd_gpu_scene *gs, const rd_scen
 {
     double t0 = now_ms();
     uint32_t n = 0, *list = xcalloc(s->mesh_count, sizeof *list);
-    uint8_t *hit = xcalloc(s->mesh_count, 1);
-    for (uint32_t m = 0; m < s->mesh_count; m++)
-        if (rd_gpu_scene_mesh_stale(gs, s, m)) list[n++] = m, hit[m] = 1;
-    if (rebuilt) *rebuilt = n;
-    rd_vk_result r = n ? rebuild_meshes(vk, gs, s, list, n, err, errlen) : RD_VK_OK;
-    if (n) gs->deform_build_ms = now_ms() - t0;
+    uint32_t ng = 0, *gpu = xcalloc(s->mesh_count, sizeof *gpu);
+    uint8_t *hit = xcalloc(s->mesh_count, 1), *degraded = xcalloc(s->mesh_count, 1);
+    for (uint32_t m = 0; m < s->mesh_count; m++) {
+        if (!rd_gpu_scene_mesh_stale(gs, s, m)) continue;
+        hit[m] = 1;
+        if (rd_gpu_scene_deform_on_gpu(gs, m))
+            gpu[ng++] = m;
+        else
+            list[n++] = m;
+    }
+    if (rebuilt) *rebuilt = n + ng;
+    /* where their instances were: a new geometry revision logs it, then where they are */
+    if (n + ng) gs->revision = gs->geometry_revision = ++last_revision;
+    for (uint32_t i = 0; n + ng && gs->placed && i < gs->instance_capacity; i++) {
+        if (gs->placed[i].info.y >= s->mesh_count || !hit[gs->placed[i].info.y]) continue;
+        float lo[3], hi[3];
+        placed_box(gs, i, lo, hi);
+        log_box(gs, lo, hi);
+    }
+    rd_vk_result r = RD_VK_OK;
+    if (ng) {
+        r = rd_gpu_scene_deform_run(vk, gs, s, gpu, ng, degraded, err, errlen);
+        if (r != RD_VK_OK && r != RD_VK_ERR_DEVICE_LOST && !vk->device_lost) {
+            /* the GPU path failed (no pipeline, no memory): the CPU takes these meshes, now and
+             * from now on */
+            fprintf(stderr, "probecast: deforming meshes go to the CPU: %s\n", err);
+            gs->deform_on_cpu = true;
+            memset(degraded, 1, ng);
+            r = RD_VK_OK;
+        }
+        for (uint32_t k = 0; r == RD_VK_OK && k < ng; k++) /* refitted too far: rebuilt now */
+            if (degraded[k]) list[n++] = gpu[k];
+    } else if (n) {
+        gs->deform_ms = gs->refit_ms = 0;
+    }
+    if (r == RD_VK_OK && n) r = rebuild_meshes(vk, gs, s, list, n, err, errlen);
+    if (n + ng) gs->deform_build_ms = now_ms() - t0;
     if (r == RD_VK_OK) r = update_instances(vk, NULL, gs, s, err, errlen);
-    /* where the rebuilt meshes' instances are now (update_instances logs only moved ones) */
-    for (uint32_t i = 0; r == RD_VK_OK && n && i < s->instance_count; i++) {
+    /* where the changed meshes' instances are now (update_instances logs only moved ones) */
+    for (uint32_t i = 0; r == RD_VK_OK && n + ng && i < s->instance_count; i++) {
         if (!hit[s->instances[i].mesh] || i >= gs->instance_capacity) continue;
         float lo[3], hi[3];
         placed_box(gs, i, lo, hi);
         log_box(gs, lo, hi);
     }
     free(list);
+    free(gpu);
     free(hit);
+    free(degraded);
     return r;
 }
 
@@ -529,6 +554,8 @@ static rd_vk_result scene_upload(rd_vk *vk, rd_staging *st, rd_gpu_scene *gs, co
                                  rd_gpu_scene_prep *prep, char *err, size_t errlen)
 {
     memset(gs, 0, sizeof *gs);
+    const char *deform = getenv("PROBECAST_DEFORM");
+    gs->deform_on_cpu = deform && strcmp(deform, "cpu") == 0;
     for (int k = 0; k < 3; k++) {
         float c = 0.5f * (s->bounds_min[k] + s->bounds_max[k]);
         gs->origin_shift[k] = isfinite(c) ? c : 0.0f;
@@ -618,6 +645,7 @@ rd_vk_result rd_gpu_scene_create(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
 
 void rd_gpu_scene_destroy(rd_vk *vk, rd_gpu_scene *gs)
 {
+    rd_gpu_scene_deform_destroy(vk, gs);
     rd_buffer *bufs[] = {&gs->tris,       &gs->tri_attrs, &gs->blas_nodes, &gs->tlas_nodes,
                          &gs->tlas_index, &gs->instances, &gs->materials,  &gs->textures,
                          &gs->texels,     &gs->lights};

@@ -3,8 +3,10 @@
  * Bottom-level BVHs are built once per mesh; the top-level BVH over instances is rebuilt
  * when nodes move (rd_gpu_scene_update_instances), so moving an object costs one small
  * rebuild and upload. A mesh that deforms (skins, morph targets: scene.h rd_mesh_deform) gets
- * room for any BVH of its triangles, and its BLAS is rebuilt on the CPU when its pose changed
- * (rd_gpu_scene_update_pose). Lights are a separate small upload.
+ * room for any BVH of its triangles; when its pose changed (rd_gpu_scene_update_pose) it is
+ * posed on the GPU and its BLAS refitted there in place, or rebuilt on the CPU (the first pose,
+ * a degraded tree, PROBECAST_DEFORM=cpu: gpu_scene_deform.c). Lights are a separate small
+ * upload.
  */
 #ifndef RD_GPU_SCENE_H
 #define RD_GPU_SCENE_H
@@ -20,6 +22,8 @@ typedef struct rd_gpu_scene_dirty {
     uint64_t revision;
     float lo[3], hi[3];
 } rd_gpu_scene_dirty;
+
+typedef struct rd_gpu_scene_deform rd_gpu_scene_deform; /* gpu_scene_deform.c */
 
 typedef struct rd_gpu_scene {
     rd_buffer tris, tri_attrs, blas_nodes, tlas_nodes, tlas_index, instances;
@@ -70,7 +74,18 @@ typedef struct rd_gpu_scene {
     pc_light *placed_lights; /* the lights as last uploaded (light_capacity of them) */
     /* statistics */
     double blas_build_ms, tlas_build_ms, upload_ms;
-    double deform_build_ms; /* the last rd_gpu_scene_update_pose's BLAS rebuilds and uploads */
+    /* the last rd_gpu_scene_update_pose that changed a mesh: its whole mesh work (GPU poses and
+     * refits, CPU rebuilds and uploads; wall time), and the GPU time of its posing (with the
+     * triangle records) and of its refits (the submission's wall time in deform_ms, refit_ms 0,
+     * where the device has no timestamps; both 0 when no mesh went through the GPU) */
+    double deform_build_ms, deform_ms, refit_ms;
+    /* mesh poses refitted on the GPU, rebuilt on the CPU; refitted trees checked against a fresh
+     * build (gpu_scene_deform.c) */
+    uint64_t deform_refits, deform_rebuilds, deform_sah_checks;
+    /* Deforming meshes: GPU state (NULL until a pose needs it), and the CPU path forced for
+     * every pose (set by the upload from the environment: PROBECAST_DEFORM=cpu). */
+    rd_gpu_scene_deform *deform;
+    bool deform_on_cpu;
     uint64_t tri_count, blas_node_count;
     uint32_t tlas_node_count, max_blas_depth;
 } rd_gpu_scene;
@@ -128,11 +143,13 @@ rd_vk_result rd_gpu_scene_update_instances(rd_vk *vk, rd_gpu_scene *gs, const rd
                                            char *err, size_t errlen);
 /* Whether mesh's deformed shape changed since its BLAS was built (its deform revision moved). */
 bool rd_gpu_scene_mesh_stale(const rd_gpu_scene *gs, const rd_scene *scene, uint32_t mesh);
-/* rd_gpu_scene_update_instances after a pose: first every stale deformed mesh (the CPU
- * deformation of rd_scene_update done) gets its BLAS rebuilt on the CPU and written in place,
- * with its triangles; the boxes its instances took before and take now are logged as changed
- * geometry (a new geometry revision). *rebuilt (may be NULL) gets how many meshes were rebuilt,
- * deform_ms the time it took. Rebuilding is the CPU reference for a GPU refit to come. */
+/* rd_gpu_scene_update_instances after a pose (rd_scene_update done: its CPU deformation gives
+ * the pose, and the shape a CPU rebuild uses): every stale deformed mesh gets its triangle
+ * records and BLAS written in place, posed and refitted on the GPU (gpu_scene_deform.c), or
+ * rebuilt on the CPU from the CPU's deformed shape; the boxes its instances took before and
+ * take now are logged as changed geometry (a new geometry revision). *rebuilt (may be NULL) gets
+ * how many meshes changed (refitted or rebuilt); deform_build_ms, deform_ms and refit_ms the
+ * time it took. */
 rd_vk_result rd_gpu_scene_update_pose(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *scene,
                                       uint32_t *rebuilt, char *err, size_t errlen);
 /* Re-uploads the lights (the count may change). Within the buffer's capacity nothing waits: the

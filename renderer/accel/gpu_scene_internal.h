@@ -9,6 +9,7 @@
 
 #include "shaders/gpu_types.h"
 #include "renderer/accel/bvh.h"
+#include "renderer/accel/gpu_scene.h"
 #include "renderer/scene/scene.h"
 
 static inline double now_ms(void)
@@ -52,5 +53,22 @@ static inline uint64_t blas_slots(const rd_mesh *m, uint32_t built)
 void rd_gpu_scene_fill_mesh(const rd_scene *s, uint32_t m, const rd_bvh *bvh, const float o[3],
                             uint32_t node_base, uint32_t tri_base, pc_bvh_node *nodes, pc_tri *tris,
                             pc_tri_attr *attrs);
+
+/* gpu_scene_deform.c: deforming meshes posed and refitted on the GPU (rd_gpu_scene_update_pose).
+ * rd_gpu_scene_deform_built: the CPU just wrote mesh m's BLAS from bvh (its first triangle at
+ * tri_base): the GPU state of m (its vertex arrays, made once, and bvh's topology) follows it,
+ * unless gs->deform_on_cpu. rd_gpu_scene_deform_on_gpu: whether m's next pose is to be refitted
+ * on the GPU (else rebuilt on the CPU). rd_gpu_scene_deform_run: poses and refits the meshes
+ * list[0..n) (each rd_gpu_scene_deform_on_gpu) in one submission, in the scene's buffers, and
+ * sets their bounds and revisions; rebuild[k] = 1 where list[k]'s refitted tree has degraded
+ * and is to be rebuilt now. rd_gpu_scene_deform_destroy: idempotent; nothing may be in flight. */
+rd_vk_result rd_gpu_scene_deform_built(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, uint32_t m,
+                                       const rd_bvh *bvh, uint32_t tri_base, char *err,
+                                       size_t errlen);
+bool rd_gpu_scene_deform_on_gpu(const rd_gpu_scene *gs, uint32_t m);
+rd_vk_result rd_gpu_scene_deform_run(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
+                                     const uint32_t *list, uint32_t n, uint8_t *rebuild, char *err,
+                                     size_t errlen);
+void rd_gpu_scene_deform_destroy(rd_vk *vk, rd_gpu_scene *gs);
 
 #endif

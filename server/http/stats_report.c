@@ -142,6 +142,12 @@ cJSON *srv_stats_json(const srv_stats_snapshot *s)
     cJSON *scene = cJSON_AddObjectToObject(j, "scene");
     cJSON_AddNumberToObject(scene, "generation", (double)r->scene_generation);
     cJSON_AddNumberToObject(scene, "triangles", (double)r->triangles);
+    cJSON *df = cJSON_AddObjectToObject(scene, "deform");
+    cJSON_AddNumberToObject(df, "deform_build_ms", round(r->deform_build_ms * 1000) / 1000);
+    cJSON_AddNumberToObject(df, "deform_ms", round(r->deform_ms * 1000) / 1000);
+    cJSON_AddNumberToObject(df, "refit_ms", round(r->refit_ms * 1000) / 1000);
+    cJSON_AddNumberToObject(df, "refits", (double)r->deform_refits);
+    cJSON_AddNumberToObject(df, "rebuilds", (double)r->deform_rebuilds);
     cJSON *mem = cJSON_AddObjectToObject(j, "memory");
     cJSON_AddNumberToObject(mem, "rss_bytes", (double)s->memory.rss_bytes);
     cJSON_AddNumberToObject(mem, "peak_rss_bytes", (double)s->memory.peak_rss_bytes);
@@ -238,6 +244,17 @@ char *srv_stats_prometheus(const srv_stats_snapshot *s)
            (double)r->world_ticks);
     metric(&t, "probecast_probe_updates_total", "counter", "DDGI probe updates run.",
            (double)r->world_updates_total);
+    metric(&t, "probecast_deform_seconds", "gauge",
+           "Wall time of the last pose's deforming-mesh work (GPU and CPU).",
+           r->deform_build_ms / 1000.0);
+    metric(&t, "probecast_deform_gpu_seconds", "gauge",
+           "GPU time of the last GPU pose's posing and triangle records.", r->deform_ms / 1000.0);
+    metric(&t, "probecast_refit_gpu_seconds", "gauge",
+           "GPU time of the last GPU pose's BVH refits.", r->refit_ms / 1000.0);
+    metric(&t, "probecast_deform_refits_total", "counter",
+           "Mesh poses whose BVH was refitted on the GPU.", (double)r->deform_refits);
+    metric(&t, "probecast_deform_rebuilds_total", "counter",
+           "Mesh poses whose BVH was rebuilt on the CPU.", (double)r->deform_rebuilds);
     metric(&t, "probecast_views", "gauge", "Views (the default view and one per viewer).",
            r->views);
     metric(&t, "probecast_rays_per_second", "gauge",

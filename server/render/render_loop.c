@@ -412,6 +412,11 @@ static void share_state(srv_render_loop *l, bool rendering)
     s->rays_per_probe = w->gi ? w->ddgi.vol.counts.w : 0;
     s->scene_generation = l->svc.st.generation;
     s->triangles = l->svc.st.scene.tri_total;
+    s->deform_build_ms = l->svc.gs.deform_build_ms;
+    s->deform_ms = l->svc.gs.deform_ms;
+    s->refit_ms = l->svc.gs.refit_ms;
+    s->deform_refits = l->svc.gs.deform_refits;
+    s->deform_rebuilds = l->svc.gs.deform_rebuilds;
     s->views = l->views.count;
     s->views_watched = watched;
     s->pt_target = l->svc.pt_target;

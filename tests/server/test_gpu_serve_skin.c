@@ -2,7 +2,8 @@
  * loaded with --scene. GET /v1/scene lists its skin (two joints) and the arm node's skin; seeking
  * the animation (PATCH /v1/animation) rebuilds the arm's bottom-level BVH, which rays traced on
  * the GPU show: picks over the picture hit the straight arm (|y| <= 0.1) at 0 s, the forearm
- * pointing up (hits up to y = 1) at 1.5 s, and the straight arm again back at 0 s. */
+ * pointing up (hits up to y = 1) at 1.5 s, and the straight arm again back at 0 s (posed and
+ * refitted on the GPU by then: GET /v1/stats counts one CPU rebuild and two GPU refits). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -106,6 +107,18 @@ int main(void)
            "the bent arm: %d hits, y up to %g (the forearm reaches y = 1)", bent, bent_y);
     CHECKF(again == straight && again_y == straight_y, "back at 0 s: %d hits, y up to %g", again,
            again_y);
+
+    /* /v1/stats: the first pose rebuilt the arm's BVH on the CPU, the later ones refitted it on
+     * the GPU (the arm is one leaf: its SAH cost never grows) */
+    cJSON *stats = pc_api_get_json(&d, "/v1/stats");
+    const cJSON *df = cJSON_GetObjectItemCaseSensitive(
+        cJSON_GetObjectItemCaseSensitive(stats, "scene"), "deform");
+    CHECKF(cJSON_IsObject(df) && pc_json_number(df, "rebuilds") == 1 &&
+               pc_json_number(df, "refits") == 2 && pc_json_number(df, "deform_ms") >= 0 &&
+               pc_json_number(df, "refit_ms") >= 0 && pc_json_number(df, "deform_build_ms") > 0,
+           "/v1/stats reports the deformation: %g rebuilds, %g refits",
+           df ? pc_json_number(df, "rebuilds") : -1, df ? pc_json_number(df, "refits") : -1);
+    cJSON_Delete(stats);
 
     CHECK(pc_daemon_alive(&d));
     CHECKF(pc_daemon_stop(&d) == 0, "clean exit after SIGTERM");
