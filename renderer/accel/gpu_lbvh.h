@@ -1,0 +1,64 @@
+/* gpu_lbvh.h: a BVH over a triangle mesh built on the GPU, a linear BVH after Karras 2012
+ * ("Maximizing Parallelism in the Construction of BVHs, Octrees, and k-d Trees"), in the node
+ * layout the traversal reads (pc_bvh_node, as rd_bvh: nodes[0] the root, an interior node's
+ * children adjacent at first and first + 1, a leaf's triangles [first, first + count) of
+ * prim_index). Passes (shaders/lbvh_*.comp, a barrier between each):
+ *   1. lbvh_bounds: the centroids' box, by atomics (two dispatches: reset, then widen);
+ *   2. lbvh_morton: keys (30-bit Morton code of the centroid, triangle index);
+ *   3. lbvh_sort: a bitonic sort of the keys padded to N = next power of two, one dispatch per
+ *      step: log2(N) (log2(N) + 1) / 2 dispatches (91 for 5000 triangles) of N/2 threads,
+ *      O(N log^2 N) work; simple and exact, slower than a radix sort for large meshes;
+ *   4. lbvh_hierarchy: Karras's radix tree, one thread per internal node; internal node i's
+ *      children go to nodes 2i+1 and 2i+2, so 2n-1 nodes with the root at 0;
+ *   5. lbvh_boxes: the leaves (one thread each), then 64 passes of one thread per internal
+ *      node, each finishing the nodes whose children were finished in earlier passes (exact
+ *      unions; a radix tree over 64-bit keys has at most 64 internal levels). No pass reads a
+ *      box written in the same dispatch. (A single pass of threads climbing from the leaves
+ *      with one atomic counter per node, Karras's sec. 4, came out with wrong boxes on
+ *      lavapipe for nodes above the first level; not understood yet, so not used.)
+ * Leaf policy: one triangle per leaf (no collapse yet), so traversal does more box tests than
+ * on a CPU build with 4 a leaf. Depth: at most 64 (one level a bit of the 64-bit keys), but
+ * not kept within RD_BVH_MAX_DEPTH (48) as the CPU builder's is; random and degenerate meshes
+ * of a few thousand triangles stay near 2 log2 n; rd_gpu_lbvh_build_download reports it.
+ * Children may sit before their parent (internal node i's slot is its parent's choice), so
+ * rd_gpu_refit_blas_create, which assumes the CPU builder's order, cannot take it yet.
+ * A triangle with a non-finite vertex gets an empty box and a key past every finite one.
+ * Not yet used by gpu_scene (which builds BLASes on the CPU, renderer/accel/bvh.h). */
+#ifndef RD_GPU_LBVH_H
+#define RD_GPU_LBVH_H
+
+#include <stdint.h>
+
+#include "renderer/accel/bvh.h"
+#include "renderer/vk/vk_compute.h"
+
+typedef struct rd_gpu_lbvh_builder {
+    rd_pipeline bounds, morton, sort, hierarchy, boxes;
+} rd_gpu_lbvh_builder;
+
+rd_vk_result rd_gpu_lbvh_builder_create(rd_vk *vk, rd_gpu_lbvh_builder *b, char *err,
+                                        size_t errlen);
+void rd_gpu_lbvh_builder_destroy(rd_vk *vk, rd_gpu_lbvh_builder *b); /* idempotent */
+
+/* Nodes a build over tri_count triangles writes: 2 tri_count - 1 (1 for none). */
+uint32_t rd_gpu_lbvh_node_count(uint32_t tri_count);
+/* Bytes of scratch a build needs (16-byte aligned device address). */
+uint64_t rd_gpu_lbvh_scratch_bytes(uint32_t tri_count);
+
+/* Records a build into c. positions: device address of 9 floats per triangle; nodes: room for
+ * rd_gpu_lbvh_node_count(tri_count) pc_bvh_node (indices relative to it); prim_index: room for
+ * tri_count uints (leaf order -> triangle); scratch: rd_gpu_lbvh_scratch_bytes. All must stay
+ * alive until c has run; the results are ready after the barrier that ends the recording. */
+void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress positions,
+                        uint32_t tri_count, VkDeviceAddress nodes, VkDeviceAddress prim_index,
+                        VkDeviceAddress scratch);
+
+/* Blocking convenience (tests, benchmarks): uploads positions, builds, waits, and reads the
+ * tree back into out (an rd_bvh the caller frees with rd_bvh_destroy; depth computed on the
+ * CPU). gpu_ms (may be NULL): wall time of the submit and wait of the build alone. On error
+ * out is zeroed. */
+rd_vk_result rd_gpu_lbvh_build_download(rd_vk *vk, const rd_gpu_lbvh_builder *b,
+                                        const float *positions, uint32_t tri_count, rd_bvh *out,
+                                        double *gpu_ms, char *err, size_t errlen);
+
+#endif

@@ -1,0 +1,178 @@
+/* test_gpu_lbvh.c: the GPU LBVH builder (renderer/accel/gpu_lbvh.h) on lavapipe: for random
+ * triangle soups of 0 to 5000 triangles and degenerate meshes (all centroids equal, a flat
+ * plane, a few non-finite triangles) every structural promise of bvh.h (check_triangles with
+ * one triangle a leaf: each triangle in exactly one leaf, every box inside its parent, depth
+ * within RD_BVH_MAX_DEPTH), closest hits equal to brute force, and an SAH cost within 3x of
+ * the CPU builder's on the same mesh (printed). Prints the build time (submit and wait) of
+ * each size; `test_gpu_lbvh bench` builds larger meshes and prints only the table. */
+#include "bvh_check.h"
+#include "renderer/accel/bvh.h"
+#include "renderer/accel/gpu_lbvh.h"
+#include "renderer/vk/vk_context.h"
+#include "test_util.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static char err[512];
+static double g_worst_ratio = 0;
+
+static void random_soup(float *pos, uint32_t n, float size)
+{
+    for (uint32_t i = 0; i < n; i++) {
+        float c[3] = {rng_range(-1, 1), rng_range(-1, 1), rng_range(-1, 1)};
+        random_tri(pos + 9 * (size_t)i, c, size);
+    }
+}
+
+/* Builds pos on the GPU and checks it; returns the build's milliseconds. */
+static double check_mesh(rd_vk *vk, const rd_gpu_lbvh_builder *b, const char *what,
+                         const float *pos, uint32_t n, uint32_t rays)
+{
+    rd_bvh gpu;
+    double ms = 0;
+    rd_vk_result r = rd_gpu_lbvh_build_download(vk, b, pos, n, &gpu, &ms, err, sizeof err);
+    CHECKF(r == RD_VK_OK, "%s: %s", what, err);
+    if (r != RD_VK_OK) return 0;
+    CHECKF(gpu.node_count == (n ? 2 * n - 1 : 1), "%s: %u nodes", what, gpu.node_count);
+    int bad = check_triangles(what, &gpu, pos, n, 1);
+    CHECKF(bad == 0, "%s: %d structural problems", what, bad);
+
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint32_t i = 0; i < n; i++) {
+        if (!tri_finite(pos + 9 * (size_t)i)) continue;
+        for (int k = 0; k < 9; k++) {
+            lo[k % 3] = fminf(lo[k % 3], pos[9 * (size_t)i + k]);
+            hi[k % 3] = fmaxf(hi[k % 3], pos[9 * (size_t)i + k]);
+        }
+    }
+    if (bad == 0 && n > 0 && rays > 0) {
+        float *orgs = malloc((size_t)rays * 6 * sizeof(float));
+        if (!orgs) abort();
+        make_rays(orgs, orgs + 3 * (size_t)rays, rays, lo, hi, 0.5f, pos, n);
+        uint32_t hits =
+            compare_rays(what, &gpu, pos, n, orgs, orgs + 3 * (size_t)rays, rays, 0, INFINITY);
+        CHECKF(hits > 0, "%s: no ray hit anything", what);
+        free(orgs);
+    }
+
+    rd_bvh cpu;
+    CHECK(rd_bvh_build_triangles(&cpu, pos, n, NULL));
+    double sah_gpu = rd_bvh_sah_cost(&gpu), sah_cpu = rd_bvh_sah_cost(&cpu);
+    double ratio = sah_cpu > 0 ? sah_gpu / sah_cpu : 0;
+    fprintf(stderr,
+            "%-28s %6u tris  depth %2u (CPU %2u)  SAH %9.2f vs CPU %9.2f = %.2fx  %8.2f ms\n", what,
+            n, gpu.depth, cpu.depth, sah_gpu, sah_cpu, ratio, ms);
+    if (sah_cpu > 0) CHECKF(ratio < 3.0, "%s: SAH %.3f over the CPU build's", what, ratio);
+    if (ratio > g_worst_ratio) g_worst_ratio = ratio;
+    rd_bvh_destroy(&cpu);
+    rd_bvh_destroy(&gpu);
+    return ms;
+}
+
+static void run_tests(rd_vk *vk, const rd_gpu_lbvh_builder *b)
+{
+    static const uint32_t sizes[] = {0, 1, 2, 3, 7, 100, 5000};
+    float *pos = tris_alloc(5000);
+    for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++) {
+        char what[64];
+        snprintf(what, sizeof what, "random soup %u", sizes[s]);
+        rng_seed(17 + s);
+        random_soup(pos, sizes[s], sizes[s] > 100 ? 0.05f : 0.3f);
+        check_mesh(vk, b, what, pos, sizes[s], sizes[s] ? 1000 : 0);
+    }
+
+    /* all centroids at one point: the keys differ only in their triangle index */
+    rng_seed(5);
+    for (uint32_t i = 0; i < 600; i++) {
+        float a[3], d[3], *v = pos + 9 * (size_t)i;
+        rng_unit(a), rng_unit(d);
+        for (int k = 0; k < 3; k++) {
+            v[k] = 0.25f + a[k];
+            v[3 + k] = 0.25f + d[k];
+            v[6 + k] = 0.25f - a[k] - d[k];
+        }
+    }
+    check_mesh(vk, b, "equal centroids", pos, 600, 500);
+
+    /* a flat 40 x 40 grid of quads in z = 0 (the centroid box has no depth) */
+    uint32_t g = 40, n = 0;
+    for (uint32_t y = 0; y < g; y++)
+        for (uint32_t x = 0; x < g; x++) {
+            float x0 = (float)x / g, x1 = (float)(x + 1) / g;
+            float y0 = (float)y / g, y1 = (float)(y + 1) / g;
+            float q[18] = {x0, y0, 0, x1, y0, 0, x1, y1, 0, x0, y0, 0, x1, y1, 0, x0, y1, 0};
+            memcpy(pos + 9 * (size_t)n, q, sizeof q);
+            n += 2;
+        }
+    check_mesh(vk, b, "flat plane", pos, n, 1000);
+
+    /* one identical triangle many times over */
+    for (uint32_t i = 1; i < 64; i++)
+        memcpy(pos + 9 * (size_t)i, pos, 9 * sizeof(float));
+    check_mesh(vk, b, "64 copies of one triangle", pos, 64, 100);
+
+    /* a few non-finite triangles among finite ones */
+    rng_seed(11);
+    random_soup(pos, 300, 0.2f);
+    for (uint32_t i = 0; i < 300; i += 37)
+        pos[9 * i + (i % 9)] = (i % 2) ? NAN : INFINITY;
+    check_mesh(vk, b, "non-finite among 300", pos, 300, 500);
+    free(pos);
+}
+
+static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b)
+{
+    static const uint32_t sizes[] = {1000, 5000, 20000, 100000};
+    float *pos = tris_alloc(100000);
+    printf("%8s %10s %10s\n", "tris", "gpu_ms", "sah_ratio");
+    for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++) {
+        rng_seed(3 + s);
+        random_soup(pos, sizes[s], 0.02f);
+        rd_bvh gpu, cpu;
+        double ms = 0, best = 1e30;
+        for (int rep = 0; rep < 3; rep++) {
+            rd_vk_result r =
+                rd_gpu_lbvh_build_download(vk, b, pos, sizes[s], &gpu, &ms, err, sizeof err);
+            if (r != RD_VK_OK) {
+                fprintf(stderr, "%s\n", err);
+                free(pos);
+                return;
+            }
+            best = ms < best ? ms : best;
+            if (rep < 2) rd_bvh_destroy(&gpu);
+        }
+        if (!rd_bvh_build_triangles(&cpu, pos, sizes[s], NULL)) abort();
+        printf("%8u %10.2f %10.3f\n", sizes[s], best,
+               rd_bvh_sah_cost(&gpu) / rd_bvh_sah_cost(&cpu));
+        rd_bvh_destroy(&gpu);
+        rd_bvh_destroy(&cpu);
+    }
+    free(pos);
+}
+
+int main(int argc, char **argv)
+{
+    bool bench = argc > 1 && strcmp(argv[1], "bench") == 0;
+    rd_vk vk;
+    rd_vk_result rc = rd_vk_create(&vk, NULL, err, sizeof err);
+    CHECKF(rc == RD_VK_OK, "%s", err);
+    if (rc != RD_VK_OK) return test_finish();
+    rd_gpu_lbvh_builder b;
+    rc = rd_gpu_lbvh_builder_create(&vk, &b, err, sizeof err);
+    CHECKF(rc == RD_VK_OK, "%s", err);
+    if (rc == RD_VK_OK) {
+        if (bench)
+            run_bench(&vk, &b);
+        else
+            run_tests(&vk, &b);
+    }
+    if (!bench) fprintf(stderr, "worst SAH ratio GPU LBVH / CPU binned SAH: %.3f\n", g_worst_ratio);
+    rd_gpu_lbvh_builder_destroy(&vk, &b);
+    rd_gpu_lbvh_builder_destroy(&vk, &b); /* idempotent */
+    CHECK(rd_vk_validation_messages(&vk) == 0);
+    rd_vk_destroy(&vk);
+    return test_finish();
+}
