@@ -3,8 +3,10 @@
 // Scratch, in uints from its start: [0, 8) centroid bounds as order-preserving uints
 // (min xyz, max xyz); [8, 8 + 2N) the sort keys as uvec2 (x: triangle index, y: Morton code;
 // N = tri count rounded up to a power of two, padding keys all ones); then leaf_slot[n] (sorted
-// leaf -> output node), node_slot[n] (internal node -> output node) and done[n] (per internal
-// node: the lbvh_boxes pass that made its box, 0 before).
+// leaf -> output node), node_slot[n] (internal node -> output node), done[n] (per internal
+// node: the lbvh_boxes pass that made its box, 0 before), range[2n] (per internal node: first
+// sorted leaf and count) and alive[2n] (per working-tree node: 1 if it stays in the output,
+// then its output index after lbvh_scan). Word 6 of the scratch: the output's node count.
 // pc.params.x = n (triangles), pc.params.y = uint offset of leaf_slot.
 #ifndef LBVH_GLSL
 #define LBVH_GLSL
@@ -41,6 +43,15 @@ uint lbvh_done_at(uint n, uint leaf_at)
 {
     return leaf_at + 2u * n;
 }
+uint lbvh_range_at(uint n, uint leaf_at)
+{
+    return leaf_at + 3u * n;
+}
+uint lbvh_alive_at(uint n, uint leaf_at)
+{
+    return leaf_at + 5u * n;
+}
+#define LBVH_COUNT_AT 6u
 
 // Triangle t's three vertices (9 floats each triangle).
 void lbvh_triangle(uint64_t positions, uint t, out vec3 a, out vec3 b, out vec3 c)

@@ -6,10 +6,12 @@
 // internal node i at nodes 2i+1 and 2i+2, adjacent as pc_bvh_node wants; every node but the
 // root is one node's child, so the 2n-1 nodes are all written once. Each thread writes its
 // children's w words (interior: first = 2c+1, count 0; leaves are written by lbvh_boxes),
-// the slots of its children and prim_index of its leaf children, and clears its own done word
-// for lbvh_boxes. n == 1: the root is the one leaf; n == 0: an empty root.
+// the slots of its children and prim_index of its leaf children, clears its own done word for
+// lbvh_boxes, and writes its range of sorted leaves and whether its children stay (alive: its
+// range holds more than max_leaf triangles) for lbvh_scan and lbvh_remap. n == 1: the root is the one leaf; n == 0: an empty root.
 // Push constants (pc_push): buf0 = scratch (shaders/lbvh.glsl), buf1 = nodes (pc_bvh_node),
-// buf2 = prim_index (uint); params.x = n, params.y = uint offset of leaf_slot in scratch.
+// buf2 = prim_index (uint); params.x = n, params.y = uint offset of leaf_slot in scratch,
+// params.z = max_leaf (the nodes go to the working tree; for n == 0 buf1 is the output).
 #version 460
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
@@ -63,8 +65,10 @@ void main()
             float inf = uintBitsToFloat(0x7f800000u);
             nodes.n[0].bmin = vec4(inf, inf, inf, uintBitsToFloat(0u));
             nodes.n[0].bmax = vec4(-inf, -inf, -inf, uintBitsToFloat(0u));
+            s.v[LBVH_COUNT_AT] = 1u;
         } else {
             s.v[lbvh_leaf_slot_at(n, at)] = 0u;
+            s.v[lbvh_alive_at(n, at)] = 1u;
             prim.v[0] = g_keys.k[0].x;
         }
         return;
@@ -93,10 +97,18 @@ void main()
     }
     int gamma = i + sp * d + min(d, 0);
 
+    // this node's range of sorted leaves, for the collapse of small subtrees (lbvh_remap)
+    // (a range holding finite and non-finite triangles, keys on either side of 1 << 30, is
+    // never collapsed: the count's top bit marks it; bvh.h keeps such triangles apart)
+    uint lo = uint(min(i, j)), count = uint(max(i, j)) - lo + 1u;
+    bool mixed = ((g_keys.k[min(i, j)].y ^ g_keys.k[max(i, j)].y) & (1u << 30)) != 0u;
+    s.v[lbvh_range_at(n, at) + 2u * ti] = lo;
+    s.v[lbvh_range_at(n, at) + 2u * ti + 1u] = count | (mixed ? 0x80000000u : 0u);
     uint children[2] = uint[2](uint(gamma), uint(gamma + 1));
     bool leaf[2] = bool[2](min(i, j) == gamma, max(i, j) == gamma + 1);
     for (uint c = 0u; c < 2u; c++) {
         uint slot = 2u * ti + 1u + c;
+        s.v[lbvh_alive_at(n, at) + slot] = count > pc.params.z || mixed ? 1u : 0u;
         if (leaf[c]) {
             s.v[lbvh_leaf_slot_at(n, at) + children[c]] = slot;
             prim.v[children[c]] = g_keys.k[children[c]].x;
@@ -108,6 +120,7 @@ void main()
     s.v[lbvh_done_at(n, at) + ti] = 0u;
     if (ti == 0u) {
         s.v[lbvh_node_slot_at(n, at)] = 0u;
+        s.v[lbvh_alive_at(n, at)] = 1u;
         set_interior(nodes, 0u, 1u);
     }
 }

@@ -12,6 +12,8 @@
 #include "shaders/lbvh_boxes.spv.h"
 #include "shaders/lbvh_hierarchy.spv.h"
 #include "shaders/lbvh_morton.spv.h"
+#include "shaders/lbvh_remap.spv.h"
+#include "shaders/lbvh_scan.spv.h"
 #include "shaders/lbvh_sort.spv.h"
 
 #define PUSH_SIZE ((uint32_t)sizeof(pc_push))
@@ -22,14 +24,18 @@ static const rd_pipeline_desc kPipelines[] = {
     RD_PIPELINE_DESC(rd_gpu_lbvh_builder, hierarchy, "lbvh_hierarchy", pc_spv_lbvh_hierarchy,
                      PUSH_SIZE),
     RD_PIPELINE_DESC(rd_gpu_lbvh_builder, boxes, "lbvh_boxes", pc_spv_lbvh_boxes, PUSH_SIZE),
+    RD_PIPELINE_DESC(rd_gpu_lbvh_builder, scan, "lbvh_scan", pc_spv_lbvh_scan, PUSH_SIZE),
+    RD_PIPELINE_DESC(rd_gpu_lbvh_builder, remap, "lbvh_remap", pc_spv_lbvh_remap, PUSH_SIZE),
 };
 #define PIPELINE_COUNT (sizeof kPipelines / sizeof kPipelines[0])
 
 /* One dispatch covers at most this many threads (65535 groups of PC_WG_1D). */
 #define MAX_THREADS (65535u * PC_WG_1D)
-/* The scratch layout of shaders/lbvh.glsl, in uints: 8 of bounds, 2N of keys, then leaf_slot,
- * node_slot and done, n each. */
+/* The scratch layout of shaders/lbvh.glsl, in uints: 8 of bounds (word 6: the output's node
+ * count), 2N of keys, then leaf_slot, node_slot, done (n each), range and alive (2n each);
+ * then, 16-byte aligned, the working tree of 2n - 1 nodes. */
 #define KEYS_AT 8u
+#define TAIL_WORDS 7u
 /* Passes of lbvh_boxes after the leaves: the tree's internal levels, at most 64. */
 #define BOX_PASSES 64u
 
@@ -57,9 +63,22 @@ uint32_t rd_gpu_lbvh_node_count(uint32_t tri_count)
     return tri_count ? 2 * tri_count - 1 : 1;
 }
 
+/* Byte offset of the working tree in the scratch. */
+static uint64_t work_nodes_at(uint32_t n)
+{
+    uint64_t words = KEYS_AT + 2 * padded_keys(n) + TAIL_WORDS * (uint64_t)n;
+    return (4 * words + 15) & ~(uint64_t)15;
+}
+
 uint64_t rd_gpu_lbvh_scratch_bytes(uint32_t tri_count)
 {
-    return 4 * (KEYS_AT + 2 * padded_keys(tri_count) + 3 * (uint64_t)tri_count);
+    return work_nodes_at(tri_count) +
+           sizeof(pc_bvh_node) * (uint64_t)rd_gpu_lbvh_node_count(tri_count);
+}
+
+static uint32_t max_leaf_def(uint32_t max_leaf)
+{
+    return max_leaf == 0 ? 4 : max_leaf > RD_BVH_MAX_LEAF ? RD_BVH_MAX_LEAF : max_leaf;
 }
 
 static uint32_t groups(uint64_t threads)
@@ -68,10 +87,11 @@ static uint32_t groups(uint64_t threads)
 }
 
 void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress positions,
-                        uint32_t tri_count, VkDeviceAddress nodes, VkDeviceAddress prim_index,
-                        VkDeviceAddress scratch)
+                        uint32_t tri_count, uint32_t max_leaf, VkDeviceAddress nodes,
+                        VkDeviceAddress prim_index, VkDeviceAddress scratch)
 {
-    uint32_t n = tri_count;
+    uint32_t n = tri_count, ml = max_leaf_def(max_leaf);
+    VkDeviceAddress work = scratch + work_nodes_at(n);
     uint64_t nkeys = padded_keys(n);
     assert(n <= MAX_THREADS && nkeys / 2 <= MAX_THREADS);
     uint32_t leaf_at = (uint32_t)(KEYS_AT + 2 * nkeys);
@@ -93,16 +113,25 @@ void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress
             }
         }
     }
-    pc_push h = {.buf0 = scratch, .buf1 = nodes, .buf2 = prim_index, .params = {n, leaf_at, 0, 0}};
+    pc_push h = {.buf0 = scratch,
+                 .buf1 = n ? work : nodes,
+                 .buf2 = prim_index,
+                 .params = {n, leaf_at, ml, 0}};
     rd_cmd_dispatch(c, &b->hierarchy, &h, groups(n > 1 ? n - 1 : 1), 1, 1);
     rd_cmd_barrier(c);
     if (n > 0) {
-        pc_push x = {.buf0 = positions, .buf1 = nodes, .buf2 = scratch, .params = {n, leaf_at}};
+        pc_push x = {.buf0 = positions, .buf1 = work, .buf2 = scratch, .params = {n, leaf_at}};
         for (uint32_t k = 0; k <= (n > 1 ? BOX_PASSES : 0); k++) {
             x.params.z = k;
             rd_cmd_dispatch(c, &b->boxes, &x, groups(n), 1, 1);
             rd_cmd_barrier(c);
         }
+        pc_push sc = {.buf2 = scratch, .params = {n, leaf_at, ml, 0}};
+        rd_cmd_dispatch(c, &b->scan, &sc, 1, 1, 1);
+        rd_cmd_barrier(c);
+        pc_push rm = {.buf0 = work, .buf1 = nodes, .buf2 = scratch, .params = {n, leaf_at, ml, 0}};
+        rd_cmd_dispatch(c, &b->remap, &rm, groups(2 * (uint64_t)n - 1), 1, 1);
+        rd_cmd_barrier(c);
     }
 }
 
@@ -139,8 +168,9 @@ static double now_ms(void)
 }
 
 rd_vk_result rd_gpu_lbvh_build_download(rd_vk *vk, const rd_gpu_lbvh_builder *b,
-                                        const float *positions, uint32_t tri_count, rd_bvh *out,
-                                        double *gpu_ms, char *err, size_t errlen)
+                                        const float *positions, uint32_t tri_count,
+                                        uint32_t max_leaf, rd_bvh *out, double *gpu_ms, char *err,
+                                        size_t errlen)
 {
     memset(out, 0, sizeof *out);
     if (tri_count > MAX_THREADS) {
@@ -162,7 +192,7 @@ rd_vk_result rd_gpu_lbvh_build_download(rd_vk *vk, const rd_gpu_lbvh_builder *b,
     rd_cmd c;
     if (r == RD_VK_OK) r = rd_cmd_begin(vk, &c, err, errlen);
     if (r == RD_VK_OK) {
-        rd_gpu_lbvh_record(&c, b, pos.address, tri_count, nodes.address, prim.address,
+        rd_gpu_lbvh_record(&c, b, pos.address, tri_count, max_leaf, nodes.address, prim.address,
                            scratch.address);
         double t0 = now_ms();
         r = rd_cmd_submit_wait(vk, &c, err, errlen);
@@ -175,9 +205,16 @@ rd_vk_result rd_gpu_lbvh_build_download(rd_vk *vk, const rd_gpu_lbvh_builder *b,
             fprintf(stderr, "probecast: out of memory (GPU LBVH read-back)\n");
             abort();
         }
-        out->node_count = nn;
         out->prim_count = tri_count;
-        r = rd_buffer_download(vk, &nodes, 0, out->nodes, node_bytes, err, errlen);
+        r = rd_buffer_download(vk, &scratch, RD_GPU_LBVH_COUNT_OFFSET, &out->node_count, 4, err,
+                               errlen);
+        if (r == RD_VK_OK && !(out->node_count >= 1 && out->node_count <= nn)) {
+            snprintf(err, errlen, "GPU LBVH: %u nodes out of %u", out->node_count, nn);
+            r = RD_VK_ERR_VULKAN;
+        }
+        if (r == RD_VK_OK)
+            r = rd_buffer_download(vk, &nodes, 0, out->nodes,
+                                   (size_t)out->node_count * sizeof(pc_bvh_node), err, errlen);
         if (r == RD_VK_OK && prim_bytes)
             r = rd_buffer_download(vk, &prim, 0, out->prim_index, prim_bytes, err, errlen);
         if (r == RD_VK_OK) out->depth = tree_depth(out);

@@ -16,8 +16,11 @@
  *      box written in the same dispatch. (A single pass of threads climbing from the leaves
  *      with one atomic counter per node, Karras's sec. 4, came out with wrong boxes on
  *      lavapipe for nodes above the first level; not understood yet, so not used.)
- * Leaf policy: one triangle per leaf (no collapse yet), so traversal does more box tests than
- * on a CPU build with 4 a leaf. Depth: at most 64 (one level a bit of the 64-bit keys), but
+ *   6. lbvh_scan, lbvh_remap: the collapse of every subtree of at most max_leaf triangles
+ *      into one leaf (their sorted leaves are contiguous), the nodes that stay numbered by a
+ *      prefix sum (one workgroup: simple, O(n) on 64 threads) and copied to the output.
+ * Leaf policy: a subtree of at most max_leaf (default 4) triangles becomes a leaf, whatever its
+ * SAH cost (the CPU builder weighs it). Depth: at most 64 (one level a bit of the 64-bit keys), but
  * not kept within RD_BVH_MAX_DEPTH (48) as the CPU builder's is; random and degenerate meshes
  * of a few thousand triangles stay near 2 log2 n; rd_gpu_lbvh_build_download reports it.
  * Children may sit before their parent (internal node i's slot is its parent's choice), so
@@ -33,32 +36,38 @@
 #include "renderer/vk/vk_compute.h"
 
 typedef struct rd_gpu_lbvh_builder {
-    rd_pipeline bounds, morton, sort, hierarchy, boxes;
+    rd_pipeline bounds, morton, sort, hierarchy, boxes, scan, remap;
 } rd_gpu_lbvh_builder;
 
 rd_vk_result rd_gpu_lbvh_builder_create(rd_vk *vk, rd_gpu_lbvh_builder *b, char *err,
                                         size_t errlen);
 void rd_gpu_lbvh_builder_destroy(rd_vk *vk, rd_gpu_lbvh_builder *b); /* idempotent */
 
-/* Nodes a build over tri_count triangles writes: 2 tri_count - 1 (1 for none). */
+/* Nodes a build over tri_count triangles writes at most: 2 tri_count - 1 (1 for none); with
+ * leaves of several triangles fewer, their count at RD_GPU_LBVH_COUNT_OFFSET in the scratch. */
 uint32_t rd_gpu_lbvh_node_count(uint32_t tri_count);
 /* Bytes of scratch a build needs (16-byte aligned device address). */
 uint64_t rd_gpu_lbvh_scratch_bytes(uint32_t tri_count);
+/* Byte offset in the scratch of the uint node count a build writes. */
+#define RD_GPU_LBVH_COUNT_OFFSET 24u
 
-/* Records a build into c. positions: device address of 9 floats per triangle; nodes: room for
+/* Records a build into c. positions: device address of 9 floats per triangle; max_leaf: a
+ * subtree of at most this many triangles becomes one leaf (0 = 4 as the CPU builder, at most
+ * RD_BVH_MAX_LEAF; 1 = one triangle a leaf); nodes: room for
  * rd_gpu_lbvh_node_count(tri_count) pc_bvh_node (indices relative to it); prim_index: room for
  * tri_count uints (leaf order -> triangle); scratch: rd_gpu_lbvh_scratch_bytes. All must stay
  * alive until c has run; the results are ready after the barrier that ends the recording. */
 void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress positions,
-                        uint32_t tri_count, VkDeviceAddress nodes, VkDeviceAddress prim_index,
-                        VkDeviceAddress scratch);
+                        uint32_t tri_count, uint32_t max_leaf, VkDeviceAddress nodes,
+                        VkDeviceAddress prim_index, VkDeviceAddress scratch);
 
 /* Blocking convenience (tests, benchmarks): uploads positions, builds, waits, and reads the
  * tree back into out (an rd_bvh the caller frees with rd_bvh_destroy; depth computed on the
  * CPU). gpu_ms (may be NULL): wall time of the submit and wait of the build alone. On error
  * out is zeroed. */
 rd_vk_result rd_gpu_lbvh_build_download(rd_vk *vk, const rd_gpu_lbvh_builder *b,
-                                        const float *positions, uint32_t tri_count, rd_bvh *out,
-                                        double *gpu_ms, char *err, size_t errlen);
+                                        const float *positions, uint32_t tri_count,
+                                        uint32_t max_leaf, rd_bvh *out, double *gpu_ms, char *err,
+                                        size_t errlen);
 
 #endif

@@ -1,10 +1,11 @@
 /* test_gpu_lbvh.c: the GPU LBVH builder (renderer/accel/gpu_lbvh.h) on lavapipe: for random
  * triangle soups of 0 to 5000 triangles and degenerate meshes (all centroids equal, a flat
  * plane, a few non-finite triangles) every structural promise of bvh.h (check_triangles with
- * one triangle a leaf: each triangle in exactly one leaf, every box inside its parent, depth
- * within RD_BVH_MAX_DEPTH), closest hits equal to brute force, and an SAH cost within 3x of
- * the CPU builder's on the same mesh (printed). Prints the build time (submit and wait) of
- * each size; `test_gpu_lbvh bench` builds larger meshes and prints only the table. */
+ * one triangle a leaf and with subtrees of up to 4 collapsed: each triangle in exactly one leaf,
+ * every box inside its parent, depth within RD_BVH_MAX_DEPTH), closest hits equal to brute force,
+ * and an SAH cost within 3x of the CPU builder's on the same mesh (printed). Prints the build time
+ * (submit and wait) of each size; `test_gpu_lbvh bench` builds larger meshes and prints only the
+ * table. */
 #include "bvh_check.h"
 #include "renderer/accel/bvh.h"
 #include "renderer/accel/gpu_lbvh.h"
@@ -27,17 +28,19 @@ static void random_soup(float *pos, uint32_t n, float size)
     }
 }
 
-/* Builds pos on the GPU and checks it; returns the build's milliseconds. */
-static double check_mesh(rd_vk *vk, const rd_gpu_lbvh_builder *b, const char *what,
-                         const float *pos, uint32_t n, uint32_t rays)
+/* Builds pos on the GPU with leaves of at most max_leaf triangles and checks it. */
+static void check_build(rd_vk *vk, const rd_gpu_lbvh_builder *b, const char *what, const float *pos,
+                        uint32_t n, uint32_t rays, uint32_t max_leaf)
 {
     rd_bvh gpu;
     double ms = 0;
-    rd_vk_result r = rd_gpu_lbvh_build_download(vk, b, pos, n, &gpu, &ms, err, sizeof err);
+    rd_vk_result r =
+        rd_gpu_lbvh_build_download(vk, b, pos, n, max_leaf, &gpu, &ms, err, sizeof err);
     CHECKF(r == RD_VK_OK, "%s: %s", what, err);
-    if (r != RD_VK_OK) return 0;
-    CHECKF(gpu.node_count == (n ? 2 * n - 1 : 1), "%s: %u nodes", what, gpu.node_count);
-    int bad = check_triangles(what, &gpu, pos, n, 1);
+    if (r != RD_VK_OK) return;
+    if (max_leaf == 1)
+        CHECKF(gpu.node_count == (n ? 2 * n - 1 : 1), "%s: %u nodes", what, gpu.node_count);
+    int bad = check_triangles(what, &gpu, pos, n, max_leaf);
     CHECKF(bad == 0, "%s: %d structural problems", what, bad);
 
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -63,13 +66,21 @@ static double check_mesh(rd_vk *vk, const rd_gpu_lbvh_builder *b, const char *wh
     double sah_gpu = rd_bvh_sah_cost(&gpu), sah_cpu = rd_bvh_sah_cost(&cpu);
     double ratio = sah_cpu > 0 ? sah_gpu / sah_cpu : 0;
     fprintf(stderr,
-            "%-28s %6u tris  depth %2u (CPU %2u)  SAH %9.2f vs CPU %9.2f = %.2fx  %8.2f ms\n", what,
-            n, gpu.depth, cpu.depth, sah_gpu, sah_cpu, ratio, ms);
+            "%-26s %5u tris leaf<=%u %5u nodes depth %2u (CPU %2u) SAH %8.2f vs CPU %8.2f = "
+            "%.2fx %7.2f ms\n",
+            what, n, max_leaf, gpu.node_count, gpu.depth, cpu.depth, sah_gpu, sah_cpu, ratio, ms);
     if (sah_cpu > 0) CHECKF(ratio < 3.0, "%s: SAH %.3f over the CPU build's", what, ratio);
     if (ratio > g_worst_ratio) g_worst_ratio = ratio;
     rd_bvh_destroy(&cpu);
     rd_bvh_destroy(&gpu);
-    return ms;
+}
+
+/* Both leaf policies: one triangle a leaf, and subtrees of up to 4 collapsed. */
+static void check_mesh(rd_vk *vk, const rd_gpu_lbvh_builder *b, const char *what, const float *pos,
+                       uint32_t n, uint32_t rays)
+{
+    check_build(vk, b, what, pos, n, rays, 1);
+    check_build(vk, b, what, pos, n, rays, 4);
 }
 
 static void run_tests(rd_vk *vk, const rd_gpu_lbvh_builder *b)
@@ -120,6 +131,14 @@ static void run_tests(rd_vk *vk, const rd_gpu_lbvh_builder *b)
     for (uint32_t i = 0; i < 300; i += 37)
         pos[9 * i + (i % 9)] = (i % 2) ? NAN : INFINITY;
     check_mesh(vk, b, "non-finite among 300", pos, 300, 500);
+
+    /* finite and non-finite triangles in a subtree small enough to collapse */
+    rng_seed(12);
+    random_soup(pos, 7, 0.2f);
+    pos[9 * 1 + 4] = NAN;
+    pos[9 * 5] = -INFINITY;
+    check_mesh(vk, b, "2 non-finite among 7", pos, 7, 200);
+    check_mesh(vk, b, "1 non-finite among 3", pos + 9 * 3, 3, 100);
     free(pos);
 }
 
@@ -127,7 +146,7 @@ static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b)
 {
     static const uint32_t sizes[] = {1000, 5000, 20000, 100000};
     float *pos = tris_alloc(100000);
-    printf("%8s %10s %10s\n", "tris", "gpu_ms", "sah_ratio");
+    printf("%8s %10s %10s  (leaves of up to 4)\n", "tris", "gpu_ms", "sah_ratio");
     for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++) {
         rng_seed(3 + s);
         random_soup(pos, sizes[s], 0.02f);
@@ -135,7 +154,7 @@ static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b)
         double ms = 0, best = 1e30;
         for (int rep = 0; rep < 3; rep++) {
             rd_vk_result r =
-                rd_gpu_lbvh_build_download(vk, b, pos, sizes[s], &gpu, &ms, err, sizeof err);
+                rd_gpu_lbvh_build_download(vk, b, pos, sizes[s], 0, &gpu, &ms, err, sizeof err);
             if (r != RD_VK_OK) {
                 fprintf(stderr, "%s\n", err);
                 free(pos);
