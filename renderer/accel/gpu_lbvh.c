@@ -88,7 +88,7 @@ static uint32_t groups(uint64_t threads)
 
 void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress positions,
                         uint32_t tri_count, uint32_t max_leaf, VkDeviceAddress nodes,
-                        VkDeviceAddress prim_index, VkDeviceAddress scratch)
+                        VkDeviceAddress prim_index, VkDeviceAddress scratch, rd_timer *timer)
 {
     uint32_t n = tri_count, ml = max_leaf_def(max_leaf);
     VkDeviceAddress work = scratch + work_nodes_at(n);
@@ -105,6 +105,7 @@ void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress
         push.params = (pc_uvec4){n, (uint32_t)nkeys, 0, 0};
         rd_cmd_dispatch(c, &b->morton, &push, groups(nkeys), 1, 1);
         rd_cmd_barrier(c);
+        if (timer) rd_timer_mark(c, timer, "lbvh_keys");
         for (uint64_t k = 2; k <= nkeys; k <<= 1) {
             for (uint64_t j = k >> 1; j > 0; j >>= 1) {
                 push.params = (pc_uvec4){(uint32_t)(nkeys / 2), (uint32_t)k, (uint32_t)j, 0};
@@ -112,6 +113,7 @@ void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress
                 rd_cmd_barrier(c);
             }
         }
+        if (timer) rd_timer_mark(c, timer, "lbvh_sort");
     }
     pc_push h = {.buf0 = scratch,
                  .buf1 = n ? work : nodes,
@@ -119,6 +121,7 @@ void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress
                  .params = {n, leaf_at, ml, 0}};
     rd_cmd_dispatch(c, &b->hierarchy, &h, groups(n > 1 ? n - 1 : 1), 1, 1);
     rd_cmd_barrier(c);
+    if (timer) rd_timer_mark(c, timer, "lbvh_hierarchy");
     if (n > 0) {
         pc_push x = {.buf0 = positions, .buf1 = work, .buf2 = scratch, .params = {n, leaf_at}};
         for (uint32_t k = 0; k <= (n > 1 ? BOX_PASSES : 0); k++) {
@@ -126,12 +129,14 @@ void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress
             rd_cmd_dispatch(c, &b->boxes, &x, groups(n), 1, 1);
             rd_cmd_barrier(c);
         }
+        if (timer) rd_timer_mark(c, timer, "lbvh_boxes");
         pc_push sc = {.buf2 = scratch, .params = {n, leaf_at, ml, 0}};
         rd_cmd_dispatch(c, &b->scan, &sc, 1, 1, 1);
         rd_cmd_barrier(c);
         pc_push rm = {.buf0 = work, .buf1 = nodes, .buf2 = scratch, .params = {n, leaf_at, ml, 0}};
         rd_cmd_dispatch(c, &b->remap, &rm, groups(2 * (uint64_t)n - 1), 1, 1);
         rd_cmd_barrier(c);
+        if (timer) rd_timer_mark(c, timer, "lbvh_collapse");
     }
 }
 
@@ -169,8 +174,8 @@ static double now_ms(void)
 
 rd_vk_result rd_gpu_lbvh_build_download(rd_vk *vk, const rd_gpu_lbvh_builder *b,
                                         const float *positions, uint32_t tri_count,
-                                        uint32_t max_leaf, rd_bvh *out, double *gpu_ms, char *err,
-                                        size_t errlen)
+                                        uint32_t max_leaf, rd_timer *timer, rd_bvh *out,
+                                        double *gpu_ms, char *err, size_t errlen)
 {
     memset(out, 0, sizeof *out);
     if (tri_count > MAX_THREADS) {
@@ -192,11 +197,13 @@ rd_vk_result rd_gpu_lbvh_build_download(rd_vk *vk, const rd_gpu_lbvh_builder *b,
     rd_cmd c;
     if (r == RD_VK_OK) r = rd_cmd_begin(vk, &c, err, errlen);
     if (r == RD_VK_OK) {
+        if (timer) rd_timer_begin(&c, timer);
         rd_gpu_lbvh_record(&c, b, pos.address, tri_count, max_leaf, nodes.address, prim.address,
-                           scratch.address);
+                           scratch.address, timer);
         double t0 = now_ms();
         r = rd_cmd_submit_wait(vk, &c, err, errlen);
         if (gpu_ms) *gpu_ms = now_ms() - t0;
+        if (r == RD_VK_OK && timer) r = rd_timer_resolve(vk, timer, err, errlen);
     }
     if (r == RD_VK_OK) {
         out->nodes = malloc(node_bytes);

@@ -56,18 +56,21 @@ uint64_t rd_gpu_lbvh_scratch_bytes(uint32_t tri_count);
  * RD_BVH_MAX_LEAF; 1 = one triangle a leaf); nodes: room for
  * rd_gpu_lbvh_node_count(tri_count) pc_bvh_node (indices relative to it); prim_index: room for
  * tri_count uints (leaf order -> triangle); scratch: rd_gpu_lbvh_scratch_bytes. All must stay
- * alive until c has run; the results are ready after the barrier that ends the recording. */
+ * alive until c has run; the results are ready after the barrier that ends the recording.
+ * timer (may be NULL): begun by the caller; marks lbvh_keys, lbvh_sort, lbvh_hierarchy,
+ * lbvh_boxes and lbvh_collapse (those that run). */
 void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress positions,
                         uint32_t tri_count, uint32_t max_leaf, VkDeviceAddress nodes,
-                        VkDeviceAddress prim_index, VkDeviceAddress scratch);
+                        VkDeviceAddress prim_index, VkDeviceAddress scratch, rd_timer *timer);
 
 /* Blocking convenience (tests, benchmarks): uploads positions, builds, waits, and reads the
  * tree back into out (an rd_bvh the caller frees with rd_bvh_destroy; depth computed on the
- * CPU). gpu_ms (may be NULL): wall time of the submit and wait of the build alone. On error
+ * CPU). gpu_ms (may be NULL): wall time of the submit and wait of the build alone; timer (may
+ * be NULL): begun here and resolved after the wait, one section a pass. On error
  * out is zeroed. */
 rd_vk_result rd_gpu_lbvh_build_download(rd_vk *vk, const rd_gpu_lbvh_builder *b,
                                         const float *positions, uint32_t tri_count,
-                                        uint32_t max_leaf, rd_bvh *out, double *gpu_ms, char *err,
-                                        size_t errlen);
+                                        uint32_t max_leaf, rd_timer *timer, rd_bvh *out,
+                                        double *gpu_ms, char *err, size_t errlen);
 
 #endif

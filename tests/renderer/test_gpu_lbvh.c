@@ -35,7 +35,7 @@ static void check_build(rd_vk *vk, const rd_gpu_lbvh_builder *b, const char *wha
     rd_bvh gpu;
     double ms = 0;
     rd_vk_result r =
-        rd_gpu_lbvh_build_download(vk, b, pos, n, max_leaf, &gpu, &ms, err, sizeof err);
+        rd_gpu_lbvh_build_download(vk, b, pos, n, max_leaf, NULL, &gpu, &ms, err, sizeof err);
     CHECKF(r == RD_VK_OK, "%s: %s", what, err);
     if (r != RD_VK_OK) return;
     if (max_leaf == 1)
@@ -146,17 +146,26 @@ static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b)
 {
     static const uint32_t sizes[] = {1000, 5000, 20000, 100000};
     float *pos = tris_alloc(100000);
-    printf("%8s %10s %10s  (leaves of up to 4)\n", "tris", "gpu_ms", "sah_ratio");
+    rd_timer timer;
+    if (rd_timer_create(vk, &timer, err, sizeof err) != RD_VK_OK) {
+        fprintf(stderr, "%s\n", err);
+        free(pos);
+        return;
+    }
+    printf("leaves of up to 4; ms: submit and wait (best of 3), then GPU timestamps of the last\n");
+    printf("%8s %8s %8s %8s %8s %8s %8s %9s\n", "tris", "wall_ms", "keys", "sort", "hierarchy",
+           "boxes", "collapse", "sah_ratio");
     for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++) {
         rng_seed(3 + s);
         random_soup(pos, sizes[s], 0.02f);
         rd_bvh gpu, cpu;
         double ms = 0, best = 1e30;
         for (int rep = 0; rep < 3; rep++) {
-            rd_vk_result r =
-                rd_gpu_lbvh_build_download(vk, b, pos, sizes[s], 0, &gpu, &ms, err, sizeof err);
+            rd_vk_result r = rd_gpu_lbvh_build_download(vk, b, pos, sizes[s], 0, &timer, &gpu, &ms,
+                                                        err, sizeof err);
             if (r != RD_VK_OK) {
                 fprintf(stderr, "%s\n", err);
+                rd_timer_destroy(vk, &timer);
                 free(pos);
                 return;
             }
@@ -164,11 +173,14 @@ static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b)
             if (rep < 2) rd_bvh_destroy(&gpu);
         }
         if (!rd_bvh_build_triangles(&cpu, pos, sizes[s], NULL)) abort();
-        printf("%8u %10.2f %10.3f\n", sizes[s], best,
-               rd_bvh_sah_cost(&gpu) / rd_bvh_sah_cost(&cpu));
+        printf("%8u %8.2f", sizes[s], best);
+        for (uint32_t k = 1; k <= 5; k++)
+            printf(" %8.2f", timer.valid && k < timer.count ? timer.ms[k] : -1.0);
+        printf(" %9.3f\n", rd_bvh_sah_cost(&gpu) / rd_bvh_sah_cost(&cpu));
         rd_bvh_destroy(&gpu);
         rd_bvh_destroy(&cpu);
     }
+    rd_timer_destroy(vk, &timer);
     free(pos);
 }
 
