@@ -93,7 +93,8 @@ void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress
     uint32_t n = tri_count, ml = max_leaf_def(max_leaf);
     VkDeviceAddress work = scratch + work_nodes_at(n);
     uint64_t nkeys = padded_keys(n);
-    assert(n <= MAX_THREADS && nkeys / 2 <= MAX_THREADS);
+    assert(n <= RD_GPU_LBVH_MAX_TRIANGLES);
+    _Static_assert(2ull * RD_GPU_LBVH_MAX_TRIANGLES <= MAX_THREADS, "one dispatch a pass");
     uint32_t leaf_at = (uint32_t)(KEYS_AT + 2 * nkeys);
     pc_push push = {.buf0 = positions, .buf2 = scratch, .params = {n, 0, 0, 0}};
     if (n > 0) {
@@ -178,8 +179,9 @@ rd_vk_result rd_gpu_lbvh_build_download(rd_vk *vk, const rd_gpu_lbvh_builder *b,
                                         double *gpu_ms, char *err, size_t errlen)
 {
     memset(out, 0, sizeof *out);
-    if (tri_count > MAX_THREADS) {
-        snprintf(err, errlen, "GPU LBVH: %u triangles, at most %u", tri_count, MAX_THREADS);
+    if (tri_count > RD_GPU_LBVH_MAX_TRIANGLES) {
+        snprintf(err, errlen, "GPU LBVH: %u triangles, at most %u", tri_count,
+                 RD_GPU_LBVH_MAX_TRIANGLES);
         return RD_VK_ERR_UNSUPPORTED;
     }
     uint32_t nn = rd_gpu_lbvh_node_count(tri_count);

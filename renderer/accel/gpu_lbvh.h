@@ -43,6 +43,10 @@ rd_vk_result rd_gpu_lbvh_builder_create(rd_vk *vk, rd_gpu_lbvh_builder *b, char 
                                         size_t errlen);
 void rd_gpu_lbvh_builder_destroy(rd_vk *vk, rd_gpu_lbvh_builder *b); /* idempotent */
 
+/* Triangles one build takes at most: every pass is one dispatch of at most 65535 groups, and
+ * the largest have 2n threads (the Morton pass's N padded keys, the collapse's 2n - 1 nodes). */
+#define RD_GPU_LBVH_MAX_TRIANGLES (65535u * PC_WG_1D / 2u)
+
 /* Nodes a build over tri_count triangles writes at most: 2 tri_count - 1 (1 for none); with
  * leaves of several triangles fewer, their count at RD_GPU_LBVH_COUNT_OFFSET in the scratch. */
 uint32_t rd_gpu_lbvh_node_count(uint32_t tri_count);
@@ -51,9 +55,9 @@ uint64_t rd_gpu_lbvh_scratch_bytes(uint32_t tri_count);
 /* Byte offset in the scratch of the uint node count a build writes. */
 #define RD_GPU_LBVH_COUNT_OFFSET 24u
 
-/* Records a build into c. positions: device address of 9 floats per triangle; max_leaf: a
- * subtree of at most this many triangles becomes one leaf (0 = 4 as the CPU builder, at most
- * RD_BVH_MAX_LEAF; 1 = one triangle a leaf); nodes: room for
+/* Records a build into c (tri_count at most RD_GPU_LBVH_MAX_TRIANGLES). positions: device address
+ * of 9 floats per triangle; max_leaf: a subtree of at most this many triangles becomes one leaf (0
+ * = 4 as the CPU builder, at most RD_BVH_MAX_LEAF; 1 = one triangle a leaf); nodes: room for
  * rd_gpu_lbvh_node_count(tri_count) pc_bvh_node (indices relative to it); prim_index: room for
  * tri_count uints (leaf order -> triangle); scratch: rd_gpu_lbvh_scratch_bytes. All must stay
  * alive until c has run; the results are ready after the barrier that ends the recording.

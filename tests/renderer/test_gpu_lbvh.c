@@ -139,6 +139,12 @@ static void run_tests(rd_vk *vk, const rd_gpu_lbvh_builder *b)
     pos[9 * 5] = -INFINITY;
     check_mesh(vk, b, "2 non-finite among 7", pos, 7, 200);
     check_mesh(vk, b, "1 non-finite among 3", pos + 9 * 3, 3, 100);
+
+    /* too many triangles: an error before anything is read or allocated */
+    rd_bvh none;
+    CHECK(rd_gpu_lbvh_build_download(vk, b, NULL, RD_GPU_LBVH_MAX_TRIANGLES + 1, 0, NULL, &none,
+                                     NULL, err, sizeof err) == RD_VK_ERR_UNSUPPORTED);
+    CHECK(none.nodes == NULL && none.node_count == 0);
     free(pos);
 }
 
