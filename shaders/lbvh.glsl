@@ -6,7 +6,9 @@
 // leaf -> output node), node_slot[n] (internal node -> output node), done[n] (per internal
 // node: the lbvh_boxes pass that made its box, 0 before), range[2n] (per internal node: first
 // sorted leaf and count) and alive[2n] (per working-tree node: 1 if it stays in the output,
-// then its output index after lbvh_scan). Word 6 of the scratch: the output's node count.
+// then its output index after lbvh_scan), then 4 words: the indirect dispatch of the
+// lbvh_boxes passes (x: groups, zeroed when the root is done). Word 6 of the scratch: the
+// output's node count.
 // pc.params.x = n (triangles), pc.params.y = uint offset of leaf_slot.
 #ifndef LBVH_GLSL
 #define LBVH_GLSL
@@ -50,6 +52,10 @@ uint lbvh_range_at(uint n, uint leaf_at)
 uint lbvh_alive_at(uint n, uint leaf_at)
 {
     return leaf_at + 5u * n;
+}
+uint lbvh_args_at(uint n, uint leaf_at)
+{
+    return leaf_at + 7u * n;
 }
 #define LBVH_COUNT_AT 6u
 

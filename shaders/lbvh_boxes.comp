@@ -6,7 +6,9 @@
 // both done before pass k (leaves, or done[c] in [1, k)) writes its box, the exact union of
 // theirs, and done = k. The tree over distinct 64-bit keys is at most 64 internal levels deep
 // (each level's common prefix is longer than its parent's), so 64 passes finish every node;
-// a done node's thread returns at once.
+// a done node's thread returns at once, and the thread that finishes the root zeroes the
+// group count of the indirect dispatch of the passes (scratch, lbvh_args_at), so the passes
+// after it launch nothing.
 // Runs after lbvh_hierarchy (slots, interior w words, cleared done words).
 // Push constants (pc_push): buf0 = positions, buf1 = nodes (pc_bvh_node), buf2 = scratch
 // (shaders/lbvh.glsl); params.x = n, params.y = uint offset of leaf_slot in scratch,
@@ -67,4 +69,5 @@ void main()
     nodes.n[slot].bmin = vec4(min(l.bmin.xyz, r.bmin.xyz), uintBitsToFloat(2u * i + 1u));
     nodes.n[slot].bmax = vec4(max(l.bmax.xyz, r.bmax.xyz), uintBitsToFloat(0u));
     s.v[lbvh_done_at(n, at) + i] = k;
+    if (i == 0u) s.v[lbvh_args_at(n, at)] = 0u;
 }

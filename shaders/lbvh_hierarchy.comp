@@ -8,7 +8,8 @@
 // children's w words (interior: first = 2c+1, count 0; leaves are written by lbvh_boxes),
 // the slots of its children and prim_index of its leaf children, clears its own done word for
 // lbvh_boxes, and writes its range of sorted leaves and whether its children stay (alive: its
-// range holds more than max_leaf triangles) for lbvh_scan and lbvh_remap. n == 1: the root is the one leaf; n == 0: an empty root.
+// range holds more than max_leaf triangles) for lbvh_scan and lbvh_remap; thread 0 writes the
+// indirect dispatch of the lbvh_boxes passes (one thread per internal node). n == 1: the root is the one leaf; n == 0: an empty root.
 // Push constants (pc_push): buf0 = scratch (shaders/lbvh.glsl), buf1 = nodes (pc_bvh_node),
 // buf2 = prim_index (uint); params.x = n, params.y = uint offset of leaf_slot in scratch,
 // params.z = max_leaf (the nodes go to the working tree; for n == 0 buf1 is the output).
@@ -121,6 +122,9 @@ void main()
     if (ti == 0u) {
         s.v[lbvh_node_slot_at(n, at)] = 0u;
         s.v[lbvh_alive_at(n, at)] = 1u;
+        s.v[lbvh_args_at(n, at)] = (n - 1u + PC_WG_1D - 1u) / PC_WG_1D;
+        s.v[lbvh_args_at(n, at) + 1u] = 1u;
+        s.v[lbvh_args_at(n, at) + 2u] = 1u;
         set_interior(nodes, 0u, 1u);
     }
 }

@@ -32,10 +32,11 @@ static const rd_pipeline_desc kPipelines[] = {
 /* One dispatch covers at most this many threads (65535 groups of PC_WG_1D). */
 #define MAX_THREADS (65535u * PC_WG_1D)
 /* The scratch layout of shaders/lbvh.glsl, in uints: 8 of bounds (word 6: the output's node
- * count), 2N of keys, then leaf_slot, node_slot, done (n each), range and alive (2n each);
- * then, 16-byte aligned, the working tree of 2n - 1 nodes. */
+ * count), 2N of keys, then leaf_slot, node_slot, done (n each), range and alive (2n each),
+ * 4 of indirect dispatch; then, 16-byte aligned, the working tree of 2n - 1 nodes. */
 #define KEYS_AT 8u
 #define TAIL_WORDS 7u
+#define ARGS_WORDS 4u
 /* Passes of lbvh_boxes after the leaves: the tree's internal levels, at most 64. */
 #define BOX_PASSES 64u
 
@@ -66,7 +67,7 @@ uint32_t rd_gpu_lbvh_node_count(uint32_t tri_count)
 /* Byte offset of the working tree in the scratch. */
 static uint64_t work_nodes_at(uint32_t n)
 {
-    uint64_t words = KEYS_AT + 2 * padded_keys(n) + TAIL_WORDS * (uint64_t)n;
+    uint64_t words = KEYS_AT + 2 * padded_keys(n) + TAIL_WORDS * (uint64_t)n + ARGS_WORDS;
     return (4 * words + 15) & ~(uint64_t)15;
 }
 
@@ -88,8 +89,9 @@ static uint32_t groups(uint64_t threads)
 
 void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress positions,
                         uint32_t tri_count, uint32_t max_leaf, VkDeviceAddress nodes,
-                        VkDeviceAddress prim_index, VkDeviceAddress scratch, rd_timer *timer)
+                        VkDeviceAddress prim_index, const rd_buffer *scratch_buf, rd_timer *timer)
 {
+    VkDeviceAddress scratch = scratch_buf->address;
     uint32_t n = tri_count, ml = max_leaf_def(max_leaf);
     VkDeviceAddress work = scratch + work_nodes_at(n);
     uint64_t nkeys = padded_keys(n);
@@ -125,9 +127,12 @@ void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress
     if (timer) rd_timer_mark(c, timer, "lbvh_hierarchy");
     if (n > 0) {
         pc_push x = {.buf0 = positions, .buf1 = work, .buf2 = scratch, .params = {n, leaf_at}};
-        for (uint32_t k = 0; k <= (n > 1 ? BOX_PASSES : 0); k++) {
+        rd_cmd_dispatch(c, &b->boxes, &x, groups(n), 1, 1); /* the leaves */
+        rd_cmd_barrier(c);
+        VkDeviceSize args = 4 * ((VkDeviceSize)leaf_at + TAIL_WORDS * (VkDeviceSize)n);
+        for (uint32_t k = 1; n > 1 && k <= BOX_PASSES; k++) {
             x.params.z = k;
-            rd_cmd_dispatch(c, &b->boxes, &x, groups(n), 1, 1);
+            rd_cmd_dispatch_indirect(c, &b->boxes, &x, scratch_buf, args);
             rd_cmd_barrier(c);
         }
         if (timer) rd_timer_mark(c, timer, "lbvh_boxes");
@@ -201,7 +206,7 @@ rd_vk_result rd_gpu_lbvh_build_download(rd_vk *vk, const rd_gpu_lbvh_builder *b,
     if (r == RD_VK_OK) {
         if (timer) rd_timer_begin(&c, timer);
         rd_gpu_lbvh_record(&c, b, pos.address, tri_count, max_leaf, nodes.address, prim.address,
-                           scratch.address, timer);
+                           &scratch, timer);
         double t0 = now_ms();
         r = rd_cmd_submit_wait(vk, &c, err, errlen);
         if (gpu_ms) *gpu_ms = now_ms() - t0;

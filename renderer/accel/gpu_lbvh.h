@@ -10,10 +10,11 @@
  *      O(N log^2 N) work; simple and exact, slower than a radix sort for large meshes;
  *   4. lbvh_hierarchy: Karras's radix tree, one thread per internal node; internal node i's
  *      children go to nodes 2i+1 and 2i+2, so 2n-1 nodes with the root at 0;
- *   5. lbvh_boxes: the leaves (one thread each), then 64 passes of one thread per internal
- *      node, each finishing the nodes whose children were finished in earlier passes (exact
- *      unions; a radix tree over 64-bit keys has at most 64 internal levels). No pass reads a
- *      box written in the same dispatch. (A single pass of threads climbing from the leaves
+ *   5. lbvh_boxes: the leaves (one thread each), then 64 indirect passes of one thread per
+ *      internal node, each finishing the nodes whose children were finished in earlier passes
+ *      (exact unions; a radix tree over 64-bit keys has at most 64 internal levels); the pass
+ *      that finishes the root zeroes the group count of those after it. No pass reads a box
+ *      written in the same dispatch. (A single pass of threads climbing from the leaves
  *      with one atomic counter per node, Karras's sec. 4, came out with wrong boxes on
  *      lavapipe for nodes above the first level; not understood yet, so not used.)
  *   6. lbvh_scan, lbvh_remap: the collapse of every subtree of at most max_leaf triangles
@@ -59,13 +60,14 @@ uint64_t rd_gpu_lbvh_scratch_bytes(uint32_t tri_count);
  * of 9 floats per triangle; max_leaf: a subtree of at most this many triangles becomes one leaf (0
  * = 4 as the CPU builder, at most RD_BVH_MAX_LEAF; 1 = one triangle a leaf); nodes: room for
  * rd_gpu_lbvh_node_count(tri_count) pc_bvh_node (indices relative to it); prim_index: room for
- * tri_count uints (leaf order -> triangle); scratch: rd_gpu_lbvh_scratch_bytes. All must stay
+ * tri_count uints (leaf order -> triangle); scratch: a buffer of rd_gpu_lbvh_scratch_bytes
+ * (also read as indirect dispatch arguments). All must stay
  * alive until c has run; the results are ready after the barrier that ends the recording.
  * timer (may be NULL): begun by the caller; marks lbvh_keys, lbvh_sort, lbvh_hierarchy,
  * lbvh_boxes and lbvh_collapse (those that run). */
 void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress positions,
                         uint32_t tri_count, uint32_t max_leaf, VkDeviceAddress nodes,
-                        VkDeviceAddress prim_index, VkDeviceAddress scratch, rd_timer *timer);
+                        VkDeviceAddress prim_index, const rd_buffer *scratch, rd_timer *timer);
 
 /* Blocking convenience (tests, benchmarks): uploads positions, builds, waits, and reads the
  * tree back into out (an rd_bvh the caller frees with rd_bvh_destroy; depth computed on the
