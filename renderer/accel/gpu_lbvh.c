@@ -51,9 +51,11 @@ void rd_gpu_lbvh_builder_destroy(rd_vk *vk, rd_gpu_lbvh_builder *b)
     rd_pipelines_destroy(vk, b, kPipelines, PIPELINE_COUNT);
 }
 
+/* Keys the sort takes: a power of two, at least one block of lbvh_sort's shared memory. */
+#define SORT_BLOCK (2u * PC_WG_1D)
 static uint64_t padded_keys(uint32_t n)
 {
-    uint64_t p = 1;
+    uint64_t p = SORT_BLOCK;
     while (p < n)
         p <<= 1;
     return p;
@@ -109,12 +111,18 @@ void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress
         rd_cmd_dispatch(c, &b->morton, &push, groups(nkeys), 1, 1);
         rd_cmd_barrier(c);
         if (timer) rd_timer_mark(c, timer, "lbvh_keys");
-        for (uint64_t k = 2; k <= nkeys; k <<= 1) {
-            for (uint64_t j = k >> 1; j > 0; j >>= 1) {
+        push.params = (pc_uvec4){(uint32_t)(nkeys / 2), 0, 0, 2}; /* k <= SORT_BLOCK */
+        rd_cmd_dispatch(c, &b->sort, &push, (uint32_t)(nkeys / SORT_BLOCK), 1, 1);
+        rd_cmd_barrier(c);
+        for (uint64_t k = 2 * SORT_BLOCK; k <= nkeys; k <<= 1) {
+            for (uint64_t j = k >> 1; j >= SORT_BLOCK; j >>= 1) {
                 push.params = (pc_uvec4){(uint32_t)(nkeys / 2), (uint32_t)k, (uint32_t)j, 0};
                 rd_cmd_dispatch(c, &b->sort, &push, groups(nkeys / 2), 1, 1);
                 rd_cmd_barrier(c);
             }
+            push.params = (pc_uvec4){(uint32_t)(nkeys / 2), (uint32_t)k, 0, 1};
+            rd_cmd_dispatch(c, &b->sort, &push, (uint32_t)(nkeys / SORT_BLOCK), 1, 1);
+            rd_cmd_barrier(c);
         }
         if (timer) rd_timer_mark(c, timer, "lbvh_sort");
     }
