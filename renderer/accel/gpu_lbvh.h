@@ -15,16 +15,19 @@
  *      internal node, each finishing the nodes whose children were finished in earlier passes
  *      (exact unions; a radix tree over 64-bit keys has at most 64 internal levels); the pass
  *      that finishes the root zeroes the group count of those after it. No pass reads a box
- *      written in the same dispatch. (A single pass of threads climbing from the leaves
- *      with one atomic counter per node, Karras's sec. 4, came out with wrong boxes on
- *      lavapipe for nodes above the first level; not understood yet, so not used.)
+ *      written in the same dispatch. (Karras's single pass, a thread climbing from each leaf
+ *      with an atomic counter per node, coherent buffers and memory barriers, gave wrong boxes
+ *      above the first level on lavapipe with 64-thread workgroups and right ones with
+ *      1-thread workgroups (34 ms there against these passes' 69 ms for 100 K triangles);
+ *      why is not known yet.)
  *   6. lbvh_scan, lbvh_remap: the collapse of every subtree of at most max_leaf triangles
  *      into one leaf (their sorted leaves are contiguous), the nodes that stay numbered by a
  *      prefix sum (one workgroup: simple, O(n) on 64 threads) and copied to the output.
- * Leaf policy: a subtree of at most max_leaf (default 4) triangles becomes a leaf, whatever its
- * SAH cost (the CPU builder weighs it). Depth: at most 64 (one level a bit of the 64-bit keys), but
- * not kept within RD_BVH_MAX_DEPTH (48) as the CPU builder's is; random and degenerate meshes
- * of a few thousand triangles stay near 2 log2 n; rd_gpu_lbvh_build_download reports it.
+ * Leaf policy: a subtree of at most max_leaf (default 4) triangles becomes a leaf, whatever
+ * its SAH cost (the CPU builder weighs it). Depth: at most 64 (a level a bit of the 64-bit
+ * keys), but not kept within RD_BVH_MAX_DEPTH (48) as the CPU builder's is; random and
+ * degenerate meshes of a few thousand triangles stay near 2 log2 n (test_gpu_lbvh prints it);
+ * rd_gpu_lbvh_build_download reports it.
  * Children may sit before their parent (internal node i's slot is its parent's choice), so
  * rd_gpu_refit_blas_create, which assumes the CPU builder's order, cannot take it yet.
  * A triangle with a non-finite vertex gets an empty box and a key past every finite one.
