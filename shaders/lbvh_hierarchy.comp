@@ -5,8 +5,8 @@
 // Output order (renderer/accel/gpu_lbvh.h): the root at node 0 and the two children of
 // internal node i at nodes 2i+1 and 2i+2, adjacent as pc_bvh_node wants; every node but the
 // root is one node's child, so the 2n-1 nodes of this working tree are all written once.
-// Each thread writes its children's w words (interior: first = 2c+1, count 0; leaves are written by lbvh_boxes),
-// the slots of its children and prim_index of its leaf children, clears its own done word for
+// Each thread writes its children's w words (interior: first = 2c+1, count 0; leaves are
+// written by lbvh_boxes), the slots of its children and prim_index of its leaf children, clears its own done word for
 // lbvh_boxes, and writes its range of sorted leaves and whether its children stay (alive: its
 // range holds more than max_leaf triangles) for lbvh_scan and lbvh_remap; thread 0 writes the
 // indirect dispatch of the lbvh_boxes passes (one thread per internal node). lbvh_remap copies
