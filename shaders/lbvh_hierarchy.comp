@@ -1,17 +1,16 @@
 // lbvh_hierarchy.comp: the binary radix tree of an LBVH over the sorted keys (Karras 2012,
-// "Maximizing Parallelism in the Construction of BVHs, Octrees, and k-d Trees", sec. 4,
-// Figure 4), one thread per internal node i in [0, n-1). The keys are distinct (the triangle
-// index sits in their low word), so the longest common prefix of two keys settles every tie.
-// Output order (renderer/accel/gpu_lbvh.h): the root at node 0 and the two children of
-// internal node i at nodes 2i+1 and 2i+2, adjacent as pc_bvh_node wants; every node but the
-// root is one node's child, so the 2n-1 nodes of this working tree are all written once.
-// Each thread writes its children's w words (interior: first = 2c+1, count 0; leaves are
-// written by lbvh_boxes), the slots of its children and prim_index of its leaf children, clears its own done word for
-// lbvh_boxes, and writes its range of sorted leaves and whether its children stay (alive: its
-// range holds more than max_leaf triangles) for lbvh_scan and lbvh_remap; thread 0 writes the
-// indirect dispatch of the lbvh_boxes passes (one thread per internal node). lbvh_remap copies
-// the nodes that stay to the output. n == 1: the root is the one leaf; n == 0: an empty root
-// (written straight to the output).
+// "Maximizing Parallelism in the Construction of BVHs, Octrees, and k-d Trees", sec. 4, Figure 4),
+// one thread per internal node i in [0, n-1). The keys are distinct (the triangle index sits in
+// their low word), so the longest common prefix of two keys settles every tie. Output order
+// (renderer/accel/gpu_lbvh.h): the root at node 0 and the two children of internal node i at nodes
+// 2i+1 and 2i+2, adjacent as pc_bvh_node wants; every node but the root is one node's child, so the
+// 2n-1 nodes of this working tree are all written once. Each thread writes its children's w words
+// (interior: first = 2c+1, count 0; leaves are written by lbvh_boxes), the slots of its children
+// and prim_index of its leaf children, clears its own done word for lbvh_boxes, and writes its
+// range of sorted leaves and whether its children stay (alive: its range holds more than max_leaf
+// triangles) for lbvh_scan and lbvh_remap; thread 0 writes the indirect dispatch of the lbvh_boxes
+// passes (one thread per internal node). lbvh_remap copies the nodes that stay to the output.
+// n == 1: the root is the one leaf; n == 0: an empty root (written straight to the output).
 // Push constants (pc_push): buf0 = scratch (shaders/lbvh.glsl), buf1 = nodes (pc_bvh_node),
 // buf2 = prim_index (uint); params.x = n, params.y = uint offset of leaf_slot in scratch,
 // params.z = max_leaf (the nodes go to the working tree; for n == 0 buf1 is the output).
