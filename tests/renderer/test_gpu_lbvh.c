@@ -3,6 +3,7 @@
  * plane, a few non-finite triangles) every structural promise of bvh.h (check_triangles with
  * one triangle a leaf and with subtrees of up to 4 collapsed: each triangle in exactly one leaf,
  * every box inside its parent, depth within RD_BVH_MAX_DEPTH), closest hits equal to brute force,
+ * the GPU traversal (shaders/trace.glsl through test_trace.comp) agreeing with the CPU's,
  * and an SAH cost within 3x of the CPU builder's on the same mesh (printed). Prints the build time
  * (submit and wait) of each size; `test_gpu_lbvh bench` builds larger meshes and prints only the
  * table. */
@@ -10,6 +11,7 @@
 #include "renderer/accel/bvh.h"
 #include "renderer/accel/gpu_lbvh.h"
 #include "renderer/vk/vk_context.h"
+#include "shaders/test_trace.spv.h"
 #include "test_util.h"
 
 #include <math.h>
@@ -19,6 +21,103 @@
 
 static char err[512];
 static double g_worst_ratio = 0;
+static uint32_t g_gpu_rays = 0, g_gpu_differ = 0;
+static rd_pipeline g_trace; /* shaders/test_trace.comp: trace_ray of shaders/trace.glsl */
+
+typedef struct gpu_hit {
+    uint32_t t, u, v, hit;
+    uint32_t instance, tri, backface, pad;
+} gpu_hit;
+
+/* Traces rays on the GPU with shaders/trace.glsl over bvh (one instance, identity transform,
+ * under a one-leaf TLAS) and compares each closest hit with the CPU traversal of the same tree:
+ * the same triangle, or t within 1e-5 relative (ties); returns the rays that differ. */
+static uint32_t gpu_trace_differences(rd_vk *vk, const rd_bvh *bvh, const float *pos, uint32_t n,
+                                      const float *orgs, const float *dirs, uint32_t rays)
+{
+    pc_tri *tris = malloc((size_t)n * sizeof *tris);
+    float *ray_buf = malloc((size_t)rays * 8 * sizeof(float));
+    gpu_hit *res = malloc((size_t)rays * sizeof *res);
+    if (!tris || !ray_buf || !res) abort();
+    for (uint32_t k = 0; k < n; k++) {
+        const float *p = pos + 9 * (size_t)bvh->prim_index[k];
+        tris[k] = (pc_tri){{p[0], p[1], p[2], pc_u2f(0)},
+                           {p[3], p[4], p[5], pc_u2f(0)},
+                           {p[6], p[7], p[8], pc_u2f(bvh->prim_index[k])}};
+    }
+    for (uint32_t i = 0; i < rays; i++) {
+        const float *o = orgs + 3 * (size_t)i, *d = dirs + 3 * (size_t)i;
+        float r[8] = {o[0], o[1], o[2], 0, d[0], d[1], d[2], INFINITY};
+        memcpy(ray_buf + 8 * (size_t)i, r, sizeof r);
+    }
+    pc_instance inst = {.info = {0, 0, 0, 0}};
+    for (int r = 0; r < 3; r++) {
+        float row[4] = {r == 0, r == 1, r == 2, 0};
+        inst.object_to_world[r] = inst.world_to_object[r] = (pc_vec4){row[0], row[1], row[2], 0};
+    }
+    pc_bvh_node tlas = bvh->nodes[0];
+    tlas.bmin.w = pc_u2f(0);
+    tlas.bmax.w = pc_u2f(1);
+    uint32_t zero = 0;
+    rd_buffer b[7] = {{0}};
+    const void *data[6] = {bvh->nodes, tris, &inst, &tlas, &zero, ray_buf};
+    size_t bytes[6] = {bvh->node_count * sizeof(pc_bvh_node),
+                       n * sizeof *tris,
+                       sizeof inst,
+                       sizeof tlas,
+                       sizeof zero,
+                       (size_t)rays * 8 * sizeof(float)};
+    bool ok = true;
+    for (int i = 0; i < 6 && ok; i++)
+        ok = rd_buffer_create(vk, &b[i], bytes[i], RD_MEMORY_DEVICE, err, sizeof err) == RD_VK_OK &&
+             rd_buffer_upload(vk, &b[i], 0, data[i], bytes[i], err, sizeof err) == RD_VK_OK;
+    pc_globals *g = calloc(1, sizeof *g);
+    if (!g) abort();
+    g->scene.blas_nodes = b[0].address;
+    g->scene.tris = b[1].address;
+    g->scene.instances = b[2].address;
+    g->scene.tlas_nodes = b[3].address;
+    g->scene.tlas_index = b[4].address;
+    g->scene.counts = (pc_uvec4){1, 0, 0, 0};
+    rd_buffer bg = {0};
+    ok = ok &&
+         rd_buffer_create(vk, &bg, sizeof *g, RD_MEMORY_DEVICE, err, sizeof err) == RD_VK_OK &&
+         rd_buffer_upload(vk, &bg, 0, g, sizeof *g, err, sizeof err) == RD_VK_OK &&
+         rd_buffer_create(vk, &b[6], (size_t)rays * sizeof *res, RD_MEMORY_READBACK, err,
+                          sizeof err) == RD_VK_OK;
+    rd_cmd c;
+    ok = ok && rd_cmd_begin(vk, &c, err, sizeof err) == RD_VK_OK;
+    if (ok) {
+        pc_push push = {.globals = bg.address,
+                        .buf0 = b[5].address,
+                        .buf1 = b[6].address,
+                        .params = {rays, 0, 0, 0}};
+        rd_cmd_dispatch(&c, &g_trace, &push, (rays + PC_WG_1D - 1) / PC_WG_1D, 1, 1);
+        rd_cmd_barrier(&c);
+        ok = rd_cmd_submit_wait(vk, &c, err, sizeof err) == RD_VK_OK &&
+             rd_buffer_download(vk, &b[6], 0, res, (size_t)rays * sizeof *res, err, sizeof err) ==
+                 RD_VK_OK;
+    }
+    CHECKF(ok, "GPU trace: %s", err);
+    uint32_t differ = ok ? 0 : rays;
+    for (uint32_t i = 0; ok && i < rays; i++) {
+        float t_cpu = 0, t_gpu;
+        int64_t cpu = rd_bvh_closest_triangle(bvh, pos, orgs + 3 * (size_t)i, dirs + 3 * (size_t)i,
+                                              0, INFINITY, &t_cpu);
+        memcpy(&t_gpu, &res[i].t, sizeof t_gpu);
+        int64_t gpu = res[i].hit ? (int64_t)pc_f2u(tris[res[i].tri].v2.w) : -1;
+        bool same = gpu == cpu || (gpu >= 0 && cpu >= 0 && fabsf(t_gpu - t_cpu) <= 1e-5f * t_cpu);
+        if (!same) differ++;
+    }
+    for (int i = 0; i < 7; i++)
+        rd_buffer_destroy(vk, &b[i]);
+    rd_buffer_destroy(vk, &bg);
+    free(g);
+    free(res);
+    free(ray_buf);
+    free(tris);
+    return differ;
+}
 
 static void random_soup(float *pos, uint32_t n, float size)
 {
@@ -58,6 +157,14 @@ static void check_build(rd_vk *vk, const rd_gpu_lbvh_builder *b, const char *wha
         uint32_t hits =
             compare_rays(what, &gpu, pos, n, orgs, orgs + 3 * (size_t)rays, rays, 0, INFINITY);
         CHECKF(hits > 0, "%s: no ray hit anything", what);
+        if (!box_empty(&gpu.nodes[0])) {
+            uint32_t differ =
+                gpu_trace_differences(vk, &gpu, pos, n, orgs, orgs + 3 * (size_t)rays, rays);
+            CHECKF(differ <= rays / 100, "%s: %u of %u rays traced on the GPU differ", what, differ,
+                   rays);
+            g_gpu_rays += rays;
+            g_gpu_differ += differ;
+        }
         free(orgs);
     }
 
@@ -200,13 +307,23 @@ int main(int argc, char **argv)
     rd_gpu_lbvh_builder b;
     rc = rd_gpu_lbvh_builder_create(&vk, &b, err, sizeof err);
     CHECKF(rc == RD_VK_OK, "%s", err);
+    if (rc == RD_VK_OK)
+        rc = rd_pipeline_create(&vk, &g_trace, "test_trace", pc_spv_test_trace,
+                                sizeof pc_spv_test_trace, sizeof(pc_push), err, sizeof err);
+    CHECKF(rc == RD_VK_OK, "%s", err);
     if (rc == RD_VK_OK) {
         if (bench)
             run_bench(&vk, &b);
         else
             run_tests(&vk, &b);
     }
-    if (!bench) fprintf(stderr, "worst SAH ratio GPU LBVH / CPU binned SAH: %.3f\n", g_worst_ratio);
+    if (!bench) {
+        fprintf(stderr, "worst SAH ratio GPU LBVH / CPU binned SAH: %.3f\n", g_worst_ratio);
+        fprintf(stderr,
+                "GPU traversal (trace.glsl) over the LBVH: %u of %u rays differ from the CPU\n",
+                g_gpu_differ, g_gpu_rays);
+    }
+    rd_pipeline_destroy(&vk, &g_trace);
     rd_gpu_lbvh_builder_destroy(&vk, &b);
     rd_gpu_lbvh_builder_destroy(&vk, &b); /* idempotent */
     CHECK(rd_vk_validation_messages(&vk) == 0);
