@@ -266,8 +266,8 @@ static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b)
         return;
     }
     printf("leaves of up to 4; ms: submit and wait (best of 3), then GPU timestamps of the last\n");
-    printf("%8s %8s %8s %8s %8s %8s %8s %9s\n", "tris", "wall_ms", "keys", "sort", "hierarchy",
-           "boxes", "collapse", "sah_ratio");
+    printf("%8s %8s %8s %8s %8s %8s %8s %9s %6s\n", "tris", "wall_ms", "keys", "sort", "hierarchy",
+           "boxes", "collapse", "sah_ratio", "depth");
     for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++) {
         rng_seed(3 + s);
         random_soup(pos, sizes[s], 0.02f);
@@ -289,7 +289,7 @@ static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b)
         printf("%8u %8.2f", sizes[s], best);
         for (uint32_t k = 1; k <= 5; k++)
             printf(" %8.2f", timer.valid && k < timer.count ? timer.ms[k] : -1.0);
-        printf(" %9.3f\n", rd_bvh_sah_cost(&gpu) / rd_bvh_sah_cost(&cpu));
+        printf(" %9.3f %6u\n", rd_bvh_sah_cost(&gpu) / rd_bvh_sah_cost(&cpu), gpu.depth);
         rd_bvh_destroy(&gpu);
         rd_bvh_destroy(&cpu);
     }
