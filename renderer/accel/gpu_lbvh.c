@@ -1,0 +1,250 @@
+/* gpu_lbvh.c: a linear BVH built on the GPU (see gpu_lbvh.h). */
+#include "renderer/accel/gpu_lbvh.h"
+
+#include <assert.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "shaders/gpu_types.h"
+#include "shaders/lbvh_bounds.spv.h"
+#include "shaders/lbvh_boxes.spv.h"
+#include "shaders/lbvh_hierarchy.spv.h"
+#include "shaders/lbvh_morton.spv.h"
+#include "shaders/lbvh_remap.spv.h"
+#include "shaders/lbvh_scan.spv.h"
+#include "shaders/lbvh_sort.spv.h"
+
+#define PUSH_SIZE ((uint32_t)sizeof(pc_push))
+static const rd_pipeline_desc kPipelines[] = {
+    RD_PIPELINE_DESC(rd_gpu_lbvh_builder, bounds, "lbvh_bounds", pc_spv_lbvh_bounds, PUSH_SIZE),
+    RD_PIPELINE_DESC(rd_gpu_lbvh_builder, morton, "lbvh_morton", pc_spv_lbvh_morton, PUSH_SIZE),
+    RD_PIPELINE_DESC(rd_gpu_lbvh_builder, sort, "lbvh_sort", pc_spv_lbvh_sort, PUSH_SIZE),
+    RD_PIPELINE_DESC(rd_gpu_lbvh_builder, hierarchy, "lbvh_hierarchy", pc_spv_lbvh_hierarchy,
+                     PUSH_SIZE),
+    RD_PIPELINE_DESC(rd_gpu_lbvh_builder, boxes, "lbvh_boxes", pc_spv_lbvh_boxes, PUSH_SIZE),
+    RD_PIPELINE_DESC(rd_gpu_lbvh_builder, scan, "lbvh_scan", pc_spv_lbvh_scan, PUSH_SIZE),
+    RD_PIPELINE_DESC(rd_gpu_lbvh_builder, remap, "lbvh_remap", pc_spv_lbvh_remap, PUSH_SIZE),
+};
+#define PIPELINE_COUNT (sizeof kPipelines / sizeof kPipelines[0])
+
+/* One dispatch covers at most this many threads (65535 groups of PC_WG_1D). */
+#define MAX_THREADS (65535u * PC_WG_1D)
+/* The scratch layout of shaders/lbvh.glsl, in uints: 8 of bounds (word 6: the output's node
+ * count), 2N of keys, then leaf_slot, node_slot, done (n each), range and alive (2n each),
+ * 4 of indirect dispatch; then, 16-byte aligned, the working tree of 2n - 1 nodes. */
+#define KEYS_AT 8u
+#define TAIL_WORDS 7u
+#define ARGS_WORDS 4u
+/* Passes of lbvh_boxes after the leaves: the tree's internal levels, at most 64. */
+#define BOX_PASSES 64u
+
+rd_vk_result rd_gpu_lbvh_builder_create(rd_vk *vk, rd_gpu_lbvh_builder *b, char *err, size_t errlen)
+{
+    memset(b, 0, sizeof *b);
+    return rd_pipelines_create(vk, b, kPipelines, PIPELINE_COUNT, err, errlen);
+}
+
+void rd_gpu_lbvh_builder_destroy(rd_vk *vk, rd_gpu_lbvh_builder *b)
+{
+    rd_pipelines_destroy(vk, b, kPipelines, PIPELINE_COUNT);
+}
+
+/* Keys the sort takes: a power of two, at least one block of lbvh_sort's shared memory. */
+#define SORT_BLOCK (2u * PC_WG_1D)
+static uint64_t padded_keys(uint32_t n)
+{
+    uint64_t p = SORT_BLOCK;
+    while (p < n)
+        p <<= 1;
+    return p;
+}
+
+uint32_t rd_gpu_lbvh_node_count(uint32_t tri_count)
+{
+    return tri_count ? 2 * tri_count - 1 : 1;
+}
+
+/* Byte offset of the working tree in the scratch. */
+static uint64_t work_nodes_at(uint32_t n)
+{
+    uint64_t words = KEYS_AT + 2 * padded_keys(n) + TAIL_WORDS * (uint64_t)n + ARGS_WORDS;
+    return (4 * words + 15) & ~(uint64_t)15;
+}
+
+uint64_t rd_gpu_lbvh_scratch_bytes(uint32_t tri_count)
+{
+    return work_nodes_at(tri_count) +
+           sizeof(pc_bvh_node) * (uint64_t)rd_gpu_lbvh_node_count(tri_count);
+}
+
+static uint32_t max_leaf_def(uint32_t max_leaf)
+{
+    return max_leaf == 0 ? 4 : max_leaf > RD_BVH_MAX_LEAF ? RD_BVH_MAX_LEAF : max_leaf;
+}
+
+static uint32_t groups(uint64_t threads)
+{
+    return (uint32_t)((threads + PC_WG_1D - 1) / PC_WG_1D);
+}
+
+void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress positions,
+                        uint32_t tri_count, uint32_t max_leaf, VkDeviceAddress nodes,
+                        VkDeviceAddress prim_index, const rd_buffer *scratch_buf, rd_timer *timer)
+{
+    VkDeviceAddress scratch = scratch_buf->address;
+    uint32_t n = tri_count, ml = max_leaf_def(max_leaf);
+    VkDeviceAddress work = scratch + work_nodes_at(n);
+    uint64_t nkeys = padded_keys(n);
+    assert(n <= RD_GPU_LBVH_MAX_TRIANGLES);
+    _Static_assert(2ull * RD_GPU_LBVH_MAX_TRIANGLES <= MAX_THREADS, "one dispatch a pass");
+    uint32_t leaf_at = (uint32_t)(KEYS_AT + 2 * nkeys);
+    pc_push push = {.buf0 = positions, .buf2 = scratch, .params = {n, 0, 0, 0}};
+    if (n > 0) {
+        rd_cmd_dispatch(c, &b->bounds, &push, 1, 1, 1); /* reset */
+        rd_cmd_barrier(c);
+        push.params.z = 1;
+        rd_cmd_dispatch(c, &b->bounds, &push, groups(n), 1, 1);
+        rd_cmd_barrier(c);
+        push.params = (pc_uvec4){n, (uint32_t)nkeys, 0, 0};
+        rd_cmd_dispatch(c, &b->morton, &push, groups(nkeys), 1, 1);
+        rd_cmd_barrier(c);
+        if (timer) rd_timer_mark(c, timer, "lbvh_keys");
+        push.params = (pc_uvec4){(uint32_t)(nkeys / 2), 0, 0, 2}; /* k <= SORT_BLOCK */
+        rd_cmd_dispatch(c, &b->sort, &push, (uint32_t)(nkeys / SORT_BLOCK), 1, 1);
+        rd_cmd_barrier(c);
+        for (uint64_t k = 2 * SORT_BLOCK; k <= nkeys; k <<= 1) {
+            for (uint64_t j = k >> 1; j >= SORT_BLOCK; j >>= 1) {
+                push.params = (pc_uvec4){(uint32_t)(nkeys / 2), (uint32_t)k, (uint32_t)j, 0};
+                rd_cmd_dispatch(c, &b->sort, &push, groups(nkeys / 2), 1, 1);
+                rd_cmd_barrier(c);
+            }
+            push.params = (pc_uvec4){(uint32_t)(nkeys / 2), (uint32_t)k, 0, 1};
+            rd_cmd_dispatch(c, &b->sort, &push, (uint32_t)(nkeys / SORT_BLOCK), 1, 1);
+            rd_cmd_barrier(c);
+        }
+        if (timer) rd_timer_mark(c, timer, "lbvh_sort");
+    }
+    pc_push h = {.buf0 = scratch,
+                 .buf1 = n ? work : nodes,
+                 .buf2 = prim_index,
+                 .params = {n, leaf_at, ml, 0}};
+    rd_cmd_dispatch(c, &b->hierarchy, &h, groups(n > 1 ? n - 1 : 1), 1, 1);
+    rd_cmd_barrier(c);
+    if (timer) rd_timer_mark(c, timer, "lbvh_hierarchy");
+    if (n > 0) {
+        pc_push x = {.buf0 = positions, .buf1 = work, .buf2 = scratch, .params = {n, leaf_at}};
+        rd_cmd_dispatch(c, &b->boxes, &x, groups(n), 1, 1); /* the leaves */
+        rd_cmd_barrier(c);
+        VkDeviceSize args = 4 * ((VkDeviceSize)leaf_at + TAIL_WORDS * (VkDeviceSize)n);
+        for (uint32_t k = 1; n > 1 && k <= BOX_PASSES; k++) {
+            x.params.z = k;
+            rd_cmd_dispatch_indirect(c, &b->boxes, &x, scratch_buf, args);
+            rd_cmd_barrier(c);
+        }
+        if (timer) rd_timer_mark(c, timer, "lbvh_boxes");
+        pc_push sc = {.buf2 = scratch, .params = {n, leaf_at, ml, 0}};
+        rd_cmd_dispatch(c, &b->scan, &sc, 1, 1, 1);
+        rd_cmd_barrier(c);
+        pc_push rm = {.buf0 = work, .buf1 = nodes, .buf2 = scratch, .params = {n, leaf_at, ml, 0}};
+        rd_cmd_dispatch(c, &b->remap, &rm, groups(2 * (uint64_t)n - 1), 1, 1);
+        rd_cmd_barrier(c);
+        if (timer) rd_timer_mark(c, timer, "lbvh_collapse");
+    }
+}
+
+/* Levels below the root of a downloaded tree (a broken tree's walk stops at bad child indices
+ * or after node_count visits: the tests catch such trees). */
+static uint32_t tree_depth(const rd_bvh *bvh)
+{
+    uint32_t *stack = malloc(2 * (size_t)bvh->node_count * sizeof *stack), sp = 0, depth = 0;
+    uint32_t visits = 0;
+    if (!stack) {
+        fprintf(stderr, "probecast: out of memory (GPU LBVH depth)\n");
+        abort();
+    }
+    stack[sp++] = 0, stack[sp++] = 0;
+    while (sp > 0 && visits++ < bvh->node_count) {
+        uint32_t d = stack[--sp], ni = stack[--sp];
+        const pc_bvh_node *nd = &bvh->nodes[ni];
+        depth = d > depth ? d : depth;
+        uint32_t first = rd_bvh_node_first(nd);
+        if (rd_bvh_node_count(nd) != 0 || bvh->prim_count == 0) continue;
+        if (first + 1 >= bvh->node_count || sp + 4 > 2 * bvh->node_count) continue;
+        stack[sp++] = first, stack[sp++] = d + 1;
+        stack[sp++] = first + 1, stack[sp++] = d + 1;
+    }
+    free(stack);
+    return depth;
+}
+
+static double now_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+}
+
+rd_vk_result rd_gpu_lbvh_build_download(rd_vk *vk, const rd_gpu_lbvh_builder *b,
+                                        const float *positions, uint32_t tri_count,
+                                        uint32_t max_leaf, rd_timer *timer, rd_bvh *out,
+                                        double *gpu_ms, char *err, size_t errlen)
+{
+    memset(out, 0, sizeof *out);
+    if (tri_count > RD_GPU_LBVH_MAX_TRIANGLES) {
+        snprintf(err, errlen, "GPU LBVH: %u triangles, at most %u", tri_count,
+                 RD_GPU_LBVH_MAX_TRIANGLES);
+        return RD_VK_ERR_UNSUPPORTED;
+    }
+    uint32_t nn = rd_gpu_lbvh_node_count(tri_count);
+    size_t pos_bytes = (size_t)tri_count * 9 * sizeof(float);
+    size_t node_bytes = (size_t)nn * sizeof(pc_bvh_node), prim_bytes = (size_t)tri_count * 4;
+    rd_buffer pos = {0}, nodes = {0}, prim = {0}, scratch = {0};
+    rd_vk_result r = rd_buffer_create(vk, &pos, pos_bytes, RD_MEMORY_DEVICE, err, errlen);
+    if (r == RD_VK_OK && pos_bytes)
+        r = rd_buffer_upload(vk, &pos, 0, positions, pos_bytes, err, errlen);
+    if (r == RD_VK_OK) r = rd_buffer_create(vk, &nodes, node_bytes, RD_MEMORY_DEVICE, err, errlen);
+    if (r == RD_VK_OK) r = rd_buffer_create(vk, &prim, prim_bytes, RD_MEMORY_DEVICE, err, errlen);
+    if (r == RD_VK_OK)
+        r = rd_buffer_create(vk, &scratch, rd_gpu_lbvh_scratch_bytes(tri_count), RD_MEMORY_DEVICE,
+                             err, errlen);
+    rd_cmd c;
+    if (r == RD_VK_OK) r = rd_cmd_begin(vk, &c, err, errlen);
+    if (r == RD_VK_OK) {
+        if (timer) rd_timer_begin(&c, timer);
+        rd_gpu_lbvh_record(&c, b, pos.address, tri_count, max_leaf, nodes.address, prim.address,
+                           &scratch, timer);
+        double t0 = now_ms();
+        r = rd_cmd_submit_wait(vk, &c, err, errlen);
+        if (gpu_ms) *gpu_ms = now_ms() - t0;
+        if (r == RD_VK_OK && timer) r = rd_timer_resolve(vk, timer, err, errlen);
+    }
+    if (r == RD_VK_OK) {
+        out->nodes = malloc(node_bytes);
+        out->prim_index = malloc(prim_bytes ? prim_bytes : 4);
+        if (!out->nodes || !out->prim_index) {
+            fprintf(stderr, "probecast: out of memory (GPU LBVH read-back)\n");
+            abort();
+        }
+        out->prim_count = tri_count;
+        r = rd_buffer_download(vk, &scratch, RD_GPU_LBVH_COUNT_OFFSET, &out->node_count, 4, err,
+                               errlen);
+        if (r == RD_VK_OK && !(out->node_count >= 1 && out->node_count <= nn)) {
+            snprintf(err, errlen, "GPU LBVH: %u nodes out of %u", out->node_count, nn);
+            r = RD_VK_ERR_VULKAN;
+        }
+        if (r == RD_VK_OK)
+            r = rd_buffer_download(vk, &nodes, 0, out->nodes,
+                                   (size_t)out->node_count * sizeof(pc_bvh_node), err, errlen);
+        if (r == RD_VK_OK && prim_bytes)
+            r = rd_buffer_download(vk, &prim, 0, out->prim_index, prim_bytes, err, errlen);
+        if (r == RD_VK_OK) out->depth = tree_depth(out);
+    }
+    rd_buffer_destroy(vk, &scratch);
+    rd_buffer_destroy(vk, &prim);
+    rd_buffer_destroy(vk, &nodes);
+    rd_buffer_destroy(vk, &pos);
+    if (r != RD_VK_OK) rd_bvh_destroy(out);
+    return r;
+}

@@ -1,0 +1,86 @@
+/* gpu_lbvh.h: a BVH over a triangle mesh built on the GPU, a linear BVH after Karras 2012
+ * ("Maximizing Parallelism in the Construction of BVHs, Octrees, and k-d Trees"), in the node
+ * layout the traversal reads (pc_bvh_node, as rd_bvh: nodes[0] the root, an interior node's
+ * children adjacent at first and first + 1, a leaf's triangles [first, first + count) of
+ * prim_index). Passes (shaders/lbvh_*.comp, a barrier between each):
+ *   1. lbvh_bounds: the centroids' box, by atomics (two dispatches: reset, then widen);
+ *   2. lbvh_morton: keys (30-bit Morton code of the centroid, triangle index);
+ *   3. lbvh_sort: a bitonic sort of the keys padded to N = a power of two (at least 128), the
+ *      steps within blocks of 128 keys in shared memory, the others one dispatch each: 28
+ *      dispatches for 5000 triangles (N = 8192), 66 for 100 K; O(N log^2 N) work, simple and
+ *      exact, slower than a radix sort for large meshes;
+ *   4. lbvh_hierarchy: Karras's radix tree, one thread per internal node; internal node i's
+ *      children go to nodes 2i+1 and 2i+2, so 2n-1 nodes with the root at 0;
+ *   5. lbvh_boxes: the leaves (one thread each), then 64 indirect passes of one thread per
+ *      internal node, each finishing the nodes whose children were finished in earlier passes
+ *      (exact unions; a radix tree over 64-bit keys has at most 64 internal levels); the pass
+ *      that finishes the root zeroes the group count of those after it. No pass reads a box
+ *      written in the same dispatch. (Karras's single pass, a thread climbing from each leaf
+ *      with an atomic counter per node, coherent buffers and memory barriers, gave wrong boxes
+ *      above the first level on lavapipe with 64-thread workgroups and right ones with
+ *      1-thread workgroups (34 ms there against these passes' 69 ms for 100 K triangles);
+ *      why is not known yet.)
+ *   6. lbvh_scan, lbvh_remap: the collapse of every subtree of at most max_leaf triangles
+ *      into one leaf (their sorted leaves are contiguous), the nodes that stay numbered by a
+ *      prefix sum (one workgroup: simple, O(n) on 64 threads) and copied to the output.
+ * Leaf policy: a subtree of at most max_leaf (default 4) triangles becomes a leaf, whatever
+ * its SAH cost (the CPU builder weighs it). Depth: at most 64 (a level a bit of the 64-bit
+ * keys), but not kept within RD_BVH_MAX_DEPTH (48) as the CPU builder's is; random and
+ * degenerate meshes of a few thousand triangles stay near 2 log2 n (test_gpu_lbvh prints it);
+ * rd_gpu_lbvh_build_download reports it.
+ * Children may sit before their parent (internal node i's slot is its parent's choice), so
+ * rd_gpu_refit_blas_create, which assumes the CPU builder's order, cannot take it yet.
+ * A triangle with a non-finite vertex gets an empty box and a key past every finite one.
+ * Not yet used by gpu_scene (which builds BLASes on the CPU, renderer/accel/bvh.h). */
+#ifndef RD_GPU_LBVH_H
+#define RD_GPU_LBVH_H
+
+#include <stdint.h>
+
+#include "renderer/accel/bvh.h"
+#include "renderer/vk/vk_compute.h"
+
+typedef struct rd_gpu_lbvh_builder {
+    rd_pipeline bounds, morton, sort, hierarchy, boxes, scan, remap;
+} rd_gpu_lbvh_builder;
+
+rd_vk_result rd_gpu_lbvh_builder_create(rd_vk *vk, rd_gpu_lbvh_builder *b, char *err,
+                                        size_t errlen);
+void rd_gpu_lbvh_builder_destroy(rd_vk *vk, rd_gpu_lbvh_builder *b); /* idempotent */
+
+/* Triangles one build takes at most: every pass is one dispatch of at most 65535 groups, and
+ * the largest have 2n threads (the Morton pass's N padded keys, the collapse's 2n - 1 nodes). */
+#define RD_GPU_LBVH_MAX_TRIANGLES (65535u * PC_WG_1D / 2u)
+
+/* Nodes a build over tri_count triangles writes at most: 2 tri_count - 1 (1 for none); with
+ * leaves of several triangles fewer, their count at RD_GPU_LBVH_COUNT_OFFSET in the scratch. */
+uint32_t rd_gpu_lbvh_node_count(uint32_t tri_count);
+/* Bytes of scratch a build needs (16-byte aligned device address). */
+uint64_t rd_gpu_lbvh_scratch_bytes(uint32_t tri_count);
+/* Byte offset in the scratch of the uint node count a build writes. */
+#define RD_GPU_LBVH_COUNT_OFFSET 24u
+
+/* Records a build into c (tri_count at most RD_GPU_LBVH_MAX_TRIANGLES). positions: device address
+ * of 9 floats per triangle; max_leaf: a subtree of at most this many triangles becomes one leaf (0
+ * = 4 as the CPU builder, at most RD_BVH_MAX_LEAF; 1 = one triangle a leaf); nodes: room for
+ * rd_gpu_lbvh_node_count(tri_count) pc_bvh_node (indices relative to it); prim_index: room for
+ * tri_count uints (leaf order -> triangle); scratch: a buffer of rd_gpu_lbvh_scratch_bytes
+ * (also read as indirect dispatch arguments). All must stay
+ * alive until c has run; the results are ready after the barrier that ends the recording.
+ * timer (may be NULL): begun by the caller; marks lbvh_keys, lbvh_sort, lbvh_hierarchy,
+ * lbvh_boxes and lbvh_collapse (those that run). */
+void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress positions,
+                        uint32_t tri_count, uint32_t max_leaf, VkDeviceAddress nodes,
+                        VkDeviceAddress prim_index, const rd_buffer *scratch, rd_timer *timer);
+
+/* Blocking convenience (tests, benchmarks): uploads positions, builds, waits, and reads the
+ * tree back into out (an rd_bvh the caller frees with rd_bvh_destroy; depth computed on the
+ * CPU). gpu_ms (may be NULL): wall time of the submit and wait of the build alone; timer (may
+ * be NULL): begun here and resolved after the wait, one section a pass. On error
+ * out is zeroed. */
+rd_vk_result rd_gpu_lbvh_build_download(rd_vk *vk, const rd_gpu_lbvh_builder *b,
+                                        const float *positions, uint32_t tri_count,
+                                        uint32_t max_leaf, rd_timer *timer, rd_bvh *out,
+                                        double *gpu_ms, char *err, size_t errlen);
+
+#endif

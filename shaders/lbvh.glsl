@@ -1,0 +1,88 @@
+// lbvh.glsl: the scratch layout and key helpers shared by the LBVH passes
+// (renderer/accel/gpu_lbvh.c mirrors the layout: rd_gpu_lbvh_scratch_bytes).
+// Scratch, in uints from its start: [0, 8) centroid bounds as order-preserving uints
+// (min xyz, max xyz); [8, 8 + 2N) the sort keys as uvec2 (x: triangle index, y: Morton code;
+// N = tri count rounded up to a power of two, padding keys all ones); then leaf_slot[n] (sorted
+// leaf -> output node), node_slot[n] (internal node -> output node), done[n] (per internal
+// node: the lbvh_boxes pass that made its box, 0 before), range[2n] (per internal node: first
+// sorted leaf and count) and alive[2n] (per working-tree node: 1 if it stays in the output,
+// then its output index after lbvh_scan), then 4 words: the indirect dispatch of the
+// lbvh_boxes passes (x: groups, zeroed when the root is done). Word 6 of the scratch: the
+// output's node count.
+// pc.params.x = n (triangles), pc.params.y = uint offset of leaf_slot.
+#ifndef LBVH_GLSL
+#define LBVH_GLSL
+
+#define LBVH_KEYS_AT 8u
+
+layout(buffer_reference, std430, buffer_reference_align = 4) coherent buffer LbvhUints
+{
+    uint v[];
+};
+layout(buffer_reference, std430, buffer_reference_align = 8) buffer LbvhKeys
+{
+    uvec2 k[];
+};
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer LbvhFloats
+{
+    float v[];
+};
+
+LbvhKeys lbvh_keys(uint64_t scratch)
+{
+    return LbvhKeys(scratch + 32ul); // 4 bytes * LBVH_KEYS_AT
+}
+
+uint lbvh_leaf_slot_at(uint n, uint leaf_at)
+{
+    return leaf_at;
+}
+uint lbvh_node_slot_at(uint n, uint leaf_at)
+{
+    return leaf_at + n;
+}
+uint lbvh_done_at(uint n, uint leaf_at)
+{
+    return leaf_at + 2u * n;
+}
+uint lbvh_range_at(uint n, uint leaf_at)
+{
+    return leaf_at + 3u * n;
+}
+uint lbvh_alive_at(uint n, uint leaf_at)
+{
+    return leaf_at + 5u * n;
+}
+uint lbvh_args_at(uint n, uint leaf_at)
+{
+    return leaf_at + 7u * n;
+}
+#define LBVH_COUNT_AT 6u
+
+// Triangle t's three vertices (9 floats each triangle).
+void lbvh_triangle(uint64_t positions, uint t, out vec3 a, out vec3 b, out vec3 c)
+{
+    LbvhFloats p = LbvhFloats(positions);
+    uint o = 9u * t;
+    a = vec3(p.v[o], p.v[o + 1u], p.v[o + 2u]);
+    b = vec3(p.v[o + 3u], p.v[o + 4u], p.v[o + 5u]);
+    c = vec3(p.v[o + 6u], p.v[o + 7u], p.v[o + 8u]);
+}
+
+bool lbvh_finite(vec3 v)
+{
+    return !any(isnan(v)) && !any(isinf(v));
+}
+
+// Floats to uints that compare in the same order (for atomicMin / atomicMax).
+uint lbvh_f2o(float f)
+{
+    uint u = floatBitsToUint(f);
+    return (u & 0x80000000u) != 0u ? ~u : (u | 0x80000000u);
+}
+float lbvh_o2f(uint o)
+{
+    return uintBitsToFloat((o & 0x80000000u) != 0u ? (o & 0x7fffffffu) : ~o);
+}
+
+#endif

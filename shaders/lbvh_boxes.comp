@@ -1,0 +1,73 @@
+// lbvh_boxes.comp: the boxes of an LBVH bottom-up (Karras 2012, sec. 4, "Bounding boxes"),
+// in passes rather than by one climbing thread per leaf, so that no pass reads a box written
+// in the same dispatch. params.z == 0: one thread per leaf writes it (first = its sorted
+// position, count 1, the triangle's box; empty [+inf, -inf] for a triangle with a non-finite
+// vertex). params.z == k >= 1: one thread per internal node not yet done whose children were
+// both done before pass k (leaves, or done[c] in [1, k)) writes its box, the exact union of
+// theirs, and done = k. The tree over distinct 64-bit keys is at most 64 internal levels deep
+// (each level's common prefix is longer than its parent's), so 64 passes finish every node;
+// a done node's thread returns at once, and the thread that finishes the root zeroes the
+// group count of the indirect dispatch of the passes (scratch, lbvh_args_at), so the passes
+// after it launch nothing.
+// Runs after lbvh_hierarchy (slots, interior w words, cleared done words).
+// Push constants (pc_push): buf0 = positions, buf1 = nodes (pc_bvh_node), buf2 = scratch
+// (shaders/lbvh.glsl); params.x = n, params.y = uint offset of leaf_slot in scratch,
+// params.z = pass.
+#version 460
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#extension GL_GOOGLE_include_directive : require
+
+#include "gpu_types.h"
+#include "lbvh.glsl"
+
+layout(local_size_x = PC_WG_1D) in;
+
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer Nodes
+{
+    pc_bvh_node n[];
+};
+
+layout(push_constant) uniform Push
+{
+    pc_push pc;
+};
+
+// Whether a child node was finished before pass k.
+bool child_ready(LbvhUints s, uint n, uint at, pc_bvh_node c, uint k)
+{
+    if (floatBitsToUint(c.bmax.w) != 0u) return true; /* a leaf */
+    uint done = s.v[lbvh_done_at(n, at) + (floatBitsToUint(c.bmin.w) - 1u) / 2u];
+    return done != 0u && done < k;
+}
+
+void main()
+{
+    uint n = pc.params.x, at = pc.params.y, k = pc.params.z;
+    uint i = gl_GlobalInvocationID.x;
+    Nodes nodes = Nodes(pc.buf1);
+    LbvhUints s = LbvhUints(pc.buf2);
+    if (k == 0u) {
+        if (i >= n) return;
+        uint tri = lbvh_keys(pc.buf2).k[i].x;
+        vec3 a, b, c;
+        lbvh_triangle(pc.buf0, tri, a, b, c);
+        vec3 lo = min(a, min(b, c)), hi = max(a, max(b, c));
+        if (!lbvh_finite(a) || !lbvh_finite(b) || !lbvh_finite(c)) {
+            lo = vec3(uintBitsToFloat(0x7f800000u));
+            hi = -lo;
+        }
+        uint slot = s.v[lbvh_leaf_slot_at(n, at) + i];
+        nodes.n[slot].bmin = vec4(lo, uintBitsToFloat(i));
+        nodes.n[slot].bmax = vec4(hi, uintBitsToFloat(1u));
+        return;
+    }
+    if (i + 1u >= n || s.v[lbvh_done_at(n, at) + i] != 0u) return;
+    pc_bvh_node l = nodes.n[2u * i + 1u], r = nodes.n[2u * i + 2u];
+    if (!child_ready(s, n, at, l, k) || !child_ready(s, n, at, r, k)) return;
+    uint slot = s.v[lbvh_node_slot_at(n, at) + i];
+    nodes.n[slot].bmin = vec4(min(l.bmin.xyz, r.bmin.xyz), uintBitsToFloat(2u * i + 1u));
+    nodes.n[slot].bmax = vec4(max(l.bmax.xyz, r.bmax.xyz), uintBitsToFloat(0u));
+    s.v[lbvh_done_at(n, at) + i] = k;
+    if (i == 0u) s.v[lbvh_args_at(n, at)] = 0u;
+}
