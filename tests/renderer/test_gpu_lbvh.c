@@ -255,10 +255,15 @@ static void run_tests(rd_vk *vk, const rd_gpu_lbvh_builder *b)
     free(pos);
 }
 
-static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b)
+static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b, int argc, char **argv)
 {
-    static const uint32_t sizes[] = {1000, 5000, 20000, 100000};
-    float *pos = tris_alloc(100000);
+    uint32_t sizes[16] = {1000, 5000, 20000, 100000}, count = 4, most = 0;
+    if (argc > 0) /* sizes given: `test_gpu_lbvh bench 100000 1000000` */
+        for (count = 0; count < (uint32_t)argc && count < 16; count++)
+            sizes[count] = (uint32_t)strtoul(argv[count], NULL, 10);
+    for (uint32_t s = 0; s < count; s++)
+        most = sizes[s] > most ? sizes[s] : most;
+    float *pos = tris_alloc(most);
     rd_timer timer;
     if (rd_timer_create(vk, &timer, err, sizeof err) != RD_VK_OK) {
         fprintf(stderr, "%s\n", err);
@@ -268,7 +273,7 @@ static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b)
     printf("leaves of up to 4; ms: submit and wait (best of 3), then GPU timestamps of the last\n");
     printf("%8s %8s %8s %8s %8s %8s %8s %9s %6s\n", "tris", "wall_ms", "keys", "sort", "hierarchy",
            "boxes", "collapse", "sah_ratio", "depth");
-    for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++) {
+    for (uint32_t s = 0; s < count; s++) {
         rng_seed(3 + s);
         random_soup(pos, sizes[s], 0.02f);
         rd_bvh gpu, cpu;
@@ -313,7 +318,7 @@ int main(int argc, char **argv)
     CHECKF(rc == RD_VK_OK, "%s", err);
     if (rc == RD_VK_OK) {
         if (bench)
-            run_bench(&vk, &b);
+            run_bench(&vk, &b, argc - 2, argv + 2);
         else
             run_tests(&vk, &b);
     }
