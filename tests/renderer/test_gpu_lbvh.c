@@ -270,7 +270,11 @@ static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b, int argc, char **
         free(pos);
         return;
     }
-    printf("leaves of up to 4; ms: submit and wait (best of 3), then GPU timestamps of the last\n");
+    /* PROBECAST_LBVH_LEAF: the leaf policy (max_leaf; default 0: up to 4) */
+    const char *leaf_env = getenv("PROBECAST_LBVH_LEAF");
+    uint32_t max_leaf = leaf_env ? (uint32_t)strtoul(leaf_env, NULL, 10) : 0;
+    printf("leaves of up to %u; ms: submit and wait (best of 3), then GPU timestamps of the last\n",
+           max_leaf ? max_leaf : 4);
     printf("%8s %8s %8s %8s %8s %8s %8s %9s %6s\n", "tris", "wall_ms", "keys", "sort", "hierarchy",
            "boxes", "collapse", "sah_ratio", "depth");
     for (uint32_t s = 0; s < count; s++) {
@@ -279,8 +283,8 @@ static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b, int argc, char **
         rd_bvh gpu, cpu;
         double ms = 0, best = 1e30;
         for (int rep = 0; rep < 3; rep++) {
-            rd_vk_result r = rd_gpu_lbvh_build_download(vk, b, pos, sizes[s], 0, &timer, &gpu, &ms,
-                                                        err, sizeof err);
+            rd_vk_result r = rd_gpu_lbvh_build_download(vk, b, pos, sizes[s], max_leaf, &timer,
+                                                        &gpu, &ms, err, sizeof err);
             if (r != RD_VK_OK) {
                 fprintf(stderr, "%s\n", err);
                 rd_timer_destroy(vk, &timer);
