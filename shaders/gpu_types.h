@@ -54,6 +54,9 @@ static inline float pc_u2f(uint32_t u)
 #define PC_WG_2D_X 8
 #define PC_WG_2D_Y 8
 #define PC_WG_1D 64
+/* The GPU LBVH's node renumbering (shaders/lbvh_scan.comp): words of its prefix sum that one
+ * workgroup scans (a multiple of PC_WG_1D). */
+#define PC_LBVH_SCAN_BLOCK 2048u
 
 /* ---- enumerations (plain constants: GLSL has no enums) ------------------------------- */
 #define PC_LIGHT_POINT 0u

@@ -7,7 +7,8 @@
 // node: the lbvh_boxes pass that made its box, 0 before), range[2n] (per internal node: first
 // sorted leaf and count) and alive[2n] (per working-tree node: 1 if it stays in the output,
 // then its output index after lbvh_scan), then 4 words: the indirect dispatch of the
-// lbvh_boxes passes (x: groups, zeroed when the root is done). Word 6 of the scratch: the
+// lbvh_boxes passes (x: groups, zeroed when the root is done), then lbvh_scan's block sums
+// (LBVH_SCAN_BLOCK). Word 6 of the scratch: the
 // output's node count.
 // pc.params.x = n (triangles), pc.params.y = uint offset of leaf_slot.
 #ifndef LBVH_GLSL
@@ -58,6 +59,11 @@ uint lbvh_args_at(uint n, uint leaf_at)
     return leaf_at + 7u * n;
 }
 #define LBVH_COUNT_AT 6u
+// lbvh_scan.comp's block sums (PC_LBVH_SCAN_BLOCK, gpu_types.h) follow the args words.
+uint lbvh_scan_sums_at(uint n, uint leaf_at)
+{
+    return lbvh_args_at(n, leaf_at) + 4u;
+}
 
 // Triangle t's three vertices (9 floats each triangle).
 void lbvh_triangle(uint64_t positions, uint t, out vec3 a, out vec3 b, out vec3 c)

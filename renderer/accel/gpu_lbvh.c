@@ -67,9 +67,18 @@ uint32_t rd_gpu_lbvh_node_count(uint32_t tri_count)
 }
 
 /* Byte offset of the working tree in the scratch. */
+#define SCAN_BLOCK PC_LBVH_SCAN_BLOCK
+_Static_assert(SCAN_BLOCK % PC_WG_1D == 0, "whole chunks a thread");
+
+static uint32_t scan_blocks(uint32_t n)
+{
+    return n ? (2 * n - 1 + SCAN_BLOCK - 1) / SCAN_BLOCK : 0;
+}
+
 static uint64_t work_nodes_at(uint32_t n)
 {
-    uint64_t words = KEYS_AT + 2 * padded_keys(n) + TAIL_WORDS * (uint64_t)n + ARGS_WORDS;
+    uint64_t words =
+        KEYS_AT + 2 * padded_keys(n) + TAIL_WORDS * (uint64_t)n + ARGS_WORDS + scan_blocks(n);
     return (4 * words + 15) & ~(uint64_t)15;
 }
 
@@ -144,8 +153,15 @@ void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress
             rd_cmd_barrier(c);
         }
         if (timer) rd_timer_mark(c, timer, "lbvh_boxes");
-        pc_push sc = {.buf2 = scratch, .params = {n, leaf_at, ml, 0}};
+        /* block sums, their scan, then each block's words */
+        pc_push sc = {.buf2 = scratch, .params = {n, leaf_at, 0, 0}};
+        rd_cmd_dispatch(c, &b->scan, &sc, scan_blocks(n), 1, 1);
+        rd_cmd_barrier(c);
+        sc.params.z = 1;
         rd_cmd_dispatch(c, &b->scan, &sc, 1, 1, 1);
+        rd_cmd_barrier(c);
+        sc.params.z = 2;
+        rd_cmd_dispatch(c, &b->scan, &sc, scan_blocks(n), 1, 1);
         rd_cmd_barrier(c);
         pc_push rm = {.buf0 = work, .buf1 = nodes, .buf2 = scratch, .params = {n, leaf_at, ml, 0}};
         rd_cmd_dispatch(c, &b->remap, &rm, groups(2 * (uint64_t)n - 1), 1, 1);
