@@ -106,19 +106,22 @@ void rd_scene_init(rd_scene *s)
     }
 }
 
+void rd_mesh_free_arrays(rd_mesh *m)
+{
+    free(m->name);
+    free(m->positions);
+    free(m->normals);
+    free(m->uvs);
+    free(m->tangents);
+    free(m->material);
+    rd_mesh_deform_free(m->deform);
+}
+
 void rd_scene_destroy(rd_scene *s)
 {
     if (!s) return;
-    for (uint32_t i = 0; i < s->mesh_count; i++) {
-        rd_mesh *m = &s->meshes[i];
-        free(m->name);
-        free(m->positions);
-        free(m->normals);
-        free(m->uvs);
-        free(m->tangents);
-        free(m->material);
-        rd_mesh_deform_free(m->deform);
-    }
+    for (uint32_t i = 0; i < s->mesh_count; i++)
+        rd_mesh_free_arrays(&s->meshes[i]);
     free(s->meshes);
     for (uint32_t i = 0; i < s->node_count; i++) {
         free(s->nodes[i].name);

@@ -219,6 +219,9 @@ rd_material rd_material_default(void);
 void rd_scene_init(rd_scene *s);
 /* Frees everything the scene owns and leaves it empty (idempotent). */
 void rd_scene_destroy(rd_scene *s);
+/* Frees a mesh's name, arrays and deformation (the mesh struct itself stays, its pointers
+ * dangling: refill or drop it). */
+void rd_mesh_free_arrays(rd_mesh *m);
 
 /* Builders: each returns the new element's index; arrays grow as needed; strings are copied.
  * Out-of-memory aborts (the only fatal error). */

@@ -45,12 +45,10 @@ static bool build_scene(rd_scene *s)
     if (g != RD_GLTF_OK) return false;
     rd_mesh *m = &s->meshes[0], sheet;
     pc_skinned_sheet(&sheet, COLS, ROWS);
-    free(m->positions);
-    free(m->normals);
-    free(m->uvs);
-    free(m->tangents);
-    free(m->material);
-    rd_mesh_deform_free(m->deform);
+    char *name = m->name;
+    m->name = NULL; /* the mesh keeps its name */
+    rd_mesh_free_arrays(m);
+    m->name = name;
     m->tri_count = sheet.tri_count;
     m->positions = sheet.positions;
     m->normals = sheet.normals;
