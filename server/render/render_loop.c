@@ -119,6 +119,12 @@ static void world_changed(srv_render_loop *l, unsigned changes, double now)
     if (changes & SRV_CHANGE_PERSIST) l->persist_dirty = true;
 }
 
+/* A count moved by delta, never below 0 (a watcher's -1 may arrive for a view it never reached). */
+static unsigned count_plus(unsigned n, int delta)
+{
+    return delta < 0 && (unsigned)-delta > n ? 0 : (unsigned)((int)n + delta);
+}
+
 static void apply_view_cmd(srv_render_loop *l, srv_cmd *c, double now)
 {
     srv_api_error e;
@@ -181,16 +187,12 @@ static void apply_view_cmd(srv_render_loop *l, srv_cmd *c, double now)
         return;
     case SRV_CMD_VIEW_WATCH:
         if (!v) return;
-        v->watchers = c->delta < 0 && (unsigned)-c->delta > v->watchers
-                          ? 0
-                          : (unsigned)((int)v->watchers + c->delta);
+        v->watchers = count_plus(v->watchers, c->delta);
         publish_view(l, v, true);
         return;
     case SRV_CMD_VIEW_VIDEO:
         if (!v) return;
-        v->video_watchers = c->delta < 0 && (unsigned)-c->delta > v->video_watchers
-                                ? 0
-                                : (unsigned)((int)v->video_watchers + c->delta);
+        v->video_watchers = count_plus(v->video_watchers, c->delta);
         return;
     case SRV_CMD_FRAME_REQUEST: {
         if (!v) return;
