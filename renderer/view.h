@@ -76,9 +76,9 @@ typedef struct rd_view {
     rd_view_history near;    /* near-field ratios (near_field.comp) */
     bool near_on;            /* the last frame traced near-field rays */
     /* the frame's JPEG coefficients, one set per quality, when the GPU encodes
-     * (renderer/jpeg_dct.h: rd_jpeg_dct_record_view creates and grows it) */
+     * (renderer/encode/jpeg_dct.h: rd_jpeg_dct_record_view creates and grows it) */
     rd_buffer jpeg_coefs;
-    /* the frame as I420 for video viewers (renderer/video_i420.h: rd_video_i420_record_view
+    /* the frame as I420 for video viewers (renderer/encode/video_i420.h: rd_video_i420_record_view
      * creates and grows it) */
     rd_buffer i420;
     rd_timer timer;

@@ -1,6 +1,6 @@
 #version 460
 /* jpeg_dct.comp: the lossy half of a baseline 4:2:0 JPEG encode, one 16x16 MCU a workgroup
- * (renderer/jpeg_dct.h; the entropy coding follows on the CPU: server/encode/jpeg_coefs.h). Mirrors
+ * (renderer/encode/jpeg_dct.h; the entropy coding follows on the CPU: server/encode/jpeg_coefs.h). Mirrors
  * libjpeg(-turbo) step by step so that the entropy coder on the CPU (jpeg_write_coefficients)
  * writes what one libjpeg encode of the frame would:
  *  - colour: JFIF RGB -> YCbCr in libjpeg's 16-bit fixed point (jccolor.c rgb_ycc_convert),

@@ -1,5 +1,5 @@
 #version 460
-/* video_i420.comp: a view's RGBA8 frame as I420 for the video encoders (renderer/video_i420.h),
+/* video_i420.comp: a view's RGBA8 frame as I420 for the video encoders (renderer/encode/video_i420.h),
  * BT.601 limited range in 16-bit fixed point, bit exact with server/encode/video_encoder.c's
  * srv_video_rgba_to_i420 (the CPU path and the tests' reference):
  *   Y  = (16829 R + 33039 G + 6416 B + (16 << 16) + 32768) >> 16

@@ -1,7 +1,7 @@
 /* readback.h: a ring of host-visible buffers that frames are copied into without waiting.
  *
  * After a frame is rendered, rd_readback_submit records a copy of a view's output buffer (its
- * RGBA8 pixels, or its JPEG coefficients: renderer/jpeg_dct.h) into a free slot and submits it with
+ * RGBA8 pixels, or its JPEG coefficients: renderer/encode/jpeg_dct.h) into a free slot and submits it with
  * its own fence, then returns at once; the render thread goes on with the next frame while the copy
  * runs. rd_readback_poll hands completed slots to a callback in submission order (on the render
  * thread). The callback either copies the pixels out or keeps the slot (a lease): its memory then

@@ -18,8 +18,8 @@
 #define SRV_MAX_VARIANTS 8
 
 /* A frame's image on the CPU, shared read-only (reference counted): its tone-mapped RGBA8
- * pixels, or what the GPU computed of them: JPEG coefficients (renderer/jpeg_dct.h), I420 planes
- * (renderer/video_i420.h), or both. */
+ * pixels, or what the GPU computed of them: JPEG coefficients (renderer/encode/jpeg_dct.h), I420 planes
+ * (renderer/encode/video_i420.h), or both. */
 typedef struct srv_image {
     atomic_int refs;
     unsigned width, height;
@@ -30,7 +30,7 @@ typedef struct srv_image {
     unsigned coef_sets;
     unsigned coef_quality[SRV_MAX_VARIANTS];
     /* the frame as I420 for the video encoders too (GPU path, a view with video viewers:
-     * renderer/video_i420.h): Y at data + i420_at, i420_y_stride bytes a row, then Cb and Cr,
+     * renderer/encode/video_i420.h): Y at data + i420_at, i420_y_stride bytes a row, then Cb and Cr,
      * i420_c_stride bytes a row and (height + 1) / 2 rows each; i420_y_stride 0: none */
     size_t i420_at;
     unsigned i420_y_stride, i420_c_stride;

@@ -1,6 +1,6 @@
 /* jpeg_coefs.h: JPEGs entropy-coded from DCT coefficients the GPU computed.
  *
- * renderer/jpeg_dct.h runs colour conversion, chroma subsampling, the DCT and quantisation on
+ * renderer/encode/jpeg_dct.h runs colour conversion, chroma subsampling, the DCT and quantisation on
  * the GPU; what is left for the CPU is libjpeg's entropy coder (its transcoding API,
  * jpeg_write_coefficients, with the standard Huffman tables): about half the CPU time of a whole
  * libjpeg-turbo encode of the pixels (tests/bench/results/h100/jpeg_gpu.txt). Stripes work as in
@@ -18,7 +18,7 @@
 #include <stdint.h>
 
 #include "server/encode/jpeg_striped.h"
-#include "renderer/jpeg_dct.h"
+#include "renderer/encode/jpeg_dct.h"
 
 /* The quantisation tables libjpeg uses at quality (jpeg_set_quality, baseline), natural order:
  * tables[0] luma, tables[1] chroma. */
@@ -26,7 +26,7 @@ void srv_jpeg_quant_tables(unsigned quality, uint16_t tables[2][64]);
 /* The JPEG pass (rd_jpeg_dct_create) with these tables for every quality 1-100. */
 rd_vk_result srv_jpeg_dct_create(rd_vk *vk, rd_jpeg_dct *d, char *err, size_t errlen);
 
-/* One frame's coefficients in renderer/jpeg_dct.h's layout (rd_jpeg_coef_bytes bytes). */
+/* One frame's coefficients in renderer/encode/jpeg_dct.h's layout (rd_jpeg_coef_bytes bytes). */
 typedef struct srv_jpeg_coefs {
     const int16_t *blocks;
     unsigned width, height;

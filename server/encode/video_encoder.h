@@ -103,7 +103,7 @@ srv_video_result srv_video_encode(srv_video_encoder *e, const uint8_t *rgba, siz
                                   bool force_key, srv_video_packet *out, char *err,
                                   size_t err_size);
 /* srv_video_encode of a frame already in I420 (BT.601 limited range, as srv_video_rgba_to_i420
- * writes it; e.g. by the GPU: renderer/video_i420.h): the Y plane (width x height bytes, rows
+ * writes it; e.g. by the GPU: renderer/encode/video_i420.h): the Y plane (width x height bytes, rows
  * y_stride apart), Cb and Cr ((width + 1) / 2 x (height + 1) / 2, rows c_stride apart). */
 srv_video_result srv_video_encode_i420(srv_video_encoder *e, const uint8_t *y, size_t y_stride,
                                        const uint8_t *cb, const uint8_t *cr, size_t c_stride,

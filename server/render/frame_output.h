@@ -8,12 +8,12 @@
  *
  * What is copied depends on the JPEG path:
  *  - CPU (libjpeg-turbo encodes the pixels): the RGBA8 image, 4 bytes a pixel;
- *  - GPU: the JPEG pass (renderer/jpeg_dct.h) runs in the frame's command buffer, transforming
+ *  - GPU: the JPEG pass (renderer/encode/jpeg_dct.h) runs in the frame's command buffer, transforming
  *    once and quantising at every quality the frame is sent at (the encoders' lag-driven
  *    variants, srv_encoder_qualities), and its coefficients are copied, 3 bytes a pixel a
  *    quality; the encoders only entropy-code them (server/encode/jpeg_coefs.h), about 40% of the
  * CPU time of encoding the pixels. When some watcher of the view takes video, an I420 pass
- *    (renderer/video_i420.h) runs too and its planes follow the coefficients, 1.5 bytes a
+ *    (renderer/encode/video_i420.h) runs too and its planes follow the coefficients, 1.5 bytes a
  *    pixel, for the video encoders; a moving frame that every watcher takes as video
  *    (srv_frame_info.video_only) gets only the planes.
  * On the CPU path video encoders read the RGBA8 pixels.
@@ -28,8 +28,8 @@
 
 #include "server/encode/encoder_pool.h"
 #include "server/render/render_stats.h"
-#include "renderer/jpeg_dct.h"
-#include "renderer/video_i420.h"
+#include "renderer/encode/jpeg_dct.h"
+#include "renderer/encode/video_i420.h"
 #include "renderer/vk/readback.h"
 #include "server/render/views.h"
 

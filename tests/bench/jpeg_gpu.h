@@ -1,7 +1,7 @@
 /* jpeg_gpu.h: the daemon's GPU JPEG path driven frame by frame, for probecast_jpegbench and
  * test_gpu_jpeg (issue 14: GPU JPEG against the striped CPU encoder).
  *
- * The product's pass (renderer/jpeg_dct.h: colour conversion, chroma averaging, DCT and
+ * The product's pass (renderer/encode/jpeg_dct.h: colour conversion, chroma averaging, DCT and
  * quantisation with libjpeg's tables) runs on an uploaded RGBA8 frame; the coefficients are
  * copied to a host-visible buffer (or the pass writes that buffer itself: jpeg_gpu.direct); the
  * product's entropy coder (server/encode/jpeg_coefs.h) codes them on the CPU, whole on one thread or in
@@ -20,7 +20,7 @@
 #include "renderer/accel/task_pool.h"
 #include "renderer/vk/vk_buffer.h"
 #include "renderer/vk/vk_compute.h"
-#include "renderer/jpeg_dct.h"
+#include "renderer/encode/jpeg_dct.h"
 #include "server/encode/jpeg_coefs.h"
 #include "server/encode/jpeg_striped.h"
 

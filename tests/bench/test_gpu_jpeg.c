@@ -1,4 +1,4 @@
-/* test_gpu_jpeg.c: the daemon's GPU JPEG path (renderer/jpeg_dct.c, server/encode/jpeg_coefs.c, driven
+/* test_gpu_jpeg.c: the daemon's GPU JPEG path (renderer/encode/jpeg_dct.c, server/encode/jpeg_coefs.c, driven
  * by tests/bench/jpeg_gpu.c) against libjpeg-turbo at the same quality and 4:2:0 subsampling, at
  * tiny sizes (odd ones too): its coefficients are libjpeg's (accurate integer DCT) but for DCT
  * rounding (at most 1 apart, in at most 2% of them), its JPEG decodes, has the size of

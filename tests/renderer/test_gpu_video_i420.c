@@ -1,4 +1,4 @@
-/* test_gpu_video_i420.c: the GPU's I420 for video viewers (renderer/video_i420.c,
+/* test_gpu_video_i420.c: the GPU's I420 for video viewers (renderer/encode/video_i420.c,
  * shaders/video_i420.comp) is bit exact with the CPU conversion the encoders use otherwise
  * (srv_video_rgba_to_i420), at tiny sizes, odd ones too (a last column or row that averages
  * what it has), and the bytes past the width repeat the last column. */
@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "renderer/video_i420.h"
+#include "renderer/encode/video_i420.h"
 #include "server/encode/video_encoder.h"
 #include "test_render_util.h"
 #include "test_util.h"

@@ -1,5 +1,5 @@
 /* video_i420.c: a view's frame as I420 on the GPU (see video_i420.h). */
-#include "renderer/video_i420.h"
+#include "renderer/encode/video_i420.h"
 
 #include <stdio.h>
 #include <string.h>

@@ -1,5 +1,5 @@
 /* jpeg_dct.c: the GPU half of a JPEG encode (see jpeg_dct.h). */
-#include "renderer/jpeg_dct.h"
+#include "renderer/encode/jpeg_dct.h"
 
 #include <stdio.h>
 #include <string.h>
