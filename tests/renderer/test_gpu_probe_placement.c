@@ -107,6 +107,22 @@ static void test_probes_on_surfaces(void)
                    hi);
         }
     }
+    /* given counts (eval's density factors, a user's --probes): the outermost layers 0.15 of
+     * their own spacing inside the bounds; with the fitted grid's margin, 32 x 16 x 20 probes
+     * stood up to 1.8 spacings inside, and floor and ceiling faded outside the grid */
+    const rd_ddgi_settings counted = {.mode = PC_GI_DDGI, .counts = {32, 16, 20}};
+    CHECK(rd_ddgi_configure(&ddgi, s.bounds_min, s.bounds_max, &counted, err, sizeof err) ==
+          RD_VK_OK);
+    const float o[3] = {ddgi.vol.origin.x, ddgi.vol.origin.y, ddgi.vol.origin.z};
+    const float sp[3] = {ddgi.vol.spacing.x, ddgi.vol.spacing.y, ddgi.vol.spacing.z};
+    for (int k = 0; k < 3; k++) {
+        float lo = o[k] - s.bounds_min[k],
+              hi = s.bounds_max[k] - (o[k] + sp[k] * (counted.counts[k] - 1));
+        CHECKF(fabsf(lo - 0.15f * sp[k]) < 1e-3f * sp[k] &&
+                   fabsf(hi - 0.15f * sp[k]) < 1e-3f * sp[k],
+               "counts %u, axis %d: outermost layers %g and %g inside the bounds, spacing %g",
+               counted.counts[k], k, lo, hi, sp[k]);
+    }
     rd_ddgi_destroy(&ddgi);
     rd_scene_destroy(&s);
 }
