@@ -54,6 +54,7 @@ rd_vk_result rd_renderer_render(rd_renderer *r, rd_gpu_scene *scene, const rd_vi
         .pathtrace_first = fs->pathtrace_first,
         .reflections = fs->reflections,
         .near_field = fs->near_field,
+        .shadow_cull = fs->shadow_cull,
     };
     res = rd_view_render_still(&r->view, &r->world, camera, &vs, err, errlen);
     rd_frame_stats_add(&r->stats, &r->world.stats);

@@ -31,6 +31,7 @@ typedef struct rd_frame_settings {
                                  earlier frame (0 = start over); progressive rendering */
     unsigned reflections;     /* PC_REFLECT_* (0 = auto; rd_view_settings) */
     unsigned near_field;      /* PC_NEAR_* (0 = auto; rd_view_settings) */
+    unsigned shadow_cull;     /* PC_SHADOW_CULL_* (0 = maps; rd_view_settings) */
     /* instead of sky when set: the environment (an image, if any, is the world's own:
      * rd_world_set_environment_image) */
     const rd_environment *env;

@@ -189,11 +189,16 @@ static rd_vk_result prepare(rd_view *v, const rd_world *w, const rd_view_camera 
         snprintf(err, errlen, "unknown near-field mode %u", s->near_field);
         return RD_VK_ERR_UNSUPPORTED;
     }
+    if (s->shadow_cull > PC_SHADOW_CULL_OFF) {
+        snprintf(err, errlen, "unknown shadow cull mode %u", s->shadow_cull);
+        return RD_VK_ERR_UNSUPPORTED;
+    }
     rd_vk_result res = ensure_size(v, width, height, err, errlen);
     if (res != RD_VK_OK) return res;
     pc_globals g;
     memset(&g, 0, sizeof g);
-    rd_world_fill_globals(w, &g);
+    rd_world_fill_view_globals(w, &g);
+    if (s->shadow_cull == PC_SHADOW_CULL_OFF) g.ddgi.control.w = 0; /* a ray to every light */
     rd_world_fill_camera(w, camera, width, height, &g);
     g.view.size = (pc_uvec4){width, height, v->frame_index, s->seed};
     g.view.tonemap = (pc_vec4){exp2f(s->exposure_ev), (float)s->tonemap, (float)s->view, 0};

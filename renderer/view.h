@@ -33,6 +33,7 @@ typedef struct rd_view_settings { /* per frame */
                                      earlier frame of this view (0 = start over) */
     unsigned reflections;         /* PC_REFLECT_* (0 = auto): indirect specular with GI on */
     unsigned near_field;          /* PC_NEAR_* (0 = auto): near-field rays with GI on */
+    unsigned shadow_cull;         /* PC_SHADOW_CULL_* (0 = maps, where the world has them) */
 } rd_view_settings;
 
 /* The pipelines of a view's frame; created once per device, shared by all views. */

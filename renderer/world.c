@@ -13,8 +13,8 @@ static rd_vk_result compute_brdf_albedo(rd_vk *vk, rd_buffer *table, char *err, 
 {
     const uint32_t entries = PC_BRDF_ALBEDO_SIDE * PC_BRDF_ALBEDO_SIDE;
     rd_pipeline gen = {0};
-    rd_vk_result res = rd_buffer_create(vk, table, entries * 2 * sizeof(float),
-                                        RD_MEMORY_DEVICE, err, errlen);
+    rd_vk_result res =
+        rd_buffer_create(vk, table, entries * 2 * sizeof(float), RD_MEMORY_DEVICE, err, errlen);
     if (res == RD_VK_OK)
         res = rd_pipeline_create(vk, &gen, "brdf albedo", pc_spv_brdf_albedo,
                                  sizeof pc_spv_brdf_albedo, sizeof(pc_push), err, errlen);
@@ -97,8 +97,8 @@ static uint16_t half_of(float f)
     return (uint16_t)(h > 0x7bff ? 0x7bff : h);
 }
 
-rd_vk_result rd_world_stage_environment(rd_vk *vk, rd_env_staged *out, rd_env_image *img,
-                                        char *err, size_t errlen)
+rd_vk_result rd_world_stage_environment(rd_vk *vk, rd_env_staged *out, rd_env_image *img, char *err,
+                                        size_t errlen)
 {
     memset(out, 0, sizeof *out);
     rd_env_image im = *img;
@@ -227,6 +227,14 @@ void rd_world_fill_globals(const rd_world *w, pc_globals *g)
         g->env.height = w->env_height;
     }
     g->brdf_albedo = w->brdf_albedo.address;
+}
+
+void rd_world_fill_view_globals(const rd_world *w, pc_globals *g)
+{
+    rd_world_fill_globals(w, g);
+    if (!w->gi || !w->scene) return;
+    g->ddgi.control.w = rd_shadow_maps_view_lights(&w->shadow_maps, w->scene);
+    g->ddgi.shadow_maps = g->ddgi.control.w ? w->shadow_maps.maps.address : 0;
 }
 
 void rd_world_fill_camera(const rd_world *w, const rd_view_camera *camera, unsigned width,

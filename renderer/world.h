@@ -112,6 +112,10 @@ void rd_world_wake_all(rd_world *w, float age);
 /* Fills the world part of a pass's globals: scene refs, the probe volume shifted by the scene's
  * floating origin (zero when GI is off), sky. Leaves g->view alone. */
 void rd_world_fill_globals(const rd_world *w, pc_globals *g);
+/* rd_world_fill_globals for a view frame: the lights' distance maps in g->ddgi only as far as
+ * they show the scene as it is now (rd_shadow_maps_view_lights), for the cull of camera pixels'
+ * shadow rays. */
+void rd_world_fill_view_globals(const rd_world *w, pc_globals *g);
 /* Fills the camera part of g->view (eye shifted by the scene's floating origin, basis scaled by
  * the field of view and the aspect of width x height) and its size (x, y); a view's frames and
  * picks (pick.h) see the same rays. Needs a scene. */

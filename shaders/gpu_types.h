@@ -130,6 +130,13 @@ static inline float pc_u2f(uint32_t u)
 #define PC_NEAR_SETTLE_FRAMES (PC_NEAR_INTERLEAVE * PC_NEAR_HISTORY_MAX)
 #define PC_NEAR_RATIO_MAX 8.0
 
+/* Shadow rays of camera pixels and reflection hits (rd_view_settings.shadow_cull): none toward
+ * a light whose distance map shows the point certainly hidden (shaders/shadow_map.glsl,
+ * direct_radiance_culled), or a ray to every light in front of it (exact everywhere, also
+ * behind openings narrower than a map texel). */
+#define PC_SHADOW_CULL_MAPS 0u
+#define PC_SHADOW_CULL_OFF 1u
+
 /* Rays leave surfaces moved along the geometric normal by PC_RAY_OFFSET_REL times the
  * magnitudes the hit's arithmetic met (shaders/trace.glsl, ray_offset_distance): with their sum
  * about twice the largest, that is 2^-15 of it, Wächter and Binder's 256 ulps. */

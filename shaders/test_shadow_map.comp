@@ -6,7 +6,8 @@
  * vec4 unit geometric normal with w = the ray offset of its surface, pc_surface.offset), buf1 =
  * results (vec4: x map visibility, or -2 when the update mapped no light this far, -1 when the
  * map cannot tell; y 1 when the shadow ray reaches the light, else 0; z cosine between the
- * normal and the light), params.x = point count, params.y = the light. */
+ * normal and the light; w 1 when view frames cull the light's shadow ray there:
+ * shadow_map_hidden), params.x = point count, params.y = the light. */
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
 #include "shadow_map.glsl"
@@ -30,10 +31,12 @@ void main()
     vec3 wi;
     float dist;
     light_incident(l, p, wi, dist);
-    float map = -2.0;
-    if (index < g.ddgi.control.w)
+    float map = -2.0, hidden = 0.0;
+    if (index < g.ddgi.control.w) {
         map = shadow_map_visibility(g.ddgi.shadow_maps, index, l, p, n);
+        hidden = shadow_map_hidden(g.ddgi.shadow_maps, index, l, p, n) ? 1.0 : 0.0;
+    }
     uint rays = 0u;
     bool clear = shadow_ray_clear(g.scene, offset_ray_origin(p, n, offset), wi, dist, rays);
-    OutRef(pc.buf1).v[i] = vec4(map, clear ? 1.0 : 0.0, dot(n, wi), 0.0);
+    OutRef(pc.buf1).v[i] = vec4(map, clear ? 1.0 : 0.0, dot(n, wi), hidden);
 }

@@ -23,6 +23,7 @@ void rd_shadow_maps_init(rd_vk *vk, rd_shadow_maps *m)
 void rd_shadow_maps_release(rd_shadow_maps *m)
 {
     if (!m->vk) return;
+    if (m->maps.buffer) vkDeviceWaitIdle(m->vk->device); /* view frames may read them (rare) */
     rd_buffer_destroy(m->vk, &m->maps);
     m->capacity = 0;
     m->lights = 0;
@@ -36,6 +37,16 @@ unsigned rd_shadow_maps_valid(const rd_shadow_maps *m)
     unsigned n = 0;
     for (unsigned i = 0; m->maps.buffer && i < PC_SHADOW_MAP_MAX_LIGHTS; i++)
         n += m->table[i] != 0;
+    return n;
+}
+
+uint32_t rd_shadow_maps_view_lights(const rd_shadow_maps *m, const rd_gpu_scene *scene)
+{
+    if (!m->maps.buffer || m->geometry != scene->geometry_revision) return 0;
+    uint32_t n = 0, lights = scene->refs.counts.y;
+    while (n < lights && n < PC_SHADOW_MAP_MAX_LIGHTS && m->table[n] != 0 &&
+           m->shown[n] == scene->light_revision[n])
+        n++;
     return n;
 }
 
@@ -356,8 +367,9 @@ rd_vk_result rd_shadow_maps_prepare(rd_shadow_maps *m, rd_cmd *c, rd_timer *time
         r = rd_pipeline_create(m->vk, &m->build, "shadow map", pc_spv_shadow_map,
                                sizeof pc_spv_shadow_map, sizeof(pc_push), err, errlen);
     if (r == RD_VK_OK && build && p.words > m->capacity) {
-        /* probe updates are waited for (rd_world_update), so nothing in flight reads the maps;
-         * a new buffer holds no map yet */
+        /* view frames in flight may read the maps (rd_shadow_maps_view_lights); a new buffer
+         * holds no map yet */
+        if (m->maps.buffer) vkDeviceWaitIdle(m->vk->device);
         rd_buffer_destroy(m->vk, &m->maps);
         m->capacity = 0;
         memset(m->table, 0, sizeof m->table);

@@ -8,7 +8,9 @@
  * tests/bench/results/h100/probe_shading.txt). A map costs one ray per texel once (6 x
  * PC_SHADOW_MAP_SIDE^2 for a point light, PC_SHADOW_MAP_SUN_SIDE^2 for a sun) and then serves
  * every update until the geometry changes (every map) or its light moves (that light's map),
- * so an idle or static scene pays for it once.
+ * so an idle or static scene pays for it once. View frames read them too, as a cull of camera
+ * pixels' shadow rays (rd_shadow_maps_view_lights), so the maps' memory is freed or replaced only
+ * after the device is idle.
  *
  * When maps are stale, each update decides whether rebuilding them pays: a rebuild is worth it
  * when its rays are at most the shadow rays it saves, i.e. the update's probe hits times the
@@ -74,6 +76,11 @@ void rd_shadow_maps_destroy(rd_shadow_maps *m);
 void rd_shadow_maps_release(rd_shadow_maps *m);
 /* Lights whose map the last update could read. */
 unsigned rd_shadow_maps_valid(const rd_shadow_maps *m);
+/* Lights [0, n) whose maps show the scene as it is now (its geometry and those lights'
+ * revisions), for view frames recorded between updates: camera pixels and reflection hits cull
+ * their shadow rays by them (shaders/shadow_map.glsl, direct_radiance_culled). 0 when the maps
+ * show an older geometry or there are none. */
+uint32_t rd_shadow_maps_view_lights(const rd_shadow_maps *m, const rd_gpu_scene *scene);
 
 /* Called once per probe update before its shading is recorded into c, after the scene's
  * pending light values (rd_gpu_scene_record_updates). Records a rebuild when the maps are stale

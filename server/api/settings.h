@@ -65,6 +65,7 @@ typedef enum srv_setting_type {
 #define SRV_VISIBILITY_NAMES "all", "probes", "off"
 #define SRV_RELOCATION_NAMES "off", "on"
 #define SRV_NEAR_FIELD_NAMES "on", "off" /* PC_NEAR_AUTO, PC_NEAR_OFF */
+#define SRV_SHADOW_CULL_NAMES "maps", "off" /* PC_SHADOW_CULL_MAPS, PC_SHADOW_CULL_OFF */
 /* gi_mode beyond PC_GI_*: reference path tracing, no probes (srv_settings_to_gi maps it to
  * PC_GI_OFF) */
 #define SRV_GI_PATHTRACE 3u
@@ -155,7 +156,12 @@ typedef enum srv_setting_type {
       "near-field rays: camera pixels trace short rays (half a probe spacing) that correct the "  \
       "probe field where light changes faster than its spacing (corners, contacts, lamp "        \
       "shades), one pixel in four per frame, averaged while the view rests; off: the field "     \
-      "alone")
+      "alone")                                                                                     \
+    X(SHADOW_CULL, shadow_cull, ENUM, "shadow_cull", "--shadow-cull", ALL, "", 0, 0,              \
+      PC_SHADOW_CULL_MAPS, VIEW, (SRV_SHADOW_CULL_NAMES),                                          \
+      "shadow rays of camera pixels and reflections: none toward lights whose distance maps "    \
+      "show the point hidden (maps), or one to every light in front of it (off: exact also "     \
+      "behind openings narrower than a map texel)")
 /* clang-format on */
 
 /* Values a CPU device (lavapipe) starts with for the settings the command line did not give:

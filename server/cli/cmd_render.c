@@ -217,6 +217,7 @@ static int parse(int argc, char **argv, render_args *a)
     a->fs.tonemap = a->set.tonemap;
     a->fs.view = a->set.view;
     a->fs.near_field = a->set.near_field;
+    a->fs.shadow_cull = a->set.shadow_cull;
     memcpy(a->fs.sky, a->set.sky, sizeof a->fs.sky);
     if (a->gi.mode == PC_GI_OFF && (a->fs.view != PC_VIEW_FINAL || a->dump)) {
         fprintf(stderr, "probecast render: --view and --dump-probes need --gi classic or ddgi\n");

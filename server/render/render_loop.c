@@ -265,6 +265,7 @@ static void render_view(srv_render_loop *l, srv_view *v, double now)
         .tonemap = s->tonemap,
         .view = l->svc.world.gi ? s->view : PC_VIEW_FINAL,
         .near_field = still ? s->near_field : PC_NEAR_OFF,
+        .shadow_cull = s->shadow_cull,
     };
     if (l->svc.pt_target) { /* progressive: add samples to the view's accumulation */
         vs.pathtrace_spp = l->vk.is_cpu ? 1 : 16;

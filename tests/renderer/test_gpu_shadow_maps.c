@@ -117,6 +117,7 @@ static bool check_light(harness *h, rd_world *w, const rd_scene *s, uint32_t ind
     memcpy(h->res, h->out.mapped, POINTS * 4 * sizeof(float));
     const rd_light *l = &s->lights[index];
     int clear = 0, shadowed = 0, map_bad = 0, ray_bad = 0, unmapped = 0, agree = 0;
+    int culled = 0, culled_lit = 0; /* the view's cull (shadow_map_hidden: no shadow ray) */
     for (int i = 0; i < POINTS; i++) {
         float x = -HALF + 2 * HALF * (float)(i % GRID) / (GRID - 1);
         float z = -HALF + 2 * HALF * (float)(i / GRID) / (GRID - 1);
@@ -125,6 +126,9 @@ static bool check_light(harness *h, rd_world *w, const rd_scene *s, uint32_t ind
         if (r[0] < 0) unmapped++;
         if (r[1] != (float)want && clear_of_edges(l, x, z)) ray_bad++;
         agree += (r[0] >= 0.5f) == (want == 1);
+        /* edges included: a cull there would darken a lit pixel for good */
+        culled += r[3] == 1.0f;
+        culled_lit += r[3] == 1.0f && want == 1;
         if (!clear_of_edges(l, x, z)) continue;
         clear++;
         shadowed += want == 0;
@@ -136,8 +140,8 @@ static bool check_light(harness *h, rd_world *w, const rd_scene *s, uint32_t ind
         }
     }
     printf("%s, light %u: %d of %d points clear of shadow edges (%d in shadow); map agrees "
-           "with the analytic answer at %d of %d points\n",
-           what, index, clear, POINTS, shadowed, agree, POINTS);
+           "with the analytic answer at %d of %d points; %d points culled\n",
+           what, index, clear, POINTS, shadowed, agree, POINTS, culled);
     CHECKF(unmapped == 0, "%s, light %u: %d points without a map answer", what, index, unmapped);
     CHECKF(shadowed > 50 && clear - shadowed > 50, "%s, light %u: %d shadowed of %d", what, index,
            shadowed, clear);
@@ -147,7 +151,56 @@ static bool check_light(harness *h, rd_world *w, const rd_scene *s, uint32_t ind
            map_bad);
     CHECKF(agree >= POINTS * 98 / 100, "%s, light %u: the map agrees at only %d of %d points", what,
            index, agree, POINTS);
+    /* camera pixels and reflection hits skip the shadow ray where the map shows the point
+     * hidden (direct_radiance_culled): that must never be a lit point, and must cull most of
+     * the shadow */
+    CHECKF(culled_lit == 0, "%s, light %u: %d lit points culled", what, index, culled_lit);
+    CHECKF(culled > shadowed / 2, "%s, light %u: only %d of %d shadowed points culled", what, index,
+           culled, shadowed);
     return map_bad == 0 && ray_bad == 0;
+}
+
+/* 5. View frames: camera pixels cull their shadow rays by the maps (direct_radiance_culled).
+ * On the many-lights Cornell box (four lights, the blocks' shadows) a converged field has every
+ * light's map; a frame with the cull must equal one without it exactly (a culled light is one
+ * whose shadow ray would have been blocked) and trace fewer shadow rays. */
+static void check_view_cull(rd_vk *vk)
+{
+    test_rig rig;
+    if (!test_rig_open(vk, "hard:many-lights", &rig)) return;
+    rd_renderer *r = &rig.r;
+    const rd_ddgi_settings gi = {.mode = PC_GI_DDGI, .counts = {4, 4, 4}, .rays = 64, .seed = 1};
+    enum { W = 48, H = 36 };
+    float *img[2] = {malloc(W * H * 3 * sizeof(float)), malloc(W * H * 3 * sizeof(float))};
+    unsigned shadow_rays[2] = {0, 0}, done = 0;
+    VK_CHECK(rd_renderer_configure_gi(r, rig.s.bounds_min, rig.s.bounds_max, &gi, err, sizeof err));
+    rd_world_set_scene(&r->world, &rig.gs);
+    VK_CHECK(rd_world_converge(&r->world, RD_WORLD_CONVERGE_CAP, &done, err, sizeof err));
+    unsigned lights = rig.s.light_count, mapped = rd_shadow_maps_valid(&r->world.shadow_maps);
+    CHECKF(mapped == lights, "after %u updates %u of %u lights have maps", done, mapped, lights);
+    for (int k = 0; k < 2; k++) {
+        rd_frame_settings fs = {.width = W,
+                                .height = H,
+                                .seed = 1,
+                                .near_field = PC_NEAR_OFF,
+                                .reflections = PC_REFLECT_OFF,
+                                .shadow_cull = k ? PC_SHADOW_CULL_OFF : PC_SHADOW_CULL_MAPS};
+        VK_CHECK(rd_renderer_render(r, &rig.gs, &rig.cam, &fs, err, sizeof err));
+        shadow_rays[k] = r->stats.rays.shadow_rays;
+        VK_CHECK(rd_renderer_read_hdr(r, img[k], err, sizeof err));
+    }
+    int differ = 0;
+    for (int i = 0; i < W * H * 3; i++)
+        differ += img[0][i] != img[1][i];
+    printf("view frame %dx%d: %u shadow rays with the cull, %u without; %d values differ\n", W, H,
+           shadow_rays[0], shadow_rays[1], differ);
+    CHECKF(differ == 0, "the cull changed %d values of the image", differ);
+    CHECKF(shadow_rays[0] > 0 && shadow_rays[0] < shadow_rays[1] * 9 / 10,
+           "the cull traced %u shadow rays, %u without it", shadow_rays[0], shadow_rays[1]);
+done:
+    free(img[0]);
+    free(img[1]);
+    test_rig_close(vk, &rig);
 }
 
 int main(void)
@@ -335,6 +388,8 @@ int main(void)
     CHECKF(w.shadow_maps.maps.buffer == VK_NULL_HANDLE && w.ddgi.vol.control.w == 0 &&
                w.stats.rays.probe_shadow_rays > 0 && w.stats.rays.shadow_map_rays == 0,
            "rays mode: maps kept or no shadow rays (%u)", w.stats.rays.probe_shadow_rays);
+
+    check_view_cull(&vk);
 
 done:
     rd_buffer_destroy(&vk, &h.points);
