@@ -1,9 +1,9 @@
 /* render.h: the one-view convenience for offline tools (probecast render, eval, tests): a
  * world (world.h) and one view (view.h) of it, where each frame first advances the probe
  * field and then renders: [probe updates] -> primary -> shade (direct) -> [near field, GI
- * sampling, reflections] -> tone map, with GPU timings and ray counts of all of it. The scene is passed in
- * (rd_gpu_scene) so one renderer can draw any uploaded scene. The daemon uses world and views
- * directly.
+ * sampling, reflections] -> tone map, with GPU timings and ray counts of all of it. The scene is
+ * passed in (rd_gpu_scene) so one renderer can draw any uploaded scene. The daemon uses world and
+ * views directly.
  */
 #ifndef RD_RENDER_H
 #define RD_RENDER_H

@@ -96,7 +96,8 @@ static void eval_usage(FILE *f)
         if (!(d->cli & SRV_CLI_EVAL)) continue;
         char def[96];
         eval_default_text(&a, d, def, sizeof def);
-        srv_setting_print_usage(f, d, (d->bit & EVAL_SWEEPS) != 0, def);
+        /* settings eval does not sweep show the table's default */
+        srv_setting_print_usage(f, d, (d->bit & EVAL_SWEEPS) != 0, def[0] ? def : NULL);
     }
 }
 
@@ -186,6 +187,8 @@ static void set_base(eval_args *a, const srv_settings *set)
     if (a->base.relocation) append(l, cap, " relocate");
     a->near_field = set->near_field;
     if (a->near_field == PC_NEAR_OFF) append(l, cap, " near-off");
+    a->shadow_cull = set->shadow_cull;
+    if (a->shadow_cull == PC_SHADOW_CULL_OFF) append(l, cap, " cull-off");
     if (a->base.path_bounces != RD_DDGI_DEFAULT_PATH_BOUNCES) {
         char p[24];
         snprintf(p, sizeof p, " paths%u", a->base.path_bounces);
@@ -322,8 +325,11 @@ static bool run_setting(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene
     if (rd_renderer_configure_gi(&c->r, s->bounds_min, s->bounds_max, gi, c->err, sizeof c->err) !=
         RD_VK_OK)
         return false;
-    rd_frame_settings fs = {
-        .width = a->width, .height = a->height, .seed = gi->seed, .near_field = a->near_field};
+    rd_frame_settings fs = {.width = a->width,
+                            .height = a->height,
+                            .seed = gi->seed,
+                            .near_field = a->near_field,
+                            .shadow_cull = a->shadow_cull};
     fs.env = &c->env;
     if (moving) {
         fs.gi_updates = updates / 2 ? updates / 2 : 1;
@@ -373,7 +379,8 @@ static bool run_default(eval_ctx *c, rd_scene *s, rd_gpu_scene *gs, const rd_vie
                             .height = a->height,
                             .seed = 1,
                             .env = &c->env,
-                            .near_field = a->near_field};
+                            .near_field = a->near_field,
+                            .shadow_cull = a->shadow_cull};
     if (!measure_frame(c, gs, cam, &fs, ref, row)) return false;
     row->probes[0] = c->r.world.ddgi.vol.counts.x;
     row->probes[1] = c->r.world.ddgi.vol.counts.y;

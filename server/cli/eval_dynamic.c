@@ -51,8 +51,11 @@ static double mean_lum(const float *rgb, size_t px)
 static bool measure(eval_ctx *c, const rd_view_camera *cam, const float *ref, dyn_row *row)
 {
     const eval_args *a = c->a;
-    rd_view_settings vs = {
-        .width = a->width, .height = a->height, .seed = 1, .near_field = a->near_field};
+    rd_view_settings vs = {.width = a->width,
+                           .height = a->height,
+                           .seed = 1,
+                           .near_field = a->near_field,
+                           .shadow_cull = a->shadow_cull};
     if (rd_view_render_still(&c->r.view, &c->r.world, cam, &vs, c->err, sizeof c->err) != RD_VK_OK)
         return false;
     size_t px = (size_t)a->width * a->height;

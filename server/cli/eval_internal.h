@@ -31,8 +31,9 @@ typedef struct eval_args {
      * setting, kept in near_field); rows set mode, counts,
      * rays, hysteresis and seed */
     rd_ddgi_settings base;
-    unsigned near_field; /* PC_NEAR_* of every row (--near-field) */
-    char base_label[48]; /* those flags as row labels show them ("" at the defaults) */
+    unsigned near_field;  /* PC_NEAR_* of every row (--near-field) */
+    unsigned shadow_cull; /* PC_SHADOW_CULL_* of every row (--shadow-cull) */
+    char base_label[48];  /* those flags as row labels show them ("" at the defaults) */
 } eval_args;
 
 typedef struct eval_ctx {
