@@ -246,7 +246,8 @@ static double median(double *v, unsigned n)
 }
 
 static void print_timings(const rd_vk *vk, const rd_scene *s, const rd_gpu_scene *gs,
-                          const rd_frame_stats *avg, unsigned frames, unsigned w, unsigned h)
+                          const rd_frame_stats *avg, unsigned frames, unsigned w, unsigned h,
+                          unsigned mapped, unsigned cull)
 {
     printf("device      %s\n", vk->device_name);
     printf("scene       %llu triangles, %u instances, %u lights\n",
@@ -257,6 +258,18 @@ static void print_timings(const rd_vk *vk, const rd_scene *s, const rd_gpu_scene
            gs->tlas_build_ms, gs->upload_ms);
     printf("frame       %ux%u, median of %u frames after %.1f s of warm-up\n", w, h, frames,
            RENDER_WARMUP_MS / 1000.0);
+    /* how camera pixels and reflections chose their shadow rays (direct_radiance_culled) */
+    if (s->light_count == 0)
+        printf("shadows     no lights\n");
+    else if (cull == PC_SHADOW_CULL_OFF)
+        printf("shadows     a ray to every light in front of a point (--shadow-cull off)\n");
+    else if (mapped == 0)
+        printf("shadows     a ray to every light in front of a point (no distance maps: GI off, "
+               "or not worth building yet)\n");
+    else
+        printf("shadows     no ray where the distance maps (%u of %u lights) show a point hidden, "
+               "a ray elsewhere\n",
+               mapped, s->light_count);
     if (!avg->timed) {
         printf("(this device has no GPU timestamps)\n");
         return;
@@ -487,7 +500,9 @@ int cli_render(int argc, char **argv)
     if (vr == RD_VK_OK && a.dump) vr = dump_probes(&r, a.dump, err, sizeof err);
     if (vr == RD_VK_OK && a.timings) {
         printf("scene load  %.1f ms\n", load_ms);
-        print_timings(&vk, &scene, &gs, &med, frames, a.fs.width, a.fs.height);
+        unsigned mapped = r.world.gi ? rd_shadow_maps_view_lights(&r.world.shadow_maps, &gs) : 0;
+        print_timings(&vk, &scene, &gs, &med, frames, a.fs.width, a.fs.height, mapped,
+                      a.fs.shadow_cull);
     }
     if (vr != RD_VK_OK) fprintf(stderr, "probecast: %s\n", err);
     rd_renderer_destroy(&r);
