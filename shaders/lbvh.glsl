@@ -16,6 +16,18 @@
 
 #define LBVH_KEYS_AT 8u
 
+// Every pass is a 2D dispatch of 1D work (renderer/accel/gpu_lbvh.c: a row of at most 65535
+// groups, rows in y, so that a pass can have more than 65535 groups): the linear workgroup and
+// thread index; the last row may run past the work, and its threads return.
+uint lbvh_group()
+{
+    return gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
+}
+uint lbvh_thread()
+{
+    return lbvh_group() * PC_WG_1D + gl_LocalInvocationID.x;
+}
+
 layout(buffer_reference, std430, buffer_reference_align = 4) coherent buffer LbvhUints
 {
     uint v[];

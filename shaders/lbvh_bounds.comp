@@ -21,7 +21,7 @@ layout(push_constant) uniform Push
 
 void main()
 {
-    uint i = gl_GlobalInvocationID.x;
+    uint i = lbvh_thread();
     LbvhUints s = LbvhUints(pc.buf2);
     if (pc.params.z == 0u) {
         if (i < 3u) {

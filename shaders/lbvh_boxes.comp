@@ -7,8 +7,8 @@
 // theirs, and done = k. The tree over distinct 64-bit keys is at most 64 internal levels deep
 // (each level's common prefix is longer than its parent's), so 64 passes finish every node;
 // a done node's thread returns at once, and the thread that finishes the root zeroes the
-// group count of the indirect dispatch of the passes (scratch, lbvh_args_at), so the passes
-// after it launch nothing.
+// x group count of the indirect dispatch of the passes (scratch, lbvh_args_at; rows of groups
+// in y, lbvh_hierarchy), so the passes after it launch nothing.
 // Runs after lbvh_hierarchy (slots, interior w words, cleared done words).
 // Push constants (pc_push): buf0 = positions, buf1 = nodes (pc_bvh_node), buf2 = scratch
 // (shaders/lbvh.glsl); params.x = n, params.y = uint offset of leaf_slot in scratch,
@@ -44,7 +44,7 @@ bool child_ready(LbvhUints s, uint n, uint at, pc_bvh_node c, uint k)
 void main()
 {
     uint n = pc.params.x, at = pc.params.y, k = pc.params.z;
-    uint i = gl_GlobalInvocationID.x;
+    uint i = lbvh_thread();
     Nodes nodes = Nodes(pc.buf1);
     LbvhUints s = LbvhUints(pc.buf2);
     if (k == 0u) {

@@ -9,11 +9,12 @@
 // and prim_index of its leaf children, clears its own done word for lbvh_boxes, and writes its
 // range of sorted leaves and whether its children stay (alive: its range holds more than max_leaf
 // triangles) for lbvh_scan and lbvh_remap; thread 0 writes the indirect dispatch of the lbvh_boxes
-// passes (one thread per internal node). lbvh_remap copies the nodes that stay to the output.
+// passes (one thread per internal node, rows of at most params.w groups). lbvh_remap copies the nodes that stay to the output.
 // n == 1: the root is the one leaf; n == 0: an empty root (written straight to the output).
 // Push constants (pc_push): buf0 = scratch (shaders/lbvh.glsl), buf1 = nodes (pc_bvh_node),
 // buf2 = prim_index (uint); params.x = n, params.y = uint offset of leaf_slot in scratch,
-// params.z = max_leaf (the nodes go to the working tree; for n == 0 buf1 is the output).
+// params.z = max_leaf, params.w = groups a row of a dispatch (the nodes go to the working tree;
+// for n == 0 buf1 is the output).
 #version 460
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
@@ -55,7 +56,7 @@ void set_interior(Nodes nodes, uint slot, uint first)
 void main()
 {
     uint n = pc.params.x, at = pc.params.y;
-    uint ti = gl_GlobalInvocationID.x;
+    uint ti = lbvh_thread();
     Nodes nodes = Nodes(pc.buf1);
     LbvhUints s = LbvhUints(pc.buf0);
     LbvhUints prim = LbvhUints(pc.buf2);
@@ -123,8 +124,9 @@ void main()
     if (ti == 0u) {
         s.v[lbvh_node_slot_at(n, at)] = 0u;
         s.v[lbvh_alive_at(n, at)] = 1u;
-        s.v[lbvh_args_at(n, at)] = (n - 1u + PC_WG_1D - 1u) / PC_WG_1D;
-        s.v[lbvh_args_at(n, at) + 1u] = 1u;
+        uint groups = (n - 1u + PC_WG_1D - 1u) / PC_WG_1D, row = min(groups, pc.params.w);
+        s.v[lbvh_args_at(n, at)] = row;
+        s.v[lbvh_args_at(n, at) + 1u] = (groups + row - 1u) / row;
         s.v[lbvh_args_at(n, at) + 2u] = 1u;
         set_interior(nodes, 0u, 1u);
     }

@@ -33,7 +33,7 @@ uint lbvh_expand_bits(uint v)
 
 void main()
 {
-    uint i = gl_GlobalInvocationID.x;
+    uint i = lbvh_thread();
     LbvhKeys keys = lbvh_keys(pc.buf2);
     if (i >= pc.params.y) return;
     if (i >= pc.params.x) {

@@ -29,7 +29,7 @@ layout(push_constant) uniform Push
 
 void main()
 {
-    uint n = pc.params.x, at = pc.params.y, slot = gl_GlobalInvocationID.x;
+    uint n = pc.params.x, at = pc.params.y, slot = lbvh_thread();
     if (slot >= 2u * n - 1u) return;
     LbvhUints s = LbvhUints(pc.buf2);
     uint out_at = s.v[lbvh_alive_at(n, at) + slot];

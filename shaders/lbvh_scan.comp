@@ -60,7 +60,8 @@ void main()
         }
         return;
     }
-    uint block = gl_WorkGroupID.x, chunk = PC_LBVH_SCAN_BLOCK / PC_WG_1D;
+    uint block = lbvh_group(), chunk = PC_LBVH_SCAN_BLOCK / PC_WG_1D;
+    if (block >= blocks) return; /* past the last block: the whole group */
     uint a = min(block * PC_LBVH_SCAN_BLOCK + t * chunk, m), b = min(a + chunk, m), sum = 0u;
     for (uint k = a; k < b; k++)
         sum += s.v[base + k];

@@ -44,7 +44,7 @@ void main()
     uint k = pc.params.y, kind = pc.params.w;
     LbvhKeys keys = lbvh_keys(pc.buf2);
     if (kind == 0u) {
-        uint i = gl_GlobalInvocationID.x, j = pc.params.z;
+        uint i = lbvh_thread(), j = pc.params.z;
         if (i >= pc.params.x) return;
         uint a = pair_low(i, j), b = a | j;
         uvec2 ka = keys.k[a], kb = keys.k[b];
@@ -54,7 +54,9 @@ void main()
         }
         return;
     }
-    uint t = gl_LocalInvocationID.x, base = gl_WorkGroupID.x * LBVH_SORT_BLOCK;
+    uint t = gl_LocalInvocationID.x, block = lbvh_group();
+    if (block >= pc.params.x / PC_WG_1D) return; /* past the last block: the whole group */
+    uint base = block * LBVH_SORT_BLOCK;
     g_block[t] = keys.k[base + t];
     g_block[t + PC_WG_1D] = keys.k[base + t + PC_WG_1D];
     barrier();

@@ -29,8 +29,8 @@ static const rd_pipeline_desc kPipelines[] = {
 };
 #define PIPELINE_COUNT (sizeof kPipelines / sizeof kPipelines[0])
 
-/* One dispatch covers at most this many threads (65535 groups of PC_WG_1D). */
-#define MAX_THREADS (65535u * PC_WG_1D)
+/* Groups in one dimension of a dispatch: the least maxComputeWorkGroupCount Vulkan allows. */
+#define MAX_GROUPS_PER_DIM 65535u
 /* The scratch layout of shaders/lbvh.glsl, in uints: 8 of bounds (word 6: the output's node
  * count), 2N of keys, then leaf_slot, node_slot, done (n each), range and alive (2n each),
  * 4 of indirect dispatch; then, 16-byte aligned, the working tree of 2n - 1 nodes. */
@@ -42,7 +42,7 @@ static const rd_pipeline_desc kPipelines[] = {
 
 rd_vk_result rd_gpu_lbvh_builder_create(rd_vk *vk, rd_gpu_lbvh_builder *b, char *err, size_t errlen)
 {
-    memset(b, 0, sizeof *b);
+    memset(b, 0, sizeof *b); /* row_groups 0: the per-dimension limit */
     return rd_pipelines_create(vk, b, kPipelines, PIPELINE_COUNT, err, errlen);
 }
 
@@ -93,9 +93,28 @@ static uint32_t max_leaf_def(uint32_t max_leaf)
     return max_leaf == 0 ? 4 : max_leaf > RD_BVH_MAX_LEAF ? RD_BVH_MAX_LEAF : max_leaf;
 }
 
-static uint32_t groups(uint64_t threads)
+static uint64_t groups(uint64_t threads)
 {
-    return (uint32_t)((threads + PC_WG_1D - 1) / PC_WG_1D);
+    return (threads + PC_WG_1D - 1) / PC_WG_1D;
+}
+
+/* Groups a row of a dispatch: the builder's test hook, else the per-dimension limit. */
+static uint32_t row_groups(const rd_gpu_lbvh_builder *b)
+{
+    return b->row_groups && b->row_groups < MAX_GROUPS_PER_DIM ? b->row_groups : MAX_GROUPS_PER_DIM;
+}
+
+/* Dispatches count groups of 1D work as rows of row_groups(b) groups (x) in y, the shaders'
+ * lbvh_group() (shaders/lbvh.glsl) numbering them; the last row's extra groups return. */
+static void dispatch_1d(rd_cmd *c, const rd_gpu_lbvh_builder *b, const rd_pipeline *p,
+                        const pc_push *push, uint64_t count)
+{
+    uint64_t row = row_groups(b);
+    if (count < row) row = count;
+    if (row == 0) return;
+    uint64_t rows = (count + row - 1) / row;
+    assert(rows <= MAX_GROUPS_PER_DIM);
+    rd_cmd_dispatch(c, p, push, (uint32_t)row, (uint32_t)rows, 1);
 }
 
 void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress positions,
@@ -107,30 +126,35 @@ void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress
     VkDeviceAddress work = scratch + work_nodes_at(n);
     uint64_t nkeys = padded_keys(n);
     assert(n <= RD_GPU_LBVH_MAX_TRIANGLES);
-    _Static_assert(2ull * RD_GPU_LBVH_MAX_TRIANGLES <= MAX_THREADS, "one dispatch a pass");
+    /* the most threads of a pass (N padded keys, 2n - 1 nodes), and every uint word index of
+     * the scratch, fit in 32 bits */
+    _Static_assert(2ull * RD_GPU_LBVH_MAX_TRIANGLES * (2 + TAIL_WORDS) + KEYS_AT + ARGS_WORDS +
+                           2ull * RD_GPU_LBVH_MAX_TRIANGLES / SCAN_BLOCK <
+                       (1ull << 32),
+                   "32-bit indices");
     uint32_t leaf_at = (uint32_t)(KEYS_AT + 2 * nkeys);
     pc_push push = {.buf0 = positions, .buf2 = scratch, .params = {n, 0, 0, 0}};
     if (n > 0) {
         rd_cmd_dispatch(c, &b->bounds, &push, 1, 1, 1); /* reset */
         rd_cmd_barrier(c);
         push.params.z = 1;
-        rd_cmd_dispatch(c, &b->bounds, &push, groups(n), 1, 1);
+        dispatch_1d(c, b, &b->bounds, &push, groups(n));
         rd_cmd_barrier(c);
         push.params = (pc_uvec4){n, (uint32_t)nkeys, 0, 0};
-        rd_cmd_dispatch(c, &b->morton, &push, groups(nkeys), 1, 1);
+        dispatch_1d(c, b, &b->morton, &push, groups(nkeys));
         rd_cmd_barrier(c);
         if (timer) rd_timer_mark(c, timer, "lbvh_keys");
         push.params = (pc_uvec4){(uint32_t)(nkeys / 2), 0, 0, 2}; /* k <= SORT_BLOCK */
-        rd_cmd_dispatch(c, &b->sort, &push, (uint32_t)(nkeys / SORT_BLOCK), 1, 1);
+        dispatch_1d(c, b, &b->sort, &push, nkeys / SORT_BLOCK);
         rd_cmd_barrier(c);
         for (uint64_t k = 2 * SORT_BLOCK; k <= nkeys; k <<= 1) {
             for (uint64_t j = k >> 1; j >= SORT_BLOCK; j >>= 1) {
                 push.params = (pc_uvec4){(uint32_t)(nkeys / 2), (uint32_t)k, (uint32_t)j, 0};
-                rd_cmd_dispatch(c, &b->sort, &push, groups(nkeys / 2), 1, 1);
+                dispatch_1d(c, b, &b->sort, &push, groups(nkeys / 2));
                 rd_cmd_barrier(c);
             }
             push.params = (pc_uvec4){(uint32_t)(nkeys / 2), (uint32_t)k, 0, 1};
-            rd_cmd_dispatch(c, &b->sort, &push, (uint32_t)(nkeys / SORT_BLOCK), 1, 1);
+            dispatch_1d(c, b, &b->sort, &push, nkeys / SORT_BLOCK);
             rd_cmd_barrier(c);
         }
         if (timer) rd_timer_mark(c, timer, "lbvh_sort");
@@ -138,13 +162,13 @@ void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress
     pc_push h = {.buf0 = scratch,
                  .buf1 = n ? work : nodes,
                  .buf2 = prim_index,
-                 .params = {n, leaf_at, ml, 0}};
-    rd_cmd_dispatch(c, &b->hierarchy, &h, groups(n > 1 ? n - 1 : 1), 1, 1);
+                 .params = {n, leaf_at, ml, row_groups(b)}};
+    dispatch_1d(c, b, &b->hierarchy, &h, groups(n > 1 ? n - 1 : 1));
     rd_cmd_barrier(c);
     if (timer) rd_timer_mark(c, timer, "lbvh_hierarchy");
     if (n > 0) {
         pc_push x = {.buf0 = positions, .buf1 = work, .buf2 = scratch, .params = {n, leaf_at}};
-        rd_cmd_dispatch(c, &b->boxes, &x, groups(n), 1, 1); /* the leaves */
+        dispatch_1d(c, b, &b->boxes, &x, groups(n)); /* the leaves */
         rd_cmd_barrier(c);
         VkDeviceSize args = 4 * ((VkDeviceSize)leaf_at + TAIL_WORDS * (VkDeviceSize)n);
         for (uint32_t k = 1; n > 1 && k <= BOX_PASSES; k++) {
@@ -155,16 +179,16 @@ void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress
         if (timer) rd_timer_mark(c, timer, "lbvh_boxes");
         /* block sums, their scan, then each block's words */
         pc_push sc = {.buf2 = scratch, .params = {n, leaf_at, 0, 0}};
-        rd_cmd_dispatch(c, &b->scan, &sc, scan_blocks(n), 1, 1);
+        dispatch_1d(c, b, &b->scan, &sc, scan_blocks(n));
         rd_cmd_barrier(c);
         sc.params.z = 1;
         rd_cmd_dispatch(c, &b->scan, &sc, 1, 1, 1);
         rd_cmd_barrier(c);
         sc.params.z = 2;
-        rd_cmd_dispatch(c, &b->scan, &sc, scan_blocks(n), 1, 1);
+        dispatch_1d(c, b, &b->scan, &sc, scan_blocks(n));
         rd_cmd_barrier(c);
         pc_push rm = {.buf0 = work, .buf1 = nodes, .buf2 = scratch, .params = {n, leaf_at, ml, 0}};
-        rd_cmd_dispatch(c, &b->remap, &rm, groups(2 * (uint64_t)n - 1), 1, 1);
+        dispatch_1d(c, b, &b->remap, &rm, groups(2 * (uint64_t)n - 1));
         rd_cmd_barrier(c);
         if (timer) rd_timer_mark(c, timer, "lbvh_collapse");
     }

@@ -8,18 +8,18 @@
  *   3. lbvh_sort: a bitonic sort of the keys padded to N = a power of two (at least 128), the
  *      steps within blocks of 128 keys in shared memory, the others one dispatch each: 28
  *      dispatches for 5000 triangles (N = 8192), 66 for 100 K; O(N log^2 N) work, simple and
- *      exact, slower than a radix sort for large meshes;
+ *      exact, slower than a radix sort for large meshes (171 dispatches for 2^24 keys);
  *   4. lbvh_hierarchy: Karras's radix tree, one thread per internal node; internal node i's
  *      children go to nodes 2i+1 and 2i+2, so 2n-1 nodes with the root at 0;
  *   5. lbvh_boxes: the leaves (one thread each), then 64 indirect passes of one thread per
- *      internal node, each finishing the nodes whose children were finished in earlier passes
- *      (exact unions; a radix tree over 64-bit keys has at most 64 internal levels); the pass
- *      that finishes the root zeroes the group count of those after it. No pass reads a box
- *      written in the same dispatch. (Karras's single pass, a thread climbing from each leaf
- *      with an atomic counter per node, coherent buffers and memory barriers, gave wrong boxes
- *      above the first level on lavapipe with 64-thread workgroups and right ones with
- *      1-thread workgroups (34 ms there against these passes' 69 ms for 100 K triangles);
- *      why is not known yet.)
+ *      internal node (group counts written by lbvh_hierarchy, in rows as every pass), each
+ *      finishing the nodes whose children were finished in earlier passes (exact unions; a
+ *      radix tree over 64-bit keys has at most 64 internal levels); the pass that finishes the
+ *      root zeroes the group count of those after it. No pass reads a box written in the same
+ *      dispatch. (Karras's single pass, a thread climbing from each leaf with an atomic counter
+ *      per node, coherent buffers and memory barriers, gave wrong boxes above the first level
+ *      on lavapipe with 64-thread workgroups and right ones with 1-thread workgroups (34 ms
+ *      there against these passes' 69 ms for 100 K triangles); why is not known yet.)
  *   6. lbvh_scan, lbvh_remap: the collapse of every subtree of at most max_leaf triangles
  *      into one leaf (their sorted leaves are contiguous), the nodes that stay numbered by a
  *      prefix sum (one workgroup: simple, O(n) on 64 threads) and copied to the output.
@@ -42,15 +42,22 @@
 
 typedef struct rd_gpu_lbvh_builder {
     rd_pipeline bounds, morton, sort, hierarchy, boxes, scan, remap;
+    /* Groups a row of a pass's dispatch (x; rows in y): 0 (as create leaves it) = 65535, the
+     * least per-dimension limit Vulkan allows. A test hook: tests lower it so that small meshes
+     * need several rows. */
+    uint32_t row_groups;
 } rd_gpu_lbvh_builder;
 
 rd_vk_result rd_gpu_lbvh_builder_create(rd_vk *vk, rd_gpu_lbvh_builder *b, char *err,
                                         size_t errlen);
 void rd_gpu_lbvh_builder_destroy(rd_vk *vk, rd_gpu_lbvh_builder *b); /* idempotent */
 
-/* Triangles one build takes at most: every pass is one dispatch of at most 65535 groups, and
- * the largest have 2n threads (the Morton pass's N padded keys, the collapse's 2n - 1 nodes). */
-#define RD_GPU_LBVH_MAX_TRIANGLES (65535u * PC_WG_1D / 2u)
+/* Triangles one build takes at most: 2^24 (16.7 M; the sort's N padded keys at most 2^24). Every
+ * pass is one dispatch of rows of at most 65535 groups (x) in y, the indirect ones too, so a pass
+ * of 2n threads needs 2n / (64 * 65535) rows (9 for 2^24); the limit is set by 32-bit indices
+ * in the shaders (scratch words, 2n - 1 nodes) with room to spare, and by memory: 2^24
+ * triangles take about 0.6 GiB of positions, 1.6 GiB of scratch and 1 GiB of nodes. */
+#define RD_GPU_LBVH_MAX_TRIANGLES (1u << 24)
 
 /* Nodes a build over tri_count triangles writes at most: 2 tri_count - 1 (1 for none); with
  * leaves of several triangles fewer, their count at RD_GPU_LBVH_COUNT_OFFSET in the scratch. */
@@ -60,7 +67,8 @@ uint64_t rd_gpu_lbvh_scratch_bytes(uint32_t tri_count);
 /* Byte offset in the scratch of the uint node count a build writes. */
 #define RD_GPU_LBVH_COUNT_OFFSET 24u
 
-/* Records a build into c (tri_count at most RD_GPU_LBVH_MAX_TRIANGLES). positions: device address
+/* Records a build into c (tri_count at most RD_GPU_LBVH_MAX_TRIANGLES: asserted; callers check
+ * it, as rd_gpu_lbvh_build_download does, and report an error beyond it). positions: device address
  * of 9 floats per triangle; max_leaf: a subtree of at most this many triangles becomes one leaf (0
  * = 4 as the CPU builder, at most RD_BVH_MAX_LEAF; 1 = one triangle a leaf); nodes: room for
  * rd_gpu_lbvh_node_count(tri_count) pc_bvh_node (indices relative to it); prim_index: room for
@@ -77,7 +85,8 @@ void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress
  * tree back into out (an rd_bvh the caller frees with rd_bvh_destroy; depth computed on the
  * CPU). gpu_ms (may be NULL): wall time of the submit and wait of the build alone; timer (may
  * be NULL): begun here and resolved after the wait, one section a pass. On error
- * out is zeroed. */
+ * out is zeroed; more than RD_GPU_LBVH_MAX_TRIANGLES is RD_VK_ERR_UNSUPPORTED with a message,
+ * before anything is read or allocated. */
 rd_vk_result rd_gpu_lbvh_build_download(rd_vk *vk, const rd_gpu_lbvh_builder *b,
                                         const float *positions, uint32_t tri_count,
                                         uint32_t max_leaf, rd_timer *timer, rd_bvh *out,

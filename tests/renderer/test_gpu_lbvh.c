@@ -4,9 +4,12 @@
  * one triangle a leaf and with subtrees of up to 4 collapsed: each triangle in exactly one leaf,
  * every box inside its parent, depth within RD_BVH_MAX_DEPTH), closest hits equal to brute force,
  * the GPU traversal (shaders/trace.glsl through test_trace.comp) agreeing with the CPU's,
- * and an SAH cost within 3x of the CPU builder's on the same mesh (printed). Prints the build time
- * (submit and wait) of each size; `test_gpu_lbvh bench` builds larger meshes and prints only the
- * table. */
+ * and an SAH cost within 3x of the CPU builder's on the same mesh (printed); the same checks with
+ * the dispatches' rows lowered to 3 groups and 1 group (rd_gpu_lbvh_builder.row_groups), so that
+ * 5000 triangles need several rows of a 2D dispatch in every pass. Prints the build time (submit
+ * and wait) of each size. `test_gpu_lbvh bench [sizes]` (up to RD_GPU_LBVH_MAX_TRIANGLES, e.g.
+ * `bench 1000000 8000000`) builds larger meshes and prints two tables: the build's passes, and
+ * the traversal speed of the same rays through the CPU builder's tree and the LBVH (run_bench). */
 #include "bvh_check.h"
 #include "renderer/accel/bvh.h"
 #include "renderer/accel/gpu_lbvh.h"
@@ -18,6 +21,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 static char err[512];
 static double g_worst_ratio = 0;
@@ -29,26 +33,31 @@ typedef struct gpu_hit {
     uint32_t instance, tri, backface, pad;
 } gpu_hit;
 
-/* Traces rays on the GPU with shaders/trace.glsl over bvh (one instance, identity transform,
- * under a one-leaf TLAS) and compares each closest hit with the CPU traversal of the same tree:
- * the same triangle, or t within 1e-5 relative (ties); returns the rays that differ. */
-static uint32_t gpu_trace_differences(rd_vk *vk, const rd_bvh *bvh, const float *pos, uint32_t n,
-                                      const float *orgs, const float *dirs, uint32_t rays)
+/* A one-instance scene for shaders/trace.glsl on the GPU: bvh (identity transform) under a
+ * one-leaf TLAS, its triangles in leaf order (v2.w: the mesh's own triangle index). */
+typedef struct trace_scene {
+    rd_buffer buf[5]; /* BLAS nodes, tris, instance, TLAS node, TLAS index */
+    rd_buffer globals;
+} trace_scene;
+
+static void trace_scene_destroy(rd_vk *vk, trace_scene *ts)
 {
-    pc_tri *tris = malloc((size_t)n * sizeof *tris);
-    float *ray_buf = malloc((size_t)rays * 8 * sizeof(float));
-    gpu_hit *res = malloc((size_t)rays * sizeof *res);
-    if (!tris || !ray_buf || !res) abort();
+    for (int i = 0; i < 5; i++)
+        rd_buffer_destroy(vk, &ts->buf[i]);
+    rd_buffer_destroy(vk, &ts->globals);
+}
+
+static bool trace_scene_create(rd_vk *vk, trace_scene *ts, const rd_bvh *bvh, const float *pos,
+                               uint32_t n)
+{
+    memset(ts, 0, sizeof *ts);
+    pc_tri *tris = malloc((size_t)(n ? n : 1) * sizeof *tris);
+    if (!tris) abort();
     for (uint32_t k = 0; k < n; k++) {
         const float *p = pos + 9 * (size_t)bvh->prim_index[k];
         tris[k] = (pc_tri){{p[0], p[1], p[2], pc_u2f(0)},
                            {p[3], p[4], p[5], pc_u2f(0)},
                            {p[6], p[7], p[8], pc_u2f(bvh->prim_index[k])}};
-    }
-    for (uint32_t i = 0; i < rays; i++) {
-        const float *o = orgs + 3 * (size_t)i, *d = dirs + 3 * (size_t)i;
-        float r[8] = {o[0], o[1], o[2], 0, d[0], d[1], d[2], INFINITY};
-        memcpy(ray_buf + 8 * (size_t)i, r, sizeof r);
     }
     pc_instance inst = {.info = {0, 0, 0, 0}};
     for (int r = 0; r < 3; r++) {
@@ -59,45 +68,87 @@ static uint32_t gpu_trace_differences(rd_vk *vk, const rd_bvh *bvh, const float 
     tlas.bmin.w = pc_u2f(0);
     tlas.bmax.w = pc_u2f(1);
     uint32_t zero = 0;
-    rd_buffer b[7] = {{0}};
-    const void *data[6] = {bvh->nodes, tris, &inst, &tlas, &zero, ray_buf};
-    size_t bytes[6] = {bvh->node_count * sizeof(pc_bvh_node),
-                       n * sizeof *tris,
-                       sizeof inst,
-                       sizeof tlas,
-                       sizeof zero,
-                       (size_t)rays * 8 * sizeof(float)};
+    const void *data[5] = {bvh->nodes, tris, &inst, &tlas, &zero};
+    size_t bytes[5] = {(size_t)bvh->node_count * sizeof(pc_bvh_node), (size_t)n * sizeof *tris,
+                       sizeof inst, sizeof tlas, sizeof zero};
     bool ok = true;
-    for (int i = 0; i < 6 && ok; i++)
-        ok = rd_buffer_create(vk, &b[i], bytes[i], RD_MEMORY_DEVICE, err, sizeof err) == RD_VK_OK &&
-             rd_buffer_upload(vk, &b[i], 0, data[i], bytes[i], err, sizeof err) == RD_VK_OK;
+    for (int i = 0; i < 5 && ok; i++)
+        ok = bytes[i] > 0 &&
+             rd_buffer_create(vk, &ts->buf[i], bytes[i], RD_MEMORY_DEVICE, err, sizeof err) ==
+                 RD_VK_OK &&
+             rd_buffer_upload(vk, &ts->buf[i], 0, data[i], bytes[i], err, sizeof err) == RD_VK_OK;
+    free(tris);
     pc_globals *g = calloc(1, sizeof *g);
     if (!g) abort();
-    g->scene.blas_nodes = b[0].address;
-    g->scene.tris = b[1].address;
-    g->scene.instances = b[2].address;
-    g->scene.tlas_nodes = b[3].address;
-    g->scene.tlas_index = b[4].address;
+    g->scene.blas_nodes = ts->buf[0].address;
+    g->scene.tris = ts->buf[1].address;
+    g->scene.instances = ts->buf[2].address;
+    g->scene.tlas_nodes = ts->buf[3].address;
+    g->scene.tlas_index = ts->buf[4].address;
     g->scene.counts = (pc_uvec4){1, 0, 0, 0};
-    rd_buffer bg = {0};
     ok = ok &&
-         rd_buffer_create(vk, &bg, sizeof *g, RD_MEMORY_DEVICE, err, sizeof err) == RD_VK_OK &&
-         rd_buffer_upload(vk, &bg, 0, g, sizeof *g, err, sizeof err) == RD_VK_OK &&
-         rd_buffer_create(vk, &b[6], (size_t)rays * sizeof *res, RD_MEMORY_READBACK, err,
-                          sizeof err) == RD_VK_OK;
-    rd_cmd c;
-    ok = ok && rd_cmd_begin(vk, &c, err, sizeof err) == RD_VK_OK;
-    if (ok) {
-        pc_push push = {.globals = bg.address,
-                        .buf0 = b[5].address,
-                        .buf1 = b[6].address,
-                        .params = {rays, 0, 0, 0}};
-        rd_cmd_dispatch(&c, &g_trace, &push, (rays + PC_WG_1D - 1) / PC_WG_1D, 1, 1);
-        rd_cmd_barrier(&c);
-        ok = rd_cmd_submit_wait(vk, &c, err, sizeof err) == RD_VK_OK &&
-             rd_buffer_download(vk, &b[6], 0, res, (size_t)rays * sizeof *res, err, sizeof err) ==
-                 RD_VK_OK;
+         rd_buffer_create(vk, &ts->globals, sizeof *g, RD_MEMORY_DEVICE, err, sizeof err) ==
+             RD_VK_OK &&
+         rd_buffer_upload(vk, &ts->globals, 0, g, sizeof *g, err, sizeof err) == RD_VK_OK;
+    free(g);
+    if (!ok) trace_scene_destroy(vk, ts);
+    return ok;
+}
+
+/* A device buffer of rays for test_trace.comp: (origin, tmin 0), (direction, tmax +inf). */
+static bool upload_rays(rd_vk *vk, rd_buffer *buf, const float *orgs, const float *dirs,
+                        uint32_t rays)
+{
+    size_t bytes = (size_t)rays * 8 * sizeof(float);
+    float *ray_buf = malloc(bytes);
+    if (!ray_buf) abort();
+    for (uint32_t i = 0; i < rays; i++) {
+        const float *o = orgs + 3 * (size_t)i, *d = dirs + 3 * (size_t)i;
+        float r[8] = {o[0], o[1], o[2], 0, d[0], d[1], d[2], INFINITY};
+        memcpy(ray_buf + 8 * (size_t)i, r, sizeof r);
     }
+    bool ok = rd_buffer_create(vk, buf, bytes, RD_MEMORY_DEVICE, err, sizeof err) == RD_VK_OK &&
+              rd_buffer_upload(vk, buf, 0, ray_buf, bytes, err, sizeof err) == RD_VK_OK;
+    free(ray_buf);
+    return ok;
+}
+
+/* Traces rays (upload_rays) through ts into res (a gpu_hit each) and waits. timer (may be
+ * NULL): begun here, the trace marked "trace" and resolved. */
+static bool trace_rays(rd_vk *vk, const trace_scene *ts, const rd_buffer *ray_buf,
+                       const rd_buffer *res, uint32_t rays, rd_timer *timer)
+{
+    rd_cmd c;
+    if (rd_cmd_begin(vk, &c, err, sizeof err) != RD_VK_OK) return false;
+    if (timer) rd_timer_begin(&c, timer);
+    pc_push push = {.globals = ts->globals.address,
+                    .buf0 = ray_buf->address,
+                    .buf1 = res->address,
+                    .params = {rays, 0, 0, 0}};
+    rd_cmd_dispatch(&c, &g_trace, &push, (rays + PC_WG_1D - 1) / PC_WG_1D, 1, 1);
+    rd_cmd_barrier(&c);
+    if (timer) rd_timer_mark(&c, timer, "trace");
+    return rd_cmd_submit_wait(vk, &c, err, sizeof err) == RD_VK_OK &&
+           (!timer || rd_timer_resolve(vk, timer, err, sizeof err) == RD_VK_OK);
+}
+
+/* Traces rays on the GPU with shaders/trace.glsl over bvh (trace_scene) and compares each
+ * closest hit with the CPU traversal of the same tree: the same triangle, or t within 1e-5
+ * relative (ties); returns the rays that differ. */
+static uint32_t gpu_trace_differences(rd_vk *vk, const rd_bvh *bvh, const float *pos, uint32_t n,
+                                      const float *orgs, const float *dirs, uint32_t rays)
+{
+    gpu_hit *res = malloc((size_t)rays * sizeof *res);
+    if (!res) abort();
+    trace_scene ts;
+    rd_buffer ray_buf = {0}, res_buf = {0};
+    bool scene = trace_scene_create(vk, &ts, bvh, pos, n);
+    bool ok = scene && upload_rays(vk, &ray_buf, orgs, dirs, rays) &&
+              rd_buffer_create(vk, &res_buf, (size_t)rays * sizeof *res, RD_MEMORY_READBACK, err,
+                               sizeof err) == RD_VK_OK &&
+              trace_rays(vk, &ts, &ray_buf, &res_buf, rays, NULL) &&
+              rd_buffer_download(vk, &res_buf, 0, res, (size_t)rays * sizeof *res, err,
+                                 sizeof err) == RD_VK_OK;
     CHECKF(ok, "GPU trace: %s", err);
     uint32_t differ = ok ? 0 : rays;
     for (uint32_t i = 0; ok && i < rays; i++) {
@@ -105,17 +156,14 @@ static uint32_t gpu_trace_differences(rd_vk *vk, const rd_bvh *bvh, const float 
         int64_t cpu = rd_bvh_closest_triangle(bvh, pos, orgs + 3 * (size_t)i, dirs + 3 * (size_t)i,
                                               0, INFINITY, &t_cpu);
         memcpy(&t_gpu, &res[i].t, sizeof t_gpu);
-        int64_t gpu = res[i].hit ? (int64_t)pc_f2u(tris[res[i].tri].v2.w) : -1;
+        int64_t gpu = res[i].hit ? (int64_t)bvh->prim_index[res[i].tri] : -1;
         bool same = gpu == cpu || (gpu >= 0 && cpu >= 0 && fabsf(t_gpu - t_cpu) <= 1e-5f * t_cpu);
         if (!same) differ++;
     }
-    for (int i = 0; i < 7; i++)
-        rd_buffer_destroy(vk, &b[i]);
-    rd_buffer_destroy(vk, &bg);
-    free(g);
+    rd_buffer_destroy(vk, &res_buf);
+    rd_buffer_destroy(vk, &ray_buf);
+    if (scene) trace_scene_destroy(vk, &ts);
     free(res);
-    free(ray_buf);
-    free(tris);
     return differ;
 }
 
@@ -247,6 +295,18 @@ static void run_tests(rd_vk *vk, const rd_gpu_lbvh_builder *b)
     check_mesh(vk, b, "2 non-finite among 7", pos, 7, 200);
     check_mesh(vk, b, "1 non-finite among 3", pos + 9 * 3, 3, 100);
 
+    /* 2D dispatches (shaders/lbvh.glsl, lbvh_group): rows of 3 groups (the test hook; 65535 on
+     * a device), so that 5000 triangles need several rows in every pass (Morton 43 rows, the
+     * sort's 22, the boxes' indirect passes 27, the scan 2, the collapse 53), each last row
+     * with groups past the work; then rows of one group */
+    rd_gpu_lbvh_builder rows = *b;
+    rows.row_groups = 3;
+    rng_seed(23);
+    random_soup(pos, 5000, 0.05f);
+    check_mesh(vk, &rows, "5000 in rows of 3 groups", pos, 5000, 1000);
+    rows.row_groups = 1;
+    check_mesh(vk, &rows, "5000 in rows of 1 group", pos, 5000, 300);
+
     /* too many triangles: an error before anything is read or allocated */
     rd_bvh none;
     CHECK(rd_gpu_lbvh_build_download(vk, b, NULL, RD_GPU_LBVH_MAX_TRIANGLES + 1, 0, NULL, &none,
@@ -255,20 +315,103 @@ static void run_tests(rd_vk *vk, const rd_gpu_lbvh_builder *b)
     free(pos);
 }
 
+/* Traversal speed of bvh (test_trace.comp, trace.glsl) over the rays in ray_buf: the best of
+ * reps GPU-timed traces (wall time where the device has no timestamps), in Mrays/s; the hits
+ * go to hits (a gpu_hit each, NULL: not read back). 0 on error (printed). */
+static double trace_speed(rd_vk *vk, rd_timer *timer, const rd_bvh *bvh, const float *pos,
+                          uint32_t n, const rd_buffer *ray_buf, const rd_buffer *res, uint32_t rays,
+                          int reps, gpu_hit *hits)
+{
+    trace_scene ts;
+    if (!trace_scene_create(vk, &ts, bvh, pos, n)) {
+        fprintf(stderr, "trace scene: %s\n", err);
+        return 0;
+    }
+    double best = 1e30;
+    bool ok = true;
+    for (int rep = 0; rep < reps && ok; rep++) {
+        struct timespec t0, t1;
+        clock_gettime(CLOCK_MONOTONIC, &t0);
+        ok = trace_rays(vk, &ts, ray_buf, res, rays, timer);
+        clock_gettime(CLOCK_MONOTONIC, &t1);
+        double ms = timer->valid && timer->count > 1
+                        ? timer->ms[1]
+                        : (double)(t1.tv_sec - t0.tv_sec) * 1e3 + (t1.tv_nsec - t0.tv_nsec) * 1e-6;
+        best = ms < best ? ms : best;
+    }
+    if (ok && hits)
+        ok = rd_buffer_download(vk, res, 0, hits, (size_t)rays * sizeof *hits, err, sizeof err) ==
+             RD_VK_OK;
+    if (!ok) fprintf(stderr, "trace: %s\n", err);
+    trace_scene_destroy(vk, &ts);
+    return ok && best > 0 ? rays / (best * 1e3) : 0;
+}
+
+/* Rays from random points on the sphere around the box [lo, hi] (centre, 1.5 x the half
+ * diagonal) toward random points inside it, unit directions; deterministic. */
+static void sphere_rays(float *orgs, float *dirs, uint32_t rays, const float lo[3],
+                        const float hi[3])
+{
+    float c[3], r = 0;
+    for (int k = 0; k < 3; k++) {
+        c[k] = 0.5f * (lo[k] + hi[k]);
+        r += (hi[k] - c[k]) * (hi[k] - c[k]);
+    }
+    r = 1.5f * sqrtf(r);
+    rng_seed(99);
+    for (uint32_t i = 0; i < rays; i++) {
+        float u[3], *o = orgs + 3 * (size_t)i, *d = dirs + 3 * (size_t)i, len = 0;
+        rng_unit(u);
+        for (int k = 0; k < 3; k++)
+            o[k] = c[k] + r * u[k];
+        for (int k = 0; k < 3; k++) {
+            d[k] = rng_range(lo[k], hi[k]) - o[k];
+            len += d[k] * d[k];
+        }
+        len = sqrtf(len);
+        for (int k = 0; k < 3; k++)
+            d[k] /= len;
+    }
+}
+
+typedef struct bench_row {
+    uint32_t tris, differ, depth;
+    double cpu_mrays, lbvh_mrays, sah_ratio, build_ms;
+} bench_row;
+
+/* `test_gpu_lbvh bench [sizes]`: for random soups of each size, the LBVH build's time (best of
+ * 3, submit and wait, then the GPU timestamps of its passes), and the traversal speed of the same
+ * rays (sphere_rays; PROBECAST_LBVH_RAYS, default 2^20) through the CPU builder's tree and the
+ * LBVH (best of 3 GPU-timed traces each). Prints two tables. */
 static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b, int argc, char **argv)
 {
     uint32_t sizes[16] = {1000, 5000, 20000, 100000}, count = 4, most = 0;
     if (argc > 0) /* sizes given: `test_gpu_lbvh bench 100000 1000000` */
         for (count = 0; count < (uint32_t)argc && count < 16; count++)
             sizes[count] = (uint32_t)strtoul(argv[count], NULL, 10);
-    for (uint32_t s = 0; s < count; s++)
+    for (uint32_t s = 0; s < count; s++) {
+        if (sizes[s] == 0 || sizes[s] > RD_GPU_LBVH_MAX_TRIANGLES) {
+            fprintf(stderr, "bench: sizes from 1 to %u triangles\n", RD_GPU_LBVH_MAX_TRIANGLES);
+            return;
+        }
         most = sizes[s] > most ? sizes[s] : most;
-    float *pos = tris_alloc(most);
+    }
+    const char *rays_env = getenv("PROBECAST_LBVH_RAYS");
+    uint32_t rays = rays_env ? (uint32_t)strtoul(rays_env, NULL, 10) : 1u << 20;
+    if (rays == 0) rays = 1;
+    float *pos = tris_alloc(most), *orgs = malloc((size_t)rays * 6 * sizeof(float));
+    gpu_hit *hits_cpu = calloc(rays, sizeof *hits_cpu);
+    gpu_hit *hits_lbvh = calloc(rays, sizeof *hits_lbvh);
+    bench_row *table = calloc(count, sizeof *table);
+    if (!orgs || !hits_cpu || !hits_lbvh || !table) abort();
+    float *dirs = orgs + 3 * (size_t)rays;
     rd_timer timer;
-    if (rd_timer_create(vk, &timer, err, sizeof err) != RD_VK_OK) {
+    rd_buffer ray_buf = {0}, res_buf = {0};
+    if (rd_timer_create(vk, &timer, err, sizeof err) != RD_VK_OK ||
+        rd_buffer_create(vk, &res_buf, (size_t)rays * sizeof(gpu_hit), RD_MEMORY_READBACK, err,
+                         sizeof err) != RD_VK_OK) {
         fprintf(stderr, "%s\n", err);
-        free(pos);
-        return;
+        count = 0;
     }
     /* PROBECAST_LBVH_LEAF: the leaf policy (max_leaf; default 0: up to 4) */
     const char *leaf_env = getenv("PROBECAST_LBVH_LEAF");
@@ -277,32 +420,77 @@ static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b, int argc, char **
            max_leaf ? max_leaf : 4);
     printf("%8s %8s %8s %8s %8s %8s %8s %9s %6s\n", "tris", "wall_ms", "keys", "sort", "hierarchy",
            "boxes", "collapse", "sah_ratio", "depth");
-    for (uint32_t s = 0; s < count; s++) {
+    uint32_t done = 0;
+    for (uint32_t s = 0; s < count; s++, done++) {
         rng_seed(3 + s);
         random_soup(pos, sizes[s], 0.02f);
         rd_bvh gpu, cpu;
         double ms = 0, best = 1e30;
-        for (int rep = 0; rep < 3; rep++) {
-            rd_vk_result r = rd_gpu_lbvh_build_download(vk, b, pos, sizes[s], max_leaf, &timer,
-                                                        &gpu, &ms, err, sizeof err);
-            if (r != RD_VK_OK) {
-                fprintf(stderr, "%s\n", err);
-                rd_timer_destroy(vk, &timer);
-                free(pos);
-                return;
-            }
+        rd_vk_result r = RD_VK_OK;
+        for (int rep = 0; rep < 3 && r == RD_VK_OK; rep++) {
+            r = rd_gpu_lbvh_build_download(vk, b, pos, sizes[s], max_leaf, &timer, &gpu, &ms, err,
+                                           sizeof err);
             best = ms < best ? ms : best;
-            if (rep < 2) rd_bvh_destroy(&gpu);
+            if (r == RD_VK_OK && rep < 2) rd_bvh_destroy(&gpu);
+        }
+        if (r != RD_VK_OK) {
+            fprintf(stderr, "%s\n", err);
+            break;
         }
         if (!rd_bvh_build_triangles(&cpu, pos, sizes[s], NULL)) abort();
+        bench_row *row = &table[s];
+        row->tris = sizes[s];
+        row->build_ms = best;
+        row->depth = gpu.depth;
+        row->sah_ratio = rd_bvh_sah_cost(&gpu) / rd_bvh_sah_cost(&cpu);
         printf("%8u %8.2f", sizes[s], best);
         for (uint32_t k = 1; k <= 5; k++)
             printf(" %8.2f", timer.valid && k < timer.count ? timer.ms[k] : -1.0);
-        printf(" %9.3f %6u\n", rd_bvh_sah_cost(&gpu) / rd_bvh_sah_cost(&cpu), gpu.depth);
+        printf(" %9.3f %6u\n", row->sah_ratio, gpu.depth);
+        fflush(stdout);
+
+        const pc_bvh_node *root = &cpu.nodes[0];
+        float lo[3] = {root->bmin.x, root->bmin.y, root->bmin.z};
+        float hi[3] = {root->bmax.x, root->bmax.y, root->bmax.z};
+        sphere_rays(orgs, dirs, rays, lo, hi);
+        bool ok = upload_rays(vk, &ray_buf, orgs, dirs, rays);
+        if (ok) {
+            row->cpu_mrays =
+                trace_speed(vk, &timer, &cpu, pos, sizes[s], &ray_buf, &res_buf, rays, 3, hits_cpu);
+            row->lbvh_mrays = trace_speed(vk, &timer, &gpu, pos, sizes[s], &ray_buf, &res_buf, rays,
+                                          3, hits_lbvh);
+            for (uint32_t i = 0; i < rays; i++) {
+                const gpu_hit *a = &hits_cpu[i], *h = &hits_lbvh[i];
+                bool same =
+                    a->hit == h->hit &&
+                    (!a->hit || cpu.prim_index[a->tri] == gpu.prim_index[h->tri] || a->t == h->t);
+                row->differ += !same;
+            }
+        } else {
+            fprintf(stderr, "rays: %s\n", err);
+        }
+        rd_buffer_destroy(vk, &ray_buf);
         rd_bvh_destroy(&gpu);
         rd_bvh_destroy(&cpu);
+        if (!ok) break;
     }
+    printf("\ntraversal: %u rays from a sphere around the mesh toward points in its box, "
+           "trace.glsl (test_trace.comp), best of 3 %s\n",
+           rays, timer.valid ? "GPU-timed traces" : "traces (wall time: no timestamps)");
+    printf("%8s %11s %11s %6s %9s %9s %6s %7s\n", "tris", "cpu_Mrays", "lbvh_Mrays", "ratio",
+           "sah_ratio", "build_ms", "depth", "differ");
+    for (uint32_t s = 0; s < done; s++) {
+        const bench_row *row = &table[s];
+        printf("%8u %11.2f %11.2f %6.3f %9.3f %9.2f %6u %7u\n", row->tris, row->cpu_mrays,
+               row->lbvh_mrays, row->cpu_mrays > 0 ? row->lbvh_mrays / row->cpu_mrays : 0,
+               row->sah_ratio, row->build_ms, row->depth, row->differ);
+    }
+    rd_buffer_destroy(vk, &res_buf);
     rd_timer_destroy(vk, &timer);
+    free(table);
+    free(hits_lbvh);
+    free(hits_cpu);
+    free(orgs);
     free(pos);
 }
 
