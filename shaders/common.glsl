@@ -381,25 +381,6 @@ bool shadow_ray_clear(pc_scene_refs s, vec3 origin, vec3 wi, float dist, inout u
     return !trace_ray(s, origin, wi, 0.0, dist, PC_TRACE_ANY_HIT, sh);
 }
 
-/* Radiance reflected toward v by a surface with BRDF b from all punctual lights:
- * sum over lights of f(v, l) * E_i * cos * visibility, with ray-traced hard shadows (shadow
- * rays start on the geometric side, moved by the surface's ray offset; lights below the shading
- * or the geometric surface give nothing). Counts the shadow rays it traces into *rays. */
-vec3 direct_radiance(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, float offset, vec3 v, pc_brdf b,
-                     inout uint rays)
-{
-    vec3 sum = vec3(0.0);
-    vec3 origin = offset_ray_origin(p, ng, offset);
-    for (uint i = 0u; i < s.counts.y; i++) {
-        vec3 wi;
-        float dist;
-        vec3 f = light_term(s, i, p, n, ng, v, b, wi, dist);
-        if (all(equal(f, vec3(0.0)))) continue;
-        if (shadow_ray_clear(s, origin, wi, dist, rays)) sum += f;
-    }
-    return sum;
-}
-
 /* W: the summed RGB of every light's unshadowed term at p (the weight the choice is made by). */
 float light_weight_total(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, vec3 v, pc_brdf b)
 {

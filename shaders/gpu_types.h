@@ -132,7 +132,7 @@ static inline float pc_u2f(uint32_t u)
 
 /* Shadow rays of camera pixels and reflection hits (rd_view_settings.shadow_cull): none toward
  * a light whose distance map shows the point certainly hidden (shaders/shadow_map.glsl,
- * direct_radiance_culled), or a ray to every light in front of it (exact everywhere, also
+ * direct_radiance), or a ray to every light in front of it (exact everywhere, also
  * behind openings narrower than a map texel). */
 #define PC_SHADOW_CULL_MAPS 0u
 #define PC_SHADOW_CULL_OFF 1u

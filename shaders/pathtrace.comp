@@ -16,6 +16,7 @@
  *       params.x = sample index, params.y = max bounces (0 = 64). */
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
+#include "shadow_map.glsl"
 
 layout(local_size_x = PC_WG_2D_X, local_size_y = PC_WG_2D_Y) in;
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer AccumRef { vec4 v[]; };
@@ -50,7 +51,7 @@ void main()
             uint shadow = 0u;
             pc_brdf b = surface_brdf(sf);
             vec3 v = -dir;
-            radiance += throughput * direct_radiance(g.scene, sf.position, sf.normal,
+            radiance += throughput * direct_radiance(g.scene, 0ul, 0u, sf.position, sf.normal,
                                                      sf.geom_normal, sf.offset, v, b, shadow);
             rays += shadow;
             if (bounce == max_bounces) break;

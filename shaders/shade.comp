@@ -3,7 +3,7 @@
  *   emission + sum over punctual lights of f(v, l) * E * cos * visibility
  * with f the glTF metallic-roughness BRDF (brdf.glsl), v toward the camera and ray-traced hard
  * shadows (any-hit rays), none toward lights whose distance maps show the pixel certainly hidden
- * (direct_radiance_culled, shadow_map.glsl). Misses keep the sky radiance.
+ * (direct_radiance, shadow_map.glsl). Misses keep the sky radiance.
  * push: globals, buf0 = pc_gbuffer_texel[], buf1 = pc_counters, buf2 = vec4 radiance[]. */
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
@@ -26,7 +26,7 @@ void main()
         if (t.position.w >= 0.0) {
             vec3 p = t.position.xyz, v = normalize(g.view.eye.xyz - p);
             pc_brdf b = gbuffer_brdf(t);
-            l += direct_radiance_culled(g.scene, g.ddgi.shadow_maps, g.ddgi.control.w, p,
+            l += direct_radiance(g.scene, g.ddgi.shadow_maps, g.ddgi.control.w, p,
                                         t.normal.xyz, t.geom_normal.xyz, t.albedo.w, v, b, rays);
         }
         RadianceRef(pc.buf2).v[i] = vec4(l, 1.0);

@@ -4,7 +4,7 @@
  * and rebuilt only when the lights or the geometry change (renderer/gi/shadow_maps.h), so a probe
  * hit's visibility costs four texel reads instead of a shadow ray (a ray where they disagree:
  * probe_light_visibility). Camera pixels and reflection hits keep exact shadow rays, except
- * toward lights the map shows certainly hidden (direct_radiance_culled).
+ * toward lights the map shows certainly hidden (direct_radiance).
  *
  * Layout of the maps buffer (floats and uints of 4 bytes), a header, then the maps:
  * - words [0, MAX_LIGHTS): each light's map offset in words (0: the light has no valid map; its
@@ -188,17 +188,21 @@ float probe_light_visibility(pc_scene_refs s, uint64_t maps, uint mapped, uint i
     return shadow_ray_clear(s, offset_ray_origin(p, ng, offset), wi, dist, rays) ? 1.0 : 0.0;
 }
 
-/* direct_radiance (common.glsl) for camera pixels and reflection hits, with the lights' maps
- * (lights [0, mapped) of `maps`; 0: none) as a cull: a light whose map shows p certainly hidden
- * (shadow_map_hidden) gets no shadow ray; every other light gets its exact ray, so shadow edges,
- * lit surfaces and lights without a map are as before. The cull can err only where light passes
- * through an opening narrower than a texel (5 cm at 3 m from a point light: 128 texels a face),
- * which the map does not see. Why: in builtin:interior every pixel traced a
- * ray to every light in front of it, 7.2 a pixel, most of them to lamps in other rooms behind
- * walls (issue 25). The view passes mapped only while every map shows the scene as it is
+/* Radiance reflected toward v by a surface with BRDF b from all punctual lights:
+ * sum over lights of f(v, l) * E_i * cos * visibility, with ray-traced hard shadows (shadow
+ * rays start on the geometric side, moved by the surface's ray offset; lights below the shading
+ * or the geometric surface give nothing). Counts the shadow rays it traces into *rays.
+ * The lights' maps (lights [0, mapped) of `maps`; mapped 0: none, as the path tracer passes)
+ * serve as a cull for camera pixels and reflection hits: a light whose map shows p certainly
+ * hidden (shadow_map_hidden) gets no shadow ray; every other light gets its exact ray, so shadow
+ * edges, lit surfaces and lights without a map are as without maps. The cull can err only where
+ * light passes through an opening narrower than a texel (5 cm at 3 m from a point light: 128
+ * texels a face), which the map does not see. Why: in builtin:interior every pixel traced a ray
+ * to every light in front of it, 7.2 a pixel, most of them to lamps in other rooms behind walls
+ * (issue 25). Views pass mapped only while every map shows the scene as it is
  * (rd_world_fill_view_globals). */
-vec3 direct_radiance_culled(pc_scene_refs s, uint64_t maps, uint mapped, vec3 p, vec3 n, vec3 ng,
-                            float offset, vec3 v, pc_brdf b, inout uint rays)
+vec3 direct_radiance(pc_scene_refs s, uint64_t maps, uint mapped, vec3 p, vec3 n, vec3 ng,
+                     float offset, vec3 v, pc_brdf b, inout uint rays)
 {
     vec3 sum = vec3(0.0);
     vec3 origin = offset_ray_origin(p, ng, offset);

@@ -9,6 +9,7 @@
  * traced), params.x = ray count, params.y = n. */
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
+#include "shadow_map.glsl"
 
 layout(local_size_x = PC_WG_1D) in;
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer RayRef { vec4 v[]; };
@@ -28,8 +29,9 @@ void main()
         uint rays = 0u;
         float total = light_weight_total(g.scene, sf.position, sf.normal, sf.geom_normal, -d,
                                          lambert);
-        exact = vec4(direct_radiance(g.scene, sf.position, sf.normal, sf.geom_normal, sf.offset,
-                                     -d, lambert, rays), total);
+        exact = vec4(direct_radiance(g.scene, 0ul, 0u, sf.position, sf.normal, sf.geom_normal,
+                                     sf.offset, -d, lambert, rays),
+                     total);
         uint n = pc.params.y, sampled = 0u;
         vec3 sum = vec3(0.0);
         for (uint k = 0u; k < n; k++)

@@ -78,7 +78,7 @@ void rd_shadow_maps_release(rd_shadow_maps *m);
 unsigned rd_shadow_maps_valid(const rd_shadow_maps *m);
 /* Lights [0, n) whose maps show the scene as it is now (its geometry and those lights'
  * revisions), for view frames recorded between updates: camera pixels and reflection hits cull
- * their shadow rays by them (shaders/shadow_map.glsl, direct_radiance_culled). 0 when the maps
+ * their shadow rays by them (shaders/shadow_map.glsl, direct_radiance). 0 when the maps
  * show an older geometry or there are none. */
 uint32_t rd_shadow_maps_view_lights(const rd_shadow_maps *m, const rd_gpu_scene *scene);
 

@@ -258,7 +258,7 @@ static void print_timings(const rd_vk *vk, const rd_scene *s, const rd_gpu_scene
            gs->tlas_build_ms, gs->upload_ms);
     printf("frame       %ux%u, median of %u frames after %.1f s of warm-up\n", w, h, frames,
            RENDER_WARMUP_MS / 1000.0);
-    /* how camera pixels and reflections chose their shadow rays (direct_radiance_culled) */
+    /* how camera pixels and reflections chose their shadow rays (direct_radiance) */
     if (s->light_count == 0)
         printf("shadows     no lights\n");
     else if (cull == PC_SHADOW_CULL_OFF)

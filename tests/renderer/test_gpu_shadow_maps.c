@@ -152,7 +152,7 @@ static bool check_light(harness *h, rd_world *w, const rd_scene *s, uint32_t ind
     CHECKF(agree >= POINTS * 98 / 100, "%s, light %u: the map agrees at only %d of %d points", what,
            index, agree, POINTS);
     /* camera pixels and reflection hits skip the shadow ray where the map shows the point
-     * hidden (direct_radiance_culled): that must never be a lit point, and must cull most of
+     * hidden (direct_radiance): that must never be a lit point, and must cull most of
      * the shadow */
     CHECKF(culled_lit == 0, "%s, light %u: %d lit points culled", what, index, culled_lit);
     CHECKF(culled > shadowed / 2, "%s, light %u: only %d of %d shadowed points culled", what, index,
@@ -160,7 +160,7 @@ static bool check_light(harness *h, rd_world *w, const rd_scene *s, uint32_t ind
     return map_bad == 0 && ray_bad == 0;
 }
 
-/* 5. View frames: camera pixels cull their shadow rays by the maps (direct_radiance_culled).
+/* 5. View frames: camera pixels cull their shadow rays by the maps (direct_radiance).
  * On the many-lights Cornell box (four lights, the blocks' shadows) a converged field has every
  * light's map; a frame with the cull must equal one without it exactly (a culled light is one
  * whose shadow ray would have been blocked) and trace fewer shadow rays. */
