@@ -147,3 +147,12 @@ void rd_task_wait(rd_task_pool *p, rd_task_group *g)
     }
     pthread_mutex_unlock(&p->mu);
 }
+
+bool rd_task_group_done(rd_task_pool *p, rd_task_group *g)
+{
+    if (!p) return true;
+    pthread_mutex_lock(&p->mu);
+    bool done = g->pending == 0;
+    pthread_mutex_unlock(&p->mu);
+    return done;
+}

@@ -13,6 +13,7 @@
 #ifndef RD_TASK_POOL_H
 #define RD_TASK_POOL_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 typedef struct rd_task rd_task;
@@ -46,5 +47,8 @@ uint32_t rd_task_pool_threads(const rd_task_pool *pool); /* 1 for NULL */
 void rd_task_submit(rd_task_pool *pool, rd_task_group *g, rd_task *task, rd_task_fn fn);
 /* Returns when every task of g has finished, running queued tasks of g meanwhile. */
 void rd_task_wait(rd_task_pool *pool, rd_task_group *g);
+/* Whether every task of g has finished, without blocking or running any (a poll for work
+ * handed off the calling thread; rd_task_wait afterwards returns at once). true for NULL. */
+bool rd_task_group_done(rd_task_pool *pool, rd_task_group *g);
 
 #endif

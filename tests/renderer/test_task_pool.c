@@ -1,10 +1,13 @@
 /* test_task_pool.c: every task runs exactly once, on pools of 1, 2, 3 and 8 threads and on
- * none (NULL, inline); tasks submit and wait for nested groups; shutdown drains the queue. */
+ * none (NULL, inline); tasks submit and wait for nested groups; shutdown drains the queue;
+ * rd_task_group_done polls a group without blocking (a task held on a gate stays pending). */
 #include "renderer/accel/task_pool.h"
 #include "test_util.h"
 
 #include <pthread.h>
+#include <sched.h>
 #include <stdatomic.h>
+#include <stdbool.h>
 #include <stdlib.h>
 
 #define LEAVES 4000
@@ -139,12 +142,52 @@ static void test_shutdown(uint32_t threads)
     rd_task_pool_destroy(rd_task_pool_create(threads)); /* idle pool */
 }
 
+typedef struct gate_task {
+    rd_task task; /* first member */
+    atomic_bool open, ran;
+} gate_task;
+
+static void gate_run(rd_task *t)
+{
+    gate_task *g = (gate_task *)t;
+    while (!atomic_load(&g->open))
+        sched_yield();
+    atomic_store(&g->ran, true);
+}
+
+/* A task that waits for its gate: its group is not done while it waits (on a worker, or queued
+ * where the pool has none), and is done once it has run. */
+static void test_done(rd_task_pool *pool, const char *what)
+{
+    gate_task t;
+    atomic_init(&t.open, pool == NULL); /* inline: it runs inside submit */
+    atomic_init(&t.ran, false);
+    rd_task_group g = {0};
+    CHECKF(rd_task_group_done(pool, &g), "%s: an empty group is done", what);
+    rd_task_submit(pool, &g, &t.task, gate_run);
+    if (pool) {
+        for (int i = 0; i < 100; i++) /* polls neither block nor run the task */
+            CHECKF(!rd_task_group_done(pool, &g), "%s: done before its task ran", what);
+        CHECK(!atomic_load(&t.ran));
+        atomic_store(&t.open, true);
+    }
+    if (rd_task_pool_threads(pool) > 1) { /* a worker runs it: poll until it has */
+        while (!rd_task_group_done(pool, &g))
+            sched_yield();
+        CHECKF(atomic_load(&t.ran), "%s: done before its task ran", what);
+    } else {
+        rd_task_wait(pool, &g); /* no worker: the waiter runs it */
+    }
+    CHECKF(atomic_load(&t.ran) && rd_task_group_done(pool, &g), "%s: not done after it ran", what);
+}
+
 int main(void)
 {
     CHECK(rd_online_cores() >= 1);
     CHECK(rd_task_pool_threads(NULL) == 1);
     test_flat(NULL, "inline");
     test_nested(NULL, "inline");
+    test_done(NULL, "inline");
     const uint32_t counts[] = {1, 2, 3, 8};
     for (int i = 0; i < 4; i++) {
         rd_task_pool *pool = rd_task_pool_create(counts[i]);
@@ -156,6 +199,7 @@ int main(void)
         for (int rep = 0; rep < 3; rep++) {
             test_flat(pool, what);
             test_nested(pool, what);
+            test_done(pool, what);
         }
         rd_task_pool_destroy(pool);
         test_shutdown(counts[i]);
