@@ -6,19 +6,32 @@
  * the instance boxes of the top level. The CPU rebuild (gpu_scene.c) stays the first build of a
  * pose, the fallback, and the whole path under PROBECAST_DEFORM=cpu.
  *
- * When to rebuild on the CPU instead (deterministic: counts and costs, no clocks): the first pose
+ * When to rebuild on the CPU instead (decided by counts and costs, no clocks): the first pose
  * after the upload (the GPU needs the topology of a build it knows), every
  * RD_GPU_SCENE_REFIT_MAX-th pose after a build, and when the refitted tree has degraded: every
  * RD_GPU_SCENE_SAH_CHECK_EVERY-th refit its nodes come back and its SAH cost (rd_bvh_sah_cost)
  * is held against a fresh CPU build's of the same pose (from the CPU deformation's positions),
- * the ratio RD_GPU_REFIT_REBUILD_SAH_RATIO was measured against; past it, the mesh is rebuilt in
- * the same pose (a second build: the check's tree is not kept, which keeps one write path).
+ * the ratio RD_GPU_REFIT_REBUILD_SAH_RATIO was measured against; past it, the mesh is rebuilt at
+ * the pose where the verdict is applied (below), from that pose's positions (a second build: the
+ * check's tree is not kept, which keeps one write path).
  * Holding the refitted cost against the cost the last build had is not enough: the cost is
  * normalised by the root's area, and a shape that changes (an arm bending from straight) changes
  * what the best tree costs (the arm of test_gpu_serve_skin: 1.69 straight, 2.35 bent, refitted or
  * fresh), so that proxy rebuilt every pose of a swinging arm. A check costs one CPU build and a
  * read-back of the mesh's nodes, once in RD_GPU_SCENE_SAH_CHECK_EVERY poses; the other poses
- * read back only the root box. */
+ * read back only the root box.
+ *
+ * The check's build runs off the render thread: done inline it stalled the pose 100-150 ms for a
+ * 1 M-triangle character every RD_GPU_SCENE_SAH_CHECK_EVERY poses. At a check pose the render
+ * thread takes the refitted tree's cost from the read-back (one pass over its nodes) and hands a
+ * copy of the CPU-posed positions to a job on g->pool (one worker, owned here), which builds the
+ * fresh tree and stores the verdict. Each later pose polls the job (rd_task_group_done); the
+ * verdict is applied at the first pose of the mesh after the job finished, so a degraded tree
+ * is rebuilt (at that pose, as before) one or more poses late. A mesh has at most one job in
+ * flight (a check pose that finds one running skips its check); a CPU rebuild in the meantime
+ * voids the verdict. The job reads only its own copies; destroy waits for it.
+ * gs->deform_sah_checks counts finished checks. Still deterministic in what is decided (counts
+ * and costs), not in when: rd_gpu_scene_deform_wait_checks waits for the jobs (tests). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -27,10 +40,26 @@
 #include "renderer/accel/gpu_refit.h"
 #include "renderer/accel/gpu_scene.h"
 #include "renderer/accel/gpu_scene_internal.h"
+#include "renderer/accel/task_pool.h"
 #include "shaders/deform_tris.spv.h"
 
 #define RD_GPU_SCENE_REFIT_MAX 64u
 #define RD_GPU_SCENE_SAH_CHECK_EVERY 8u
+
+/* One mesh's SAH check off the render thread. The job (sah_check_run) owns positions while it
+ * runs and writes only worse; the render thread touches the rest only while no job runs
+ * (busy false, or rd_task_group_done). */
+typedef struct sah_check {
+    rd_task task; /* first member */
+    rd_task_group group;
+    bool busy;    /* submitted, its verdict not yet collected */
+    bool voided;  /* the mesh was rebuilt on the CPU meanwhile: the verdict is dropped */
+    bool rebuild; /* a collected verdict, applied at the mesh's next pose */
+    double sah_refitted;
+    float *positions; /* the posed triangles (9 floats each), the job's copy */
+    uint32_t tri_count;
+    bool worse; /* the job's verdict */
+} sah_check;
 
 typedef struct deform_mesh {
     bool ready; /* dm and refit made, for the BLAS the last CPU build wrote */
@@ -38,6 +67,7 @@ typedef struct deform_mesh {
     rd_gpu_refit_blas refit;
     uint32_t refits;   /* poses refitted since that build */
     uint32_t tri_base; /* the mesh's first record in gs->tris */
+    sah_check check;
 } deform_mesh;
 
 struct rd_gpu_scene_deform {
@@ -49,12 +79,33 @@ struct rd_gpu_scene_deform {
     rd_buffer readback; /* root nodes, then the nodes of the meshes whose SAH is checked */
     uint32_t mesh_count;
     deform_mesh *meshes;
+    rd_task_pool *pool; /* the SAH checks' (one worker; NULL: they run inline) */
 };
+
+/* Takes mesh m's finished check: counts it and keeps its verdict unless voided. */
+static void collect(rd_gpu_scene *gs, sah_check *c)
+{
+    if (!c->busy || !rd_task_group_done(gs->deform->pool, &c->group)) return;
+    c->busy = false;
+    c->rebuild = c->worse && !c->voided;
+    gs->deform_sah_checks++;
+}
+
+void rd_gpu_scene_deform_wait_checks(rd_gpu_scene *gs)
+{
+    rd_gpu_scene_deform *g = gs->deform;
+    for (uint32_t m = 0; g && m < g->mesh_count; m++) {
+        rd_task_wait(g->pool, &g->meshes[m].check.group);
+        collect(gs, &g->meshes[m].check);
+    }
+}
 
 void rd_gpu_scene_deform_destroy(rd_vk *vk, rd_gpu_scene *gs)
 {
     rd_gpu_scene_deform *g = gs->deform;
     if (!g) return;
+    rd_gpu_scene_deform_wait_checks(gs); /* no job may outlive what it belongs to */
+    rd_task_pool_destroy(g->pool);
     for (uint32_t m = 0; m < g->mesh_count; m++) {
         rd_gpu_deform_mesh_destroy(vk, &g->meshes[m].dm);
         rd_gpu_refit_blas_destroy(vk, &g->meshes[m].refit);
@@ -92,8 +143,12 @@ rd_vk_result rd_gpu_scene_deform_built(rd_vk *vk, rd_gpu_scene *gs, const rd_sce
         gs->deform = xcalloc(1, sizeof *gs->deform);
         gs->deform->mesh_count = gs->mesh_count;
         gs->deform->meshes = xcalloc(gs->mesh_count, sizeof *gs->deform->meshes);
+        gs->deform->pool = rd_task_pool_create(2); /* NULL: the checks run inline */
     }
     deform_mesh *dm = &gs->deform->meshes[m];
+    /* a new tree: a check of the old one still running is void, one collected is stale */
+    dm->check.voided = dm->check.busy;
+    dm->check.rebuild = false;
     const rd_mesh_deform *d = s->meshes[m].deform;
     rd_vk_result r = RD_VK_OK;
     dm->ready = false;
@@ -142,24 +197,45 @@ static rd_vk_result make_pipelines(rd_vk *vk, rd_gpu_scene_deform *g, char *err,
     return r;
 }
 
-/* Whether mesh dm's whole tree comes back this pose, for its SAH cost. */
+/* Whether mesh dm's whole tree comes back this pose, for its SAH cost: a check pose, and no
+ * check of the mesh in flight or waiting to be applied (then this one is skipped). */
 static bool check_sah(const deform_mesh *dm)
 {
-    return (dm->refits + 1) % RD_GPU_SCENE_SAH_CHECK_EVERY == 0;
+    return (dm->refits + 1) % RD_GPU_SCENE_SAH_CHECK_EVERY == 0 && !dm->check.busy &&
+           !dm->check.rebuild;
 }
 
-/* Whether mesh m's refitted tree (nodes, node_count of them) is to be rebuilt: its SAH cost
- * against a fresh CPU build's over the CPU deformation's positions. */
-static bool degraded(const rd_scene *s, uint32_t m, const pc_bvh_node *nodes, uint32_t node_count)
+/* The check job: mesh's fresh CPU build over the posed positions, its SAH cost against the
+ * refitted tree's; frees the positions. Reads and writes only c's own fields. */
+static void sah_check_run(rd_task *t)
 {
-    rd_bvh tree = {.nodes = (pc_bvh_node *)nodes, .node_count = node_count}, fresh = {0};
-    if (!rd_bvh_build_triangles(&fresh, s->meshes[m].positions, s->meshes[m].tri_count, NULL)) {
+    sah_check *c = (sah_check *)t;
+    rd_bvh fresh = {0};
+    if (!rd_bvh_build_triangles(&fresh, c->positions, c->tri_count, NULL)) {
         fprintf(stderr, "probecast: out of memory building a BVH\n");
         abort();
     }
-    bool worse = rd_gpu_refit_should_rebuild(rd_bvh_sah_cost(&tree), rd_bvh_sah_cost(&fresh));
+    c->worse = rd_gpu_refit_should_rebuild(c->sah_refitted, rd_bvh_sah_cost(&fresh));
     rd_bvh_destroy(&fresh);
-    return worse;
+    free(c->positions);
+    c->positions = NULL;
+}
+
+/* Starts mesh m's check: its refitted tree (nodes, node_count of them, read back this pose)
+ * against a fresh build of the CPU deformation's positions, on g->pool. */
+static void start_check(rd_gpu_scene_deform *g, const rd_scene *s, uint32_t m,
+                        const pc_bvh_node *nodes, uint32_t node_count)
+{
+    sah_check *c = &g->meshes[m].check;
+    rd_bvh tree = {.nodes = (pc_bvh_node *)nodes, .node_count = node_count};
+    size_t bytes = sizeof(float) * 9 * (size_t)s->meshes[m].tri_count;
+    c->sah_refitted = rd_bvh_sah_cost(&tree);
+    c->tri_count = s->meshes[m].tri_count;
+    c->positions = xcalloc(bytes, 1);
+    if (bytes) memcpy(c->positions, s->meshes[m].positions, bytes);
+    c->worse = c->voided = false;
+    c->busy = true;
+    rd_task_submit(g->pool, &c->group, &c->task, sah_check_run);
 }
 
 /* Records mesh m's triangle records (its pose written) into c. */
@@ -184,6 +260,8 @@ rd_vk_result rd_gpu_scene_deform_run(rd_vk *vk, rd_gpu_scene *gs, const rd_scene
     rd_gpu_scene_deform *g = gs->deform;
     rd_vk_result r = make_pipelines(vk, g, err, errlen);
     if (r != RD_VK_OK) return r;
+    for (uint32_t m = 0; m < g->mesh_count; m++) /* the checks that finished since */
+        collect(gs, &g->meshes[m].check);
     /* what comes back: each mesh's root, then the whole trees checked this pose */
     size_t back = (size_t)n, *at = xcalloc(n, sizeof *at);
     for (uint32_t k = 0; k < n; k++) {
@@ -267,8 +345,10 @@ rd_vk_result rd_gpu_scene_deform_run(rd_vk *vk, rd_gpu_scene *gs, const rd_scene
         gs->mesh_revision[m] = s->meshes[m].deform->revision;
         dm->refits++;
         gs->deform_refits++;
-        rebuild[k] = at[k] && degraded(s, m, &nodes[at[k]], dm->refit.node_count);
-        gs->deform_sah_checks += at[k] != 0;
+        /* a finished check's verdict now; else maybe a new check of this pose's tree */
+        rebuild[k] = dm->check.rebuild;
+        dm->check.rebuild = false;
+        if (at[k]) start_check(g, s, m, &nodes[at[k]], dm->refit.node_count);
     }
     free(at);
     return RD_VK_OK;

@@ -61,7 +61,11 @@ void rd_gpu_scene_fill_mesh(const rd_scene *s, uint32_t m, const rd_bvh *bvh, co
  * on the GPU (else rebuilt on the CPU). rd_gpu_scene_deform_run: poses and refits the meshes
  * list[0..n) (each rd_gpu_scene_deform_on_gpu) in one submission, in the scene's buffers, and
  * sets their bounds and revisions; rebuild[k] = 1 where list[k]'s refitted tree has degraded
- * and is to be rebuilt now. rd_gpu_scene_deform_destroy: idempotent; nothing may be in flight. */
+ * and is to be rebuilt now (the verdict of an SAH check that finished since the last pose; the
+ * checks run on a pool of their own). rd_gpu_scene_deform_wait_checks: waits for every SAH
+ * check in flight and collects it (counted; its verdict applied at the mesh's next pose), for
+ * tests. rd_gpu_scene_deform_destroy: idempotent; waits for the checks; no submission may be in
+ * flight. */
 rd_vk_result rd_gpu_scene_deform_built(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, uint32_t m,
                                        const rd_bvh *bvh, uint32_t tri_base, char *err,
                                        size_t errlen);
@@ -69,6 +73,7 @@ bool rd_gpu_scene_deform_on_gpu(const rd_gpu_scene *gs, uint32_t m);
 rd_vk_result rd_gpu_scene_deform_run(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
                                      const uint32_t *list, uint32_t n, uint8_t *rebuild, char *err,
                                      size_t errlen);
+void rd_gpu_scene_deform_wait_checks(rd_gpu_scene *gs);
 void rd_gpu_scene_deform_destroy(rd_vk *vk, rd_gpu_scene *gs);
 
 #endif

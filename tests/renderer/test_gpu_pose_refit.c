@@ -9,13 +9,18 @@
  * the refitted nodes bound their children and triangles with the root box the scene's bounds,
  * and the images traced through both scenes agree (different trees, the same hits). The same
  * records and trees for skin_builder's morphing cubes (morph targets with normal and tangent
- * deltas). */
+ * deltas). The SAH check runs off the render thread: the sheet unfolded (a tree built with the
+ * sheet folded back on itself, elbow at 170 degrees, its nodes mixing both halves, refitted
+ * nearly straight) degrades, and the check's verdict rebuilds it at the next pose; a check still
+ * pending when the scene is destroyed is waited for (ASan: nothing leaks, nothing is read after it
+ * is freed). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "renderer/accel/gpu_scene.h"
+#include "renderer/accel/gpu_scene_internal.h"
 #include "renderer/gltf/gltf_loader.h"
 #include "renderer/render.h"
 #include "renderer/scene/animation_clip.h"
@@ -290,6 +295,59 @@ done:
     rd_scene_destroy(&s);
 }
 
+/* Poses the sheet of s by turning the elbow (node "elbow") deg degrees about +Z. */
+static void bend(rd_scene *s, float deg)
+{
+    float h = deg * 3.14159265f / 360.0f;
+    for (uint32_t i = 0; i < s->node_count; i++) {
+        if (!s->nodes[i].name || strcmp(s->nodes[i].name, "elbow") != 0) continue;
+        const float q[4] = {0, 0, sinf(h), cosf(h)};
+        memcpy(s->nodes[i].rotation, q, sizeof q);
+    }
+    CHECKF(rd_scene_update(s, err, sizeof err), "%s", err);
+}
+
+/* Built folded, then unfolded: the check at the eighth refit (in flight until waited for)
+ * finds the tree degraded, and the pose after it rebuilds the sheet; the next check is left
+ * pending at destroy. */
+static void fold(rd_vk *vk)
+{
+    rd_scene s;
+    rd_gpu_scene gpu = {0};
+    if (!build_scene(&s)) return;
+    bend(&s, 0);
+    VK_CHECK(rd_gpu_scene_create(vk, &gpu, &s, err, sizeof err));
+    uint32_t p = 0;
+    for (; p <= 8; p++) { /* pose 0 rebuilds (the first), 1-8 refit, 8 starts a check */
+        bend(&s, p ? 0.5f * (float)p : 170.0f);
+        VK_CHECK(rd_gpu_scene_update_pose(vk, &gpu, &s, NULL, err, sizeof err));
+    }
+    CHECKF(gpu.deform_refits == 8 && gpu.deform_rebuilds == 1,
+           "fold: 8 refits, 1 rebuild before the check applies (%llu, %llu)",
+           (unsigned long long)gpu.deform_refits, (unsigned long long)gpu.deform_rebuilds);
+    rd_gpu_scene_deform_wait_checks(&gpu);
+    CHECKF(gpu.deform_sah_checks == 1, "fold: one check finished (%llu)",
+           (unsigned long long)gpu.deform_sah_checks);
+    bend(&s, 5.0f);
+    VK_CHECK(rd_gpu_scene_update_pose(vk, &gpu, &s, NULL, err, sizeof err));
+    printf("fold: %llu refits, %llu rebuilds, %llu SAH checks\n",
+           (unsigned long long)gpu.deform_refits, (unsigned long long)gpu.deform_rebuilds,
+           (unsigned long long)gpu.deform_sah_checks);
+    CHECKF(gpu.deform_rebuilds == 2 && gpu.deform_refits == 9,
+           "fold: the degraded tree is rebuilt at the pose after its check (%llu rebuilds)",
+           (unsigned long long)gpu.deform_rebuilds);
+    check_tree(vk, &gpu, &s, SHEET, "fold, rebuilt");
+    for (p = 0; p < 8; p++) { /* 8 refits of the new tree: a check starts, nobody waits */
+        bend(&s, p % 2 ? 10.0f : 20.0f);
+        VK_CHECK(rd_gpu_scene_update_pose(vk, &gpu, &s, NULL, err, sizeof err));
+    }
+    CHECK(gpu.deform_refits == 17 && gpu.deform != NULL);
+done:
+    rd_gpu_scene_destroy(vk, &gpu); /* waits for the check */
+    CHECK(gpu.deform == NULL);
+    rd_scene_destroy(&s);
+}
+
 int main(void)
 {
     rd_vk vk;
@@ -325,6 +383,7 @@ int main(void)
         CHECKF(rd_scene_update(&s, err, sizeof err), "%s", err);
         uint32_t changed = 0;
         VK_CHECK(rd_gpu_scene_update_pose(&vk, &gpu, &s, &changed, err, sizeof err));
+        rd_gpu_scene_deform_wait_checks(&gpu); /* the eighth refit's check: counted now */
         CHECKF(changed == 1, "%s: the sheet changed (%u)", what, changed);
         VK_CHECK(rd_gpu_scene_update_pose(&vk, &cpu, &s, NULL, err, sizeof err));
         printf("%s: %llu refits, %llu rebuilds, %llu SAH checks on the GPU scene; deform %.3f "
@@ -355,6 +414,7 @@ int main(void)
         free(b);
     }
     morph_cubes(&vk);
+    fold(&vk);
 done:
     free(first);
     rd_renderer_destroy(&rg);
