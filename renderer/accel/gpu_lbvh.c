@@ -167,7 +167,8 @@ void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress
     rd_cmd_barrier(c);
     if (timer) rd_timer_mark(c, timer, "lbvh_hierarchy");
     if (n > 0) {
-        pc_push x = {.buf0 = positions, .buf1 = work, .buf2 = scratch, .params = {n, leaf_at, 0, 0}};
+        pc_push x = {
+            .buf0 = positions, .buf1 = work, .buf2 = scratch, .params = {n, leaf_at, 0, 0}};
         dispatch_1d(c, b, &b->boxes, &x, groups(n)); /* the leaves */
         rd_cmd_barrier(c);
         VkDeviceSize args = 4 * ((VkDeviceSize)leaf_at + TAIL_WORDS * (VkDeviceSize)n);
