@@ -23,8 +23,7 @@ static int fill(pc_ws *ws, double deadline)
     }
     for (;;) {
         double left = deadline - pc_now_ms();
-        if (left < 0) return 0;
-        int wait = (int)(left + 0.999);
+        int wait = left > 0 ? (int)(left + 0.999) : 0; /* past the deadline: a look, no wait */
         struct pollfd p = {.fd = ws->fd, .events = POLLIN};
         int r = poll(&p, 1, wait);
         if (r < 0 && errno == EINTR) continue;

@@ -30,7 +30,7 @@ int pc_ws_send_frame(pc_ws *ws, int opcode, const void *data, size_t len, bool f
 int pc_ws_send_text(pc_ws *ws, const char *text);
 /* Receives one whole message: returns its opcode (1 text, 2 binary, 8 close) with the payload
  * in *data (valid until the next call), 0 on timeout, -1 on error or end of stream. Pings are
- * answered. */
+ * answered. timeout_ms 0 reads what has already arrived, without waiting. */
 int pc_ws_recv(pc_ws *ws, int timeout_ms, uint8_t **data, size_t *len);
 void pc_ws_close(pc_ws *ws);
 
