@@ -254,7 +254,7 @@ vec3 ddgi_irradiance(pc_ddgi_volume vol, pc_scene_refs scene, bool probe_hit, ve
      * the spacing, furniture) gets visibility rays: Chebyshev's test on filtered distances lets
      * light through such walls where a texel straddles a depth edge (issue 28); elsewhere the
      * test alone decides, as in the paper */
-    uint suspect = 0u; /* bit i: a crossed cage edge joins corner i to another active probe */
+    uint suspect = 0u; /* bit i: corner i is active, in a cell with a crossed edge between active probes */
     if (mode == PC_GI_DDGI && vis_rays) {
         uint live = 0u, edges[8];
         for (uint i = 0u; i < 8u; i++) {
@@ -266,13 +266,17 @@ vec3 ddgi_irradiance(pc_ddgi_volume vol, pc_scene_refs scene, bool probe_hit, ve
         }
         /* an edge into a probe that is off (inside geometry: not sampled) says only that the
          * geometry is solid there; one between two active probes, that it is thinner than the
-         * spacing */
+         * spacing. Then every active corner gets its ray, not only the crossed edge's ends: at a
+         * wall's outer corner the cell's far corner outside is joined to the inside probe only by
+         * a face or body diagonal, its own edges run clear of the building, and Chebyshev on its
+         * distance texel straddling the corner let the sun in (thin-walls at 12x3x12 probes:
+         * +103% against 16x4x16). */
         for (uint i = 0u; i < 8u; i++)
             for (uint k = 0u; k < 3u; k++) {
                 uint j = i | (1u << k);
                 if (j != i && (edges[i] & (1u << k)) != 0u && (live & (1u << i)) != 0u &&
                     (live & (1u << j)) != 0u)
-                    suspect |= (1u << i) | (1u << j);
+                    suspect = live;
             }
     }
     vec3 sum = vec3(0.0);
