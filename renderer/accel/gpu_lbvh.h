@@ -5,10 +5,12 @@
  * prim_index). Passes (shaders/lbvh_*.comp, a barrier between each):
  *   1. lbvh_bounds: the centroids' box, by atomics (two dispatches: reset, then widen);
  *   2. lbvh_morton: keys (30-bit Morton code of the centroid, triangle index);
- *   3. lbvh_sort: a bitonic sort of the keys padded to N = a power of two (at least 128), the
- *      steps within blocks of 128 keys in shared memory, the others one dispatch each: 28
- *      dispatches for 5000 triangles (N = 8192), 66 for 100 K; O(N log^2 N) work, simple and
- *      exact, slower than a radix sort for large meshes (171 dispatches for 2^24 keys);
+ *   3. lbvh_sort: an LSD radix sort of the n keys by their code, stable, so ascending by
+ *      (code, triangle index) as lbvh_morton writes them in triangle order: 4 passes of 8 bits
+ *      (an even count: the keys end where they began; 256 digits keep a tile's counts in shared
+ *      memory), each a histogram per tile of 1024 keys (a 64-thread workgroup), an exclusive
+ *      prefix sum of the (digit, tile) counts in three dispatches and a stable scatter: 20
+ *      dispatches whatever n, O(n) work (rd_gpu_lbvh_record_sort);
  *   4. lbvh_hierarchy: Karras's radix tree, one thread per internal node; internal node i's
  *      children go to nodes 2i+1 and 2i+2, so 2n-1 nodes with the root at 0;
  *   5. lbvh_boxes: the leaves (one thread each), then 64 indirect passes of one thread per
@@ -64,6 +66,13 @@ void rd_gpu_lbvh_builder_destroy(rd_vk *vk, rd_gpu_lbvh_builder *b); /* idempote
 uint32_t rd_gpu_lbvh_node_count(uint32_t tri_count);
 /* Bytes of scratch a build needs (16-byte aligned device address). */
 uint64_t rd_gpu_lbvh_scratch_bytes(uint32_t tri_count);
+/* Records the sort of a build (pass 3) on its own, for tests: sorts n keys (at most
+ * RD_GPU_LBVH_MAX_TRIANGLES; uvec2 each at keys: x a payload, y the 32-bit code) ascending by y,
+ * stably, in place. sort_scratch: rd_gpu_lbvh_sort_scratch_bytes(n) bytes (4-byte aligned; a
+ * build's sits at the end of its scratch). Ends with a barrier. */
+void rd_gpu_lbvh_record_sort(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress keys,
+                             uint32_t n, VkDeviceAddress sort_scratch);
+uint64_t rd_gpu_lbvh_sort_scratch_bytes(uint32_t n);
 /* Byte offset in the scratch of the uint node count a build writes. */
 #define RD_GPU_LBVH_COUNT_OFFSET 24u
 
