@@ -12,7 +12,8 @@
 //   3: each block's exclusive prefix sum of hist, in place, from its sums[block];
 //   4: scatter: a workgroup walks its tile in rounds of PC_WG_1D keys in order; a key's slot
 //      is its (digit, tile)'s next free slot (shared memory) plus the keys of the same digit
-//      before it in its round (a count over the round's digits in shared memory): stable.
+//      before it in its round (a count over the round's digits, packed 4 to a word in shared
+//      memory): stable.
 // Every dispatch is 1D work in rows (lbvh_group); a group past the work returns whole.
 // Push constants (pc_push): buf0 = keys in, buf1 = keys out (0, 4) or sums (1, 2, 3),
 // buf2 = hist; params.x = n (0, 4) or hist words (1, 2, 3), params.y = the digit's shift,
@@ -45,7 +46,7 @@ layout(buffer_reference, std430, buffer_reference_align = 4) buffer RadixUints
 };
 
 shared uint g_count[LBVH_RADIX_DIGITS]; // a tile's digit counts (0), next free slots (4)
-shared uint g_digit[PC_WG_1D];          // a round's digits (4)
+shared uint g_digits[2][PC_WG_1D / 4u]; // a round's digits, 4 a word (4; by round parity)
 shared uint g_scan[PC_WG_1D];
 
 // The exclusive prefix sum of v over the workgroup (Hillis and Steele), total its sum; every
@@ -90,6 +91,12 @@ void histogram(uint tile, uint t)
         hist.v[d * tiles + tile] = g_count[d];
 }
 
+// Bytes of packed that are zero: 0x80 in each (exact, no borrow between bytes).
+uint zero_bytes(uint packed)
+{
+    return ~(((packed & 0x7f7f7f7fu) + 0x7f7f7f7fu) | packed | 0x7f7f7f7fu);
+}
+
 void scatter(uint tile, uint t)
 {
     LbvhKeys src = LbvhKeys(pc.buf0), dst = LbvhKeys(pc.buf1);
@@ -97,24 +104,28 @@ void scatter(uint tile, uint t)
     uint n = pc.params.x, shift = pc.params.y, tiles = pc.params.z;
     for (uint d = t; d < LBVH_RADIX_DIGITS; d += PC_WG_1D)
         g_count[d] = hist.v[d * tiles + tile];
+    if (t < PC_WG_1D / 4u) g_digits[0][t] = 0u;
+    barrier();
     uint base = tile * LBVH_RADIX_TILE;
     for (uint r = 0u; r < LBVH_RADIX_ROUNDS; r++) {
-        uint i = base + r * PC_WG_1D + t;
+        uint i = base + r * PC_WG_1D + t, buf = r & 1u;
         uvec2 key = i < n ? src.k[i] : uvec2(0u);
-        uint d = i < n ? digit_of(key, shift) : LBVH_RADIX_DIGITS; // none: matches no key
-        g_digit[t] = d;
+        uint d = digit_of(key, shift);
+        // the keys past n, at the round's end, stay 0 bytes: no thread before them reads them
+        if (i < n) atomicOr(g_digits[buf][t / 4u], d << (8u * (t % 4u)));
         barrier(); // the round's digits, and the slots the last round left
-        uint before = 0u, after = 0u;
-        for (uint j = 0u; j < PC_WG_1D; j++) {
-            uint same = g_digit[j] == d ? 1u : 0u;
-            before += j < t ? same : 0u;
-            after += j > t ? same : 0u;
+        if (t < PC_WG_1D / 4u) g_digits[buf ^ 1u][t] = 0u; // for the next round
+        // the keys of digit d before this one in the round (4 a word)
+        uint before = 0u;
+        for (uint w = 0u; w < PC_WG_1D / 4u && 4u * w < t; w++) {
+            uint lanes = min(t - 4u * w, 4u), mask = lanes == 4u ? ~0u : (1u << (8u * lanes)) - 1u;
+            before += bitCount(zero_bytes(g_digits[buf][w] ^ (d * 0x01010101u)) & mask);
         }
-        uint slot = i < n ? g_count[d] : 0u;
-        barrier(); // every thread has read its slot before the last of a digit moves it on
+        uint slot = g_count[d] + before;
+        barrier(); // every thread has read g_count before any moves it on
         if (i < n) {
-            dst.k[slot + before] = key;
-            if (after == 0u) g_count[d] = slot + before + 1u;
+            dst.k[slot] = key;
+            atomicAdd(g_count[d], 1u);
         }
     }
 }
