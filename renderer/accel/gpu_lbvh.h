@@ -72,8 +72,8 @@ uint32_t rd_gpu_lbvh_node_count(uint32_t tri_count);
 uint64_t rd_gpu_lbvh_scratch_bytes(uint32_t tri_count);
 /* Records the sort of a build (pass 3) on its own, for tests: sorts n keys (at most
  * RD_GPU_LBVH_MAX_TRIANGLES; uvec2 each at keys: x a payload, y the 32-bit code) ascending by y,
- * stably, in place. sort_scratch: rd_gpu_lbvh_sort_scratch_bytes(n) bytes (4-byte aligned; a
- * build's sits at the end of its scratch). Ends with a barrier. */
+ * stably, in place. keys and sort_scratch (rd_gpu_lbvh_sort_scratch_bytes(n) bytes; a
+ * build's sits at the end of its scratch): 8-byte aligned. Ends with a barrier. */
 void rd_gpu_lbvh_record_sort(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress keys,
                              uint32_t n, VkDeviceAddress sort_scratch);
 uint64_t rd_gpu_lbvh_sort_scratch_bytes(uint32_t n);
