@@ -1,6 +1,7 @@
-// lbvh_sort.comp: an LSD radix sort (Harris, Sengupta and Owens, GPU Gems 3 ch. 39; Merrill and
-// Grimshaw 2011's reduce-then-scan shape) of the LBVH keys (renderer/accel/gpu_lbvh.c): n keys
-// (uvec2: x the payload, the triangle index; y the 32-bit code), stable by y, in 4 passes of
+// lbvh_sort.comp: an LSD radix sort (Satish, Harris and Garland 2009, "Designing Efficient
+// Sorting Algorithms for Manycore GPUs", sec. 4: tile histograms, their scan, a scatter) of the
+// LBVH keys (renderer/accel/gpu_lbvh.c): n keys (uvec2: x the payload, the triangle index; y the
+// 32-bit code), stable by y, in 4 passes of
 // 8 bits (y >> 0, 8, 16, 24), each from one key buffer to the other, so the sorted keys end
 // where they began. As lbvh_morton writes the keys in triangle order, the result is ascending by
 // (Morton code, triangle index). Each pass is five dispatches (params.w, the kind):

@@ -6,7 +6,10 @@
  * the GPU traversal (shaders/trace.glsl through test_trace.comp) agreeing with the CPU's,
  * and an SAH cost within 3x of the CPU builder's on the same mesh (printed); the same checks with
  * the dispatches' rows lowered to 3 groups and 1 group (rd_gpu_lbvh_builder.row_groups), so that
- * 5000 triangles need several rows of a 2D dispatch in every pass. Prints the build time (submit
+ * 5000 triangles need several rows of a 2D dispatch in every pass. The radix sort on its own
+ * (rd_gpu_lbvh_record_sort) equals a stable CPU sort of the same keys (1 to 70001 keys, duplicate
+ * codes, rows of 1 and 3 groups; run_sort_tests), and the sorted keys a build leaves in its scratch
+ * are its triangles ascending by (code, index) (run_build_key_tests). Prints the build time (submit
  * and wait) of each size. `test_gpu_lbvh bench [sizes]` (up to RD_GPU_LBVH_MAX_TRIANGLES, e.g.
  * `bench 1000000 8000000`) builds larger meshes and prints two tables: the build's passes, and
  * the traversal speed of the same rays through the CPU builder's tree and the LBVH (run_bench). */
