@@ -2,8 +2,9 @@
 // Sorting Algorithms for Manycore GPUs", sec. 4: tile histograms, their scan, a scatter) of the
 // LBVH keys (renderer/accel/gpu_lbvh.c): n keys (uvec2: x the payload, the triangle index; y the
 // 32-bit code), stable by y, in 4 passes of 8 bits (y >> 0, 8, 16, 24), each from one key
-// buffer to the other, so the sorted keys end where they began. As lbvh_morton writes the keys in triangle order, the result is ascending by
-// (Morton code, triangle index). Each pass is five dispatches (params.w, the kind):
+// buffer to the other, so the sorted keys end where they began. As lbvh_morton writes the keys
+// in triangle order, the result is ascending by (Morton code, triangle index). Each pass is
+// five dispatches (params.w, the kind):
 //   0: histogram: a workgroup counts the digits of its tile of LBVH_RADIX_TILE keys and writes
 //      count(d, tile) at hist[d * tiles + tile] (digit-major, so that an exclusive prefix sum of
 //      hist in order gives each (digit, tile)'s first output slot);
