@@ -51,14 +51,43 @@ void rd_gpu_lbvh_builder_destroy(rd_vk *vk, rd_gpu_lbvh_builder *b)
     rd_pipelines_destroy(vk, b, kPipelines, PIPELINE_COUNT);
 }
 
-/* Keys the sort takes: a power of two, at least one block of lbvh_sort's shared memory. */
-#define SORT_BLOCK (2u * PC_WG_1D)
+/* Keys lbvh_morton writes (the layout of shaders/lbvh.glsl): a power of two, at least 128 (the
+ * padding keys past n, all ones, are not sorted). */
 static uint64_t padded_keys(uint32_t n)
 {
-    uint64_t p = SORT_BLOCK;
+    uint64_t p = 2u * PC_WG_1D;
     while (p < n)
         p <<= 1;
     return p;
+}
+
+/* The radix sort (shaders/lbvh_sort.comp, whose constants these mirror): 4 passes of 8 bits,
+ * tiles of SORT_TILE keys a workgroup, the (digit, tile) counts scanned in blocks of
+ * SORT_SCAN_BLOCK words. */
+#define SORT_PASSES 4u
+#define SORT_DIGITS 256u
+#define SORT_TILE (16u * PC_WG_1D)
+#define SORT_SCAN_BLOCK (32u * PC_WG_1D)
+
+static uint32_t sort_tiles(uint32_t n)
+{
+    return (n + SORT_TILE - 1) / SORT_TILE;
+}
+
+static uint32_t sort_hist_words(uint32_t n)
+{
+    return SORT_DIGITS * sort_tiles(n);
+}
+
+static uint32_t sort_scan_blocks(uint32_t n)
+{
+    return (sort_hist_words(n) + SORT_SCAN_BLOCK - 1) / SORT_SCAN_BLOCK;
+}
+
+/* The sort's scratch, in uints: the other key buffer (2n), hist, then the block sums. */
+uint64_t rd_gpu_lbvh_sort_scratch_bytes(uint32_t n)
+{
+    return 4 * (2 * (uint64_t)n + sort_hist_words(n) + sort_scan_blocks(n));
 }
 
 uint32_t rd_gpu_lbvh_node_count(uint32_t tri_count)
@@ -82,10 +111,15 @@ static uint64_t work_nodes_at(uint32_t n)
     return (4 * words + 15) & ~(uint64_t)15;
 }
 
+/* Byte offset of the sort's scratch (rd_gpu_lbvh_sort_scratch_bytes), after the working tree. */
+static uint64_t sort_at(uint32_t n)
+{
+    return work_nodes_at(n) + sizeof(pc_bvh_node) * (uint64_t)rd_gpu_lbvh_node_count(n);
+}
+
 uint64_t rd_gpu_lbvh_scratch_bytes(uint32_t tri_count)
 {
-    return work_nodes_at(tri_count) +
-           sizeof(pc_bvh_node) * (uint64_t)rd_gpu_lbvh_node_count(tri_count);
+    return sort_at(tri_count) + rd_gpu_lbvh_sort_scratch_bytes(tri_count);
 }
 
 static uint32_t max_leaf_def(uint32_t max_leaf)
@@ -117,6 +151,36 @@ static void dispatch_1d(rd_cmd *c, const rd_gpu_lbvh_builder *b, const rd_pipeli
     rd_cmd_dispatch(c, p, push, (uint32_t)row, (uint32_t)rows, 1);
 }
 
+void rd_gpu_lbvh_record_sort(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress keys,
+                             uint32_t n, VkDeviceAddress sort_scratch)
+{
+    assert(n <= RD_GPU_LBVH_MAX_TRIANGLES);
+    if (n == 0) return;
+    uint32_t tiles = sort_tiles(n), words = sort_hist_words(n);
+    VkDeviceAddress other = sort_scratch, hist = other + 8 * (uint64_t)n;
+    VkDeviceAddress sums = hist + 4 * (uint64_t)words;
+    _Static_assert(SORT_PASSES % 2 == 0, "the sorted keys end in keys");
+    for (uint32_t pass = 0; pass < SORT_PASSES; pass++) {
+        VkDeviceAddress from = pass % 2 ? other : keys, to = pass % 2 ? keys : other;
+        uint32_t shift = 8 * pass;
+        pc_push p = {.buf0 = from, .buf2 = hist, .params = {n, shift, tiles, 0}};
+        dispatch_1d(c, b, &b->sort, &p, tiles);
+        rd_cmd_barrier(c);
+        p = (pc_push){.buf1 = sums, .buf2 = hist, .params = {words, shift, tiles, 1}};
+        dispatch_1d(c, b, &b->sort, &p, sort_scan_blocks(n));
+        rd_cmd_barrier(c);
+        p.params.w = 2;
+        rd_cmd_dispatch(c, &b->sort, &p, 1, 1, 1);
+        rd_cmd_barrier(c);
+        p.params.w = 3;
+        dispatch_1d(c, b, &b->sort, &p, sort_scan_blocks(n));
+        rd_cmd_barrier(c);
+        p = (pc_push){.buf0 = from, .buf1 = to, .buf2 = hist, .params = {n, shift, tiles, 4}};
+        dispatch_1d(c, b, &b->sort, &p, tiles);
+        rd_cmd_barrier(c);
+    }
+}
+
 void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress positions,
                         uint32_t tri_count, uint32_t max_leaf, VkDeviceAddress nodes,
                         VkDeviceAddress prim_index, const rd_buffer *scratch_buf, rd_timer *timer)
@@ -144,19 +208,7 @@ void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress
         dispatch_1d(c, b, &b->morton, &push, groups(nkeys));
         rd_cmd_barrier(c);
         if (timer) rd_timer_mark(c, timer, "lbvh_keys");
-        push.params = (pc_uvec4){(uint32_t)(nkeys / 2), 0, 0, 2}; /* k <= SORT_BLOCK */
-        dispatch_1d(c, b, &b->sort, &push, nkeys / SORT_BLOCK);
-        rd_cmd_barrier(c);
-        for (uint64_t k = 2 * SORT_BLOCK; k <= nkeys; k <<= 1) {
-            for (uint64_t j = k >> 1; j >= SORT_BLOCK; j >>= 1) {
-                push.params = (pc_uvec4){(uint32_t)(nkeys / 2), (uint32_t)k, (uint32_t)j, 0};
-                dispatch_1d(c, b, &b->sort, &push, groups(nkeys / 2));
-                rd_cmd_barrier(c);
-            }
-            push.params = (pc_uvec4){(uint32_t)(nkeys / 2), (uint32_t)k, 0, 1};
-            dispatch_1d(c, b, &b->sort, &push, nkeys / SORT_BLOCK);
-            rd_cmd_barrier(c);
-        }
+        rd_gpu_lbvh_record_sort(c, b, scratch + 4 * KEYS_AT, n, scratch + sort_at(n));
         if (timer) rd_timer_mark(c, timer, "lbvh_sort");
     }
     pc_push h = {.buf0 = scratch,

@@ -5,10 +5,15 @@
  * prim_index). Passes (shaders/lbvh_*.comp, a barrier between each):
  *   1. lbvh_bounds: the centroids' box, by atomics (two dispatches: reset, then widen);
  *   2. lbvh_morton: keys (30-bit Morton code of the centroid, triangle index);
- *   3. lbvh_sort: a bitonic sort of the keys padded to N = a power of two (at least 128), the
- *      steps within blocks of 128 keys in shared memory, the others one dispatch each: 28
- *      dispatches for 5000 triangles (N = 8192), 66 for 100 K; O(N log^2 N) work, simple and
- *      exact, slower than a radix sort for large meshes (171 dispatches for 2^24 keys);
+ *   3. lbvh_sort: an LSD radix sort of the n keys by their code, stable, so ascending by
+ *      (code, triangle index) as lbvh_morton writes them in triangle order: 4 passes of 8 bits
+ *      over the 31-bit code (bit 30: non-finite), each a histogram per tile of 1024 keys (a
+ *      64-thread workgroup), an exclusive prefix sum of the (digit, tile) counts in three
+ *      dispatches and a stable scatter (a key's rank among the equal digits before it in its
+ *      tile, in shared memory) into the other key buffer: 20 dispatches whatever n (8192 tiles
+ *      for 8 M keys), O(n) work (rd_gpu_lbvh_record_sort). Not 3 passes of 11 bits: an odd
+ *      count ends in the other buffer (a copy back), and 2048 digits a tile make 8x the counts
+ *      to scan; 256 fit in shared memory beside the scatter's;
  *   4. lbvh_hierarchy: Karras's radix tree, one thread per internal node; internal node i's
  *      children go to nodes 2i+1 and 2i+2, so 2n-1 nodes with the root at 0;
  *   5. lbvh_boxes: the leaves (one thread each), then 64 indirect passes of one thread per
@@ -52,11 +57,12 @@ rd_vk_result rd_gpu_lbvh_builder_create(rd_vk *vk, rd_gpu_lbvh_builder *b, char 
                                         size_t errlen);
 void rd_gpu_lbvh_builder_destroy(rd_vk *vk, rd_gpu_lbvh_builder *b); /* idempotent */
 
-/* Triangles one build takes at most: 2^24 (16.7 M; the sort's N padded keys at most 2^24). Every
+/* Triangles one build takes at most: 2^24 (16.7 M; lbvh_morton's N padded keys at most 2^24). Every
  * pass is one dispatch of rows of at most 65535 groups (x) in y, the indirect ones too, so a pass
  * of 2n threads needs 2n / (64 * 65535) rows (9 for 2^24); the limit is set by 32-bit indices
  * in the shaders (scratch words, 2n - 1 nodes) with room to spare, and by memory: 2^24
- * triangles take about 0.6 GiB of positions, 1.6 GiB of scratch and 1 GiB of nodes. */
+ * triangles take about 0.6 GiB of positions, 1.7 GiB of scratch (0.14 of it the sort's) and 1 GiB
+ * of nodes. */
 #define RD_GPU_LBVH_MAX_TRIANGLES (1u << 24)
 
 /* Nodes a build over tri_count triangles writes at most: 2 tri_count - 1 (1 for none); with
@@ -64,6 +70,13 @@ void rd_gpu_lbvh_builder_destroy(rd_vk *vk, rd_gpu_lbvh_builder *b); /* idempote
 uint32_t rd_gpu_lbvh_node_count(uint32_t tri_count);
 /* Bytes of scratch a build needs (16-byte aligned device address). */
 uint64_t rd_gpu_lbvh_scratch_bytes(uint32_t tri_count);
+/* Records the sort of a build (pass 3) on its own, for tests: sorts n keys (at most
+ * RD_GPU_LBVH_MAX_TRIANGLES; uvec2 each at keys: x a payload, y the 32-bit code) ascending by y,
+ * stably, in place. keys and sort_scratch (rd_gpu_lbvh_sort_scratch_bytes(n) bytes; a
+ * build's sits at the end of its scratch): 8-byte aligned. Ends with a barrier. */
+void rd_gpu_lbvh_record_sort(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress keys,
+                             uint32_t n, VkDeviceAddress sort_scratch);
+uint64_t rd_gpu_lbvh_sort_scratch_bytes(uint32_t n);
 /* Byte offset in the scratch of the uint node count a build writes. */
 #define RD_GPU_LBVH_COUNT_OFFSET 24u
 
