@@ -57,6 +57,15 @@ static inline float pc_u2f(uint32_t u)
 /* The GPU LBVH's node renumbering (shaders/lbvh_scan.comp): words of its prefix sum that one
  * workgroup scans (a multiple of PC_WG_1D). */
 #define PC_LBVH_SCAN_BLOCK 2048u
+/* The GPU LBVH's radix sort (shaders/lbvh_sort.comp): passes of 8-bit digits over the 31-bit
+ * keys, tiles of PC_LBVH_SORT_TILE keys a workgroup (16 a thread), the (digit, tile) counts
+ * scanned in blocks of PC_LBVH_SORT_SCAN_BLOCK words (32 a thread). */
+#define PC_LBVH_SORT_PASSES 4u
+#define PC_LBVH_SORT_DIGITS 256u
+#define PC_LBVH_SORT_ROUNDS 16u
+#define PC_LBVH_SORT_TILE (PC_WG_1D * PC_LBVH_SORT_ROUNDS)
+#define PC_LBVH_SORT_SCAN_PER_THREAD 32u
+#define PC_LBVH_SORT_SCAN_BLOCK (PC_WG_1D * PC_LBVH_SORT_SCAN_PER_THREAD)
 
 /* ---- enumerations (plain constants: GLSL has no enums) ------------------------------- */
 #define PC_LIGHT_POINT 0u

@@ -5,10 +5,10 @@
 // buffer to the other, so the sorted keys end where they began. As lbvh_morton writes the keys
 // in triangle order, the result is ascending by (Morton code, triangle index). Each pass is
 // five dispatches (params.w, the kind):
-//   0: histogram: a workgroup counts the digits of its tile of LBVH_RADIX_TILE keys and writes
+//   0: histogram: a workgroup counts the digits of its tile of PC_LBVH_SORT_TILE keys and writes
 //      count(d, tile) at hist[d * tiles + tile] (digit-major, so that an exclusive prefix sum of
 //      hist in order gives each (digit, tile)'s first output slot);
-//   1: the sum of each block of LBVH_RADIX_SCAN_BLOCK hist words to sums[block];
+//   1: the sum of each block of PC_LBVH_SORT_SCAN_BLOCK hist words to sums[block];
 //   2: one workgroup: the exclusive prefix sum of sums, in place;
 //   3: each block's exclusive prefix sum of hist, in place, from its sums[block];
 //   4: scatter: a workgroup walks its tile in rounds of PC_WG_1D keys in order; a key's slot
@@ -18,8 +18,8 @@
 // Every dispatch is 1D work in rows (lbvh_group); a group past the work returns whole.
 // Push constants (pc_push): buf0 = keys in, buf1 = keys out (0, 4) or sums (1, 2, 3),
 // buf2 = hist; params.x = n (0, 4) or hist words (1, 2, 3), params.y = the digit's shift,
-// params.z = tiles, params.w = kind. gpu_lbvh.c mirrors LBVH_RADIX_TILE and
-// LBVH_RADIX_SCAN_BLOCK.
+// params.z = tiles, params.w = kind. gpu_lbvh.c mirrors PC_LBVH_SORT_TILE and
+// PC_LBVH_SORT_SCAN_BLOCK.
 #version 460
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
@@ -30,11 +30,6 @@
 
 layout(local_size_x = PC_WG_1D) in;
 
-#define LBVH_RADIX_DIGITS 256u
-#define LBVH_RADIX_ROUNDS 16u                          // keys a thread of a tile
-#define LBVH_RADIX_TILE (PC_WG_1D * LBVH_RADIX_ROUNDS) // 1024
-#define LBVH_RADIX_SCAN_PER_THREAD 32u
-#define LBVH_RADIX_SCAN_BLOCK (PC_WG_1D * LBVH_RADIX_SCAN_PER_THREAD) // 2048
 
 layout(push_constant) uniform Push
 {
@@ -46,7 +41,7 @@ layout(buffer_reference, std430, buffer_reference_align = 4) buffer RadixUints
     uint v[];
 };
 
-shared uint g_count[LBVH_RADIX_DIGITS]; // a tile's digit counts (0), next free slots (4)
+shared uint g_count[PC_LBVH_SORT_DIGITS]; // a tile's digit counts (0), next free slots (4)
 shared uint g_digits[2][PC_WG_1D / 4u]; // a round's digits, 4 a word (4; by round parity)
 shared uint g_scan[PC_WG_1D];
 
@@ -71,24 +66,24 @@ uint group_exclusive(uint v, out uint total)
 
 uint digit_of(uvec2 key, uint shift)
 {
-    return (key.y >> shift) & (LBVH_RADIX_DIGITS - 1u);
+    return (key.y >> shift) & (PC_LBVH_SORT_DIGITS - 1u);
 }
 
 void histogram(uint tile, uint t)
 {
     LbvhKeys keys = LbvhKeys(pc.buf0);
     uint n = pc.params.x, shift = pc.params.y, tiles = pc.params.z;
-    for (uint d = t; d < LBVH_RADIX_DIGITS; d += PC_WG_1D)
+    for (uint d = t; d < PC_LBVH_SORT_DIGITS; d += PC_WG_1D)
         g_count[d] = 0u;
     barrier();
-    uint base = tile * LBVH_RADIX_TILE;
-    for (uint r = 0u; r < LBVH_RADIX_ROUNDS; r++) {
+    uint base = tile * PC_LBVH_SORT_TILE;
+    for (uint r = 0u; r < PC_LBVH_SORT_ROUNDS; r++) {
         uint i = base + r * PC_WG_1D + t;
         if (i < n) atomicAdd(g_count[digit_of(keys.k[i], shift)], 1u);
     }
     barrier();
     RadixUints hist = RadixUints(pc.buf2);
-    for (uint d = t; d < LBVH_RADIX_DIGITS; d += PC_WG_1D)
+    for (uint d = t; d < PC_LBVH_SORT_DIGITS; d += PC_WG_1D)
         hist.v[d * tiles + tile] = g_count[d];
 }
 
@@ -103,12 +98,12 @@ void scatter(uint tile, uint t)
     LbvhKeys src = LbvhKeys(pc.buf0), dst = LbvhKeys(pc.buf1);
     RadixUints hist = RadixUints(pc.buf2);
     uint n = pc.params.x, shift = pc.params.y, tiles = pc.params.z;
-    for (uint d = t; d < LBVH_RADIX_DIGITS; d += PC_WG_1D)
+    for (uint d = t; d < PC_LBVH_SORT_DIGITS; d += PC_WG_1D)
         g_count[d] = hist.v[d * tiles + tile];
     if (t < PC_WG_1D / 4u) g_digits[0][t] = 0u;
     barrier();
-    uint base = tile * LBVH_RADIX_TILE;
-    for (uint r = 0u; r < LBVH_RADIX_ROUNDS; r++) {
+    uint base = tile * PC_LBVH_SORT_TILE;
+    for (uint r = 0u; r < PC_LBVH_SORT_ROUNDS; r++) {
         uint i = base + r * PC_WG_1D + t, buf = r & 1u;
         uvec2 key = i < n ? src.k[i] : uvec2(0u);
         uint d = digit_of(key, shift);
@@ -144,15 +139,15 @@ void main()
     }
     RadixUints hist = RadixUints(pc.buf2), sums = RadixUints(pc.buf1);
     uint words = pc.params.x;
-    uint blocks = (words + LBVH_RADIX_SCAN_BLOCK - 1u) / LBVH_RADIX_SCAN_BLOCK, total;
-    if (kind == 2u) { // one group: sums[0, blocks) in chunks of LBVH_RADIX_SCAN_BLOCK
+    uint blocks = (words + PC_LBVH_SORT_SCAN_BLOCK - 1u) / PC_LBVH_SORT_SCAN_BLOCK, total;
+    if (kind == 2u) { // one group: sums[0, blocks) in chunks of PC_LBVH_SORT_SCAN_BLOCK
         uint carry = 0u;
-        for (uint base = 0u; base < blocks; base += LBVH_RADIX_SCAN_BLOCK) {
-            uint first = base + t * LBVH_RADIX_SCAN_PER_THREAD, own = 0u;
-            for (uint k = 0u; k < LBVH_RADIX_SCAN_PER_THREAD; k++)
+        for (uint base = 0u; base < blocks; base += PC_LBVH_SORT_SCAN_BLOCK) {
+            uint first = base + t * PC_LBVH_SORT_SCAN_PER_THREAD, own = 0u;
+            for (uint k = 0u; k < PC_LBVH_SORT_SCAN_PER_THREAD; k++)
                 own += first + k < blocks ? sums.v[first + k] : 0u;
             uint at = carry + group_exclusive(own, total);
-            for (uint k = 0u; k < LBVH_RADIX_SCAN_PER_THREAD && first + k < blocks; k++) {
+            for (uint k = 0u; k < PC_LBVH_SORT_SCAN_PER_THREAD && first + k < blocks; k++) {
                 uint v = sums.v[first + k];
                 sums.v[first + k] = at;
                 at += v;
@@ -162,8 +157,8 @@ void main()
         return;
     }
     if (group >= blocks) return; // the whole group
-    uint first = group * LBVH_RADIX_SCAN_BLOCK + t * LBVH_RADIX_SCAN_PER_THREAD, own = 0u;
-    for (uint k = 0u; k < LBVH_RADIX_SCAN_PER_THREAD; k++)
+    uint first = group * PC_LBVH_SORT_SCAN_BLOCK + t * PC_LBVH_SORT_SCAN_PER_THREAD, own = 0u;
+    for (uint k = 0u; k < PC_LBVH_SORT_SCAN_PER_THREAD; k++)
         own += first + k < words ? hist.v[first + k] : 0u;
     uint at = group_exclusive(own, total);
     if (kind == 1u) {
@@ -171,7 +166,7 @@ void main()
         return;
     }
     at += sums.v[group];
-    for (uint k = 0u; k < LBVH_RADIX_SCAN_PER_THREAD && first + k < words; k++) {
+    for (uint k = 0u; k < PC_LBVH_SORT_SCAN_PER_THREAD && first + k < words; k++) {
         uint v = hist.v[first + k];
         hist.v[first + k] = at;
         at += v;

@@ -61,13 +61,11 @@ static uint64_t padded_keys(uint32_t n)
     return p;
 }
 
-/* The radix sort (shaders/lbvh_sort.comp, whose constants these mirror): 4 passes of 8 bits,
- * tiles of SORT_TILE keys a workgroup, the (digit, tile) counts scanned in blocks of
- * SORT_SCAN_BLOCK words. */
-#define SORT_PASSES 4u
-#define SORT_DIGITS 256u
-#define SORT_TILE (16u * PC_WG_1D)
-#define SORT_SCAN_BLOCK (32u * PC_WG_1D)
+/* The radix sort (shaders/lbvh_sort.comp; its constants in gpu_types.h). */
+#define SORT_PASSES PC_LBVH_SORT_PASSES
+#define SORT_DIGITS PC_LBVH_SORT_DIGITS
+#define SORT_TILE PC_LBVH_SORT_TILE
+#define SORT_SCAN_BLOCK PC_LBVH_SORT_SCAN_BLOCK
 
 static uint32_t sort_tiles(uint32_t n)
 {
