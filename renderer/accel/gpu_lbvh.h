@@ -28,8 +28,8 @@
  * keys), but not kept within RD_BVH_MAX_DEPTH (48) as the CPU builder's is; random and
  * degenerate meshes of a few thousand triangles stay near 2 log2 n (test_gpu_lbvh prints it);
  * rd_gpu_lbvh_build_download reports it.
- * Children may sit before their parent (internal node i's slot is its parent's choice), so
- * rd_gpu_refit_blas_create, which assumes the CPU builder's order, cannot take it yet.
+ * Children may sit before their parent (internal node i's slot is its parent's choice);
+ * rd_gpu_refit_blas_create(_at) takes such trees (its levels come from a walk from the root).
  * A triangle with a non-finite vertex gets an empty box and a key past every finite one.
  * Not yet used by gpu_scene (which builds BLASes on the CPU, renderer/accel/bvh.h). */
 #ifndef RD_GPU_LBVH_H
