@@ -31,7 +31,8 @@
  * Children may sit before their parent (internal node i's slot is its parent's choice);
  * rd_gpu_refit_blas_create(_at) takes such trees (its levels come from a walk from the root).
  * A triangle with a non-finite vertex gets an empty box and a key past every finite one.
- * Not yet used by gpu_scene (which builds BLASes on the CPU, renderer/accel/bvh.h). */
+ * gpu_scene_deform.c rebuilds a deforming mesh's BLAS with it (uploads still build on the CPU,
+ * renderer/accel/bvh.h). */
 #ifndef RD_GPU_LBVH_H
 #define RD_GPU_LBVH_H
 
