@@ -67,9 +67,9 @@
 typedef struct sah_check {
     rd_task task; /* first member */
     rd_task_group group;
-    bool busy;    /* submitted, its verdict not yet collected */
-    bool voided;  /* the mesh was rebuilt on the CPU meanwhile: the verdict is dropped */
-    bool rebuild; /* a collected verdict, applied at the mesh's next pose */
+    bool busy;                  /* submitted, its verdict not yet collected */
+    bool voided;                /* the mesh was rebuilt meanwhile: the verdict is dropped */
+    bool rebuild;               /* a collected verdict, applied at the mesh's next pose */
     double sah_refitted, slack; /* the refitted cost, and its allowance over a CPU build's */
     float *positions;           /* the posed triangles (9 floats each), the job's copy */
     uint32_t tri_count;
@@ -98,7 +98,7 @@ typedef struct gpu_build {
 } gpu_build;
 
 struct rd_gpu_scene_deform {
-    bool pipelines; /* the three below made (on the first GPU pose) */
+    bool pipelines; /* the pipelines and timer below made (on the first GPU pose) */
     rd_gpu_deformer deformer;
     rd_gpu_refitter refitter;
     rd_pipeline tris;  /* deform_tris.comp */
