@@ -445,7 +445,13 @@ rd_vk_result rd_gpu_scene_deform_run(rd_vk *vk, rd_gpu_scene *gs, const rd_scene
         deform_mesh *dm = &g->meshes[list[k]];
         rebuild[k] = 0;
         if (!rebuild_due(dm)) continue;
-        if (gpu_build_create(vk, &builds[k], dm->refit.prim_count, err, errlen) == RD_VK_OK) {
+        uint32_t tris = dm->refit.prim_count;
+        rd_vk_result br = RD_VK_ERR_VULKAN;
+        if (rd_gpu_lbvh_node_count(tris) > blas_slots(&s->meshes[list[k]], 0)) /* never */
+            snprintf(err, errlen, "an LBVH of %u triangles does not fit the BLAS's slots", tris);
+        else
+            br = gpu_build_create(vk, &builds[k], tris, err, errlen);
+        if (br == RD_VK_OK) {
             built[k] = 1;
         } else {
             if (vk->device_lost) break;
