@@ -5,8 +5,10 @@
 // N = tri count rounded up to a power of two, padding keys all ones); then leaf_slot[n] (sorted
 // leaf -> output node), node_slot[n] (internal node -> output node), done[n] (per internal
 // node: the lbvh_boxes pass that made its box, 0 before), range[2n] (per internal node: first
-// sorted leaf and count) and alive[2n] (per working-tree node: 1 if it stays in the output,
-// then its output index after lbvh_scan), then 4 words: the indirect dispatch of the
+// sorted leaf and count, the count's top bits flags: LBVH_MIXED, LBVH_COLLAPSED) and alive[2n]
+// (per working-tree node: 1 if it stays in the output, then its output index after lbvh_scan),
+// cost[n] (per internal node: its subtree's SAH cost, float bits, lbvh_boxes), then 4 words:
+// the indirect dispatch of the
 // lbvh_boxes passes (x: groups, zeroed when the root is done), then lbvh_scan's block sums
 // (LBVH_SCAN_BLOCK). Word 6 of the scratch: the
 // output's node count.
@@ -66,10 +68,20 @@ uint lbvh_alive_at(uint n, uint leaf_at)
 {
     return leaf_at + 5u * n;
 }
-uint lbvh_args_at(uint n, uint leaf_at)
+uint lbvh_cost_at(uint n, uint leaf_at)
 {
     return leaf_at + 7u * n;
 }
+uint lbvh_args_at(uint n, uint leaf_at)
+{
+    return leaf_at + 8u * n;
+}
+// Flags in the top bits of an internal node's range count (counts are below 2^24): its range
+// mixes finite and non-finite triangles (never collapsed, lbvh_hierarchy); it is collapsed into
+// one leaf (lbvh_boxes).
+#define LBVH_MIXED 0x80000000u
+#define LBVH_COLLAPSED 0x40000000u
+#define LBVH_COUNT_MASK 0x00ffffffu
 #define LBVH_COUNT_AT 6u
 // lbvh_scan.comp's block sums (PC_LBVH_SCAN_BLOCK, gpu_types.h) follow the args words.
 uint lbvh_scan_sums_at(uint n, uint leaf_at)

@@ -7,13 +7,13 @@
 // 2n-1 nodes of this working tree are all written once. Each thread writes its children's w words
 // (interior: first = 2c+1, count 0; leaves are written by lbvh_boxes), the slots of its children
 // and prim_index of its leaf children, clears its own done word for lbvh_boxes, and writes its
-// range of sorted leaves and whether its children stay (alive: its range holds more than max_leaf
-// triangles) for lbvh_scan and lbvh_remap; thread 0 writes the indirect dispatch of the lbvh_boxes
+// range of sorted leaves and its children's alive words (1: lbvh_boxes clears those under a
+// collapsed node) for lbvh_scan and lbvh_remap; thread 0 writes the indirect dispatch of the lbvh_boxes
 // passes (one thread per internal node, rows of at most params.w groups). lbvh_remap copies the nodes that stay to the output.
 // n == 1: the root is the one leaf; n == 0: an empty root (written straight to the output).
 // Push constants (pc_push): buf0 = scratch (shaders/lbvh.glsl), buf1 = nodes (pc_bvh_node),
 // buf2 = prim_index (uint); params.x = n, params.y = uint offset of leaf_slot in scratch,
-// params.z = max_leaf, params.w = groups a row of a dispatch (the nodes go to the working tree;
+// params.z = max_leaf (unused: lbvh_boxes collapses), params.w = groups a row of a dispatch (the nodes go to the working tree;
 // for n == 0 buf1 is the output).
 #version 460
 #extension GL_EXT_buffer_reference : require
@@ -106,12 +106,12 @@ void main()
     uint lo = uint(min(i, j)), count = uint(max(i, j)) - lo + 1u;
     bool mixed = ((g_keys.k[min(i, j)].y ^ g_keys.k[max(i, j)].y) & (1u << 30)) != 0u;
     s.v[lbvh_range_at(n, at) + 2u * ti] = lo;
-    s.v[lbvh_range_at(n, at) + 2u * ti + 1u] = count | (mixed ? 0x80000000u : 0u);
+    s.v[lbvh_range_at(n, at) + 2u * ti + 1u] = count | (mixed ? LBVH_MIXED : 0u);
     uint children[2] = uint[2](uint(gamma), uint(gamma + 1));
     bool leaf[2] = bool[2](min(i, j) == gamma, max(i, j) == gamma + 1);
     for (uint c = 0u; c < 2u; c++) {
         uint slot = 2u * ti + 1u + c;
-        s.v[lbvh_alive_at(n, at) + slot] = count > pc.params.z || mixed ? 1u : 0u;
+        s.v[lbvh_alive_at(n, at) + slot] = 1u; // until lbvh_boxes collapses an ancestor
         if (leaf[c]) {
             s.v[lbvh_leaf_slot_at(n, at) + children[c]] = slot;
             prim.v[children[c]] = g_keys.k[children[c]].x;

@@ -1,12 +1,12 @@
 // lbvh_remap.comp: the output of an LBVH build (renderer/accel/gpu_lbvh.c): one thread per
 // node of the working tree copies each node that stays to its output index (lbvh_scan), an
-// interior node's first child renumbered, and an interior node whose range holds at most
-// max_leaf triangles turned into one leaf over them (its sorted leaves are contiguous, so
-// first = its range's first sorted leaf, count = its range's count; prim_index is unchanged),
-// unless its range mixes finite and non-finite triangles (count's top bit, lbvh_hierarchy).
+// interior node's first child renumbered, and an interior node that lbvh_boxes collapsed
+// (LBVH_COLLAPSED in its range count) turned into one leaf over its range (its sorted leaves are
+// contiguous, so first = its range's first sorted leaf, count = its range's count; prim_index
+// is unchanged).
 // Push constants (pc_push): buf0 = working nodes, buf1 = output nodes (pc_bvh_node),
 // buf2 = scratch (shaders/lbvh.glsl); params.x = n, params.y = uint offset of leaf_slot,
-// params.z = max_leaf.
+// params.z = max_leaf (unused: the collapse is flagged).
 #version 460
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
@@ -39,9 +39,9 @@ void main()
         uint c = (floatBitsToUint(node.bmin.w) - 1u) / 2u;
         uint first = s.v[lbvh_range_at(n, at) + 2u * c];
         uint count = s.v[lbvh_range_at(n, at) + 2u * c + 1u];
-        if (count <= pc.params.z) {
+        if ((count & LBVH_COLLAPSED) != 0u) {
             node.bmin.w = uintBitsToFloat(first);
-            node.bmax.w = uintBitsToFloat(count);
+            node.bmax.w = uintBitsToFloat(count & LBVH_COUNT_MASK);
         } else {
             node.bmin.w = uintBitsToFloat(s.v[lbvh_alive_at(n, at) + 2u * c + 1u]);
         }

@@ -32,10 +32,10 @@ static const rd_pipeline_desc kPipelines[] = {
 /* Groups in one dimension of a dispatch: the least maxComputeWorkGroupCount Vulkan allows. */
 #define MAX_GROUPS_PER_DIM 65535u
 /* The scratch layout of shaders/lbvh.glsl, in uints: 8 of bounds (word 6: the output's node
- * count), 2N of keys, then leaf_slot, node_slot, done (n each), range and alive (2n each),
- * 4 of indirect dispatch; then, 16-byte aligned, the working tree of 2n - 1 nodes. */
+ * count), 2N of keys, then leaf_slot, node_slot, done (n each), range and alive (2n each), cost
+ * (n), 4 of indirect dispatch; then, 16-byte aligned, the working tree of 2n - 1 nodes. */
 #define KEYS_AT 8u
-#define TAIL_WORDS 7u
+#define TAIL_WORDS 8u
 #define ARGS_WORDS 4u
 /* Passes of lbvh_boxes after the leaves: the tree's internal levels, at most 64. */
 #define BOX_PASSES 64u
@@ -218,7 +218,7 @@ void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress
     if (timer) rd_timer_mark(c, timer, "lbvh_hierarchy");
     if (n > 0) {
         pc_push x = {
-            .buf0 = positions, .buf1 = work, .buf2 = scratch, .params = {n, leaf_at, 0, 0}};
+            .buf0 = positions, .buf1 = work, .buf2 = scratch, .params = {n, leaf_at, 0, ml}};
         dispatch_1d(c, b, &b->boxes, &x, groups(n)); /* the leaves */
         rd_cmd_barrier(c);
         VkDeviceSize args = 4 * ((VkDeviceSize)leaf_at + TAIL_WORDS * (VkDeviceSize)n);

@@ -46,16 +46,27 @@ static rd_vk_result blas_create(rd_vk *vk, rd_gpu_refit_blas *b, const rd_bvh *b
     uint32_t nn = bvh->node_count, np = bvh->prim_count;
     b->node_count = nn;
     b->prim_count = np;
-    /* depth of every node (parents come before children in the builder's order) */
+    /* depth of every node reachable from the root, walked with an explicit stack (any node
+     * order: the CPU builder's children come after their parent, the LBVH's may come before;
+     * an LBVH is up to 64 levels deep); a level reads only deeper, earlier-refitted nodes.
+     * Nodes off the tree (none in a valid one) and bad child indices are left out. */
     uint32_t *depth = xcalloc(nn, sizeof *depth), max_depth = 0;
-    for (uint32_t i = 0; i < nn; i++) {
-        if (rd_bvh_node_count(&bvh->nodes[i]) != 0 || np == 0) continue;
+    uint32_t *stack = xcalloc(nn, sizeof *stack), sp = 0, visits = 0;
+    for (uint32_t i = 0; i < nn; i++)
+        depth[i] = UINT32_MAX;
+    if (nn && np) depth[0] = 0, stack[sp++] = 0;
+    while (sp > 0 && visits++ < nn) {
+        uint32_t i = stack[--sp];
+        if (rd_bvh_node_count(&bvh->nodes[i]) != 0) continue;
         uint32_t c = rd_bvh_node_first(&bvh->nodes[i]);
-        if (c + 1 >= nn) continue;
-        assert(c > i); /* the builder stores children after their parent */
+        if (c + 1 >= nn || c + 1 < c || depth[c] != UINT32_MAX || depth[c + 1] != UINT32_MAX ||
+            sp + 2 > nn)
+            continue;
         depth[c] = depth[c + 1] = depth[i] + 1;
         if (depth[c] > max_depth) max_depth = depth[c];
+        stack[sp++] = c, stack[sp++] = c + 1;
     }
+    free(stack);
     b->level_count = np ? max_depth + 1 : 0;
     b->level_start = xcalloc((size_t)b->level_count + 1, sizeof *b->level_start);
     uint32_t *topo = xcalloc((size_t)nn + np, sizeof *topo);

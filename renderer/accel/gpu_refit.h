@@ -1,5 +1,7 @@
 /* gpu_refit.h: a BLAS refitted on the GPU for a deformed mesh (shaders/refit.comp): the node
- * boxes recomputed bottom-up over the topology the CPU builder made, one dispatch per level
+ * boxes recomputed bottom-up over the topology of any valid tree (the CPU builder's, or the GPU
+ * LBVH's, whose children may sit before their parent: levels are depths found by a walk from the
+ * root), one dispatch per level
  * (deepest first; a level's nodes only read deeper ones, so no atomics and a deterministic
  * result; depth is ~log2(triangles / 4) + a few, so ~20-40 small dispatches per mesh). The nodes
  * keep pc_bvh_node's layout and w words, so the traversal reads them as it reads a CPU build.
@@ -35,8 +37,8 @@ typedef struct rd_gpu_refit_blas {
     uint32_t *level_start; /* level_count + 1 entries into the topology's node list */
 } rd_gpu_refit_blas;
 
-/* Uploads bvh (built over the mesh's triangles, rd_bvh_build_triangles) into nodes of its own
- * (indices relative to their start: node_base and tri_base 0). */
+/* Uploads bvh (built over the mesh's triangles, rd_bvh_build_triangles or the GPU LBVH) into nodes
+ * of its own (indices relative to their start: node_base and tri_base 0). */
 rd_vk_result rd_gpu_refit_blas_create(rd_vk *vk, rd_gpu_refit_blas *b, const rd_bvh *bvh, char *err,
                                       size_t errlen);
 /* Uploads only bvh's topology, for nodes already on the GPU at node_address as a scene holds

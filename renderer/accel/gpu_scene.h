@@ -79,9 +79,10 @@ typedef struct rd_gpu_scene {
      * triangle records) and of its refits (the submission's wall time in deform_ms, refit_ms 0,
      * where the device has no timestamps; both 0 when no mesh went through the GPU) */
     double deform_build_ms, deform_ms, refit_ms;
-    /* mesh poses refitted on the GPU, rebuilt on the CPU; refitted trees checked against a fresh
-     * build, the checks finished (off the render thread: gpu_scene_deform.c) */
-    uint64_t deform_refits, deform_rebuilds, deform_sah_checks;
+    /* mesh poses refitted on the GPU, rebuilt on the CPU, rebuilt on the GPU (the LBVH, when a
+     * refitted tree is due for a rebuild); refitted trees checked against a fresh build, the
+     * checks finished (off the render thread: gpu_scene_deform.c) */
+    uint64_t deform_refits, deform_rebuilds, deform_gpu_rebuilds, deform_sah_checks;
     /* Deforming meshes: GPU state (NULL until a pose needs it), and the CPU path forced for
      * every pose (set by the upload from the environment: PROBECAST_DEFORM=cpu). */
     rd_gpu_scene_deform *deform;

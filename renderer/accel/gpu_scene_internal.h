@@ -56,16 +56,17 @@ void rd_gpu_scene_fill_mesh(const rd_scene *s, uint32_t m, const rd_bvh *bvh, co
 
 /* gpu_scene_deform.c: deforming meshes posed and refitted on the GPU (rd_gpu_scene_update_pose).
  * rd_gpu_scene_deform_built: the CPU just wrote mesh m's BLAS from bvh (its first triangle at
- * tri_base): the GPU state of m (its vertex arrays, made once, and bvh's topology) follows it,
- * unless gs->deform_on_cpu. rd_gpu_scene_deform_on_gpu: whether m's next pose is to be refitted
- * on the GPU (else rebuilt on the CPU). rd_gpu_scene_deform_run: poses and refits the meshes
+ * tri_base): the GPU state of m (its vertex arrays and source records, made once, and bvh's
+ * topology) follows it, unless gs->deform_on_cpu. rd_gpu_scene_deform_on_gpu: whether m's next
+ * pose goes to the GPU (refitted, or rebuilt there when due; else rebuilt on the CPU).
+ * rd_gpu_scene_deform_run: poses and refits (or rebuilds with the GPU LBVH) the meshes
  * list[0..n) (each rd_gpu_scene_deform_on_gpu) in one submission, in the scene's buffers, and
- * sets their bounds and revisions; rebuild[k] = 1 where list[k]'s refitted tree has degraded
- * and is to be rebuilt now (the verdict of an SAH check that finished since the last pose; the
- * checks run on a pool of their own). rd_gpu_scene_deform_wait_checks: waits for every SAH
- * check in flight and collects it (counted; its verdict applied at the mesh's next pose), for
- * tests. rd_gpu_scene_deform_destroy: idempotent; waits for the checks; no submission may be in
- * flight. */
+ * sets their bounds and revisions; rebuild[k] = 1 where list[k] is to be rebuilt on the CPU now
+ * (a GPU rebuild it was due could not be made or kept: too deep a tree, too many triangles, no
+ * memory; the SAH checks that call for rebuilds run on a pool of their own).
+ * rd_gpu_scene_deform_wait_checks: waits for every SAH check in flight and collects it (counted;
+ * its verdict applied at the mesh's next pose), for tests. rd_gpu_scene_deform_destroy: idempotent;
+ * waits for the checks; no submission may be in flight. */
 rd_vk_result rd_gpu_scene_deform_built(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s, uint32_t m,
                                        const rd_bvh *bvh, uint32_t tri_base, char *err,
                                        size_t errlen);

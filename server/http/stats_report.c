@@ -148,6 +148,7 @@ cJSON *srv_stats_json(const srv_stats_snapshot *s)
     cJSON_AddNumberToObject(df, "refit_ms", round(r->refit_ms * 1000) / 1000);
     cJSON_AddNumberToObject(df, "refits", (double)r->deform_refits);
     cJSON_AddNumberToObject(df, "rebuilds", (double)r->deform_rebuilds);
+    cJSON_AddNumberToObject(df, "gpu_rebuilds", (double)r->deform_gpu_rebuilds);
     cJSON *mem = cJSON_AddObjectToObject(j, "memory");
     cJSON_AddNumberToObject(mem, "rss_bytes", (double)s->memory.rss_bytes);
     cJSON_AddNumberToObject(mem, "peak_rss_bytes", (double)s->memory.peak_rss_bytes);
@@ -255,6 +256,8 @@ char *srv_stats_prometheus(const srv_stats_snapshot *s)
            "Mesh poses whose BVH was refitted on the GPU.", (double)r->deform_refits);
     metric(&t, "probecast_deform_rebuilds_total", "counter",
            "Mesh poses whose BVH was rebuilt on the CPU.", (double)r->deform_rebuilds);
+    metric(&t, "probecast_deform_gpu_rebuilds_total", "counter",
+           "Mesh poses whose BVH was rebuilt on the GPU (LBVH).", (double)r->deform_gpu_rebuilds);
     metric(&t, "probecast_views", "gauge", "Views (the default view and one per viewer).",
            r->views);
     metric(&t, "probecast_rays_per_second", "gauge",

@@ -420,6 +420,7 @@ static void share_state(srv_render_loop *l, bool rendering)
     s->refit_ms = l->svc.gs.refit_ms;
     s->deform_refits = l->svc.gs.deform_refits;
     s->deform_rebuilds = l->svc.gs.deform_rebuilds;
+    s->deform_gpu_rebuilds = l->svc.gs.deform_gpu_rebuilds;
     s->views = l->views.count;
     s->views_watched = watched;
     s->pt_target = l->svc.pt_target;

@@ -49,10 +49,10 @@ typedef struct srv_render_stats {
     uint64_t shadow_map_builds, shadow_map_bytes;
     uint64_t scene_generation, triangles;
     /* deforming meshes (rd_gpu_scene): the last pose that changed one (all its mesh work, the
-     * GPU time of the posing and of the refits), and the mesh poses refitted on the GPU or
-     * rebuilt on the CPU since the scene was loaded */
+     * GPU time of the posing and of the refits), and the mesh poses refitted on the GPU,
+     * rebuilt on the CPU or rebuilt on the GPU since the scene was loaded */
     double deform_build_ms, deform_ms, refit_ms;
-    uint64_t deform_refits, deform_rebuilds;
+    uint64_t deform_refits, deform_rebuilds, deform_gpu_rebuilds;
     /* path tracing (gi_mode pathtrace; pt_target 0 otherwise) */
     unsigned pt_target;  /* samples each view accumulates */
     unsigned pt_samples; /* the fewest of the watched views (srv_views_pt_samples_min) */

@@ -1,9 +1,12 @@
 /* test_gpu_deform.c: deform.comp (renderer/accel/gpu_deform.h) against the CPU reference
  * (rd_mesh_deform_apply, run by rd_scene_update) on the two-bone arm (four and eight influences)
  * and the morphing cube that skin_builder writes, at several poses: positions, normals and
- * tangents within float tolerance. Runs with the validation layer on under ctest. */
+ * tangents within float tolerance; then each mesh's rest BVH, the CPU builder's and the GPU
+ * LBVH's (children before their parent), refitted on the GPU to the pose: the CPU's refit's
+ * boxes, a fresh build's hits. Runs with the validation layer on under ctest. */
 #include "renderer/accel/bvh.h"
 #include "renderer/accel/gpu_deform.h"
+#include "renderer/accel/gpu_lbvh.h"
 #include "renderer/accel/gpu_refit.h"
 #include "renderer/gltf/gltf_loader.h"
 #include "renderer/scene/animation_clip.h"
@@ -27,18 +30,62 @@ static int close_to(const float *a, const float *b, size_t n, float tol)
 }
 
 static rd_gpu_refitter g_refit;
+static rd_gpu_lbvh_builder g_lbvh;
 static double g_worst_sah_ratio = 0;
 
-/* The BVH of the rest shape refitted on the GPU over the GPU's deformed positions p (nt
- * triangles) against a fresh CPU build over p: the same closest hit (triangle and t) ray by ray,
- * rays from a sphere around the box through points inside it. */
+/* The CPU's refit of bvh's node i over positions p (9 floats a triangle): every box the exact
+ * union of its children's or its triangles' (recursive: the trees here are shallow). */
+static void cpu_refit(rd_bvh *bvh, uint32_t i, const float *p)
+{
+    pc_bvh_node *n = &bvh->nodes[i];
+    uint32_t first = rd_bvh_node_first(n), count = rd_bvh_node_count(n);
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint32_t c = 0; count == 0 && c < 2; c++) {
+        cpu_refit(bvh, first + c, p);
+        const pc_bvh_node *ch = &bvh->nodes[first + c];
+        for (int k = 0; k < 3; k++) {
+            lo[k] = fminf(lo[k], (&ch->bmin.x)[k]);
+            hi[k] = fmaxf(hi[k], (&ch->bmax.x)[k]);
+        }
+    }
+    for (uint32_t t = first; t < first + count; t++)
+        for (int v = 0; v < 9; v++) {
+            float x = p[9 * (size_t)bvh->prim_index[t] + v];
+            lo[v % 3] = fminf(lo[v % 3], x);
+            hi[v % 3] = fmaxf(hi[v % 3], x);
+        }
+    n->bmin.x = lo[0], n->bmin.y = lo[1], n->bmin.z = lo[2];
+    n->bmax.x = hi[0], n->bmax.y = hi[1], n->bmax.z = hi[2];
+}
+
+/* The BVH of the rest shape (the CPU builder's, or with lbvh the GPU LBVH's, whose children may
+ * sit before their parent) refitted on the GPU over the GPU's deformed positions p (nt
+ * triangles): its boxes those of the CPU's refit of the same tree, and against a fresh CPU
+ * build over p the same closest hit (triangle and t) ray by ray, rays from a sphere around the
+ * box through points inside it. */
 static void check_refit(rd_vk *vk, const rd_gpu_deform_mesh *gm, const rd_mesh_deform *d,
-                        const float *p, const char *what)
+                        const float *p, bool lbvh, const char *what)
 {
     uint32_t nt = d->vertex_count / 3;
     rd_bvh rest, fresh;
-    CHECK(rd_bvh_build_triangles(&rest, d->rest_positions, nt, NULL));
+    if (lbvh) {
+        rd_vk_result lr = rd_gpu_lbvh_build_download(vk, &g_lbvh, d->rest_positions, nt, 0, NULL,
+                                                     &rest, NULL, err, sizeof err);
+        CHECKF(lr == RD_VK_OK, "%s: LBVH: %s", what, err);
+        if (lr != RD_VK_OK) return;
+    } else {
+        CHECK(rd_bvh_build_triangles(&rest, d->rest_positions, nt, NULL));
+    }
     CHECK(rd_bvh_build_triangles(&fresh, p, nt, NULL));
+    rd_bvh ref = rest; /* the CPU's refit of the same tree */
+    ref.nodes = malloc(rest.node_count * sizeof *ref.nodes);
+    if (!ref.nodes) abort();
+    memcpy(ref.nodes, rest.nodes, rest.node_count * sizeof *ref.nodes);
+    if (rest.prim_count) cpu_refit(&ref, 0, p);
+    uint32_t child_first = 0; /* interior nodes whose children sit before them */
+    for (uint32_t i = 0; i < rest.node_count; i++)
+        child_first += rd_bvh_node_count(&rest.nodes[i]) == 0 && nt > 1 &&
+                       rd_bvh_node_first(&rest.nodes[i]) < i;
     rd_gpu_refit_blas b;
     rd_vk_result r = rd_gpu_refit_blas_create(vk, &b, &rest, err, sizeof err);
     CHECKF(r == RD_VK_OK, "%s", err);
@@ -58,6 +105,15 @@ static void check_refit(rd_vk *vk, const rd_gpu_deform_mesh *gm, const rd_mesh_d
         }
     CHECKF(close_to(&rest.nodes[0].bmin.x, lo, 3, 0) && close_to(&rest.nodes[0].bmax.x, hi, 3, 0),
            "%s: refitted root box", what);
+    uint32_t boxes_differ = 0;
+    for (uint32_t i = 0; i < rest.node_count; i++)
+        boxes_differ += !close_to(&rest.nodes[i].bmin.x, &ref.nodes[i].bmin.x, 3, 0) ||
+                        !close_to(&rest.nodes[i].bmax.x, &ref.nodes[i].bmax.x, 3, 0);
+    CHECKF(boxes_differ == 0, "%s%s: %u of %u GPU-refitted boxes differ from the CPU's refit", what,
+           lbvh ? " (LBVH)" : "", boxes_differ, rest.node_count);
+    if (lbvh && nt >= 64)
+        CHECKF(child_first > 0, "%s: the LBVH puts some children before their parent", what);
+    free(ref.nodes); /* its prim_index is rest's */
     uint32_t state = 7u, rays = 0, hits = 0, bad = 0;
     for (int i = 0; i < 400; i++) {
         float u[6];
@@ -84,14 +140,14 @@ static void check_refit(rd_vk *vk, const rd_gpu_deform_mesh *gm, const rd_mesh_d
         hits += hb >= 0;
         bad += ha != hb || (ha >= 0 && ta != tb);
     }
-    CHECKF(bad == 0 && hits > 0, "%s: %u of %u rays differ after refit (%u hits)", what, bad, rays,
-           hits);
+    CHECKF(bad == 0 && hits > 0, "%s%s: %u of %u rays differ after refit (%u hits)", what,
+           lbvh ? " (LBVH)" : "", bad, rays, hits);
     double sah_refit = rd_bvh_sah_cost(&rest), sah_fresh = rd_bvh_sah_cost(&fresh);
-    /* the rebuild policy: the small bends of these tests stay refitted */
-    if (strstr(what, "150") == NULL)
+    /* the rebuild policy: the small bends of these tests stay refitted (the CPU builder's) */
+    if (!lbvh && strstr(what, "150") == NULL)
         CHECKF(!rd_gpu_refit_should_rebuild(sah_refit, sah_fresh), "%s: SAH %g over %g", what,
                sah_refit, sah_fresh);
-    if (sah_fresh > 0 && sah_refit / sah_fresh > g_worst_sah_ratio)
+    if (!lbvh && sah_fresh > 0 && sah_refit / sah_fresh > g_worst_sah_ratio)
         g_worst_sah_ratio = sah_refit / sah_fresh;
     rd_gpu_refit_blas_destroy(vk, &b);
     rd_gpu_refit_blas_destroy(vk, &b); /* idempotent */
@@ -140,7 +196,8 @@ static void check_mesh(rd_vk *vk, const rd_gpu_deformer *g, const rd_mesh *m, co
               RD_VK_OK);
         CHECKF(close_to(t, m->tangents, nv * 4, 1e-5f), "%s: tangents differ", what);
     }
-    check_refit(vk, &gm, d, p, what);
+    check_refit(vk, &gm, d, p, false, what);
+    check_refit(vk, &gm, d, p, true, what);
     free(p);
     free(nn);
     free(t);
@@ -223,6 +280,8 @@ int main(void)
     CHECKF(rc == RD_VK_OK, "%s", err);
     rd_vk_result rr = rd_gpu_refitter_create(&vk, &g_refit, err, sizeof err);
     CHECKF(rr == RD_VK_OK, "%s", err);
+    if (rr == RD_VK_OK) rr = rd_gpu_lbvh_builder_create(&vk, &g_lbvh, err, sizeof err);
+    CHECKF(rr == RD_VK_OK, "%s", err);
     if (rc == RD_VK_OK && rr == RD_VK_OK) {
         run_file(&vk, &g, gltf_arm(ARM_FLOAT), "arm", 1);
         run_file(&vk, &g, gltf_arm(ARM_TWO_SETS), "arm, eight influences", 1);
@@ -233,6 +292,7 @@ int main(void)
     CHECK(rd_gpu_refit_should_rebuild(1.0, 0.0));
     fprintf(stderr, "worst SAH cost of a refitted BVH over a fresh build: %.3f\n",
             g_worst_sah_ratio);
+    rd_gpu_lbvh_builder_destroy(&vk, &g_lbvh);
     rd_gpu_refitter_destroy(&vk, &g_refit);
     rd_gpu_deformer_destroy(&vk, &g);
     rd_gpu_deformer_destroy(&vk, &g); /* idempotent */

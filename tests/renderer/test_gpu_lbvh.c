@@ -4,7 +4,8 @@
  * one triangle a leaf and with subtrees of up to 4 collapsed: each triangle in exactly one leaf,
  * every box inside its parent, depth within RD_BVH_MAX_DEPTH), closest hits equal to brute force,
  * the GPU traversal (shaders/trace.glsl through test_trace.comp) agreeing with the CPU's,
- * and an SAH cost within 3x of the CPU builder's on the same mesh (printed); the same checks with
+ * and an SAH cost within 3x of the CPU builder's on the same mesh (printed; random soups of 100
+ * and more within 1.12x), leaves of up to 4 no costlier than of 1; the same checks with
  * the dispatches' rows lowered to 3 groups and 1 group (rd_gpu_lbvh_builder.row_groups), so that
  * 5000 triangles need several rows of a 2D dispatch in every pass. The radix sort on its own
  * (rd_gpu_lbvh_record_sort) equals a stable CPU sort of the same keys (1 to 70001 keys, duplicate
@@ -178,16 +179,17 @@ static void random_soup(float *pos, uint32_t n, float size)
     }
 }
 
-/* Builds pos on the GPU with leaves of at most max_leaf triangles and checks it. */
-static void check_build(rd_vk *vk, const rd_gpu_lbvh_builder *b, const char *what, const float *pos,
-                        uint32_t n, uint32_t rays, uint32_t max_leaf)
+/* Builds pos on the GPU with leaves of at most max_leaf triangles and checks it; returns its
+ * SAH cost (-1 when the build failed). */
+static double check_build(rd_vk *vk, const rd_gpu_lbvh_builder *b, const char *what,
+                          const float *pos, uint32_t n, uint32_t rays, uint32_t max_leaf)
 {
     rd_bvh gpu;
     double ms = 0;
     rd_vk_result r =
         rd_gpu_lbvh_build_download(vk, b, pos, n, max_leaf, NULL, &gpu, &ms, err, sizeof err);
     CHECKF(r == RD_VK_OK, "%s: %s", what, err);
-    if (r != RD_VK_OK) return;
+    if (r != RD_VK_OK) return -1;
     if (max_leaf == 1)
         CHECKF(gpu.node_count == (n ? 2 * n - 1 : 1), "%s: %u nodes", what, gpu.node_count);
     int bad = check_triangles(what, &gpu, pos, n, max_leaf);
@@ -228,17 +230,25 @@ static void check_build(rd_vk *vk, const rd_gpu_lbvh_builder *b, const char *wha
             "%.2fx %7.2f ms\n",
             what, n, max_leaf, gpu.node_count, gpu.depth, cpu.depth, sah_gpu, sah_cpu, ratio, ms);
     if (sah_cpu > 0) CHECKF(ratio < 3.0, "%s: SAH %.3f over the CPU build's", what, ratio);
+    /* random soups: the collapse by SAH keeps the LBVH near the CPU builder (measured 1.09x
+     * at 100 and 5000 triangles; 1.26x when every subtree of up to 4 triangles collapsed) */
+    if (max_leaf == 4 && n >= 100 && strncmp(what, "random soup", 11) == 0)
+        CHECKF(ratio < 1.12, "%s: SAH %.3f times the CPU build's", what, ratio);
     if (ratio > g_worst_ratio) g_worst_ratio = ratio;
     rd_bvh_destroy(&cpu);
     rd_bvh_destroy(&gpu);
+    return sah_gpu;
 }
 
-/* Both leaf policies: one triangle a leaf, and subtrees of up to 4 collapsed. */
+/* Both leaf policies: one triangle a leaf, and subtrees of up to 4 collapsed where that lowers
+ * the SAH cost, which so never exceeds the first's (the same radix tree: a collapse is taken
+ * only when it costs less; float rounding aside). */
 static void check_mesh(rd_vk *vk, const rd_gpu_lbvh_builder *b, const char *what, const float *pos,
                        uint32_t n, uint32_t rays)
 {
-    check_build(vk, b, what, pos, n, rays, 1);
-    check_build(vk, b, what, pos, n, rays, 4);
+    double one = check_build(vk, b, what, pos, n, rays, 1);
+    double four = check_build(vk, b, what, pos, n, rays, 4);
+    CHECKF(four <= one * (1 + 1e-4), "%s: leaves of up to 4 cost %.4f, of 1 %.4f", what, four, one);
 }
 
 /* Keys of the sort (rd_gpu_lbvh_record_sort): x the payload, y the code. */

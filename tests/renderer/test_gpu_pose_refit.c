@@ -11,9 +11,10 @@
  * records and trees for skin_builder's morphing cubes (morph targets with normal and tangent
  * deltas). The SAH check runs off the render thread: the sheet unfolded (a tree built with the
  * sheet folded back on itself, elbow at 170 degrees, its nodes mixing both halves, refitted
- * nearly straight) degrades, and the check's verdict rebuilds it at the next pose; a check still
- * pending when the scene is destroyed is waited for (ASan: nothing leaks, nothing is read after it
- * is freed). */
+ * nearly straight) degrades, and the check's verdict rebuilds it on the GPU (the LBVH) at the
+ * next pose, as the 64th pose after that rebuilds it again: each time the records, tree and hits
+ * (ray by ray, against a fresh CPU build) of the all-CPU path's; a check still pending when the
+ * scene is destroyed is waited for (ASan: nothing leaks, nothing is read after it is freed). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -307,16 +308,87 @@ static void bend(rd_scene *s, float deg)
     CHECKF(rd_scene_update(s, err, sizeof err), "%s", err);
 }
 
+/* Mesh m's BLAS as gs holds it now, read back into a tree of its own (indices relative to the
+ * mesh, prim_index from the records' original triangles, node_count its 2 n slots: only what
+ * the root reaches counts), over the positions its records hold (pos, 9 floats a triangle in
+ * the original order): against a fresh CPU build over pos, the same closest hit (triangle and
+ * t) ray by ray, rays from a sphere around the root box through points inside it. */
+static void check_hits(rd_vk *vk, const rd_gpu_scene *gs, const rd_scene *s, uint32_t mesh,
+                       const char *what)
+{
+    uint32_t n = s->meshes[mesh].tri_count, base = tri_base(s, mesh), root = gs->mesh_root[mesh];
+    rd_bvh tree = {.node_count = 2 * n, .prim_count = n}, fresh;
+    tree.nodes = calloc(2 * n, sizeof *tree.nodes);
+    tree.prim_index = calloc(n, sizeof *tree.prim_index);
+    pc_tri *t = calloc(n, sizeof *t);
+    float *pos = calloc((size_t)n * 9, sizeof *pos);
+    if (!tree.nodes || !tree.prim_index || !t || !pos) abort();
+    CHECK(rd_buffer_download(vk, &gs->blas_nodes, sizeof *tree.nodes * root, tree.nodes,
+                             sizeof *tree.nodes * 2 * n, err, sizeof err) == RD_VK_OK);
+    CHECK(rd_buffer_download(vk, &gs->tris, sizeof *t * base, t, sizeof *t * n, err, sizeof err) ==
+          RD_VK_OK);
+    uint32_t bad = 0, rays = 0, hits = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        uint32_t src = pc_f2u(t[i].v2.w);
+        bad += src >= n;
+        tree.prim_index[i] = src < n ? src : 0;
+        const pc_vec4 *v[3] = {&t[i].v0, &t[i].v1, &t[i].v2};
+        for (int c = 0; src < n && c < 3; c++)
+            memcpy(&pos[9 * (size_t)src + 3 * c], &v[c]->x, 3 * sizeof(float));
+    }
+    for (uint32_t i = 0; i < 2 * n; i++) { /* absolute indices back to the mesh's own */
+        pc_bvh_node *nd = &tree.nodes[i];
+        uint32_t first = pc_f2u(nd->bmin.w), count = pc_f2u(nd->bmax.w);
+        nd->bmin.w = pc_u2f(count ? first - base : first - root);
+    }
+    CHECK(rd_bvh_build_triangles(&fresh, pos, n, NULL));
+    const float *lo = &tree.nodes[0].bmin.x, *hi = &tree.nodes[0].bmax.x;
+    uint32_t state = 3u;
+    for (int i = 0; i < 400 && bad == 0; i++) {
+        float u[6], org[3], dir[3], rad = 0;
+        for (int k = 0; k < 6; k++) {
+            state = state * 1664525u + 1013904223u;
+            u[k] = (float)(state >> 8) / 16777216.0f;
+        }
+        for (int k = 0; k < 3; k++)
+            rad += (hi[k] - lo[k]) * (hi[k] - lo[k]);
+        float z = 2 * u[0] - 1, ph = 6.2831853f * u[1], sn = sqrtf(fmaxf(0, 1 - z * z));
+        const float sd[3] = {sn * cosf(ph), sn * sinf(ph), z};
+        for (int k = 0; k < 3; k++) {
+            org[k] = 0.5f * (lo[k] + hi[k]) + 2 * sqrtf(rad) * sd[k];
+            dir[k] = lo[k] + u[3 + k] * (hi[k] - lo[k]) - org[k];
+        }
+        float ta = 0, tb = 0;
+        int64_t ha = rd_bvh_closest_triangle(&tree, pos, org, dir, 0, 1e30f, &ta);
+        int64_t hb = rd_bvh_closest_triangle(&fresh, pos, org, dir, 0, 1e30f, &tb);
+        rays++;
+        hits += hb >= 0;
+        bad += ha != hb || (ha >= 0 && ta != tb);
+    }
+    printf("%s: %u of %u rays hit, %u differ from a fresh CPU build's\n", what, hits, rays, bad);
+    CHECKF(bad == 0 && hits > 0, "%s: %u of %u rays differ from a fresh CPU build (%u hits)", what,
+           bad, rays, hits);
+    rd_bvh_destroy(&fresh);
+    rd_bvh_destroy(&tree);
+    free(t);
+    free(pos);
+}
+
 /* Built folded, then unfolded: the check at the eighth refit (in flight until waited for)
- * finds the tree degraded, and the pose after it rebuilds the sheet; the next check is left
- * pending at destroy. */
+ * finds the tree degraded, and the pose after it rebuilds the sheet on the GPU (the LBVH, in
+ * place: the records, tree and hits of a CPU rebuild's, checked against the all-CPU path's
+ * scene); the next check is left pending at destroy... after the rebuild every
+ * RD_GPU_SCENE_REFIT_MAX-th pose since (64), on the GPU too, with the same checks. */
 static void fold(rd_vk *vk)
 {
     rd_scene s;
-    rd_gpu_scene gpu = {0};
+    rd_gpu_scene gpu = {0}, cpu = {0};
     if (!build_scene(&s)) return;
     bend(&s, 0);
     VK_CHECK(rd_gpu_scene_create(vk, &gpu, &s, err, sizeof err));
+    setenv("PROBECAST_DEFORM", "cpu", 1);
+    VK_CHECK(rd_gpu_scene_create(vk, &cpu, &s, err, sizeof err));
+    unsetenv("PROBECAST_DEFORM");
     uint32_t p = 0;
     for (; p <= 8; p++) { /* pose 0 rebuilds (the first), 1-8 refit, 8 starts a check */
         bend(&s, p ? 0.5f * (float)p : 170.0f);
@@ -330,21 +402,45 @@ static void fold(rd_vk *vk)
            (unsigned long long)gpu.deform_sah_checks);
     bend(&s, 5.0f);
     VK_CHECK(rd_gpu_scene_update_pose(vk, &gpu, &s, NULL, err, sizeof err));
-    printf("fold: %llu refits, %llu rebuilds, %llu SAH checks\n",
+    VK_CHECK(rd_gpu_scene_update_pose(vk, &cpu, &s, NULL, err, sizeof err));
+    printf("fold: %llu refits, %llu CPU rebuilds, %llu GPU rebuilds, %llu SAH checks\n",
            (unsigned long long)gpu.deform_refits, (unsigned long long)gpu.deform_rebuilds,
-           (unsigned long long)gpu.deform_sah_checks);
-    CHECKF(gpu.deform_rebuilds == 2 && gpu.deform_refits == 9,
-           "fold: the degraded tree is rebuilt at the pose after its check (%llu rebuilds)",
-           (unsigned long long)gpu.deform_rebuilds);
-    check_tree(vk, &gpu, &s, SHEET, "fold, rebuilt");
+           (unsigned long long)gpu.deform_gpu_rebuilds, (unsigned long long)gpu.deform_sah_checks);
+    CHECKF(gpu.deform_rebuilds == 1 && gpu.deform_gpu_rebuilds == 1 && gpu.deform_refits == 8,
+           "fold: the degraded tree is rebuilt on the GPU at the pose after its check (%llu CPU "
+           "rebuilds, %llu GPU)",
+           (unsigned long long)gpu.deform_rebuilds, (unsigned long long)gpu.deform_gpu_rebuilds);
+    check_tree(vk, &gpu, &s, SHEET, "fold, rebuilt on the GPU");
+    check_records(vk, &s, SHEET, &gpu, &cpu, "fold, rebuilt on the GPU");
+    check_hits(vk, &gpu, &s, SHEET, "fold, rebuilt on the GPU");
     for (p = 0; p < 8; p++) { /* 8 refits of the new tree: a check starts, nobody waits */
         bend(&s, p % 2 ? 10.0f : 20.0f);
         VK_CHECK(rd_gpu_scene_update_pose(vk, &gpu, &s, NULL, err, sizeof err));
     }
-    CHECK(gpu.deform_refits == 17 && gpu.deform != NULL);
+    CHECK(gpu.deform_refits == 16 && gpu.deform != NULL);
+    check_tree(vk, &gpu, &s, SHEET, "fold, the GPU build refitted");
+    check_hits(vk, &gpu, &s, SHEET, "fold, the GPU build refitted");
+    /* on to the 64th pose since the GPU build (8 done): rebuilt on the GPU again */
+    for (p = 8; p < 64; p++) {
+        bend(&s, 10.0f + 0.25f * (float)p);
+        VK_CHECK(rd_gpu_scene_update_pose(vk, &gpu, &s, NULL, err, sizeof err));
+    }
+    VK_CHECK(rd_gpu_scene_update_pose(vk, &cpu, &s, NULL, err, sizeof err));
+    printf("fold, 64 poses on: %llu refits, %llu CPU rebuilds, %llu GPU rebuilds, %llu SAH "
+           "checks\n",
+           (unsigned long long)gpu.deform_refits, (unsigned long long)gpu.deform_rebuilds,
+           (unsigned long long)gpu.deform_gpu_rebuilds, (unsigned long long)gpu.deform_sah_checks);
+    CHECKF(gpu.deform_rebuilds == 1 && gpu.deform_gpu_rebuilds == 2 && gpu.deform_refits == 16 + 55,
+           "fold: the 64th pose since the GPU build rebuilt on the GPU (%llu GPU rebuilds, %llu "
+           "refits)",
+           (unsigned long long)gpu.deform_gpu_rebuilds, (unsigned long long)gpu.deform_refits);
+    check_tree(vk, &gpu, &s, SHEET, "fold, 64th pose");
+    check_records(vk, &s, SHEET, &gpu, &cpu, "fold, 64th pose");
+    check_hits(vk, &gpu, &s, SHEET, "fold, 64th pose");
 done:
     rd_gpu_scene_destroy(vk, &gpu); /* waits for the check */
     CHECK(gpu.deform == NULL);
+    rd_gpu_scene_destroy(vk, &cpu);
     rd_scene_destroy(&s);
 }
 
