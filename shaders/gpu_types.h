@@ -57,6 +57,9 @@ static inline float pc_u2f(uint32_t u)
 /* The GPU LBVH's node renumbering (shaders/lbvh_scan.comp): words of its prefix sum that one
  * workgroup scans (a multiple of PC_WG_1D). */
 #define PC_LBVH_SCAN_BLOCK 2048u
+/* The GPU LBVH's leaf collapse weighs a leaf's SAH cost by this (shaders/lbvh_boxes.comp says
+ * why: traversal measured faster than at 1). */
+#define PC_LBVH_LEAF_WEIGHT 0.75
 /* The GPU LBVH's radix sort (shaders/lbvh_sort.comp): passes of 8-bit digits over the 31-bit
  * keys, tiles of PC_LBVH_SORT_TILE keys a workgroup (16 a thread), the (digit, tile) counts
  * scanned in blocks of PC_LBVH_SORT_SCAN_BLOCK words (32 a thread). */

@@ -31,11 +31,12 @@
  *      its triangles); where the leaf wins, the node is flagged and its descendants marked gone.
  *   6. lbvh_scan, lbvh_remap: the nodes that stay numbered by a prefix sum and copied to the
  *      output, a flagged node as one leaf.
- * Leaf policy: the least SAH cost over the collapses of the radix tree's subtrees of at most
- * max_leaf (default 4) triangles (SAH_TRAVERSAL = SAH_INTERSECT = 1 as the CPU builder's);
- * test_gpu_lbvh: 1.09 times the CPU builder's SAH cost on random soups of 100 and 5000
- * triangles (1.26 when every such subtree became a leaf), 1.16 on a flat plane (1.23), 1.46 with
- * all centroids equal (1.48). Depth: at most 64 (a level a bit of the 64-bit
+ * Leaf policy: the least cost over the collapses of the radix tree's subtrees of at most
+ * max_leaf (default 4) triangles, a leaf's SAH weighed by PC_LBVH_LEAF_WEIGHT (0.75; SAH_TRAVERSAL
+ * = SAH_INTERSECT = 1 as the CPU builder's): pure SAH (weight 1) gave 1.09 times the CPU
+ * builder's SAH cost on random soups but traced 5% slower on an H200 than this weight, which
+ * gives 1.11-1.14 there and 1.17 on the bench's spheres (lbvh_boxes.comp has the numbers; 1.20
+ * when every such subtree became a leaf). Depth: at most 64 (a level a bit of the 64-bit
  * keys), but not kept within RD_BVH_MAX_DEPTH (48) as the CPU builder's is; random and
  * degenerate meshes of a few thousand triangles stay near 2 log2 n (test_gpu_lbvh prints it);
  * rd_gpu_lbvh_build_download reports it.
