@@ -123,6 +123,9 @@ void rd_gpu_scene_lbvh_jobs_free(rd_gpu_scene_lbvh_jobs *j); /* NULL is fine */
  * line. Frees the jobs; adds the time to gs->blas_build_ms and gs->blas_gpu_build_ms. Returns
  * an error only when the fallback fails too (a lost device, no memory). */
 rd_vk_result rd_gpu_scene_lbvh_run(rd_vk *vk, rd_gpu_scene *gs, char *err, size_t errlen);
+/* The deepest GPU tree rd_gpu_scene_lbvh_run keeps: RD_BVH_MAX_DEPTH; a test hook (tests lower it
+ * to send every mesh through the CPU fallback). */
+extern uint32_t rd_gpu_scene_lbvh_depth_limit;
 
 /* One LBVH build's buffers: its nodes (rd_gpu_lbvh_node_count), then prim_index at prim_at, and
  * its scratch. create: not RD_VK_OK (b freed) when the LBVH cannot take tris triangles or there

@@ -9,6 +9,8 @@
 #include "renderer/accel/gpu_scene_internal.h"
 #include "shaders/blas_place.spv.h"
 
+uint32_t rd_gpu_scene_lbvh_depth_limit = RD_BVH_MAX_DEPTH;
+
 rd_blas_build rd_blas_build_parse(const char *value)
 {
     if (!value || !*value || strcmp(value, "auto") == 0) return RD_BLAS_BUILD_AUTO;
@@ -264,7 +266,7 @@ rd_vk_result rd_gpu_scene_lbvh_run(rd_vk *vk, rd_gpu_scene *gs, char *err, size_
             r = RD_VK_ERR_DEVICE_LOST;
             break;
         }
-        if (br == RD_VK_OK && depth <= RD_BVH_MAX_DEPTH) {
+        if (br == RD_VK_OK && depth <= rd_gpu_scene_lbvh_depth_limit) {
             gs->blas_gpu_meshes++;
         } else {
             if (kr == RD_VK_OK) {
@@ -272,7 +274,7 @@ rd_vk_result rd_gpu_scene_lbvh_run(rd_vk *vk, rd_gpu_scene *gs, char *err, size_
                     fprintf(stderr,
                             "probecast: mesh %u's GPU BVH is deeper than %u levels (or broken): "
                             "the CPU builds it\n",
-                            j->mesh, RD_BVH_MAX_DEPTH);
+                            j->mesh, rd_gpu_scene_lbvh_depth_limit);
                 else
                     fprintf(stderr,
                             "probecast: mesh %u's GPU BVH build failed, the CPU builds "

@@ -4,7 +4,8 @@
  * non-finite vertex) and an empty mesh uploaded with PROBECAST_BLAS_BUILD=gpu and =cpu: every
  * non-empty mesh built by the GPU in the first, none in the second, the same local frames, and
  * each mesh's BLAS as the scene holds it (nodes and records read back) gives the same closest hit
- * (triangle and t) ray by ray as the CPU-built scene's; and an image of a builtin scene rendered
+ * (triangle and t) ray by ray as the CPU-built scene's; the same through the CPU fallback (every
+ * GPU tree taken as too deep by a test hook); and an image of a builtin scene rendered
  * end to end (test_render) matches the CPU-built one's within float tolerance. */
 #include <math.h>
 #include <stdio.h>
@@ -135,7 +136,9 @@ static void compare_mesh(rd_vk *vk, const rd_gpu_scene *gpu, const rd_gpu_scene 
     free(pb);
 }
 
-static void test_scene(rd_vk *vk)
+/* fallback: every GPU tree counts as too deep (the test hook), so the CPU builds each mesh
+ * after the GPU placed its records in the LBVH's leaf order, and reorders them. */
+static void test_scene(rd_vk *vk, bool fallback)
 {
     rd_scene s;
     rd_scene_init(&s);
@@ -149,12 +152,14 @@ static void test_scene(rd_vk *vk)
     CHECKF(rd_scene_update(&s, err, sizeof err), "%s", err);
     rd_gpu_scene gpu = {0}, cpu = {0};
     setenv("PROBECAST_BLAS_BUILD", "gpu", 1);
+    rd_gpu_scene_lbvh_depth_limit = fallback ? 0 : RD_BVH_MAX_DEPTH;
     VK_CHECK(rd_gpu_scene_create(vk, &gpu, &s, err, sizeof err));
+    rd_gpu_scene_lbvh_depth_limit = RD_BVH_MAX_DEPTH;
     setenv("PROBECAST_BLAS_BUILD", "cpu", 1);
     VK_CHECK(rd_gpu_scene_create(vk, &cpu, &s, err, sizeof err));
     unsetenv("PROBECAST_BLAS_BUILD");
-    CHECKF(gpu.blas_gpu_meshes == 3 && cpu.blas_gpu_meshes == 0, "GPU builds: %u and %u",
-           gpu.blas_gpu_meshes, cpu.blas_gpu_meshes);
+    CHECKF(gpu.blas_gpu_meshes == (fallback ? 0u : 3u) && cpu.blas_gpu_meshes == 0,
+           "GPU builds: %u and %u", gpu.blas_gpu_meshes, cpu.blas_gpu_meshes);
     CHECK(memcmp(gpu.mesh_origin, cpu.mesh_origin, sizeof(float) * 3 * s.mesh_count) == 0);
     CHECK(gpu.mesh_origin[3] != 0); /* the far soup's */
     CHECKF(gpu.max_blas_depth > 0 && gpu.max_blas_depth <= RD_BVH_MAX_DEPTH, "depth %u",
@@ -201,7 +206,8 @@ int main(void)
     test_parse();
     rd_vk vk;
     if (!test_vk_open(&vk)) return test_finish();
-    test_scene(&vk);
+    test_scene(&vk, false);
+    test_scene(&vk, true);
     test_image(&vk);
     return test_vk_close(&vk);
 }
