@@ -43,8 +43,9 @@
  * Children may sit before their parent (internal node i's slot is its parent's choice);
  * rd_gpu_refit_blas_create(_at) takes such trees (its levels come from a walk from the root).
  * A triangle with a non-finite vertex gets an empty box and a key past every finite one.
- * gpu_scene_deform.c rebuilds a deforming mesh's BLAS with it (uploads still build on the CPU,
- * renderer/accel/bvh.h). */
+ * gpu_scene_deform.c rebuilds a deforming mesh's BLAS with it, and gpu_scene_lbvh.c builds large
+ * static meshes' at upload (PROBECAST_BLAS_BUILD; the rest build on the CPU, renderer/accel/bvh.h).
+ */
 #ifndef RD_GPU_LBVH_H
 #define RD_GPU_LBVH_H
 

@@ -112,6 +112,8 @@ static rd_vk_result upload_blas(rd_vk *vk, rd_staging *st, rd_gpu_scene *gs, rd_
     gs->mesh_origin = p->mesh_origin;
     gs->mesh_local_bounds = p->mesh_local_bounds;
     gs->mesh_revision = p->mesh_revision;
+    gs->lbvh_jobs = p->lbvh_jobs; /* built on the GPU after the copies (rd_gpu_scene_lbvh_run) */
+    p->lbvh_jobs = NULL;
     p->mesh_revision = NULL;
     p->mesh_root = NULL;
     p->mesh_bounds = NULL;
@@ -564,6 +566,7 @@ static rd_vk_result scene_upload(rd_vk *vk, rd_staging *st, rd_gpu_scene *gs, co
     if (r == RD_VK_OK) r = update_instances(vk, st, gs, s, err, errlen);
     if (r == RD_VK_OK) r = upload_materials(vk, st, gs, s, err, errlen);
     if (r == RD_VK_OK) r = update_lights(vk, st, gs, s, err, errlen);
+    if (r == RD_VK_OK && !st) r = rd_gpu_scene_lbvh_run(vk, gs, err, errlen);
     if (r != RD_VK_OK) {
         rd_gpu_scene_destroy(vk, gs);
         return r;
@@ -615,10 +618,13 @@ rd_vk_result rd_gpu_scene_commit(rd_gpu_scene_staged *st, rd_gpu_scene *gs, char
         memset(gs, 0, sizeof *gs);
         return r;
     }
+    rd_vk *vk = st->vk;
     *gs = st->gs;
     gs->upload_ms = st->stage_ms + (now_ms() - t0);
     memset(st, 0, sizeof *st);
-    return RD_VK_OK;
+    r = rd_gpu_scene_lbvh_run(vk, gs, err, errlen); /* the records are on the GPU now */
+    if (r != RD_VK_OK) rd_gpu_scene_destroy(vk, gs);
+    return r;
 }
 
 void rd_gpu_scene_staged_destroy(rd_gpu_scene_staged *st)
@@ -633,7 +639,7 @@ rd_vk_result rd_gpu_scene_create(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
                                  size_t errlen)
 {
     rd_gpu_scene_prep prep;
-    rd_vk_result r = rd_gpu_scene_prepare(&prep, s, err, errlen);
+    rd_vk_result r = rd_gpu_scene_prepare_device(&prep, s, !vk->is_cpu, err, errlen);
     if (r != RD_VK_OK) {
         memset(gs, 0, sizeof *gs);
         return r;
@@ -646,6 +652,8 @@ rd_vk_result rd_gpu_scene_create(rd_vk *vk, rd_gpu_scene *gs, const rd_scene *s,
 void rd_gpu_scene_destroy(rd_vk *vk, rd_gpu_scene *gs)
 {
     rd_gpu_scene_deform_destroy(vk, gs);
+    rd_gpu_scene_lbvh_jobs_free(gs->lbvh_jobs);
+    gs->lbvh_jobs = NULL;
     rd_buffer *bufs[] = {&gs->tris,       &gs->tri_attrs, &gs->blas_nodes, &gs->tlas_nodes,
                          &gs->tlas_index, &gs->instances, &gs->materials,  &gs->textures,
                          &gs->texels,     &gs->lights};

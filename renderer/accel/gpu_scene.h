@@ -23,7 +23,8 @@ typedef struct rd_gpu_scene_dirty {
     float lo[3], hi[3];
 } rd_gpu_scene_dirty;
 
-typedef struct rd_gpu_scene_deform rd_gpu_scene_deform; /* gpu_scene_deform.c */
+typedef struct rd_gpu_scene_deform rd_gpu_scene_deform;       /* gpu_scene_deform.c */
+typedef struct rd_gpu_scene_lbvh_jobs rd_gpu_scene_lbvh_jobs; /* gpu_scene_lbvh.c */
 
 typedef struct rd_gpu_scene {
     rd_buffer tris, tri_attrs, blas_nodes, tlas_nodes, tlas_index, instances;
@@ -72,8 +73,13 @@ typedef struct rd_gpu_scene {
     float bounds[6];     /* the top level's root box (GPU frame): min, max */
     uint64_t light_revision[PC_SHADOW_MAP_MAX_LIGHTS];
     pc_light *placed_lights; /* the lights as last uploaded (light_capacity of them) */
-    /* statistics */
-    double blas_build_ms, tlas_build_ms, upload_ms;
+    /* static meshes whose BLAS the GPU builds, until it has (PROBECAST_BLAS_BUILD:
+     * gpu_scene_lbvh.c; the staged path builds them at the commit) */
+    rd_gpu_scene_lbvh_jobs *lbvh_jobs;
+    /* statistics: blas_build_ms includes blas_gpu_build_ms, the GPU builds' time (submissions,
+     * waits and read-backs) over blas_gpu_meshes meshes */
+    double blas_build_ms, tlas_build_ms, upload_ms, blas_gpu_build_ms;
+    uint32_t blas_gpu_meshes;
     /* the last rd_gpu_scene_update_pose that changed a mesh: its whole mesh work (GPU poses and
      * refits, CPU rebuilds and uploads; wall time), and the GPU time of its posing (with the
      * triangle records) and of its refits (the submission's wall time in deform_ms, refit_ms 0,
@@ -107,9 +113,16 @@ typedef struct rd_gpu_scene_prep {
     uint64_t tri_count, node_count;
     uint32_t max_blas_depth;
     double build_ms;
+    /* meshes left to the GPU's LBVH (PROBECAST_BLAS_BUILD): their nodes are zero here, their
+     * records in original order; the upload builds them */
+    rd_gpu_scene_lbvh_jobs *lbvh_jobs;
 } rd_gpu_scene_prep;
 
-/* Builds the BLASes of scene. On failure (a scene too large) p is left empty. */
+/* Builds the BLASes of scene. On failure (a scene too large) p is left empty. gpu_device: the
+ * scene goes to a GPU (not a CPU implementation such as lavapipe), where large meshes are left
+ * to the GPU's LBVH (PROBECAST_BLAS_BUILD; rd_gpu_scene_prepare: as for a CPU device). */
+rd_vk_result rd_gpu_scene_prepare_device(rd_gpu_scene_prep *p, const rd_scene *scene,
+                                         bool gpu_device, char *err, size_t errlen);
 rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *scene, char *err,
                                   size_t errlen);
 void rd_gpu_scene_prep_destroy(rd_gpu_scene_prep *p); /* idempotent */

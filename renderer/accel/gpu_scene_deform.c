@@ -50,7 +50,6 @@
 #include "renderer/accel/gpu_scene.h"
 #include "renderer/accel/gpu_scene_internal.h"
 #include "renderer/accel/task_pool.h"
-#include "shaders/blas_place.spv.h"
 #include "shaders/deform_tris.spv.h"
 
 #define RD_GPU_SCENE_REFIT_MAX 64u
@@ -93,13 +92,6 @@ typedef struct deform_mesh {
     uint32_t tri_base; /* the mesh's first record in gs->tris */
     sah_check check;
 } deform_mesh;
-
-/* A GPU rebuild of one mesh in this pose's submission: the LBVH's buffers, freed after it. */
-typedef struct gpu_build {
-    rd_buffer out; /* its nodes (rd_gpu_lbvh_node_count), then prim_index at prim_at */
-    rd_buffer scratch;
-    VkDeviceSize prim_at;
-} gpu_build;
 
 struct rd_gpu_scene_deform {
     bool pipelines; /* the pipelines and timer below made (on the first GPU pose) */
@@ -240,8 +232,6 @@ rd_vk_result rd_gpu_scene_deform_built(rd_vk *vk, rd_gpu_scene *gs, const rd_sce
 static const rd_pipeline_desc kPipelines[] = {
     RD_PIPELINE_DESC(rd_gpu_scene_deform, tris, "deform_tris", pc_spv_deform_tris,
                      (uint32_t)sizeof(pc_push)),
-    RD_PIPELINE_DESC(rd_gpu_scene_deform, place, "blas_place", pc_spv_blas_place,
-                     (uint32_t)sizeof(pc_push)),
 };
 #define PIPELINE_COUNT (sizeof kPipelines / sizeof kPipelines[0])
 
@@ -251,12 +241,14 @@ static rd_vk_result make_pipelines(rd_vk *vk, rd_gpu_scene_deform *g, char *err,
     rd_vk_result r = rd_gpu_deformer_create(vk, &g->deformer, err, errlen);
     if (r == RD_VK_OK) r = rd_gpu_refitter_create(vk, &g->refitter, err, errlen);
     if (r == RD_VK_OK) r = rd_pipelines_create(vk, g, kPipelines, PIPELINE_COUNT, err, errlen);
+    if (r == RD_VK_OK) r = rd_gpu_scene_place_create(vk, &g->place, err, errlen);
     if (r == RD_VK_OK) r = rd_gpu_lbvh_builder_create(vk, &g->lbvh, err, errlen);
     if (r == RD_VK_OK) r = rd_timer_create(vk, &g->timer, err, errlen);
     g->pipelines = r == RD_VK_OK;
     if (r != RD_VK_OK) { /* all idempotent: the next pose tries again from nothing */
         rd_timer_destroy(vk, &g->timer);
         rd_gpu_lbvh_builder_destroy(vk, &g->lbvh);
+        rd_pipeline_destroy(vk, &g->place);
         rd_pipelines_destroy(vk, g, kPipelines, PIPELINE_COUNT);
         rd_gpu_refitter_destroy(vk, &g->refitter);
         rd_gpu_deformer_destroy(vk, &g->deformer);
@@ -336,60 +328,18 @@ static bool rebuild_due(deform_mesh *dm)
     return due && dm->refit.prim_count > 0;
 }
 
-static void gpu_build_destroy(rd_vk *vk, gpu_build *b)
-{
-    rd_buffer_destroy(vk, &b->scratch);
-    rd_buffer_destroy(vk, &b->out);
-}
-
-/* Makes b's buffers for an LBVH build over tris triangles. Not RD_VK_OK (b freed): the LBVH
- * cannot take so many, or no memory; the caller rebuilds the mesh on the CPU. */
-static rd_vk_result gpu_build_create(rd_vk *vk, gpu_build *b, uint32_t tris, char *err,
-                                     size_t errlen)
-{
-    memset(b, 0, sizeof *b);
-    if (tris > RD_GPU_LBVH_MAX_TRIANGLES) {
-        snprintf(err, errlen, "%u triangles, more than the GPU LBVH takes", tris);
-        return RD_VK_ERR_UNSUPPORTED;
-    }
-    b->prim_at = sizeof(pc_bvh_node) * (VkDeviceSize)rd_gpu_lbvh_node_count(tris);
-    rd_vk_result r = rd_buffer_create(vk, &b->out, b->prim_at + 4 * (VkDeviceSize)tris,
-                                      RD_MEMORY_DEVICE, err, errlen);
-    if (r == RD_VK_OK)
-        r = rd_buffer_create(vk, &b->scratch, rd_gpu_lbvh_scratch_bytes(tris), RD_MEMORY_DEVICE,
-                             err, errlen);
-    if (r != RD_VK_OK) gpu_build_destroy(vk, b);
-    return r;
-}
-
 /* Records mesh m's LBVH build over its posed positions into b, then its placing in the scene's
  * buffers (blas_place.comp): the nodes at the mesh's place with its node and record bases added
  * (they fit: a deforming mesh's BLAS has 2 n slots, an LBVH at most 2 n - 1 nodes), the triangle
  * records gathered from its source records in the new leaf order. deform_tris.comp writes the
  * pose into those records after the caller's barrier. */
 static void record_rebuild(rd_cmd *c, rd_gpu_scene_deform *g, const rd_gpu_scene *gs, uint32_t m,
-                           const gpu_build *b)
+                           const rd_gpu_scene_lbvh_build *b)
 {
     const deform_mesh *dm = &g->meshes[m];
-    uint32_t n = dm->refit.prim_count, most = rd_gpu_lbvh_node_count(n);
-    VkDeviceAddress prim = b->out.address + b->prim_at;
-    rd_gpu_lbvh_record(c, &g->lbvh, dm->dm.out.address + dm->dm.out_positions, n, 0, b->out.address,
-                       prim, &b->scratch, NULL);
-    pc_push nodes = {
-        .buf0 = b->out.address,
-        .buf1 = gs->blas_nodes.address + sizeof(pc_bvh_node) * (VkDeviceAddress)gs->mesh_root[m],
-        .buf2 = b->scratch.address + RD_GPU_LBVH_COUNT_OFFSET,
-        .params = {most, gs->mesh_root[m], dm->tri_base, 0},
-    };
-    rd_cmd_dispatch(c, &g->place, &nodes, (most + PC_WG_1D - 1) / PC_WG_1D, 1, 1);
-    pc_push records = {
-        .globals = gs->tri_attrs.address + (VkDeviceAddress)dm->tri_base * sizeof(pc_tri_attr),
-        .buf0 = prim,
-        .buf1 = dm->source.address,
-        .buf2 = gs->tris.address + (VkDeviceAddress)dm->tri_base * sizeof(pc_tri),
-        .params = {n, 0, 0, 1},
-    };
-    rd_cmd_dispatch(c, &g->place, &records, (n + PC_WG_1D - 1) / PC_WG_1D, 1, 1);
+    rd_gpu_scene_record_lbvh_place(c, &g->lbvh, &g->place, gs, gs->mesh_root[m], dm->tri_base,
+                                   dm->refit.prim_count, dm->dm.out.address + dm->dm.out_positions,
+                                   dm->source.address, b);
 }
 
 /* After the submission: mesh m's GPU-built tree becomes the one its refits follow. Its topology
@@ -399,8 +349,9 @@ static void record_rebuild(rd_cmd *c, rd_gpu_scene_deform *g, const rd_gpu_scene
  * the tree is deeper than the traversal's stack allows (RD_BVH_MAX_DEPTH; an LBVH may reach 64)
  * or not a whole tree, or no memory: the caller rebuilds the mesh on the CPU. Returns only a
  * lost device. */
-static rd_vk_result adopt_rebuild(rd_vk *vk, rd_gpu_scene *gs, uint32_t m, const gpu_build *b,
-                                  bool *ok, char *err, size_t errlen)
+static rd_vk_result adopt_rebuild(rd_vk *vk, rd_gpu_scene *gs, uint32_t m,
+                                  const rd_gpu_scene_lbvh_build *b, bool *ok, char *err,
+                                  size_t errlen)
 {
     deform_mesh *dm = &gs->deform->meshes[m];
     uint32_t n = dm->refit.prim_count;
@@ -451,7 +402,7 @@ rd_vk_result rd_gpu_scene_deform_run(rd_vk *vk, rd_gpu_scene *gs, const rd_scene
         collect(gs, &g->meshes[m]);
     /* the meshes rebuilt on the GPU this pose (their LBVH's buffers made), the others refitted;
      * one that the LBVH cannot take goes to the CPU (rebuild[k]) */
-    gpu_build *builds = xcalloc(n, sizeof *builds);
+    rd_gpu_scene_lbvh_build *builds = xcalloc(n, sizeof *builds);
     uint8_t *built = xcalloc(n, 1);
     for (uint32_t k = 0; k < n; k++) {
         deform_mesh *dm = &g->meshes[list[k]];
@@ -462,7 +413,7 @@ rd_vk_result rd_gpu_scene_deform_run(rd_vk *vk, rd_gpu_scene *gs, const rd_scene
         if (rd_gpu_lbvh_node_count(tris) > blas_slots(&s->meshes[list[k]], 0)) /* never */
             snprintf(err, errlen, "an LBVH of %u triangles does not fit the BLAS's slots", tris);
         else
-            br = gpu_build_create(vk, &builds[k], tris, err, errlen);
+            br = rd_gpu_scene_lbvh_build_create(vk, &builds[k], tris, err, errlen);
         if (br == RD_VK_OK) {
             built[k] = 1;
         } else {
@@ -564,7 +515,7 @@ rd_vk_result rd_gpu_scene_deform_run(rd_vk *vk, rd_gpu_scene *gs, const rd_scene
     }
 out:
     for (uint32_t k = 0; k < n; k++)
-        gpu_build_destroy(vk, &builds[k]);
+        rd_gpu_scene_lbvh_build_destroy(vk, &builds[k]);
     free(builds);
     free(built);
     free(at);

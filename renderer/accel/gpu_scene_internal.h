@@ -9,6 +9,7 @@
 
 #include "shaders/gpu_types.h"
 #include "renderer/accel/bvh.h"
+#include "renderer/accel/gpu_lbvh.h"
 #include "renderer/accel/gpu_scene.h"
 #include "renderer/scene/scene.h"
 
@@ -76,5 +77,77 @@ rd_vk_result rd_gpu_scene_deform_run(rd_vk *vk, rd_gpu_scene *gs, const rd_scene
                                      size_t errlen);
 void rd_gpu_scene_deform_wait_checks(rd_gpu_scene *gs);
 void rd_gpu_scene_deform_destroy(rd_vk *vk, rd_gpu_scene *gs);
+
+/* gpu_scene_lbvh.c: bottom levels built by the GPU LBVH (gpu_lbvh.h) in place in the scene's
+ * buffers, for static meshes at upload and deforming meshes' rebuilds (gpu_scene_deform.c).
+ *
+ * Who builds a static mesh's BLAS at upload: PROBECAST_BLAS_BUILD=auto|cpu|gpu (parsed once per
+ * upload by rd_blas_build_from_env; rd_blas_build_parse: NULL or "" is auto, anything unknown a
+ * warning and auto). auto: the GPU for meshes of at least RD_GPU_SCENE_LBVH_MIN_TRIANGLES on a
+ * device that is not a CPU implementation; cpu: never; gpu: every mesh the LBVH takes (at least
+ * one triangle, at most RD_GPU_LBVH_MAX_TRIANGLES). */
+typedef enum rd_blas_build {
+    RD_BLAS_BUILD_AUTO = 0,
+    RD_BLAS_BUILD_CPU,
+    RD_BLAS_BUILD_GPU,
+} rd_blas_build;
+/* 1 M triangles: the CPU's trees trace 7-10 % faster than the LBVH's (SAH 1.1-1.2x; traversal
+ * 0.89-0.93x on an H200), and the CPU builds a mesh below this in a few milliseconds on many
+ * cores (8 M in ~0.56 s on 16), so only large meshes, whose CPU build delays the first frame by
+ * tens to hundreds of milliseconds, go to the GPU (8 M in ~21 ms on an H200). */
+#define RD_GPU_SCENE_LBVH_MIN_TRIANGLES (1u << 20)
+rd_blas_build rd_blas_build_parse(const char *value);
+rd_blas_build rd_blas_build_from_env(void);
+/* Whether a static mesh of tri_count triangles is built by the GPU under policy, on a device
+ * that is a GPU (gpu_device) or a CPU implementation such as lavapipe. */
+bool rd_blas_build_on_gpu(rd_blas_build policy, bool gpu_device, uint32_t tri_count);
+
+/* Static meshes whose BLAS the upload builds on the GPU (made by rd_gpu_scene_prepare_device,
+ * carried by the prep, then by the scene until rd_gpu_scene_lbvh_run): each mesh's triangles in
+ * its local frame (9 floats each, the positions its records hold, in its original order) and
+ * where its nodes (rd_gpu_lbvh_node_count slots) and records (original order) sit. */
+typedef struct rd_gpu_scene_lbvh_mesh {
+    uint32_t mesh, node_base, tri_base, tri_count;
+    float *positions;
+} rd_gpu_scene_lbvh_mesh;
+struct rd_gpu_scene_lbvh_jobs {
+    uint32_t count;
+    rd_gpu_scene_lbvh_mesh *meshes;
+};
+void rd_gpu_scene_lbvh_jobs_free(rd_gpu_scene_lbvh_jobs *j); /* NULL is fine */
+/* Builds gs->lbvh_jobs' meshes on the GPU (render thread; the scene's buffers written: records
+ * uploaded in original order), one submission each, waited for: the LBVH over its positions,
+ * its nodes and records placed (rd_gpu_scene_record_lbvh_place), the tree's nodes read back for
+ * its depth. A tree deeper than RD_BVH_MAX_DEPTH, or a build that could not be made (no memory,
+ * no pipeline): the CPU builds that mesh and its records are reordered on the host, with a log
+ * line. Frees the jobs; adds the time to gs->blas_build_ms and gs->blas_gpu_build_ms. Returns
+ * an error only when the fallback fails too (a lost device, no memory). */
+rd_vk_result rd_gpu_scene_lbvh_run(rd_vk *vk, rd_gpu_scene *gs, char *err, size_t errlen);
+/* The deepest GPU tree rd_gpu_scene_lbvh_run keeps: RD_BVH_MAX_DEPTH; a test hook (tests lower it
+ * to send every mesh through the CPU fallback). */
+extern uint32_t rd_gpu_scene_lbvh_depth_limit;
+
+/* One LBVH build's buffers: its nodes (rd_gpu_lbvh_node_count), then prim_index at prim_at, and
+ * its scratch. create: not RD_VK_OK (b freed) when the LBVH cannot take tris triangles or there
+ * is no memory. */
+typedef struct rd_gpu_scene_lbvh_build {
+    rd_buffer out, scratch;
+    VkDeviceSize prim_at;
+} rd_gpu_scene_lbvh_build;
+rd_vk_result rd_gpu_scene_lbvh_build_create(rd_vk *vk, rd_gpu_scene_lbvh_build *b, uint32_t tris,
+                                            char *err, size_t errlen);
+void rd_gpu_scene_lbvh_build_destroy(rd_vk *vk, rd_gpu_scene_lbvh_build *b); /* idempotent */
+/* blas_place.comp's pipeline (its SPIR-V is embedded once, in gpu_scene_lbvh.c). */
+rd_vk_result rd_gpu_scene_place_create(rd_vk *vk, rd_pipeline *place, char *err, size_t errlen);
+/* Records an LBVH build over n triangles (positions: 9 floats each, original order) into b,
+ * then its placing in gs's buffers by blas_place.comp (place): its nodes at node_base with the
+ * node and record bases added, its records gathered in the new leaf order at tri_base from
+ * source (n pc_tri then n pc_tri_attr, original order; must not overlap gs's records). Ends with
+ * a barrier. */
+void rd_gpu_scene_record_lbvh_place(rd_cmd *c, const rd_gpu_lbvh_builder *lbvh,
+                                    const rd_pipeline *place, const rd_gpu_scene *gs,
+                                    uint32_t node_base, uint32_t tri_base, uint32_t n,
+                                    VkDeviceAddress positions, VkDeviceAddress source,
+                                    const rd_gpu_scene_lbvh_build *b);
 
 #endif

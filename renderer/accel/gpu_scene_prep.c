@@ -126,7 +126,43 @@ void rd_gpu_scene_fill_mesh(const rd_scene *s, uint32_t m, const rd_bvh *bvh, co
     }
 }
 
+/* The box (min, max) of mesh m's triangles whose vertices are all finite, as the root of its
+ * CPU build bounds them (bvh_triangle_box); empty [+inf, -inf] when there are none. */
+static void mesh_box(const rd_mesh *mesh, float b[6])
+{
+    b[0] = b[1] = b[2] = INFINITY;
+    b[3] = b[4] = b[5] = -INFINITY;
+    for (uint32_t t = 0; t < mesh->tri_count; t++) {
+        const float *v = &mesh->positions[9 * (size_t)t];
+        bool finite = true;
+        for (int k = 0; k < 9; k++)
+            finite = finite && isfinite(v[k]);
+        for (int k = 0; finite && k < 9; k++) {
+            b[k % 3] = fminf(b[k % 3], v[k]);
+            b[3 + k % 3] = fmaxf(b[3 + k % 3], v[k]);
+        }
+    }
+}
+
+/* Mesh m left to the GPU's LBVH: its positions in its local frame o (as its records hold them)
+ * for the upload's build (rd_gpu_scene_lbvh_run). */
+static void add_lbvh_job(rd_gpu_scene_lbvh_jobs *j, const rd_mesh *mesh, uint32_t m,
+                         const float o[3], uint32_t node_base, uint32_t tri_base)
+{
+    size_t n = mesh->tri_count;
+    float *pos = xcalloc(9 * n, sizeof *pos);
+    for (size_t i = 0; i < 9 * n; i++)
+        pos[i] = (float)((double)mesh->positions[i] - o[i % 3]);
+    j->meshes[j->count++] = (rd_gpu_scene_lbvh_mesh){m, node_base, tri_base, mesh->tri_count, pos};
+}
+
 rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *s, char *err, size_t errlen)
+{
+    return rd_gpu_scene_prepare_device(p, s, false, err, errlen);
+}
+
+rd_vk_result rd_gpu_scene_prepare_device(rd_gpu_scene_prep *p, const rd_scene *s, bool gpu_device,
+                                         char *err, size_t errlen)
 {
     memset(p, 0, sizeof *p);
     double t0 = now_ms();
@@ -138,8 +174,16 @@ rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *s, char 
     p->mesh_revision = xcalloc(s->mesh_count, sizeof *p->mesh_revision);
     rd_bvh *bvhs = xcalloc(s->mesh_count, sizeof *bvhs);
     rd_bvh_mesh *meshes = xcalloc(s->mesh_count, sizeof *meshes);
-    for (uint32_t m = 0; m < s->mesh_count; m++)
-        meshes[m] = (rd_bvh_mesh){s->meshes[m].positions, s->meshes[m].tri_count};
+    /* static meshes the GPU builds at upload (PROBECAST_BLAS_BUILD): no CPU build here */
+    rd_blas_build policy = rd_blas_build_from_env();
+    uint8_t *on_gpu = xcalloc(s->mesh_count, 1);
+    uint32_t gpu_count = 0;
+    for (uint32_t m = 0; m < s->mesh_count; m++) {
+        const rd_mesh *mesh = &s->meshes[m];
+        on_gpu[m] = !mesh->deform && rd_blas_build_on_gpu(policy, gpu_device, mesh->tri_count);
+        gpu_count += on_gpu[m];
+        meshes[m] = (rd_bvh_mesh){mesh->positions, on_gpu[m] ? 0 : mesh->tri_count};
+    }
     /* Every mesh's BLAS at once, on all cores (this runs off the render thread). */
     if (!rd_bvh_build_many(bvhs, meshes, s->mesh_count, NULL)) {
         fprintf(stderr, "probecast: out of memory building a BVH\n");
@@ -150,10 +194,14 @@ rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *s, char 
     for (uint32_t m = 0; m < s->mesh_count; m++) {
         const rd_mesh *mesh = &s->meshes[m];
         p->mesh_root[m] = (uint32_t)node_total;
-        const pc_bvh_node *root = &bvhs[m].nodes[0];
         float *b = &p->mesh_bounds[m * 6];
-        b[0] = root->bmin.x, b[1] = root->bmin.y, b[2] = root->bmin.z;
-        b[3] = root->bmax.x, b[4] = root->bmax.y, b[5] = root->bmax.z;
+        if (on_gpu[m]) {
+            mesh_box(mesh, b);
+        } else {
+            const pc_bvh_node *root = &bvhs[m].nodes[0];
+            b[0] = root->bmin.x, b[1] = root->bmin.y, b[2] = root->bmin.z;
+            b[3] = root->bmax.x, b[4] = root->bmax.y, b[5] = root->bmax.z;
+        }
         float *o = &p->mesh_origin[m * 3], *lb = &p->mesh_local_bounds[m * 6];
         if (!mesh->deform) mesh_local_origin(b, o); /* a deforming mesh keeps 0: it is rebuilt */
         for (int k = 0; k < 3; k++) {
@@ -162,7 +210,8 @@ rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *s, char 
         }
         if (bvhs[m].depth > p->max_blas_depth) p->max_blas_depth = bvhs[m].depth;
         tri_total += mesh->tri_count;
-        node_total += blas_slots(mesh, bvhs[m].node_count);
+        node_total += on_gpu[m] ? rd_gpu_lbvh_node_count(mesh->tri_count)
+                                : blas_slots(mesh, bvhs[m].node_count);
     }
     p->tri_count = tri_total;
     p->node_count = node_total;
@@ -170,6 +219,7 @@ rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *s, char 
         for (uint32_t m = 0; m < s->mesh_count; m++)
             rd_bvh_destroy(&bvhs[m]);
         free(bvhs);
+        free(on_gpu);
         rd_gpu_scene_prep_destroy(p);
         snprintf(err, errlen, "scene too large: %llu triangles", (unsigned long long)tri_total);
         return RD_VK_ERR_OUT_OF_MEMORY;
@@ -178,16 +228,32 @@ rd_vk_result rd_gpu_scene_prepare(rd_gpu_scene_prep *p, const rd_scene *s, char 
     p->nodes = xcalloc(node_total, sizeof *p->nodes);
     p->tris = xcalloc(tri_total, sizeof *p->tris);
     p->attrs = xcalloc(tri_total, sizeof *p->attrs);
+    if (gpu_count) {
+        p->lbvh_jobs = xcalloc(1, sizeof *p->lbvh_jobs);
+        p->lbvh_jobs->meshes = xcalloc(gpu_count, sizeof *p->lbvh_jobs->meshes);
+    }
     uint32_t node_base = 0, tri_base = 0;
     for (uint32_t m = 0; m < s->mesh_count; m++) {
-        rd_gpu_scene_fill_mesh(s, m, &bvhs[m], &p->mesh_origin[m * 3], node_base, tri_base,
-                               p->nodes + node_base, p->tris + tri_base, p->attrs + tri_base);
-        node_base += (uint32_t)blas_slots(&s->meshes[m], bvhs[m].node_count);
-        tri_base += s->meshes[m].tri_count;
-        p->mesh_revision[m] = s->meshes[m].deform ? s->meshes[m].deform->revision : 0;
+        const rd_mesh *mesh = &s->meshes[m];
+        const float *o = &p->mesh_origin[m * 3];
+        if (on_gpu[m]) { /* records in original order, no nodes: the GPU places both */
+            rd_bvh_destroy(&bvhs[m]);
+            bvhs[m].prim_index = xcalloc(mesh->tri_count, sizeof *bvhs[m].prim_index);
+            bvhs[m].prim_count = mesh->tri_count;
+            for (uint32_t i = 0; i < mesh->tri_count; i++)
+                bvhs[m].prim_index[i] = i;
+            add_lbvh_job(p->lbvh_jobs, mesh, m, o, node_base, tri_base);
+        }
+        rd_gpu_scene_fill_mesh(s, m, &bvhs[m], o, node_base, tri_base, p->nodes + node_base,
+                               p->tris + tri_base, p->attrs + tri_base);
+        node_base += (uint32_t)(on_gpu[m] ? rd_gpu_lbvh_node_count(mesh->tri_count)
+                                          : blas_slots(mesh, bvhs[m].node_count));
+        tri_base += mesh->tri_count;
+        p->mesh_revision[m] = mesh->deform ? mesh->deform->revision : 0;
         rd_bvh_destroy(&bvhs[m]);
     }
     free(bvhs);
+    free(on_gpu);
     p->build_ms = now_ms() - t0;
     return RD_VK_OK;
 }
@@ -202,5 +268,6 @@ void rd_gpu_scene_prep_destroy(rd_gpu_scene_prep *p)
     free(p->nodes);
     free(p->tris);
     free(p->attrs);
+    rd_gpu_scene_lbvh_jobs_free(p->lbvh_jobs);
     memset(p, 0, sizeof *p);
 }

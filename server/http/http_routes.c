@@ -170,11 +170,11 @@ enum MHD_Result srv_http_handle_upload(srv_http *h, struct MHD_Connection *conn,
     rd_gpu_scene_staged *staged = calloc(1, sizeof *staged);
     if (!staged) abort();
     double t1 = srv_mono_ms();
-    rd_vk_result pr = rd_gpu_scene_prepare(&prep, scene, err, sizeof err);
+    rd_vk *vk = srv_render_loop_device(h->cfg.loop);
+    rd_vk_result pr = rd_gpu_scene_prepare_device(&prep, scene, !vk->is_cpu, err, sizeof err);
     double t2 = srv_mono_ms();
     if (pr == RD_VK_OK) {
-        pr = rd_gpu_scene_stage(srv_render_loop_device(h->cfg.loop), staged, scene, &prep, err,
-                                sizeof err);
+        pr = rd_gpu_scene_stage(vk, staged, scene, &prep, err, sizeof err);
         rd_gpu_scene_prep_destroy(&prep);
     }
     if (pr != RD_VK_OK) {
