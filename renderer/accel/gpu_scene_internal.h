@@ -83,19 +83,21 @@ void rd_gpu_scene_deform_destroy(rd_vk *vk, rd_gpu_scene *gs);
  *
  * Who builds a static mesh's BLAS at upload: PROBECAST_BLAS_BUILD=auto|cpu|gpu (parsed once per
  * upload by rd_blas_build_from_env; rd_blas_build_parse: NULL or "" is auto, anything unknown a
- * warning and auto). auto: the GPU for meshes of at least RD_GPU_SCENE_LBVH_MIN_TRIANGLES on a
- * device that is not a CPU implementation; cpu: never; gpu: every mesh the LBVH takes (at least
- * one triangle, at most RD_GPU_LBVH_MAX_TRIANGLES). */
+ * warning and auto). auto: the CPU (below); cpu: never; gpu: every mesh the LBVH takes (at
+ * least one triangle, at most RD_GPU_LBVH_MAX_TRIANGLES). */
 typedef enum rd_blas_build {
     RD_BLAS_BUILD_AUTO = 0,
     RD_BLAS_BUILD_CPU,
     RD_BLAS_BUILD_GPU,
 } rd_blas_build;
-/* 1 M triangles: the CPU's trees trace 7-10 % faster than the LBVH's (SAH 1.1-1.2x; traversal
- * 0.89-0.93x on an H200), and the CPU builds a mesh below this in a few milliseconds on many
- * cores (8 M in ~0.56 s on 16), so only large meshes, whose CPU build delays the first frame by
- * tens to hundreds of milliseconds, go to the GPU (8 M in ~21 ms on an H200). */
-#define RD_GPU_SCENE_LBVH_MIN_TRIANGLES (1u << 20)
+/* auto builds on the CPU for now: measured on an NVIDIA H200 (16 host cores;
+ * tests/bench/results/h200/blas_upload_stop43.txt), builtin:spheres:8000000 (eight meshes of
+ * 1.03 M triangles) with the GPU path took longer to its first frame than the CPU builder (bottom
+ * level 2.0 s against 1.4 s, upload 410 against 233 ms: the reserved 2n - 1 nodes, the
+ * single-threaded local-frame copy, the depth read-back), and its trees traced primary rays
+ * 1.6x slower (0.80 against 0.49 ms at 640x360; depth 32 against 22), far from the 0.89-0.94x
+ * test_gpu_lbvh's single-sphere bench measures. Until that is understood the GPU path is
+ * PROBECAST_BLAS_BUILD=gpu's. */
 rd_blas_build rd_blas_build_parse(const char *value);
 rd_blas_build rd_blas_build_from_env(void);
 /* Whether a static mesh of tri_count triangles is built by the GPU under policy, on a device

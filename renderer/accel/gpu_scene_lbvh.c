@@ -35,8 +35,9 @@ bool rd_blas_build_on_gpu(rd_blas_build policy, bool gpu_device, uint32_t tri_co
         return false;
     case RD_BLAS_BUILD_GPU:
         return true;
-    default:
-        return gpu_device && tri_count >= RD_GPU_SCENE_LBVH_MIN_TRIANGLES;
+    default: /* auto: the CPU (gpu_scene_internal.h says why) */
+        (void)gpu_device;
+        return false;
     }
 }
 
