@@ -351,3 +351,11 @@ void soup_case(const char *what, float *pos, uint32_t n, uint32_t ray_count,
     free(orgs);
     rd_bvh_destroy(&bvh);
 }
+
+void tri_soup(float *pos, uint32_t n, float size)
+{
+    for (uint32_t i = 0; i < n; i++) {
+        float c[3] = {rng_range(-1, 1), rng_range(-1, 1), rng_range(-1, 1)};
+        random_tri(pos + 9 * (size_t)i, c, size);
+    }
+}

@@ -33,6 +33,8 @@ uint32_t compare_rays(const char *what, const rd_bvh *bvh, const float *pos, uin
 void make_rays(float *orgs, float *dirs, uint32_t count, const float lo[3], const float hi[3],
                float margin, const float *pos, uint32_t n);
 void random_tri(float *v, const float c[3], float size);
+/* n random triangles of the given size, centred in [-1, 1]^3 (9 floats each). */
+void tri_soup(float *pos, uint32_t n, float size);
 void soup_case(const char *what, float *pos, uint32_t n, uint32_t ray_count,
                const rd_bvh_options *opt, float tmin, uint32_t min_hits);
 

@@ -9,13 +9,14 @@
  * checks with the dispatches' rows lowered to 3 groups and 1 group
  * (rd_gpu_lbvh_builder.row_groups), so that 5000 triangles need several rows of a 2D dispatch in
  * every pass. The radix sort on its own (rd_gpu_lbvh_record_sort) equals a stable CPU sort of the
- * same keys (1 to 70001 keys, duplicate codes, rows of 1 and 3 groups; run_sort_tests), and the
+ * same keys (1 to 70001 keys, duplicate codes, rows of 1 and 3 groups; lbvh_sort_check.c), and the
  * sorted keys a build leaves in its scratch are its triangles ascending by (code, index)
- * (run_build_key_tests). Prints the build time (submit and wait) of each size. `test_gpu_lbvh bench
- * [sizes]` (up to RD_GPU_LBVH_MAX_TRIANGLES, e.g. `bench 1000000 8000000`) builds larger meshes and
- * prints two tables: the build's passes, and the traversal speed of the same rays through the CPU
- * builder's tree and the LBVH (run_bench). */
+ * (lbvh_sort_check.c too). Prints the build time (submit and wait) of each size. `test_gpu_lbvh
+ * bench [sizes]` (up to RD_GPU_LBVH_MAX_TRIANGLES, e.g. `bench 1000000 8000000`) builds larger
+ * meshes and prints two tables: the build's passes, and the traversal speed of the same rays
+ * through the CPU builder's tree and the LBVH (run_bench). */
 #include "bvh_check.h"
+#include "lbvh_sort_check.h"
 #include "renderer/accel/bvh.h"
 #include "renderer/accel/gpu_lbvh.h"
 #include "renderer/vk/vk_context.h"
@@ -172,14 +173,6 @@ static uint32_t gpu_trace_differences(rd_vk *vk, const rd_bvh *bvh, const float 
     return differ;
 }
 
-static void random_soup(float *pos, uint32_t n, float size)
-{
-    for (uint32_t i = 0; i < n; i++) {
-        float c[3] = {rng_range(-1, 1), rng_range(-1, 1), rng_range(-1, 1)};
-        random_tri(pos + 9 * (size_t)i, c, size);
-    }
-}
-
 /* Builds pos on the GPU with leaves of at most max_leaf triangles and checks it; returns its
  * SAH cost (-1 when the build failed). */
 static double check_build(rd_vk *vk, const rd_gpu_lbvh_builder *b, const char *what,
@@ -254,198 +247,16 @@ static void check_mesh(rd_vk *vk, const rd_gpu_lbvh_builder *b, const char *what
            "%s: leaves of up to 4 cost %.4f, of 1 %.4f", what, four, one);
 }
 
-/* Keys of the sort (rd_gpu_lbvh_record_sort): x the payload, y the code. */
-typedef struct sort_key {
-    uint32_t x, y;
-} sort_key;
-
-static const sort_key *g_sort_in;
-/* By code, then by position in g_sort_in: a stable order through qsort. */
-static int cmp_stable(const void *pa, const void *pb)
-{
-    uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
-    uint32_t ya = g_sort_in[a].y, yb = g_sort_in[b].y;
-    return ya != yb ? (ya < yb ? -1 : 1) : (a < b ? -1 : a > b);
-}
-
-/* Sorts n keys on the GPU with rd_gpu_lbvh_record_sort alone and checks the result equals a
- * stable CPU sort of the same keys by code (every key, payload and code, in its place). */
-static void check_sort(rd_vk *vk, const rd_gpu_lbvh_builder *b, const char *what,
-                       const sort_key *in, uint32_t n)
-{
-    size_t bytes = (size_t)n * sizeof *in;
-    sort_key *out = malloc(bytes);
-    uint32_t *order = malloc((size_t)n * sizeof *order);
-    if (!out || !order) abort();
-    rd_buffer keys = {0}, scratch = {0};
-    rd_cmd c;
-    bool ok = rd_buffer_create(vk, &keys, bytes, RD_MEMORY_DEVICE, err, sizeof err) == RD_VK_OK &&
-              rd_buffer_upload(vk, &keys, 0, in, bytes, err, sizeof err) == RD_VK_OK &&
-              rd_buffer_create(vk, &scratch, rd_gpu_lbvh_sort_scratch_bytes(n), RD_MEMORY_DEVICE,
-                               err, sizeof err) == RD_VK_OK &&
-              rd_cmd_begin(vk, &c, err, sizeof err) == RD_VK_OK;
-    if (ok) {
-        rd_gpu_lbvh_record_sort(&c, b, keys.address, n, scratch.address);
-        ok = rd_cmd_submit_wait(vk, &c, err, sizeof err) == RD_VK_OK &&
-             rd_buffer_download(vk, &keys, 0, out, bytes, err, sizeof err) == RD_VK_OK;
-    }
-    CHECKF(ok, "%s: %s", what, err);
-    for (uint32_t i = 0; i < n; i++)
-        order[i] = i;
-    g_sort_in = in;
-    qsort(order, n, sizeof *order, cmp_stable);
-    uint32_t wrong = 0, first = n;
-    for (uint32_t i = 0; ok && i < n; i++)
-        if (out[i].x != in[order[i]].x || out[i].y != in[order[i]].y) {
-            wrong++;
-            first = first < i ? first : i;
-        }
-    CHECKF(ok && wrong == 0, "%s: %u of %u keys out of place, the first at %u", what, wrong, n,
-           first);
-    fprintf(stderr, "sort %-36s %6u keys: %u out of place\n", what, n, wrong);
-    rd_buffer_destroy(vk, &scratch);
-    rd_buffer_destroy(vk, &keys);
-    free(order);
-    free(out);
-}
-
-/* The sort alone on keys whose payloads are not in order (so that stability shows): random
- * 32-bit codes, codes from 5 values (long runs of equal digits in every pass), all codes
- * equal, and codes in descending order; sizes around the 1024-key tiles and the 2048-word scan
- * blocks; then rows of 1 and 3 groups (the test hook) so that every dispatch has several rows. */
-static void run_sort_tests(rd_vk *vk, const rd_gpu_lbvh_builder *b)
-{
-    static const uint32_t sizes[] = {1, 2, 127, 129, 1023, 1025, 5000, 70001};
-    sort_key *in = malloc(70001 * sizeof *in);
-    if (!in) abort();
-    rd_gpu_lbvh_builder rows = *b;
-    for (uint32_t hook = 0; hook < 3; hook++) {
-        rows.row_groups = hook == 0 ? 0 : hook == 1 ? 3 : 1;
-        for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++) {
-            uint32_t n = sizes[s];
-            if (hook > 0 && n > 5000) continue; /* rows of 1 group: keep it quick */
-            for (uint32_t kind = 0; kind < 4; kind++) {
-                rng_seed(31 + 7 * s + kind);
-                for (uint32_t i = 0; i < n; i++) {
-                    uint32_t r = rng_u32();
-                    in[i].x = rng_u32();
-                    in[i].y = kind == 0   ? r
-                              : kind == 1 ? (r % 5) * 0x01010101u + (r % 5 == 4 ? 0xff000000u : 0)
-                              : kind == 2 ? 0x40000000u
-                                          : ~i;
-                }
-                char what[96];
-                static const char *kinds[] = {"random codes", "5 codes", "one code", "descending"};
-                snprintf(what, sizeof what, "%s, rows of %u", kinds[kind],
-                         hook == 0 ? 65535 : rows.row_groups);
-                check_sort(vk, &rows, what, in, n);
-            }
-        }
-    }
-    free(in);
-}
-
-/* Builds pos with rd_gpu_lbvh_record on buffers of its own and checks the sorted keys the
- * build leaves in its scratch (shaders/lbvh.glsl: uvec2 at word 8): x a permutation of the
- * triangles, ascending by (code, triangle index) as a stable sort of lbvh_morton's keys (written
- * in triangle order) gives, equal codes in triangle order, non-finite triangles' code 1 << 30
- * (finite ones below), and prim_index (leaves of one triangle) the sorted triangle order. */
-static void check_build_keys(rd_vk *vk, const rd_gpu_lbvh_builder *b, const char *what,
-                             const float *pos, uint32_t n)
-{
-    size_t key_bytes = (size_t)n * sizeof(sort_key);
-    sort_key *keys = malloc(key_bytes);
-    uint32_t *prim = malloc((size_t)n * 4), *seen = calloc(n, sizeof *seen);
-    if (!keys || !prim || !seen) abort();
-    rd_buffer bp = {0}, nodes = {0}, bprim = {0}, scratch = {0};
-    size_t pos_bytes = (size_t)n * 9 * sizeof(float);
-    rd_cmd c;
-    bool ok = rd_buffer_create(vk, &bp, pos_bytes, RD_MEMORY_DEVICE, err, sizeof err) == RD_VK_OK &&
-              rd_buffer_upload(vk, &bp, 0, pos, pos_bytes, err, sizeof err) == RD_VK_OK &&
-              rd_buffer_create(vk, &nodes, rd_gpu_lbvh_node_count(n) * sizeof(pc_bvh_node),
-                               RD_MEMORY_DEVICE, err, sizeof err) == RD_VK_OK &&
-              rd_buffer_create(vk, &bprim, (size_t)n * 4, RD_MEMORY_DEVICE, err, sizeof err) ==
-                  RD_VK_OK &&
-              rd_buffer_create(vk, &scratch, rd_gpu_lbvh_scratch_bytes(n), RD_MEMORY_DEVICE, err,
-                               sizeof err) == RD_VK_OK &&
-              rd_cmd_begin(vk, &c, err, sizeof err) == RD_VK_OK;
-    if (ok) {
-        rd_gpu_lbvh_record(&c, b, bp.address, n, 1, nodes.address, bprim.address, &scratch, NULL);
-        ok = rd_cmd_submit_wait(vk, &c, err, sizeof err) == RD_VK_OK &&
-             rd_buffer_download(vk, &scratch, 32, keys, key_bytes, err, sizeof err) == RD_VK_OK &&
-             rd_buffer_download(vk, &bprim, 0, prim, (size_t)n * 4, err, sizeof err) == RD_VK_OK;
-    }
-    CHECKF(ok, "%s: %s", what, err);
-    uint32_t bad = 0;
-    for (uint32_t i = 0; ok && i < n; i++) {
-        const sort_key *k = &keys[i];
-        bool in_range = k->x < n && !seen[k->x]++;
-        bool ascending =
-            i == 0 || keys[i - 1].y < k->y || (keys[i - 1].y == k->y && keys[i - 1].x < k->x);
-        bool code = in_range &&
-                    (tri_finite(pos + 9 * (size_t)k->x) ? k->y < (1u << 30) : k->y == (1u << 30));
-        if (!in_range || !ascending || !code || prim[i] != k->x) {
-            if (bad++ < 3)
-                fprintf(stderr, "%s: sorted key %u = (code %08x, triangle %u), prim_index %u\n",
-                        what, i, k->y, k->x, prim[i]);
-        }
-    }
-    CHECKF(ok && bad == 0, "%s: %u sorted keys wrong", what, bad);
-    rd_buffer_destroy(vk, &scratch);
-    rd_buffer_destroy(vk, &bprim);
-    rd_buffer_destroy(vk, &nodes);
-    rd_buffer_destroy(vk, &bp);
-    free(seen);
-    free(prim);
-    free(keys);
-}
-
-/* The build's own keys (check_build_keys) for sizes that are not powers of two nor multiples
- * of the tiles, many equal centroids, non-finite triangles, and rows of 3 groups. */
-static void run_build_key_tests(rd_vk *vk, const rd_gpu_lbvh_builder *b)
-{
-    static const uint32_t sizes[] = {1, 2, 127, 129, 5000, 70001};
-    float *pos = tris_alloc(70001);
-    for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++) {
-        char what[64];
-        rng_seed(41 + s);
-        random_soup(pos, sizes[s], 0.01f);
-        snprintf(what, sizeof what, "build keys, soup %u", sizes[s]);
-        check_build_keys(vk, b, what, pos, sizes[s]);
-    }
-    /* 3000 triangles on 7 centroids (runs of equal codes), every 50th non-finite */
-    rng_seed(43);
-    for (uint32_t i = 0; i < 3000; i++) {
-        float c[3] = {0.1f * (float)(i % 7), 0.5f, -0.2f * (float)(i % 7)}, a[3], *v = pos + 9 * i;
-        rng_unit(a);
-        for (int k = 0; k < 3; k++) {
-            v[k] = c[k] + a[k];
-            v[3 + k] = c[k] - a[k];
-            v[6 + k] = c[k];
-        }
-        if (i % 50 == 7) v[i % 9] = (i % 100 == 7) ? NAN : -INFINITY;
-    }
-    check_build_keys(vk, b, "build keys, 7 centroids", pos, 3000);
-    rd_gpu_lbvh_builder rows = *b;
-    rows.row_groups = 3;
-    check_build_keys(vk, &rows, "build keys, 7 centroids, rows of 3", pos, 3000);
-    random_soup(pos, 5000, 0.02f);
-    pos[9 * 4999 + 2] = NAN;
-    check_build_keys(vk, &rows, "build keys, 5000, rows of 3", pos, 5000);
-    free(pos);
-}
-
 static void run_tests(rd_vk *vk, const rd_gpu_lbvh_builder *b)
 {
-    run_sort_tests(vk, b);
-    run_build_key_tests(vk, b);
+    lbvh_sort_checks(vk, b);
     static const uint32_t sizes[] = {0, 1, 2, 3, 7, 100, 5000};
     float *pos = tris_alloc(5000);
     for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++) {
         char what[64];
         snprintf(what, sizeof what, "random soup %u", sizes[s]);
         rng_seed(17 + s);
-        random_soup(pos, sizes[s], sizes[s] > 100 ? 0.05f : 0.3f);
+        tri_soup(pos, sizes[s], sizes[s] > 100 ? 0.05f : 0.3f);
         check_mesh(vk, b, what, pos, sizes[s], sizes[s] ? 1000 : 0);
     }
 
@@ -481,14 +292,14 @@ static void run_tests(rd_vk *vk, const rd_gpu_lbvh_builder *b)
 
     /* a few non-finite triangles among finite ones */
     rng_seed(11);
-    random_soup(pos, 300, 0.2f);
+    tri_soup(pos, 300, 0.2f);
     for (uint32_t i = 0; i < 300; i += 37)
         pos[9 * i + (i % 9)] = (i % 2) ? NAN : INFINITY;
     check_mesh(vk, b, "non-finite among 300", pos, 300, 500);
 
     /* finite and non-finite triangles in a subtree small enough to collapse */
     rng_seed(12);
-    random_soup(pos, 7, 0.2f);
+    tri_soup(pos, 7, 0.2f);
     pos[9 * 1 + 4] = NAN;
     pos[9 * 5] = -INFINITY;
     check_mesh(vk, b, "2 non-finite among 7", pos, 7, 200);
@@ -501,7 +312,7 @@ static void run_tests(rd_vk *vk, const rd_gpu_lbvh_builder *b)
     rd_gpu_lbvh_builder rows = *b;
     rows.row_groups = 3;
     rng_seed(23);
-    random_soup(pos, 5000, 0.05f);
+    tri_soup(pos, 5000, 0.05f);
     check_mesh(vk, &rows, "5000 in rows of 3 groups", pos, 5000, 1000);
     rows.row_groups = 1;
     check_mesh(vk, &rows, "5000 in rows of 1 group", pos, 5000, 300);
@@ -622,7 +433,7 @@ static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b, int argc, char **
     uint32_t done = 0;
     for (uint32_t s = 0; s < count; s++, done++) {
         rng_seed(3 + s);
-        random_soup(pos, sizes[s], 0.02f);
+        tri_soup(pos, sizes[s], 0.02f);
         rd_bvh gpu, cpu;
         double ms = 0, best = 1e30;
         rd_vk_result r = RD_VK_OK;
