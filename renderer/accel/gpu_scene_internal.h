@@ -152,4 +152,12 @@ void rd_gpu_scene_record_lbvh_place(rd_cmd *c, const rd_gpu_lbvh_builder *lbvh,
                                     VkDeviceAddress positions, VkDeviceAddress source,
                                     const rd_gpu_scene_lbvh_build *b);
 
+/* gpu_scene_materials.c: a device buffer holding size bytes of data, written at once without st,
+ * staged into st with it (vk_staging.h); and the scene's materials, texture table and texels
+ * (sets gs->glossy). */
+rd_vk_result rd_gpu_scene_upload_new(rd_vk *vk, rd_staging *st, rd_buffer *b, const void *data,
+                                     size_t size, char *err, size_t errlen);
+rd_vk_result rd_gpu_scene_upload_materials(rd_vk *vk, rd_staging *st, rd_gpu_scene *gs,
+                                           const rd_scene *s, char *err, size_t errlen);
+
 #endif
