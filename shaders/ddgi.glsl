@@ -254,7 +254,7 @@ vec3 ddgi_irradiance(pc_ddgi_volume vol, pc_scene_refs scene, bool probe_hit, ve
      * the spacing, furniture) gets visibility rays: Chebyshev's test on filtered distances lets
      * light through such walls where a texel straddles a depth edge (issue 28); elsewhere the
      * test alone decides, as in the paper */
-    uint suspect = 0u; /* bit i: corner i is active, in a cell with a crossed edge between active probes */
+    bool crossed = false; /* a cage edge of the cell between two active probes is crossed */
     if (mode == PC_GI_DDGI && vis_rays) {
         uint live = 0u, edges[8];
         for (uint i = 0u; i < 8u; i++) {
@@ -271,12 +271,11 @@ vec3 ddgi_irradiance(pc_ddgi_volume vol, pc_scene_refs scene, bool probe_hit, ve
          * a face or body diagonal, its own edges run clear of the building, and Chebyshev on its
          * distance texel straddling the corner let the sun in (thin-walls at 12x3x12 probes:
          * +103% against 16x4x16). */
-        for (uint i = 0u; i < 8u; i++)
+        for (uint i = 0u; i < 8u && !crossed; i++)
             for (uint k = 0u; k < 3u; k++) {
                 uint j = i | (1u << k);
-                if (j != i && (edges[i] & (1u << k)) != 0u && (live & (1u << i)) != 0u &&
-                    (live & (1u << j)) != 0u)
-                    suspect = live;
+                crossed = crossed || (j != i && (edges[i] & (1u << k)) != 0u &&
+                                      (live & (1u << i)) != 0u && (live & (1u << j)) != 0u);
             }
     }
     vec3 sum = vec3(0.0);
@@ -310,7 +309,7 @@ vec3 ddgi_irradiance(pc_ddgi_volume vol, pc_scene_refs scene, bool probe_hit, ve
             w = max(1e-6, w);
             if (w < 0.2) w *= w * w / 0.04;
             bool clear = clear_sigmas > 0.0 && mean - clear_sigmas * sqrt(variance) > r;
-            if ((suspect & (1u << i)) != 0u && w > 1e-3 && !clear) {
+            if (crossed && w > 1e-3 && !clear) { /* an active corner of a crossed cell */
                 vec3 to = probe_pos - biased;
                 float dist = length(to);
                 pc_hit h;
