@@ -100,8 +100,9 @@ test('the quality menu\'s JPEG choice returns to JPEG; video again after', { tim
   await until(async () => (await page.evaluate((n) => window.__frames.slice(n).length, n)) >= 3, 'frames', 15000);
   let frames = await page.evaluate((n) => window.__frames.slice(n), n);
   assert.ok(frames.every((f) => f.format === 0), `JPEG only: ${JSON.stringify(frames.map((f) => f.format))}`);
-  await page.locator('#video-mode button[data-value="auto"]').click();
+  // counted before the click: a VP9 frame may arrive before the next evaluate returns
   n = await page.evaluate(() => window.__frames.length);
+  await page.locator('#video-mode button[data-value="auto"]').click();
   await orbit(2000);
   await until(async () => (await page.evaluate((n) => window.__frames.slice(n).filter((f) => f.format === 2).length, n)) >= 3,
     'VP9 again', 15000);
