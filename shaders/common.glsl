@@ -8,6 +8,7 @@
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 
 #include "gpu_types.h"
 
@@ -86,7 +87,6 @@ vec4 sample_texture_as(pc_scene_refs s, uint index, vec2 uv, bool srgb)
 }
 
 vec4 sample_texture(pc_scene_refs s, uint index, vec2 uv) { return sample_texture_as(s, index, uv, true); }
-vec4 sample_data_texture(pc_scene_refs s, uint index, vec2 uv) { return sample_texture_as(s, index, uv, false); }
 
 vec2 tri_uv(pc_tri_attr a, float u, float v)
 {
@@ -160,8 +160,8 @@ vec3 octahedral_decode(uint bits)
  * object-to-world matrix and made orthonormal against ns, which makes mirrored instances and
  * mirrored UVs right without a separate handedness rule. Returns ns when the frame is
  * degenerate. */
-vec3 apply_normal_map(pc_scene_refs s, pc_material m, pc_tri t, pc_tri_attr a, pc_instance inst,
-                      pc_hit hit, vec2 uv, vec3 ns)
+vec3 apply_normal_map(pc_material m, pc_tri t, pc_tri_attr a, pc_instance inst, pc_hit hit,
+                      vec4 texel, vec3 ns)
 {
     float w = 1.0 - hit.u - hit.v;
     vec3 T, B;
@@ -192,7 +192,7 @@ vec3 apply_normal_map(pc_scene_refs s, pc_material m, pc_tri t, pc_tri_attr a, p
     float bl = length(B);
     if (!(bl > 1e-20) || isinf(bl)) return ns;
     B /= bl;
-    vec3 tn = sample_data_texture(s, m.tex2.y - 1u, uv).xyz * 2.0 - 1.0;
+    vec3 tn = texel.xyz * 2.0 - 1.0;
     tn.xy *= m.params.y;
     vec3 n = T * tn.x + B * tn.y + ns * tn.z;
     float nl = length(n);
@@ -277,8 +277,24 @@ pc_surface surface_at(pc_scene_refs s, pc_hit hit, vec3 ray_dir)
     uint mat_index = floatBitsToUint(t.v0.w);
     pc_material m = MaterialRef(s.materials).v[mat_index];
     vec2 uv = tri_uv(a, hit.u, hit.v);
+    /* The material's textures, fetched from one call site: base colour (sRGB), emission (sRGB;
+     * only where the factor emits), normal map, metallic-roughness, occlusion (linear).
+     * Lavapipe runs a shader's branches under lane masks whether a lane takes them or not
+     * (ddgi.glsl says more): five inlined samplers cost untextured scenes' probe shading 13%. */
+    vec3 emission = m.emission.rgb;
+    uvec4 ids = uvec4(m.tex.x, any(greaterThan(emission, vec3(0.0))) ? m.tex.y : 0u, m.tex2.y,
+                      m.tex2.x);
+    uint todo = (ids.x != 0u ? 1u : 0u) | (ids.y != 0u ? 2u : 0u) | (ids.z != 0u ? 4u : 0u) |
+                (ids.w != 0u ? 8u : 0u) | (m.tex2.z != 0u ? 16u : 0u);
+    vec4 texels[5] = vec4[5](vec4(1.0), vec4(1.0), vec4(1.0), vec4(1.0), vec4(1.0));
+    while (todo != 0u) {
+        uint k = findLSB(todo);
+        todo &= todo - 1u;
+        uint id = k == 4u ? m.tex2.z : ids[k];
+        texels[k] = sample_texture_as(s, id - 1u, uv, k < 2u);
+    }
     if (m.tex2.y != 0u) {
-        ns = apply_normal_map(s, m, t, a, inst, hit, uv, ns);
+        ns = apply_normal_map(m, t, a, inst, hit, texels[2], ns);
         /* keep the mapped normal on the front side of the true surface */
         float c = dot(ns, ng);
         if (c < 0.01) ns = normalize(ns + ng * (0.01 - c));
@@ -292,24 +308,21 @@ pc_surface surface_at(pc_scene_refs s, pc_hit hit, vec3 ray_dir)
     sf.geom_normal = ng;
 
     vec3 albedo = m.base_color.rgb;
-    if (m.tex.x != 0u) albedo *= sample_texture(s, m.tex.x - 1u, uv).rgb;
-    vec3 emission = m.emission.rgb;
-    if (m.tex.y != 0u && any(greaterThan(emission, vec3(0.0))))
-        emission *= sample_texture(s, m.tex.y - 1u, uv).rgb;
+    if (m.tex.x != 0u) albedo *= texels[0].rgb;
+    if (ids.y != 0u) emission *= texels[1].rgb;
     bool double_sided = m.tex.w != 0u;
     sf.albedo = clamp(albedo, 0.0, 1.0);
     sf.emission = (!hit.backface || double_sided) ? max(emission, vec3(0.0)) : vec3(0.0);
     sf.metallic = m.pbr.x;
     sf.roughness = m.pbr.y;
     if (m.tex2.x != 0u) { /* glTF: B = metalness, G = roughness, linear */
-        vec4 mr = sample_data_texture(s, m.tex2.x - 1u, uv);
-        sf.metallic *= mr.b;
-        sf.roughness *= mr.g;
+        sf.metallic *= texels[3].b;
+        sf.roughness *= texels[3].g;
     }
     sf.specular = m.params.w;
     sf.occlusion = 1.0;
     if (m.tex2.z != 0u) /* glTF: occlusion = 1 + strength * (R - 1) */
-        sf.occlusion = 1.0 + m.params.z * (sample_data_texture(s, m.tex2.z - 1u, uv).r - 1.0);
+        sf.occlusion = 1.0 + m.params.z * (texels[4].r - 1.0);
     sf.metallic = clamp(sf.metallic, 0.0, 1.0);
     sf.roughness = clamp(sf.roughness, 0.0, 1.0);
     sf.occlusion = clamp(sf.occlusion, 0.0, 1.0);
