@@ -26,6 +26,16 @@ layout(buffer_reference, std430, buffer_reference_align = 4) buffer CounterRef {
 
 layout(push_constant) uniform PushBlock { pc_push pc; };
 
+/* Specialization constant PC_SPEC_MASKED_LANES (rd_pipeline_create sets it): the device runs
+ * a shader's branches under lane masks, every branch and every loop at least once whether a lane
+ * takes it or not (lavapipe: LLVM code over 8 lanes), so each inlined call site of a big routine
+ * costs its full price. Passes then take such calls from one site in a loop (the DDGI query's
+ * visibility rays, a surface's textures): lavapipe's probe shading 1502 -> 1151 ms an update
+ * (cornell+gltf, default grid). A GPU skips untaken branches, and there the loops with their
+ * local arrays measured slower (NVIDIA H200, builtin:interior 1080p gi sample 1.53 -> 1.71 ms),
+ * so it keeps the inlined form. */
+layout(constant_id = PC_SPEC_MASKED_LANES) const bool pc_masked_lanes = false;
+
 pc_globals load_globals() { return GlobalsRef(pc.globals).g; }
 
 /* ---- colour ---------------------------------------------------------------------------- */
@@ -277,21 +287,27 @@ pc_surface surface_at(pc_scene_refs s, pc_hit hit, vec3 ray_dir)
     uint mat_index = floatBitsToUint(t.v0.w);
     pc_material m = MaterialRef(s.materials).v[mat_index];
     vec2 uv = tri_uv(a, hit.u, hit.v);
-    /* The material's textures, fetched from one call site: base colour (sRGB), emission (sRGB;
-     * only where the factor emits), normal map, metallic-roughness, occlusion (linear).
-     * Lavapipe runs a shader's branches under lane masks whether a lane takes them or not
-     * (ddgi.glsl says more): five inlined samplers cost untextured scenes' probe shading 13%. */
+    /* The material's textures: base colour (sRGB), emission (sRGB; only where the factor
+     * emits), normal map, metallic-roughness, occlusion (linear). Under masked lanes from one
+     * call site (pc_masked_lanes): five inlined samplers cost lavapipe's probe shading of
+     * untextured scenes 13%. */
     vec3 emission = m.emission.rgb;
     uvec4 ids = uvec4(m.tex.x, any(greaterThan(emission, vec3(0.0))) ? m.tex.y : 0u, m.tex2.y,
                       m.tex2.x);
     uint todo = (ids.x != 0u ? 1u : 0u) | (ids.y != 0u ? 2u : 0u) | (ids.z != 0u ? 4u : 0u) |
                 (ids.w != 0u ? 8u : 0u) | (m.tex2.z != 0u ? 16u : 0u);
     vec4 texels[5] = vec4[5](vec4(1.0), vec4(1.0), vec4(1.0), vec4(1.0), vec4(1.0));
-    while (todo != 0u) {
-        uint k = findLSB(todo);
-        todo &= todo - 1u;
-        uint id = k == 4u ? m.tex2.z : ids[k];
-        texels[k] = sample_texture_as(s, id - 1u, uv, k < 2u);
+    if (pc_masked_lanes) {
+        while (todo != 0u) {
+            uint k = findLSB(todo);
+            todo &= todo - 1u;
+            uint id = k == 4u ? m.tex2.z : ids[k];
+            texels[k] = sample_texture_as(s, id - 1u, uv, k < 2u);
+        }
+    } else {
+        [[unroll]] for (uint k = 0u; k < 5u; k++)
+            if ((todo & (1u << k)) != 0u)
+                texels[k] = sample_texture_as(s, (k == 4u ? m.tex2.z : ids[k]) - 1u, uv, k < 2u);
     }
     if (m.tex2.y != 0u) {
         ns = apply_normal_map(m, t, a, inst, hit, texels[2], ns);

@@ -220,6 +220,20 @@ uint ddgi_probe_edges(pc_ddgi_volume vol, uint index)
  * bright seams along the corners and speckles on glossy walls (thin-walls+metal +142% against
  * the path tracer). Probe-ray hits pass no limit: their rays start at the probe, in free space.
  * Callers make sure the field holds at least one update. */
+/* Corner i (bit 0: +x, 1: +y, 2: +z) of the cell at base: its probe index. */
+uint ddgi_corner_probe(pc_ddgi_volume vol, ivec3 base, uint i)
+{
+    ivec3 pc = min(base + ivec3(i & 1u, (i >> 1) & 1u, (i >> 2) & 1u), ivec3(vol.counts.xyz) - 1);
+    return ddgi_probe_index(vol, pc);
+}
+
+/* Corner i's trilinear weight at alpha (the point's place in its cell), at least 0.001 a axis. */
+float ddgi_trilinear(vec3 alpha, uint i)
+{
+    vec3 tri = max(vec3(0.001), mix(1.0 - alpha, alpha, vec3(i & 1u, (i >> 1) & 1u, (i >> 2) & 1u)));
+    return tri.x * tri.y * tri.z;
+}
+
 /* clear_sigmas > 0: a visibility ray is left out where the probe's distances say the segment is
  * clear, the texel's mean more than clear_sigmas deviations beyond the point (the probe's rays
  * toward it all went past it); a wall in between, or a texel straddling its edge, keeps the mean
@@ -233,6 +247,49 @@ uint ddgi_probe_edges(pc_ddgi_volume vol, uint index)
 /* The sample point's bias, in units of the bias scale (params.y): along n and along v. */
 #define DDGI_NORMAL_BIAS 0.2
 #define DDGI_VIEW_BIAS 0.8
+
+/* The weight of probe (a corner of the query's cell) before its trilinear factor: the back-face
+ * wrap, Chebyshev visibility and small-weight crush of mode PC_GI_DDGI (1 in classic mode); 0
+ * when the probe is inactive. ray: it is an active corner of a crossed cell with weight left,
+ * whose distances do not show the segment clear (ddgi_irradiance says when). */
+float ddgi_corner_weight(pc_ddgi_volume vol, uint mode, uint probe, vec3 p, vec3 n, vec3 biased,
+                         bool crossed, float clear_sigmas, out bool ray)
+{
+    ray = false;
+    if (!ddgi_probe_active(vol, probe)) return 0.0;
+    if (mode != PC_GI_DDGI) return 1.0;
+    vec3 probe_pos = ddgi_probe_position(vol, probe);
+    vec3 to_probe = probe_pos - p;
+    float len = length(to_probe);
+    vec3 dir_to_probe = len > 0.0 ? to_probe / len : n;
+    float wrap = (dot(dir_to_probe, n) + 1.0) * 0.5;
+    float w = wrap * wrap + 0.2;
+    vec3 probe_to_point = biased - probe_pos;
+    float r = length(probe_to_point);
+    vec3 dir = r > 0.0 ? probe_to_point / r : n;
+    vec2 moments = ddgi_sample_distance(vol, probe, dir);
+    float mean = moments.x;
+    float variance = abs(moments.y - mean * mean);
+    if (r > mean) {
+        float d = r - mean;
+        float cheb = variance / (variance + d * d);
+        w *= max(0.05, cheb * cheb * cheb);
+    }
+    w = max(1e-6, w);
+    if (w < 0.2) w *= w * w / 0.04;
+    bool clear = clear_sigmas > 0.0 && mean - clear_sigmas * sqrt(variance) > r;
+    ray = crossed && w > 1e-3 && !clear;
+    return w;
+}
+
+/* Whether geometry lies between the biased query point and probe (a visibility ray). */
+bool ddgi_corner_blocked(pc_ddgi_volume vol, pc_scene_refs scene, uint probe, vec3 biased)
+{
+    vec3 to = ddgi_probe_position(vol, probe) - biased;
+    float dist = length(to);
+    pc_hit h;
+    return dist > 0.0 && trace_ray(scene, biased, to / dist, 0.0, dist, PC_TRACE_ANY_HIT, h);
+}
 vec3 ddgi_irradiance(pc_ddgi_volume vol, pc_scene_refs scene, bool probe_hit, vec3 sky_e, vec3 p,
                      vec3 n, vec3 v, float v_reach, float clear_sigmas)
 {
@@ -258,9 +315,7 @@ vec3 ddgi_irradiance(pc_ddgi_volume vol, pc_scene_refs scene, bool probe_hit, ve
     if (mode == PC_GI_DDGI && vis_rays) {
         uint live = 0u, edges[8];
         for (uint i = 0u; i < 8u; i++) {
-            ivec3 pc = min(base + ivec3(i & 1u, (i >> 1) & 1u, (i >> 2) & 1u),
-                           ivec3(vol.counts.xyz) - 1);
-            uint probe = ddgi_probe_index(vol, pc);
+            uint probe = ddgi_corner_probe(vol, base, i);
             edges[i] = ddgi_probe_edges(vol, probe);
             if (ddgi_probe_active(vol, probe)) live |= 1u << i;
         }
@@ -278,66 +333,43 @@ vec3 ddgi_irradiance(pc_ddgi_volume vol, pc_scene_refs scene, bool probe_hit, ve
                                       (live & (1u << i)) != 0u && (live & (1u << j)) != 0u);
             }
     }
-    /* Two passes over the corners: weights first, then the visibility rays of the corners
-     * that need one, from a single call site. Lavapipe runs a shader's branches under lane
-     * masks, every loop at least once, whether a lane takes them or not: a trace inlined in
-     * each of eight unrolled corners cost probe shading 2.2x (cornell+gltf, paper's first hit
-     * only: 490 against 230 ms an update at the default grid). */
-    float w[8]; /* each corner's weight before its trilinear factor; 0: inactive */
-    float tri_w[8];
-    uint rays = 0u; /* corners that get a visibility ray */
-    [[dont_unroll]] for (uint i = 0u; i < 8u; i++) {
-        ivec3 off = ivec3(i & 1u, (i >> 1) & 1u, (i >> 2) & 1u);
-        ivec3 pc = min(base + off, ivec3(vol.counts.xyz) - 1);
-        uint probe = ddgi_probe_index(vol, pc);
-        w[i] = 0.0;
-        vec3 tri = max(vec3(0.001), mix(1.0 - alpha, alpha, vec3(off)));
-        tri_w[i] = tri.x * tri.y * tri.z;
-        if (!ddgi_probe_active(vol, probe)) continue;
-        float wi = 1.0;
-        if (mode == PC_GI_DDGI) {
-            vec3 probe_pos = ddgi_probe_position(vol, probe);
-            vec3 to_probe = probe_pos - p;
-            float len = length(to_probe);
-            vec3 dir_to_probe = len > 0.0 ? to_probe / len : n;
-            float wrap = (dot(dir_to_probe, n) + 1.0) * 0.5;
-            wi *= wrap * wrap + 0.2;
-            vec3 probe_to_point = biased - probe_pos;
-            float r = length(probe_to_point);
-            vec3 dir = r > 0.0 ? probe_to_point / r : n;
-            vec2 moments = ddgi_sample_distance(vol, probe, dir);
-            float mean = moments.x;
-            float variance = abs(moments.y - mean * mean);
-            if (r > mean) {
-                float d = r - mean;
-                float cheb = variance / (variance + d * d);
-                wi *= max(0.05, cheb * cheb * cheb);
-            }
-            wi = max(1e-6, wi);
-            if (wi < 0.2) wi *= wi * wi / 0.04;
-            bool clear = clear_sigmas > 0.0 && mean - clear_sigmas * sqrt(variance) > r;
-            if (crossed && wi > 1e-3 && !clear) rays |= 1u << i; /* an active corner of a crossed cell */
-        }
-        w[i] = wi;
-    }
-    while (rays != 0u) {
-        uint i = findLSB(rays);
-        rays &= rays - 1u;
-        ivec3 pc = min(base + ivec3(i & 1u, (i >> 1) & 1u, (i >> 2) & 1u), ivec3(vol.counts.xyz) - 1);
-        vec3 to = ddgi_probe_position(vol, ddgi_probe_index(vol, pc)) - biased;
-        float dist = length(to);
-        pc_hit h;
-        if (dist > 0.0 && trace_ray(scene, biased, to / dist, 0.0, dist, PC_TRACE_ANY_HIT, h))
-            w[i] = 1e-6; /* blocked: as low as a probe Chebyshev rejects outright */
-    }
     vec3 sum = vec3(0.0);
     float wsum = 0.0;
-    [[dont_unroll]] for (uint i = 0u; i < 8u; i++) {
-        if (w[i] <= 0.0) continue;
-        ivec3 pc = min(base + ivec3(i & 1u, (i >> 1) & 1u, (i >> 2) & 1u), ivec3(vol.counts.xyz) - 1);
-        float wt = w[i] * tri_w[i];
-        sum += wt * ddgi_sample_irradiance(vol, ddgi_probe_index(vol, pc), n);
-        wsum += wt;
+    if (!pc_masked_lanes) {
+        for (uint i = 0u; i < 8u; i++) {
+            uint probe = ddgi_corner_probe(vol, base, i);
+            bool ray;
+            float w = ddgi_corner_weight(vol, mode, probe, p, n, biased, crossed, clear_sigmas, ray);
+            if (w <= 0.0) continue; /* inactive */
+            if (ray && ddgi_corner_blocked(vol, scene, probe, biased)) w = 1e-6;
+            w *= ddgi_trilinear(alpha, i);
+            sum += w * ddgi_sample_irradiance(vol, probe, n);
+            wsum += w;
+        }
+    } else {
+        /* Under masked lanes (common.glsl): weights first, then the visibility rays from one call
+         * site; the trace inlined in each of eight unrolled corners cost lavapipe's probe
+         * shading 2.2x (cornell+gltf, the paper's first hit only: 490 against 230 ms an
+         * update). */
+        float w[8]; /* 0: inactive */
+        uint rays = 0u;
+        [[dont_unroll]] for (uint i = 0u; i < 8u; i++) {
+            bool ray;
+            w[i] = ddgi_corner_weight(vol, mode, ddgi_corner_probe(vol, base, i), p, n, biased,
+                                      crossed, clear_sigmas, ray);
+            if (ray) rays |= 1u << i;
+        }
+        while (rays != 0u) {
+            uint i = findLSB(rays);
+            rays &= rays - 1u;
+            if (ddgi_corner_blocked(vol, scene, ddgi_corner_probe(vol, base, i), biased)) w[i] = 1e-6;
+        }
+        [[dont_unroll]] for (uint i = 0u; i < 8u; i++) {
+            if (w[i] <= 0.0) continue;
+            float wt = w[i] * ddgi_trilinear(alpha, i);
+            sum += wt * ddgi_sample_irradiance(vol, ddgi_corner_probe(vol, base, i), n);
+            wsum += wt;
+        }
     }
     vec3 e = wsum > 0.0 ? PC_PI * sum / wsum : vec3(0.0);
     return mix(sky_e, e, fade);

@@ -1,6 +1,8 @@
 /* vk_compute.c: compute pipelines, one-shot command buffers and timestamp queries. */
 #include "renderer/vk/vk_compute.h"
 
+#include "shaders/gpu_types.h"
+
 #include <string.h>
 
 /* One fence wait; lavapipe can take minutes on big dispatches, so waits repeat. */
@@ -59,6 +61,14 @@ rd_vk_result rd_pipeline_create(rd_vk *vk, rd_pipeline *p, const char *name, con
         goto fail;
     }
 
+    /* every pipeline gets the constants; a shader that declares none ignores them */
+    VkBool32 masked_lanes = vk->masked_lanes ? VK_TRUE : VK_FALSE;
+    VkSpecializationMapEntry entry = {
+        .constantID = PC_SPEC_MASKED_LANES, .offset = 0, .size = sizeof masked_lanes};
+    VkSpecializationInfo spec = {.mapEntryCount = 1,
+                                 .pMapEntries = &entry,
+                                 .dataSize = sizeof masked_lanes,
+                                 .pData = &masked_lanes};
     VkComputePipelineCreateInfo cpci = {
         .sType = VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO,
         .stage =
@@ -67,6 +77,7 @@ rd_vk_result rd_pipeline_create(rd_vk *vk, rd_pipeline *p, const char *name, con
                 .stage = VK_SHADER_STAGE_COMPUTE_BIT,
                 .module = p->module,
                 .pName = "main",
+                .pSpecializationInfo = &spec,
             },
         .layout = p->layout,
     };

@@ -377,6 +377,10 @@ static rd_vk_result pick_device(rd_vk *vk, const char *selector, char *err, size
     vkGetPhysicalDeviceMemoryProperties(vk->physical, &vk->memory);
     snprintf(vk->device_name, sizeof vk->device_name, "%s", vk->properties.deviceName);
     vk->is_cpu = vk->properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+    const char *masked = getenv("PROBECAST_MASKED_LANES");
+    vk->masked_lanes = masked && (strcmp(masked, "0") == 0 || strcmp(masked, "1") == 0)
+                           ? strcmp(masked, "1") == 0
+                           : vk->is_cpu;
     return RD_VK_OK;
 }
 

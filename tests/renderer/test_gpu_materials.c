@@ -8,7 +8,11 @@
  *     white metals and a glTF dielectric reflect no more than L;
  *   - normal maps: a constant tangent-space normal tilted by theta changes N.L from cos(a) to
  *     cos(a - theta), with tangents derived from the UVs and from a TANGENT attribute;
- *   - indirect diffuse: occlusion maps darken the DDGI term only, metals take none of it. */
+ *   - indirect diffuse: occlusion maps darken the DDGI term only, metals take none of it;
+ *   - the two forms of the shaders' specialization PC_SPEC_MASKED_LANES (gpu_types.h: one call
+ *     site in a loop on CPU devices, inlined call sites on GPUs) render the same image, bit for
+ *     bit, of a room with all five textures and a partition that crosses probe cage edges (so
+ *     the DDGI query's visibility rays run). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -398,6 +402,69 @@ static void test_indirect_diffuse(void)
     near_field = PC_NEAR_AUTO;
 }
 
+/* A texture of w x h texels, each (r, g, b, a) + k * step. */
+static int32_t add_texture(rd_scene *s, uint32_t w, uint32_t h, const uint8_t rgba[4], int step)
+{
+    rd_texture t = {.width = w, .height = h, .wrap_s = RD_WRAP_REPEAT, .wrap_t = RD_WRAP_REPEAT};
+    t.rgba = malloc((size_t)w * h * 4);
+    for (uint32_t k = 0; k < w * h; k++)
+        for (int c = 0; c < 4; c++)
+            t.rgba[k * 4 + c] = (uint8_t)(rgba[c] + (int)k * step);
+    return (int32_t)rd_scene_add_texture(s, &t);
+}
+
+static void test_masked_lanes(void)
+{
+    rd_scene s;
+    rd_scene_init(&s);
+    uint32_t mat = add_material(&s, 0.8f, 0.5f, 0.6f, 1);
+    rd_material *m = &s.materials[mat];
+    m->base_color_texture = add_texture(&s, 2, 2, (const uint8_t[4]){200, 120, 60, 255}, 20);
+    m->metallic_roughness_texture = add_texture(&s, 2, 2, (const uint8_t[4]){0, 180, 40, 255}, 30);
+    m->normal_texture = add_texture(&s, 2, 1, (const uint8_t[4]){150, 128, 240, 255}, -30);
+    m->occlusion_texture = add_texture(&s, 2, 2, (const uint8_t[4]){160, 0, 0, 255}, 25);
+    m->emissive_texture = add_texture(&s, 1, 2, (const uint8_t[4]){40, 20, 10, 255}, 10);
+    m->emission[0] = m->emission[1] = m->emission[2] = 0.05f;
+    rd_tri_list t = {0};
+    const float lo[3] = {-1, 0, -1}, hi[3] = {1, 2, 1};
+    rd_tris_room(&t, lo, hi, mat);
+    /* a partition with a doorway gap, across the middle probe layer's cage edges */
+    const float w_lo[3] = {0.28f, 0, -1}, w_hi[3] = {0.32f, 2, 0.3f};
+    rd_tris_box(&t, w_lo, w_hi, mat);
+    rd_tris_commit(&t, &s, "room");
+    rd_mesh *mesh = &s.meshes[0];
+    for (uint32_t i = 0; i < mesh->tri_count * 3; i++) {
+        const float *p = &mesh->positions[i * 3];
+        mesh->uvs[i * 2] = 0.7f * p[0] + 0.3f * p[2];
+        mesh->uvs[i * 2 + 1] = 0.5f * p[1] + 0.4f * p[2];
+    }
+    rd_build_point_light(&s, -0.5f, 1.6f, 0.2f, 20.0f);
+    const float negz[3] = {0, 0, -1}, up[3] = {0, 1, 0};
+    rd_view_camera cam = look(0.5f, 1, 0.95f, negz, up, 90);
+    bool was = vk.masked_lanes;
+    float *img[2];
+    for (int k = 0; k < 2; k++) {
+        vk.masked_lanes = k == 0;
+        img[k] = render_gi(&s, &cam, 0, 0, true);
+    }
+    vk.masked_lanes = was;
+    if (img[0] && img[1]) {
+        int differ = 0;
+        double mean = 0;
+        for (int i = 0; i < W * H * 3; i++) {
+            differ += img[0][i] != img[1][i];
+            mean += img[0][i] / (W * H * 3);
+        }
+        printf("masked lanes against inlined call sites: %d of %d channels differ (mean %.4f)\n",
+               differ, W * H * 3, mean);
+        CHECKF(differ == 0, "%d channels differ between the two shader forms", differ);
+        CHECKF(mean > 0.01, "the textured room is dark (%g)", mean);
+    }
+    free(img[0]);
+    free(img[1]);
+    rd_scene_destroy(&s);
+}
+
 int main(void)
 {
     if (!test_vk_open(&vk)) return test_finish();
@@ -414,5 +481,6 @@ int main(void)
     test_normal_map(1, 1);
     test_normal_map(1, -1);
     test_indirect_diffuse();
+    test_masked_lanes();
     return test_vk_close(&vk);
 }
