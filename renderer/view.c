@@ -8,25 +8,33 @@
 #include <string.h>
 
 #include "shaders/ddgi_sample.spv.h"
+#include "shaders/ddgi_sample.masked.spv.h"
 #include "shaders/near_field.spv.h"
+#include "shaders/near_field.masked.spv.h"
 #include "shaders/pathtrace.spv.h"
+#include "shaders/pathtrace.masked.spv.h"
 #include "shaders/primary.spv.h"
+#include "shaders/primary.masked.spv.h"
 #include "shaders/reflect.spv.h"
+#include "shaders/reflect.masked.spv.h"
 #include "shaders/reflect_filter.spv.h"
 #include "shaders/shade.spv.h"
 #include "shaders/tonemap.spv.h"
 
 /* The per-view passes, one line each (the world's passes are in renderer/gi). */
 static const rd_pipeline_desc pipelines[] = {
-    RD_PIPELINE_DESC(rd_view_passes, primary, "primary", pc_spv_primary, sizeof(pc_push)),
+    RD_PIPELINE_DESC_MASKED(rd_view_passes, primary, "primary", pc_spv_primary, sizeof(pc_push)),
     RD_PIPELINE_DESC(rd_view_passes, shade, "shade", pc_spv_shade, sizeof(pc_push)),
     RD_PIPELINE_DESC(rd_view_passes, tonemap, "tonemap", pc_spv_tonemap, sizeof(pc_push)),
-    RD_PIPELINE_DESC(rd_view_passes, gi_sample, "gi sample", pc_spv_ddgi_sample, sizeof(pc_push)),
-    RD_PIPELINE_DESC(rd_view_passes, pathtrace, "path trace", pc_spv_pathtrace, sizeof(pc_push)),
-    RD_PIPELINE_DESC(rd_view_passes, reflect, "reflect", pc_spv_reflect, sizeof(pc_push)),
+    RD_PIPELINE_DESC_MASKED(rd_view_passes, gi_sample, "gi sample", pc_spv_ddgi_sample,
+                            sizeof(pc_push)),
+    RD_PIPELINE_DESC_MASKED(rd_view_passes, pathtrace, "path trace", pc_spv_pathtrace,
+                            sizeof(pc_push)),
+    RD_PIPELINE_DESC_MASKED(rd_view_passes, reflect, "reflect", pc_spv_reflect, sizeof(pc_push)),
     RD_PIPELINE_DESC(rd_view_passes, reflect_filter, "reflect filter", pc_spv_reflect_filter,
                      sizeof(pc_push)),
-    RD_PIPELINE_DESC(rd_view_passes, near_field, "near field", pc_spv_near_field, sizeof(pc_push)),
+    RD_PIPELINE_DESC_MASKED(rd_view_passes, near_field, "near field", pc_spv_near_field,
+                            sizeof(pc_push)),
 };
 #define PIPELINE_COUNT (sizeof pipelines / sizeof pipelines[0])
 

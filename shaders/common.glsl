@@ -12,6 +12,20 @@
 
 #include "gpu_types.h"
 
+/* PC_MASKED_LANES 1: the variant for a device that runs a shader's branches under lane masks,
+ * every branch and every loop at least once whether a lane takes it or not (lavapipe: LLVM code
+ * over 8 lanes), so each inlined call site of a big routine costs its full price. The passes that
+ * trace and shade (CMakeLists.txt: PC_MASKED_LANE_SHADERS) are compiled twice, and such calls
+ * come from one site in a loop in this variant (the DDGI query's visibility rays, the probe path's
+ * field query, a surface's textures): lavapipe's probe shading 1502 -> 1151 ms an update
+ * (cornell+gltf, default grid), the same image bit for bit. A GPU skips untaken branches, and
+ * there the loops with their local arrays measured slower (NVIDIA H200, builtin:interior 1080p
+ * gi sample 1.53 -> 1.71 ms): the 0 variant keeps the inlined calls. rd_pipelines_create picks
+ * (rd_vk.masked_lanes). */
+#ifndef PC_MASKED_LANES
+#define PC_MASKED_LANES 0
+#endif
+
 #define PC_PI 3.14159265358979323846
 
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer GlobalsRef { pc_globals g; };
@@ -25,16 +39,6 @@ layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Li
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer CounterRef { pc_counters c; };
 
 layout(push_constant) uniform PushBlock { pc_push pc; };
-
-/* Specialization constant PC_SPEC_MASKED_LANES (rd_pipeline_create sets it): the device runs
- * a shader's branches under lane masks, every branch and every loop at least once whether a lane
- * takes it or not (lavapipe: LLVM code over 8 lanes), so each inlined call site of a big routine
- * costs its full price. Passes then take such calls from one site in a loop (the DDGI query's
- * visibility rays, a surface's textures): lavapipe's probe shading 1502 -> 1151 ms an update
- * (cornell+gltf, default grid). A GPU skips untaken branches, and there the loops with their
- * local arrays measured slower (NVIDIA H200, builtin:interior 1080p gi sample 1.53 -> 1.71 ms),
- * so it keeps the inlined form. */
-layout(constant_id = PC_SPEC_MASKED_LANES) const bool pc_masked_lanes = false;
 
 pc_globals load_globals() { return GlobalsRef(pc.globals).g; }
 
@@ -287,30 +291,27 @@ pc_surface surface_at(pc_scene_refs s, pc_hit hit, vec3 ray_dir)
     uint mat_index = floatBitsToUint(t.v0.w);
     pc_material m = MaterialRef(s.materials).v[mat_index];
     vec2 uv = tri_uv(a, hit.u, hit.v);
-    /* The material's textures: base colour (sRGB), emission (sRGB; only where the factor
-     * emits), normal map, metallic-roughness, occlusion (linear). Under masked lanes from one
-     * call site (pc_masked_lanes): five inlined samplers cost lavapipe's probe shading of
-     * untextured scenes 13%. */
-    vec3 emission = m.emission.rgb;
-    uvec4 ids = uvec4(m.tex.x, any(greaterThan(emission, vec3(0.0))) ? m.tex.y : 0u, m.tex2.y,
-                      m.tex2.x);
+    /* The material's textures: base colour and emission (sRGB; emission only where its factor
+     * emits), normal map, metallic-roughness and occlusion (linear). With masked lanes they are
+     * fetched first, from one call site (five inlined samplers cost lavapipe's probe shading of
+     * untextured scenes 13%); else each where it is used. */
+#if PC_MASKED_LANES
+    vec4 texels[5] = vec4[5](vec4(1.0), vec4(1.0), vec4(1.0), vec4(1.0), vec4(1.0));
+    uvec4 ids = uvec4(m.tex.x, any(greaterThan(m.emission.rgb, vec3(0.0))) ? m.tex.y : 0u,
+                      m.tex2.y, m.tex2.x);
     uint todo = (ids.x != 0u ? 1u : 0u) | (ids.y != 0u ? 2u : 0u) | (ids.z != 0u ? 4u : 0u) |
                 (ids.w != 0u ? 8u : 0u) | (m.tex2.z != 0u ? 16u : 0u);
-    vec4 texels[5] = vec4[5](vec4(1.0), vec4(1.0), vec4(1.0), vec4(1.0), vec4(1.0));
-    if (pc_masked_lanes) {
-        while (todo != 0u) {
-            uint k = findLSB(todo);
-            todo &= todo - 1u;
-            uint id = k == 4u ? m.tex2.z : ids[k];
-            texels[k] = sample_texture_as(s, id - 1u, uv, k < 2u);
-        }
-    } else {
-        [[unroll]] for (uint k = 0u; k < 5u; k++)
-            if ((todo & (1u << k)) != 0u)
-                texels[k] = sample_texture_as(s, (k == 4u ? m.tex2.z : ids[k]) - 1u, uv, k < 2u);
+    while (todo != 0u) {
+        uint k = findLSB(todo);
+        todo &= todo - 1u;
+        texels[k] = sample_texture_as(s, (k == 4u ? m.tex2.z : ids[k]) - 1u, uv, k < 2u);
     }
+#define SURFACE_TEXEL(k, index, srgb) texels[k]
+#else
+#define SURFACE_TEXEL(k, index, srgb) sample_texture_as(s, (index) - 1u, uv, srgb)
+#endif
     if (m.tex2.y != 0u) {
-        ns = apply_normal_map(m, t, a, inst, hit, texels[2], ns);
+        ns = apply_normal_map(m, t, a, inst, hit, SURFACE_TEXEL(2, m.tex2.y, false), ns);
         /* keep the mapped normal on the front side of the true surface */
         float c = dot(ns, ng);
         if (c < 0.01) ns = normalize(ns + ng * (0.01 - c));
@@ -324,21 +325,25 @@ pc_surface surface_at(pc_scene_refs s, pc_hit hit, vec3 ray_dir)
     sf.geom_normal = ng;
 
     vec3 albedo = m.base_color.rgb;
-    if (m.tex.x != 0u) albedo *= texels[0].rgb;
-    if (ids.y != 0u) emission *= texels[1].rgb;
+    if (m.tex.x != 0u) albedo *= SURFACE_TEXEL(0, m.tex.x, true).rgb;
+    vec3 emission = m.emission.rgb;
+    if (m.tex.y != 0u && any(greaterThan(emission, vec3(0.0))))
+        emission *= SURFACE_TEXEL(1, m.tex.y, true).rgb;
     bool double_sided = m.tex.w != 0u;
     sf.albedo = clamp(albedo, 0.0, 1.0);
     sf.emission = (!hit.backface || double_sided) ? max(emission, vec3(0.0)) : vec3(0.0);
     sf.metallic = m.pbr.x;
     sf.roughness = m.pbr.y;
     if (m.tex2.x != 0u) { /* glTF: B = metalness, G = roughness, linear */
-        sf.metallic *= texels[3].b;
-        sf.roughness *= texels[3].g;
+        vec4 mr = SURFACE_TEXEL(3, m.tex2.x, false);
+        sf.metallic *= mr.b;
+        sf.roughness *= mr.g;
     }
     sf.specular = m.params.w;
     sf.occlusion = 1.0;
     if (m.tex2.z != 0u) /* glTF: occlusion = 1 + strength * (R - 1) */
-        sf.occlusion = 1.0 + m.params.z * (texels[4].r - 1.0);
+        sf.occlusion = 1.0 + m.params.z * (SURFACE_TEXEL(4, m.tex2.z, false).r - 1.0);
+#undef SURFACE_TEXEL
     sf.metallic = clamp(sf.metallic, 0.0, 1.0);
     sf.roughness = clamp(sf.roughness, 0.0, 1.0);
     sf.occlusion = clamp(sf.occlusion, 0.0, 1.0);

@@ -335,7 +335,8 @@ vec3 ddgi_irradiance(pc_ddgi_volume vol, pc_scene_refs scene, bool probe_hit, ve
     }
     vec3 sum = vec3(0.0);
     float wsum = 0.0;
-    if (!pc_masked_lanes) {
+#if !PC_MASKED_LANES
+    {
         for (uint i = 0u; i < 8u; i++) {
             uint probe = ddgi_corner_probe(vol, base, i);
             bool ray;
@@ -346,7 +347,9 @@ vec3 ddgi_irradiance(pc_ddgi_volume vol, pc_scene_refs scene, bool probe_hit, ve
             sum += w * ddgi_sample_irradiance(vol, probe, n);
             wsum += w;
         }
-    } else {
+    }
+#else
+    {
         /* Under masked lanes (common.glsl): weights first, then the visibility rays from one call
          * site; the trace inlined in each of eight unrolled corners cost lavapipe's probe
          * shading 2.2x (cornell+gltf, the paper's first hit only: 490 against 230 ms an
@@ -371,6 +374,7 @@ vec3 ddgi_irradiance(pc_ddgi_volume vol, pc_scene_refs scene, bool probe_hit, ve
             wsum += wt;
         }
     }
+#endif
     vec3 e = wsum > 0.0 ? PC_PI * sum / wsum : vec3(0.0);
     return mix(sky_e, e, fade);
 }

@@ -82,9 +82,8 @@ void main()
         pc_surface sf = surface_at(g.scene, hit, dir);
         uint seed = pcg(slot ^ pcg(vol.info.y * 0x9E3779B9u + 0x632BE5ABu));
         vec3 radiance = vec3(0.0), throughput = vec3(1.0), n0 = vec3(0.0);
-        /* the path's last vertex takes the field's irradiance after the loop, from one call site
-         * (lavapipe runs every call site under masks, in every iteration: ddgi.glsl) */
-        bool field = false;
+        /* the field's term at the path's last vertex: one call site, inside the loop, or with
+         * masked lanes (common.glsl) after it, where it runs once rather than every iteration */
         vec3 field_weight = vec3(0.0), field_v = vec3(0.0);
         float field_reach = 0.0;
         for (uint depth = 0u;; depth++) {
@@ -104,13 +103,18 @@ void main()
                 if (pc.params.y == 0u) break; /* no field yet */
                 /* probe-ray hits start at the probe, in free space (no limit on the bias along
                  * v); a continued path's hits, half their segment and the rest along the
-                 * previous vertex's normal */
-                field = true;
+                 * previous vertex's normal (ddgi_irradiance_at_hit) */
                 field_v = v;
                 field_reach = 1e30;
                 if (depth != 0u) ddgi_hit_view(vol, dir, hit.t, n0, field_v, field_reach);
                 vec3 albedo = brdf_hit_albedo(g.brdf_albedo, b, clamp(dot(sf.normal, v), 0.0, 1.0));
                 field_weight = throughput * sf.occlusion * min(albedo, vec3(0.9)) / PC_PI;
+#if !PC_MASKED_LANES
+                radiance += field_weight * ddgi_irradiance(vol, g.scene, true,
+                                                           env_irradiance(g.env, sf.normal),
+                                                           sf.position, sf.normal, field_v,
+                                                           field_reach, 0.0);
+#endif
                 break;
             }
             float u1 = rnd(seed), u2 = rnd(seed), u3 = rnd(seed);
@@ -132,11 +136,13 @@ void main()
             hit.backface = false;
             sf = surface_at(g.scene, hit, dir);
         }
-        if (field)
+#if PC_MASKED_LANES
+        if (field_reach > 0.0)
             radiance += field_weight * ddgi_irradiance(vol, g.scene, true,
                                                        env_irradiance(g.env, sf.normal),
                                                        sf.position, sf.normal, field_v,
                                                        field_reach, 0.0);
+#endif
         if (any(isnan(radiance)) || any(isinf(radiance))) radiance = vec3(0.0);
         DdgiRayRef(vol.rays).v[slot] = vec4(radiance, r.w);
     }

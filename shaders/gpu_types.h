@@ -54,9 +54,6 @@ static inline float pc_u2f(uint32_t u)
 #define PC_WG_2D_X 8
 #define PC_WG_2D_Y 8
 #define PC_WG_1D 64
-/* Specialization constant ids (rd_pipeline_create): PC_SPEC_MASKED_LANES, a bool, true on a
- * device that runs untaken branches under lane masks (a CPU device; common.glsl says why). */
-#define PC_SPEC_MASKED_LANES 0
 /* The GPU LBVH's node renumbering (shaders/lbvh_scan.comp): words of its prefix sum that one
  * workgroup scans (a multiple of PC_WG_1D). */
 #define PC_LBVH_SCAN_BLOCK 2048u

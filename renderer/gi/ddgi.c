@@ -13,6 +13,7 @@
 #include "shaders/ddgi_scan.spv.h"
 #include "shaders/ddgi_select.spv.h"
 #include "shaders/ddgi_shade.spv.h"
+#include "shaders/ddgi_shade.masked.spv.h"
 #include "shaders/ddgi_trace.spv.h"
 #include "shaders/ddgi_wake.spv.h"
 #include "shaders/ddgi_weights.spv.h"
@@ -20,7 +21,7 @@
 /* The probe passes, one line each (rd_ddgi_update dispatches them). */
 static const rd_pipeline_desc pipelines[] = {
     RD_PIPELINE_DESC(rd_ddgi, trace, "probe trace", pc_spv_ddgi_trace, sizeof(pc_push)),
-    RD_PIPELINE_DESC(rd_ddgi, shade, "probe shade", pc_spv_ddgi_shade, sizeof(pc_push)),
+    RD_PIPELINE_DESC_MASKED(rd_ddgi, shade, "probe shade", pc_spv_ddgi_shade, sizeof(pc_push)),
     RD_PIPELINE_DESC(rd_ddgi, blend_distance, "probe blend distance", pc_spv_ddgi_blend_distance,
                      sizeof(pc_push)),
     RD_PIPELINE_DESC(rd_ddgi, blend_irradiance, "probe blend irradiance",

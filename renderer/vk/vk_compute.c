@@ -1,8 +1,6 @@
 /* vk_compute.c: compute pipelines, one-shot command buffers and timestamp queries. */
 #include "renderer/vk/vk_compute.h"
 
-#include "shaders/gpu_types.h"
-
 #include <string.h>
 
 /* One fence wait; lavapipe can take minutes on big dispatches, so waits repeat. */
@@ -61,14 +59,6 @@ rd_vk_result rd_pipeline_create(rd_vk *vk, rd_pipeline *p, const char *name, con
         goto fail;
     }
 
-    /* every pipeline gets the constants; a shader that declares none ignores them */
-    VkBool32 masked_lanes = vk->masked_lanes ? VK_TRUE : VK_FALSE;
-    VkSpecializationMapEntry entry = {
-        .constantID = PC_SPEC_MASKED_LANES, .offset = 0, .size = sizeof masked_lanes};
-    VkSpecializationInfo spec = {.mapEntryCount = 1,
-                                 .pMapEntries = &entry,
-                                 .dataSize = sizeof masked_lanes,
-                                 .pData = &masked_lanes};
     VkComputePipelineCreateInfo cpci = {
         .sType = VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO,
         .stage =
@@ -77,7 +67,6 @@ rd_vk_result rd_pipeline_create(rd_vk *vk, rd_pipeline *p, const char *name, con
                 .stage = VK_SHADER_STAGE_COMPUTE_BIT,
                 .module = p->module,
                 .pName = "main",
-                .pSpecializationInfo = &spec,
             },
         .layout = p->layout,
     };
@@ -119,8 +108,10 @@ rd_vk_result rd_pipelines_create(rd_vk *vk, void *owner, const rd_pipeline_desc 
 {
     for (size_t i = 0; i < count; i++) {
         const rd_pipeline_desc *d = &table[i];
-        rd_vk_result r = rd_pipeline_create(vk, member(owner, d), d->name, d->spirv, d->spirv_bytes,
-                                            d->push_size, err, errlen);
+        bool masked = vk->masked_lanes && d->spirv_masked;
+        rd_vk_result r = rd_pipeline_create(
+            vk, member(owner, d), d->name, masked ? d->spirv_masked : d->spirv,
+            masked ? d->spirv_masked_bytes : d->spirv_bytes, d->push_size, err, errlen);
         if (r != RD_VK_OK) {
             rd_pipelines_destroy(vk, owner, table, i);
             return r;

@@ -24,19 +24,28 @@ rd_vk_result rd_pipeline_create(rd_vk *vk, rd_pipeline *p, const char *name, con
 void rd_pipeline_destroy(rd_vk *vk, rd_pipeline *p); /* idempotent */
 
 /* One line of a pipeline table: which rd_pipeline member of the owner struct, its name (in
- * error messages), its SPIR-V and its push-constant size. */
+ * error messages), its SPIR-V and its push-constant size. spirv_masked (optional): the shader's
+ * PC_MASKED_LANES variant (shaders/common.glsl), used where rd_vk.masked_lanes. */
 typedef struct rd_pipeline_desc {
     size_t offset; /* of the rd_pipeline inside the owner */
     const char *name;
     const uint32_t *spirv;
     size_t spirv_bytes;
     uint32_t push_size;
+    const uint32_t *spirv_masked;
+    size_t spirv_masked_bytes;
 } rd_pipeline_desc;
 
 /* A table line for member `member` of `type`, made from the embedded SPIR-V array `spv`. */
 #define RD_PIPELINE_DESC(type, member, name, spv, push_size)                                       \
     {                                                                                              \
-        RD_PIPELINE_OFFSET(type, member), (name), (spv), sizeof(spv), (push_size)                  \
+        RD_PIPELINE_OFFSET(type, member), (name), (spv), sizeof(spv), (push_size), NULL, 0         \
+    }
+/* The same for a shader of CMakeLists.txt's PC_MASKED_LANE_SHADERS, with its variant spv_masked. */
+#define RD_PIPELINE_DESC_MASKED(type, member, name, spv, push_size)                                \
+    {                                                                                              \
+        RD_PIPELINE_OFFSET(type, member), (name), (spv), sizeof(spv), (push_size), spv##_masked,   \
+            sizeof(spv##_masked)                                                                   \
     }
 /* offsetof that compiles only for an rd_pipeline member */
 #define RD_PIPELINE_OFFSET(type, member)                                                           \

@@ -67,8 +67,8 @@ typedef struct rd_vk {
     double timestamp_period_ns; /* 0 when the queue has no timestamps */
     bool validation;
     bool is_cpu; /* lavapipe or another CPU implementation */
-    /* Shaders' PC_SPEC_MASKED_LANES (gpu_types.h): is_cpu, unless $PROBECAST_MASKED_LANES is 0
-     * or 1 (tests compare both forms' images on one device) */
+    /* pipelines use their shaders' PC_MASKED_LANES variants (shaders/common.glsl): is_cpu, unless
+     * $PROBECAST_MASKED_LANES is 0 or 1 (tests compare both variants' images on one device) */
     bool masked_lanes;
     atomic_uint validation_messages;
     char device_name[VK_MAX_PHYSICAL_DEVICE_NAME_SIZE];
