@@ -20,8 +20,8 @@
  * field query, a surface's textures): lavapipe's probe shading 1502 -> 1151 ms an update
  * (cornell+gltf, default grid), the same image bit for bit. A GPU skips untaken branches, and
  * there the loops with their local arrays measured slower (NVIDIA H200, builtin:interior 1080p
- * gi sample 1.53 -> 1.71 ms): the 0 variant keeps the inlined calls. rd_pipelines_create picks
- * (rd_vk.masked_lanes). */
+ * gi sample 1.58 -> 1.71 ms): the 0 variant keeps the inlined calls. rd_pipelines_create picks
+ * (rd_vk.masked_lanes); test_gpu_materials renders both variants and requires the same image. */
 #ifndef PC_MASKED_LANES
 #define PC_MASKED_LANES 0
 #endif
