@@ -19,12 +19,13 @@
 #include "shaders/reflect.masked.spv.h"
 #include "shaders/reflect_filter.spv.h"
 #include "shaders/shade.spv.h"
+#include "shaders/shade.masked.spv.h"
 #include "shaders/tonemap.spv.h"
 
 /* The per-view passes, one line each (the world's passes are in renderer/gi). */
 static const rd_pipeline_desc pipelines[] = {
     RD_PIPELINE_DESC_MASKED(rd_view_passes, primary, "primary", pc_spv_primary, sizeof(pc_push)),
-    RD_PIPELINE_DESC(rd_view_passes, shade, "shade", pc_spv_shade, sizeof(pc_push)),
+    RD_PIPELINE_DESC_MASKED(rd_view_passes, shade, "shade", pc_spv_shade, sizeof(pc_push)),
     RD_PIPELINE_DESC(rd_view_passes, tonemap, "tonemap", pc_spv_tonemap, sizeof(pc_push)),
     RD_PIPELINE_DESC_MASKED(rd_view_passes, gi_sample, "gi sample", pc_spv_ddgi_sample,
                             sizeof(pc_push)),

@@ -108,6 +108,25 @@ vec2 tri_uv(pc_tri_attr a, float u, float v)
 }
 
 /* Alpha-mask test used by trace.glsl for triangles flagged PC_TRI_ALPHA_MASK. */
+#if PC_MASKED_LANES
+/* Masked lanes (above) load every member of a struct read through a buffer reference, in every
+ * triangle test, taken or not: this form reads only the words the test uses. */
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Vec4Ref { vec4 v[]; };
+bool trace_alpha_pass(pc_scene_refs s, uint tri, float u, float v)
+{
+    uint mat_index = floatBitsToUint(Vec4Ref(s.tris).v[tri * 3u].w); /* pc_tri.v0.w */
+    Vec4Ref mat = Vec4Ref(s.materials);                                /* 6 vec4s a material */
+    float alpha = mat.v[mat_index * 6u].a;                             /* base_color */
+    uint tex = floatBitsToUint(mat.v[mat_index * 6u + 2u].x);          /* tex.x */
+    if (tex != 0u) {
+        Vec4Ref attr = Vec4Ref(s.tri_attrs); /* 6 vec4s a triangle: uv01 and uv2 are 3 and 4 */
+        vec4 uv01 = attr.v[tri * 6u + 3u];
+        vec2 uv = uv01.xy * (1.0 - u - v) + uv01.zw * u + attr.v[tri * 6u + 4u].xy * v;
+        alpha *= sample_texture_as(s, tex - 1u, uv, false).a; /* alpha is linear either way */
+    }
+    return alpha >= mat.v[mat_index * 6u + 3u].x; /* params.x: the cutoff */
+}
+#else
 bool trace_alpha_pass(pc_scene_refs s, uint tri, float u, float v)
 {
     uint mat_index = floatBitsToUint(TriRef(s.tris).v[tri].v0.w);
@@ -119,6 +138,7 @@ bool trace_alpha_pass(pc_scene_refs s, uint tri, float u, float v)
     }
     return alpha >= m.params.x;
 }
+#endif
 
 #include "environment.glsl"
 #include "trace.glsl"

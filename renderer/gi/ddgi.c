@@ -12,22 +12,24 @@
 #include "shaders/ddgi_border.spv.h"
 #include "shaders/ddgi_scan.spv.h"
 #include "shaders/ddgi_select.spv.h"
+#include "shaders/ddgi_select.masked.spv.h"
 #include "shaders/ddgi_shade.spv.h"
 #include "shaders/ddgi_shade.masked.spv.h"
 #include "shaders/ddgi_trace.spv.h"
+#include "shaders/ddgi_trace.masked.spv.h"
 #include "shaders/ddgi_wake.spv.h"
 #include "shaders/ddgi_weights.spv.h"
 
 /* The probe passes, one line each (rd_ddgi_update dispatches them). */
 static const rd_pipeline_desc pipelines[] = {
-    RD_PIPELINE_DESC(rd_ddgi, trace, "probe trace", pc_spv_ddgi_trace, sizeof(pc_push)),
+    RD_PIPELINE_DESC_MASKED(rd_ddgi, trace, "probe trace", pc_spv_ddgi_trace, sizeof(pc_push)),
     RD_PIPELINE_DESC_MASKED(rd_ddgi, shade, "probe shade", pc_spv_ddgi_shade, sizeof(pc_push)),
     RD_PIPELINE_DESC(rd_ddgi, blend_distance, "probe blend distance", pc_spv_ddgi_blend_distance,
                      sizeof(pc_push)),
     RD_PIPELINE_DESC(rd_ddgi, blend_irradiance, "probe blend irradiance",
                      pc_spv_ddgi_blend_irradiance, sizeof(pc_push)),
     RD_PIPELINE_DESC(rd_ddgi, border, "probe borders", pc_spv_ddgi_border, sizeof(pc_push)),
-    RD_PIPELINE_DESC(rd_ddgi, select, "probe select", pc_spv_ddgi_select, sizeof(pc_push)),
+    RD_PIPELINE_DESC_MASKED(rd_ddgi, select, "probe select", pc_spv_ddgi_select, sizeof(pc_push)),
     RD_PIPELINE_DESC(rd_ddgi, wake, "probe wake", pc_spv_ddgi_wake, sizeof(pc_push)),
     RD_PIPELINE_DESC(rd_ddgi, bin, "probe bin", pc_spv_ddgi_bin, sizeof(pc_push)),
     RD_PIPELINE_DESC(rd_ddgi, scan, "probe bin scan", pc_spv_ddgi_scan, sizeof(pc_push)),

@@ -11,8 +11,8 @@
  *   - indirect diffuse: occlusion maps darken the DDGI term only, metals take none of it;
  *   - the two forms of the shaders' specialization PC_SPEC_MASKED_LANES (gpu_types.h: one call
  *     site in a loop on CPU devices, inlined call sites on GPUs) render the same image, bit for
- *     bit, of a room with all five textures and a partition that crosses probe cage edges (so
- *     the DDGI query's visibility rays run). */
+ *     bit, of a room with all five textures, a partition that crosses probe cage edges (so
+ *     the DDGI query's visibility rays run) and two alpha-masked screens. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -425,12 +425,32 @@ static void test_masked_lanes(void)
     m->occlusion_texture = add_texture(&s, 2, 2, (const uint8_t[4]){160, 0, 0, 255}, 25);
     m->emissive_texture = add_texture(&s, 1, 2, (const uint8_t[4]){40, 20, 10, 255}, 10);
     m->emission[0] = m->emission[1] = m->emission[2] = 0.05f;
+    /* alpha-masked screens: a checker of holes (the masked variant defers their alpha tests,
+     * and a ray through a hole of one meets the other: trace.glsl's passes) */
+    uint32_t screen = add_material(&s, 0.7f, 0, 0.8f, 1);
+    rd_texture checker = {.width = 4,
+                          .height = 4,
+                          .wrap_s = RD_WRAP_REPEAT,
+                          .wrap_t = RD_WRAP_REPEAT,
+                          .nearest = true};
+    checker.rgba = malloc(64);
+    for (int k = 0; k < 16; k++) {
+        memcpy(&checker.rgba[k * 4], (const uint8_t[3]){180, 200, 220}, 3);
+        checker.rgba[k * 4 + 3] = ((k & 1) ^ ((k >> 2) & 1)) ? 255 : 0;
+    }
+    s.materials[screen].base_color_texture = (int32_t)rd_scene_add_texture(&s, &checker);
+    s.materials[screen].alpha_mode = RD_ALPHA_MASK;
+    s.materials[screen].alpha_cutoff = 0.5f;
     rd_tri_list t = {0};
     const float lo[3] = {-1, 0, -1}, hi[3] = {1, 2, 1};
     rd_tris_room(&t, lo, hi, mat);
     /* a partition with a doorway gap, across the middle probe layer's cage edges */
     const float w_lo[3] = {0.28f, 0, -1}, w_hi[3] = {0.32f, 2, 0.3f};
     rd_tris_box(&t, w_lo, w_hi, mat);
+    const float s_lo[3] = {-0.9f, 0.2f, -0.31f}, s_hi[3] = {0.2f, 1.6f, -0.3f};
+    const float s2_lo[3] = {-0.9f, 0.3f, -0.61f}, s2_hi[3] = {0.25f, 1.5f, -0.6f};
+    rd_tris_box(&t, s_lo, s_hi, screen);
+    rd_tris_box(&t, s2_lo, s2_hi, screen);
     rd_tris_commit(&t, &s, "room");
     rd_mesh *mesh = &s.meshes[0];
     for (uint32_t i = 0; i < mesh->tri_count * 3; i++) {
