@@ -17,8 +17,8 @@
  * over 8 lanes), so each inlined call site of a big routine costs its full price. The passes that
  * trace and shade (CMakeLists.txt: PC_MASKED_LANE_SHADERS) are compiled twice, and such calls
  * come from one site in a loop in this variant (the DDGI query's visibility rays, the probe path's
- * field query, a surface's textures): lavapipe's probe shading 1502 -> 1151 ms an update
- * (cornell+gltf, default grid), the same image bit for bit. A GPU skips untaken branches, and
+ * field query, a surface's textures, the alpha test: trace.glsl): a lavapipe probe update of
+ * cornell+gltf at its default grid 1745 -> 1110 ms, the same image bit for bit. A GPU skips untaken branches, and
  * there the loops with their local arrays measured slower (NVIDIA H200, builtin:interior 1080p
  * gi sample 1.58 -> 1.71 ms): the 0 variant keeps the inlined calls. rd_pipelines_create picks
  * (rd_vk.masked_lanes); test_gpu_materials renders both variants and requires the same image. */
