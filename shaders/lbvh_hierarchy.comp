@@ -13,7 +13,7 @@
 // n == 1: the root is the one leaf; n == 0: an empty root (written straight to the output).
 // Push constants (pc_push): buf0 = scratch (shaders/lbvh.glsl), buf1 = nodes (pc_bvh_node),
 // buf2 = prim_index (uint); params.x = n, params.y = uint offset of leaf_slot in scratch,
-// params.z = max_leaf (unused: lbvh_boxes collapses), params.w = groups a row of a dispatch (the nodes go to the working tree;
+// params.z unused (lbvh_boxes collapses leaves), params.w = groups a row of a dispatch (the nodes go to the working tree;
 // for n == 0 buf1 is the output).
 #version 460
 #extension GL_EXT_buffer_reference : require

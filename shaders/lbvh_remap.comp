@@ -6,7 +6,7 @@
 // is unchanged).
 // Push constants (pc_push): buf0 = working nodes, buf1 = output nodes (pc_bvh_node),
 // buf2 = scratch (shaders/lbvh.glsl); params.x = n, params.y = uint offset of leaf_slot,
-// params.z = max_leaf (unused: the collapse is flagged).
+// params.z unused (the collapse is flagged).
 #version 460
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require

@@ -212,7 +212,7 @@ void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress
     pc_push h = {.buf0 = scratch,
                  .buf1 = n ? work : nodes,
                  .buf2 = prim_index,
-                 .params = {n, leaf_at, ml, row_groups(b)}};
+                 .params = {n, leaf_at, 0, row_groups(b)}};
     dispatch_1d(c, b, &b->hierarchy, &h, groups(n > 1 ? n - 1 : 1));
     rd_cmd_barrier(c);
     if (timer) rd_timer_mark(c, timer, "lbvh_hierarchy");
@@ -238,7 +238,7 @@ void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress
         sc.params.z = 2;
         dispatch_1d(c, b, &b->scan, &sc, scan_blocks(n));
         rd_cmd_barrier(c);
-        pc_push rm = {.buf0 = work, .buf1 = nodes, .buf2 = scratch, .params = {n, leaf_at, ml, 0}};
+        pc_push rm = {.buf0 = work, .buf1 = nodes, .buf2 = scratch, .params = {n, leaf_at, 0, 0}};
         dispatch_1d(c, b, &b->remap, &rm, groups(2 * (uint64_t)n - 1));
         rd_cmd_barrier(c);
         if (timer) rd_timer_mark(c, timer, "lbvh_collapse");
