@@ -317,14 +317,15 @@ pc_surface surface_at(pc_scene_refs s, pc_hit hit, vec3 ray_dir)
      * untextured scenes 13%); else each where it is used. */
 #if PC_MASKED_LANES
     vec4 texels[5] = vec4[5](vec4(1.0), vec4(1.0), vec4(1.0), vec4(1.0), vec4(1.0));
-    uvec4 ids = uvec4(m.tex.x, any(greaterThan(m.emission.rgb, vec3(0.0))) ? m.tex.y : 0u,
-                      m.tex2.y, m.tex2.x);
-    uint todo = (ids.x != 0u ? 1u : 0u) | (ids.y != 0u ? 2u : 0u) | (ids.z != 0u ? 4u : 0u) |
-                (ids.w != 0u ? 8u : 0u) | (m.tex2.z != 0u ? 16u : 0u);
-    while (todo != 0u) {
-        uint k = findLSB(todo);
-        todo &= todo - 1u;
-        texels[k] = sample_texture_as(s, (k == 4u ? m.tex2.z : ids[k]) - 1u, uv, k < 2u);
+    uint ids[5] = uint[5](m.tex.x, any(greaterThan(m.emission.rgb, vec3(0.0))) ? m.tex.y : 0u,
+                          m.tex2.y, m.tex2.x, m.tex2.z);
+    uint pending = 0u; /* one bit per texture the material has */
+    for (uint k = 0u; k < 5u; k++)
+        if (ids[k] != 0u) pending |= 1u << k;
+    while (pending != 0u) {
+        uint k = findLSB(pending);
+        pending &= pending - 1u;
+        texels[k] = sample_texture_as(s, ids[k] - 1u, uv, k < 2u);
     }
 #define SURFACE_TEXEL(k, index, srgb) texels[k]
 #else
