@@ -29,7 +29,8 @@
  *   probecast_videobench [--scenes cornell,interior] [--sizes 1280x720,1920x1080] [--frames 60]
  *       [--degrees 1.5] [--warmup 16] [--qualities 40,50,60,70,80,90] [--bitrates 1,2,4,8,16]
  *       [--codecs vp8,vp9,av1] [--threads 1] [--vp8-speed 4..16] [--vp9-speed 5..9]
- *       [--av1-preset 8..13] [--device SELECTOR] [--machine NAME] [--out DIR]
+ *       [--av1-preset 8..13] [--near-field auto|off] [--device SELECTOR] [--machine NAME]
+ *       [--out DIR]
  * (speeds: srv_video_desc.speed; unset, SRV_VIDEO_*_SPEED)
  *
  * On lavapipe (two cores) keep it small; tests/bench/results/lavapipe/video_encode.* came from
@@ -72,6 +73,7 @@ typedef struct options {
     srv_video_codec codecs[3];
     unsigned codec_count;
     unsigned speed[4]; /* by srv_video_codec: 0 = the encoder's default */
+    int near_field;    /* -1: the daemon's for the device; else PC_NEAR_AUTO or PC_NEAR_OFF */
     const char *device, *machine, *out;
 } options;
 
@@ -193,6 +195,7 @@ typedef struct video_run {
     double *bytes, *py, *pc;
     uint8_t *y, *cb, *cr, *rgba;
     unsigned got;
+    double conv_ms; /* the RGBA to I420 conversion alone, summed over the frames decoded */
 } video_run;
 
 /* Decodes one packet and compares it with its frame. */
@@ -215,7 +218,9 @@ static void take_packet(video_run *v, const srv_video_packet *p)
     }
     unsigned w = v->w, h = v->h;
     size_t cs = (w + 1) / 2;
+    double t0 = srv_mono_ms();
     srv_video_rgba_to_i420(v->frames[f], (size_t)w * 4, w, h, v->y, w, v->cb, v->cr, cs);
+    v->conv_ms += srv_mono_ms() - t0;
     v->py[f] = psnr_plane(pic.y, pic.y_stride, v->y, w, w, h, 255.0 / 219.0);
     srv_video_i420_to_rgba(pic.y, pic.y_stride, pic.cb, pic.cr, pic.c_stride, w, h, v->rgba,
                            (size_t)w * 4);
@@ -270,6 +275,9 @@ static bool run_video(uint8_t **frames, unsigned n, unsigned w, unsigned h, srv_
     r->codec = srv_video_codec_name(codec), r->setting = kbps, r->speed = speed;
     fill_result(r, v.bytes, ms, v.py, v.pc, n);
     if (!v.dec) r->psnr_y = r->psnr_rgb = NAN;
+    else
+        printf("# %s %u kbit/s: RGBA to I420 %.2f ms a frame of the encode's %.2f\n",
+               r->codec, kbps, v.conv_ms / n, r->ms_mean);
     video_decoder_close(v.dec);
     srv_video_encoder_destroy(e);
     free(v.bytes), free(v.py), free(v.pc), free(v.y), free(v.cb), free(v.cr), free(v.rgba);
@@ -312,6 +320,7 @@ static uint8_t **render_orbit(rd_vk *vk, const char *scene, unsigned w, unsigned
         gi.rays = 64, gi.path_bounces = 0, gi.has_path_bounces = true;
         fs.near_field = PC_NEAR_OFF;
     }
+    if (o->near_field >= 0) fs.near_field = (unsigned)o->near_field;
     rd_gpu_scene gs;
     rd_renderer r;
     memset(&gs, 0, sizeof gs);
@@ -494,6 +503,12 @@ static bool parse(int argc, char **argv, options *o)
             o->warmup = (unsigned)atoi(v);
         } else if (!strcmp(a, "--threads")) {
             o->threads = (unsigned)atoi(v);
+        } else if (!strcmp(a, "--near-field")) {
+            if (strcmp(v, "auto") && strcmp(v, "off")) {
+                fprintf(stderr, "--near-field: auto or off\n");
+                return false;
+            }
+            o->near_field = !strcmp(v, "off") ? (int)PC_NEAR_OFF : (int)PC_NEAR_AUTO;
         } else if (!strcmp(a, "--degrees")) {
             o->degrees = atof(v);
         } else if (!strcmp(a, "--device")) {
@@ -520,6 +535,7 @@ int main(int argc, char **argv)
                  .warmup = 16,
                  .threads = 1,
                  .degrees = 1.5,
+                 .near_field = -1,
                  .qualities = {40, 50, 60, 70, 80, 90},
                  .quality_count = 6,
                  .bitrates = {1, 2, 4, 8, 16},
@@ -556,9 +572,10 @@ int main(int argc, char **argv)
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
     printf("# video against JPEG, %s (%ld cores), %s; %u frames an orbit (%.2f degrees a frame), "
            "video on %u thread(s) at 60 fps (speeds: VP8 %u, VP9 %u, AV1 preset %u), JPEG on 1; "
-           "PSNR means over frames\n",
+           "PSNR means over frames; near-field rays %s\n",
            o.machine, cores, vk.device_name, o.frames, o.degrees, o.threads, o.speed[SRV_VIDEO_VP8],
-           o.speed[SRV_VIDEO_VP9], o.speed[SRV_VIDEO_AV1]);
+           o.speed[SRV_VIDEO_VP9], o.speed[SRV_VIDEO_AV1],
+           o.near_field < 0 ? "as the daemon has them" : o.near_field ? "off" : "auto");
     for (unsigned si = 0; si < o.scene_count; si++)
         for (unsigned zi = 0; zi < o.size_count; zi++) {
             unsigned w = o.sizes[zi][0], h = o.sizes[zi][1], n = o.frames;
