@@ -79,7 +79,7 @@ void main()
         hit.v = uintBitsToFloat(rec.w);
         hit.backface = false; /* a front hit, or a back hit of a double-sided surface */
         vec3 dir = ddgi_ray_dir(vol, ray);
-        pc_surface sf = surface_at(g.scene, hit, dir);
+        pc_surface sf;
         uint seed = pcg(slot ^ pcg(vol.info.y * 0x9E3779B9u + 0x632BE5ABu));
         vec3 radiance = vec3(0.0), throughput = vec3(1.0), n0 = vec3(0.0);
         /* the field's term at the path's last vertex: one call site, inside the loop, or with
@@ -87,6 +87,8 @@ void main()
         vec3 field_weight = vec3(0.0), field_v = vec3(0.0);
         float field_reach = 0.0;
         for (uint depth = 0u;; depth++) {
+            /* the vertex: the probe ray's hit, then each continued segment's (one call site) */
+            sf = surface_at(g.scene, hit, dir);
             pc_brdf b = surface_brdf(sf);
             vec3 v = -dir;
             vec3 term, wi;
@@ -134,7 +136,6 @@ void main()
                 (floatBitsToUint(TriRef(g.scene.tris).v[hit.tri].v1.w) & PC_TRI_DOUBLE_SIDED) == 0u)
                 break; /* absorbed */
             hit.backface = false;
-            sf = surface_at(g.scene, hit, dir);
         }
 #if PC_MASKED_LANES
         if (field_reach > 0.0)
