@@ -15,6 +15,19 @@ layout(local_size_x = PC_WG_1D) in;
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer RayRef { vec4 v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer OutRef { vec4 v[]; };
 
+/* W: the summed RGB of every light's unshadowed term at p (the weight choose_light chooses by). */
+float light_weight_total(pc_scene_refs s, vec3 p, vec3 n, vec3 ng, vec3 v, pc_brdf b)
+{
+    float total = 0.0;
+    vec3 wi;
+    float dist;
+    for (uint i = 0u; i < s.counts.y; i++) {
+        vec3 f = light_term(s, i, p, n, ng, v, b, wi, dist);
+        total += f.r + f.g + f.b;
+    }
+    return total;
+}
+
 void main()
 {
     uint i = gl_GlobalInvocationID.x;
