@@ -274,10 +274,11 @@ static bool run_video(uint8_t **frames, unsigned n, unsigned w, unsigned h, srv_
     }
     r->codec = srv_video_codec_name(codec), r->setting = kbps, r->speed = speed;
     fill_result(r, v.bytes, ms, v.py, v.pc, n);
-    if (!v.dec) r->psnr_y = r->psnr_rgb = NAN;
-    else
-        printf("# %s %u kbit/s: RGBA to I420 %.2f ms a frame of the encode's %.2f\n",
-               r->codec, kbps, v.conv_ms / n, r->ms_mean);
+    if (!v.dec)
+        r->psnr_y = r->psnr_rgb = NAN;
+    else /* the conversion was timed where the PSNR is taken */
+        printf("# %s %u kbit/s: RGBA to I420 %.2f ms a frame of the encode's %.2f\n", r->codec,
+               kbps, v.conv_ms / n, r->ms_mean);
     video_decoder_close(v.dec);
     srv_video_encoder_destroy(e);
     free(v.bytes), free(v.py), free(v.pc), free(v.y), free(v.cb), free(v.cr), free(v.rgba);
@@ -575,7 +576,9 @@ int main(int argc, char **argv)
            "PSNR means over frames; near-field rays %s\n",
            o.machine, cores, vk.device_name, o.frames, o.degrees, o.threads, o.speed[SRV_VIDEO_VP8],
            o.speed[SRV_VIDEO_VP9], o.speed[SRV_VIDEO_AV1],
-           o.near_field < 0 ? "as the daemon has them" : o.near_field ? "off" : "auto");
+           o.near_field < 0 ? "as the daemon has them"
+           : o.near_field   ? "off"
+                            : "auto");
     for (unsigned si = 0; si < o.scene_count; si++)
         for (unsigned zi = 0; zi < o.size_count; zi++) {
             unsigned w = o.sizes[zi][0], h = o.sizes[zi][1], n = o.frames;
