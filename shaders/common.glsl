@@ -114,17 +114,19 @@ vec2 tri_uv(pc_tri_attr a, float u, float v)
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Vec4Ref { vec4 v[]; };
 bool trace_alpha_pass(pc_scene_refs s, uint tri, float u, float v)
 {
-    uint mat_index = floatBitsToUint(Vec4Ref(s.tris).v[tri * 3u].w); /* pc_tri.v0.w */
-    Vec4Ref mat = Vec4Ref(s.materials);                                /* 6 vec4s a material */
-    float alpha = mat.v[mat_index * 6u].a;                             /* base_color */
-    uint tex = floatBitsToUint(mat.v[mat_index * 6u + 2u].x);          /* tex.x */
+    uint mat_index = floatBitsToUint(Vec4Ref(s.tris).v[tri * PC_TRI_VEC4S].w); /* v0.w */
+    uint m = mat_index * PC_MATERIAL_VEC4S;
+    Vec4Ref mat = Vec4Ref(s.materials);
+    float alpha = mat.v[m].a; /* base_color.a */
+    uint tex = floatBitsToUint(mat.v[m + PC_MATERIAL_TEX_VEC4].x);
     if (tex != 0u) {
-        Vec4Ref attr = Vec4Ref(s.tri_attrs); /* 6 vec4s a triangle: uv01 and uv2 are 3 and 4 */
-        vec4 uv01 = attr.v[tri * 6u + 3u];
-        vec2 uv = uv01.xy * (1.0 - u - v) + uv01.zw * u + attr.v[tri * 6u + 4u].xy * v;
+        Vec4Ref attr = Vec4Ref(s.tri_attrs);
+        uint a = tri * PC_TRI_ATTR_VEC4S;
+        vec4 uv01 = attr.v[a + PC_TRI_ATTR_UV01_VEC4];
+        vec2 uv = uv01.xy * (1.0 - u - v) + uv01.zw * u + attr.v[a + PC_TRI_ATTR_UV2_VEC4].xy * v;
         alpha *= sample_texture_as(s, tex - 1u, uv, false).a; /* alpha is linear either way */
     }
-    return alpha >= mat.v[mat_index * 6u + 3u].x; /* params.x: the cutoff */
+    return alpha >= mat.v[m + PC_MATERIAL_PARAMS_VEC4].x; /* params.x: the cutoff */
 }
 #else
 bool trace_alpha_pass(pc_scene_refs s, uint tri, float u, float v)

@@ -170,6 +170,7 @@ PC_STRUCT(pc_tri)
     pc_vec4 v2;
 }
 PC_END(pc_tri);
+#define PC_TRI_VEC4S 3u /* pc_tri read as vec4s (trace_alpha_pass with masked lanes) */
 
 /* Shading attributes of the triangle with the same index as in the pc_tri array.
  * n0..n2: object-space vertex normals (xyz); uv01 = (u0, v0, u1, v1); uv2 = (u2, v2, -, -);
@@ -187,6 +188,9 @@ PC_STRUCT(pc_tri_attr)
     pc_uvec4 tangents;
 }
 PC_END(pc_tri_attr);
+#define PC_TRI_ATTR_VEC4S 6u /* pc_tri_attr read as vec4s: uv01 and uv2 are vec4s 3 and 4 */
+#define PC_TRI_ATTR_UV01_VEC4 3u
+#define PC_TRI_ATTR_UV2_VEC4 4u
 #define PC_TANGENT_PRESENT 8u
 #define PC_TANGENT_FLIP 1u
 
@@ -230,6 +234,9 @@ PC_STRUCT(pc_material)
     pc_uvec4 tex2;
 }
 PC_END(pc_material);
+#define PC_MATERIAL_VEC4S 6u /* pc_material read as vec4s: base_color, tex and params are 0, 2, 3 */
+#define PC_MATERIAL_TEX_VEC4 2u
+#define PC_MATERIAL_PARAMS_VEC4 3u
 
 /* An RGBA8 texture (sRGB-encoded colour, linear alpha) in the texel array.
  * info.x: first texel (one uint per texel, R in the low byte), info.y: width, info.z: height,
@@ -622,6 +629,14 @@ PC_OFF(pc_material, tex, 32);
 PC_OFF(pc_material, params, 48);
 PC_OFF(pc_material, pbr, 64);
 PC_OFF(pc_material, tex2, 80);
+/* the vec4 views of trace_alpha_pass (shaders/common.glsl, masked lanes) */
+PC_CHECK(pc_tri, PC_TRI_VEC4S * 16);
+PC_CHECK(pc_tri_attr, PC_TRI_ATTR_VEC4S * 16);
+PC_OFF(pc_tri_attr, uv01, PC_TRI_ATTR_UV01_VEC4 * 16);
+PC_OFF(pc_tri_attr, uv2, PC_TRI_ATTR_UV2_VEC4 * 16);
+PC_CHECK(pc_material, PC_MATERIAL_VEC4S * 16);
+PC_OFF(pc_material, tex, PC_MATERIAL_TEX_VEC4 * 16);
+PC_OFF(pc_material, params, PC_MATERIAL_PARAMS_VEC4 * 16);
 PC_CHECK(pc_texture, 16);
 PC_CHECK(pc_light, 80);
 PC_OFF(pc_light, direction, 16);

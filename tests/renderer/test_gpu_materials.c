@@ -9,10 +9,11 @@
  *   - normal maps: a constant tangent-space normal tilted by theta changes N.L from cos(a) to
  *     cos(a - theta), with tangents derived from the UVs and from a TANGENT attribute;
  *   - indirect diffuse: occlusion maps darken the DDGI term only, metals take none of it;
- *   - the two forms of the shaders' specialization PC_SPEC_MASKED_LANES (gpu_types.h: one call
- *     site in a loop on CPU devices, inlined call sites on GPUs) render the same image, bit for
- *     bit, of a room with all five textures, a partition that crosses probe cage edges (so
- *     the DDGI query's visibility rays run) and two alpha-masked screens. */
+ *   - the two compile-time variants of the tracing and shading passes (PC_MASKED_LANES,
+ *     shaders/common.glsl: one call site in a loop on CPU devices, inlined call sites on GPUs)
+ *     render the same image, bit for bit, of a room with all five textures, a partition that
+ *     crosses probe cage edges (so the DDGI query's visibility rays run) and two alpha-masked
+ *     screens. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
