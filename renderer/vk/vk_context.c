@@ -532,6 +532,7 @@ rd_vk_result rd_vk_create(rd_vk *vk, const rd_vk_options *opt, char *err, size_t
 {
     memset(vk, 0, sizeof *vk);
     atomic_init(&vk->validation_messages, 0u);
+    pthread_mutex_init(&vk->pipelines_lock, NULL);
     rd_vk_errorf(err, errlen, "%s", "");
     rd_vk_options o = opt ? *opt : (rd_vk_options){0};
     bool validation = o.validation > 0 || (o.validation == 0 && env_validation());
@@ -556,6 +557,13 @@ void rd_vk_destroy(rd_vk *vk)
             vk->spare_count--;
             vkDestroyFence(vk->device, vk->spare_fence[vk->spare_count], NULL);
         }
+        /* the pipelines made (vk_compute.c: kept after their holders let go) */
+        for (size_t i = 0; i < vk->pipeline_count; i++) {
+            rd_shared_pipeline *sp = &vk->pipelines[i];
+            vkDestroyPipeline(vk->device, sp->pipeline, NULL);
+            vkDestroyPipelineLayout(vk->device, sp->layout, NULL);
+            vkDestroyShaderModule(vk->device, sp->module, NULL);
+        }
         /* the spare command buffers go with their pool */
         if (vk->command_pool) vkDestroyCommandPool(vk->device, vk->command_pool, NULL);
         vk->command_pool = VK_NULL_HANDLE;
@@ -575,6 +583,9 @@ void rd_vk_destroy(rd_vk *vk)
     }
     vk->messenger = VK_NULL_HANDLE;
     vk->instance = VK_NULL_HANDLE;
+    free(vk->pipelines);
+    vk->pipelines = NULL;
+    vk->pipeline_count = vk->pipeline_cap = 0;
 }
 
 void rd_vk_wait_idle(rd_vk *vk)

@@ -10,6 +10,7 @@
 #ifndef RD_VK_CONTEXT_H
 #define RD_VK_CONTEXT_H
 
+#include <pthread.h>
 #include <stdatomic.h>
 #include <stdbool.h>
 #include <stddef.h>
@@ -49,6 +50,19 @@ typedef struct rd_vk_options {
 
 #define RD_VK_SPARE_CMDS 32
 
+/* A compute pipeline that rd_pipeline objects share (vk_compute.c): its key (the SPIR-V's 64-bit
+ * FNV-1a hash and size, the push-constant size), its objects and how many rd_pipeline hold it now
+ * (it stays when none does, until rd_vk_destroy). */
+typedef struct rd_shared_pipeline {
+    uint64_t hash;
+    size_t spirv_bytes;
+    uint32_t push_size;
+    unsigned refs;
+    VkShaderModule module;
+    VkPipelineLayout layout;
+    VkPipeline pipeline;
+} rd_shared_pipeline;
+
 typedef struct rd_vk {
     VkInstance instance;
     VkDebugUtilsMessengerEXT messenger;
@@ -78,6 +92,11 @@ typedef struct rd_vk {
     bool has_shader_int16;
     uint32_t timestamp_valid_bits; /* of the chosen queue family; 0 = no timestamps */
     bool device_lost;              /* set once any call saw VK_ERROR_DEVICE_LOST */
+    /* the compute pipelines made so far, shared by every rd_pipeline of the same SPIR-V and push
+     * size (vk_compute.c says why); guarded by pipelines_lock */
+    rd_shared_pipeline *pipelines;
+    size_t pipeline_count, pipeline_cap;
+    pthread_mutex_t pipelines_lock;
 } rd_vk;
 
 /* Creates instance, device, queue and command pool. On failure returns a code, writes a

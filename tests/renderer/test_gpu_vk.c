@@ -1,4 +1,5 @@
-/* test_gpu_vk.c: device creation, buffers, compute pipeline, timers and the validation counter.
+/* test_gpu_vk.c: device creation, buffers, compute pipelines (kept and shared), timers and the
+ * validation counter.
  * Runs with PROBECAST_VALIDATION=1 PROBECAST_DEVICE=llvmpipe under ctest. */
 #include "renderer/vk/vk_buffer.h"
 #include "renderer/vk/vk_compute.h"
@@ -256,6 +257,58 @@ static void test_compute(rd_vk *vk)
     free(y);
 }
 
+/* Pipelines are kept and shared (vk_compute.c): the same SPIR-V and push size give the same
+ * pipeline, whether its first holder still holds it or let go; another push size or SPIR-V gives
+ * another; the kept pipeline still runs after its holders let go; rd_vk_destroy destroys them
+ * (the validation layer would report one left at vkDestroyDevice). */
+static void test_shared_pipelines(rd_vk *vk)
+{
+    rd_pipeline a, b, c, d;
+    size_t bytes = sizeof pc_spv_test_vk_fill;
+    CHECK(rd_pipeline_create(vk, &a, "a", pc_spv_test_vk_fill, bytes, sizeof(pc_push), err,
+                             sizeof err) == RD_VK_OK);
+    size_t kept = vk->pipeline_count;
+    /* a copy of the SPIR-V elsewhere in memory: the same pipeline */
+    uint32_t *copy = malloc(bytes);
+    CHECK(copy != NULL);
+    memcpy(copy, pc_spv_test_vk_fill, bytes);
+    CHECK(rd_pipeline_create(vk, &b, "b", copy, bytes, sizeof(pc_push), err, sizeof err) ==
+          RD_VK_OK);
+    CHECK(b.pipeline == a.pipeline && b.layout == a.layout && vk->pipeline_count == kept);
+    /* another push size: another layout and pipeline */
+    CHECK(rd_pipeline_create(vk, &c, "c", pc_spv_test_vk_fill, bytes, sizeof(pc_push) + 16, err,
+                             sizeof err) == RD_VK_OK);
+    CHECK(c.pipeline != a.pipeline && c.layout != a.layout && vk->pipeline_count == kept + 1);
+    VkPipeline first = a.pipeline;
+    rd_pipeline_destroy(vk, &a);
+    rd_pipeline_destroy(vk, &b);
+    CHECK(a.pipeline == VK_NULL_HANDLE && b.pipeline == VK_NULL_HANDLE);
+    CHECK(vk->pipeline_count == kept + 1); /* kept though no one holds it */
+    /* let go by both: kept, and handed out again */
+    CHECK(rd_pipeline_create(vk, &d, "d", copy, bytes, sizeof(pc_push), err, sizeof err) ==
+          RD_VK_OK);
+    CHECK(d.pipeline == first && vk->pipeline_count == kept + 1);
+    /* and it still runs */
+    rd_buffer bx, by;
+    CHECK(rd_buffer_create(vk, &bx, 64 * 4, RD_MEMORY_DEVICE, err, sizeof err) == RD_VK_OK);
+    CHECK(rd_buffer_create(vk, &by, 64 * 4, RD_MEMORY_READBACK, err, sizeof err) == RD_VK_OK);
+    CHECK(rd_buffer_fill(vk, &bx, 5u, err, sizeof err) == RD_VK_OK);
+    rd_cmd cmd;
+    CHECK(rd_cmd_begin(vk, &cmd, err, sizeof err) == RD_VK_OK);
+    pc_push push = {.buf0 = bx.address, .buf1 = by.address, .params = {64, 2, 0, 0}};
+    rd_cmd_dispatch(&cmd, &d, &push, 1, 1, 1);
+    rd_cmd_barrier(&cmd);
+    CHECK(rd_cmd_submit_wait(vk, &cmd, err, sizeof err) == RD_VK_OK);
+    uint32_t y[64];
+    CHECK(rd_buffer_download(vk, &by, 0, y, sizeof y, err, sizeof err) == RD_VK_OK);
+    CHECK(y[0] == 10u && y[63] == 2u * 5u + 63u);
+    rd_buffer_destroy(vk, &bx);
+    rd_buffer_destroy(vk, &by);
+    rd_pipeline_destroy(vk, &c);
+    rd_pipeline_destroy(vk, &d);
+    free(copy);
+}
+
 static void test_selectors(void)
 {
     rd_vk v;
@@ -336,6 +389,7 @@ int main(void)
     test_buffers(&vk);
     test_staging(&vk);
     test_compute(&vk);
+    test_shared_pipelines(&vk);
     test_selectors();
     test_validation_counts();
 
