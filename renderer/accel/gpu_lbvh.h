@@ -25,8 +25,12 @@
  *      per node, coherent buffers and memory barriers, gave wrong boxes above the first level
  *      on lavapipe with 64-thread workgroups and right ones with 1-thread workgroups (34 ms
  *      there against these passes' 69 ms for 100 K triangles); why is not known yet.)
- *      The same passes weigh the collapse of each subtree of at most max_leaf triangles into
- *      one leaf (their sorted leaves are contiguous) by SAH, bottom-up: a node's cost is the
+ *      Each node, once its children are finished, first takes one tree rotation (Kensler 2008:
+ *      a child swapped with a grandchild under the other child, where that shrinks the other
+ *      child's box most), so subtrees move to the side they overlap less than the Morton median
+ *      put them on. The same passes weigh the collapse of each subtree of at most max_leaf
+ *      triangles into one leaf (their sorted leaves are contiguous: rotations below a node do
+ *      not change its leaf set, and a rotated child is not collapsed after) by SAH, bottom-up: a node's cost is the
  *      least of its split's (its area plus its children's costs) and one leaf's (its area times
  *      its triangles); where the leaf wins, the node is flagged and its descendants marked gone.
  *   6. lbvh_scan, lbvh_remap: the nodes that stay numbered by a prefix sum and copied to the
