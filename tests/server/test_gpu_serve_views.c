@@ -42,24 +42,9 @@ static bool frame_where(viewer *v, int timeout_ms, uint32_t view, unsigned w, un
     return false;
 }
 
-/* Frames that arrive within ms; all must show view `view` at w x h. Returns their count, or -1
- * when one does not. */
-static int frames_within(viewer *v, int ms, uint32_t view, unsigned w, unsigned h)
-{
-    int n = 0;
-    pc_frame f;
-    while (pc_stream_next(&v->ws, ms, true, &f)) {
-        bool ok = f.h.view_id == view && f.h.width == w && f.h.height == h;
-        pc_frame_free(&v->last);
-        v->last = f;
-        if (!ok) return -1;
-        n++;
-    }
-    return n;
-}
-
-/* Like frames_within, but counts only the frames captured at since_us or later (the daemon's
- * capture clock): a frame the view rendered or re-encoded before then may still be on its way.
+/* Frames that arrive within ms of each other; all must show view `view` at w x h. Returns the
+ * count of those captured at since_us or later (the daemon's capture clock; 0: all), or -1 when
+ * one does not show it. A frame the view rendered or re-encoded earlier may still be on its way.
  * The daemon reports idle ("rendering": false) while a view's still is pending; on a fast
  * machine the field converged within still_delay_ms of B's resize, and B's still, captured
  * before A moved, arrived after the 300 ms drain. */
@@ -76,6 +61,11 @@ static int frames_since(viewer *v, int ms, uint32_t view, unsigned w, unsigned h
         n += late;
     }
     return n;
+}
+
+static int frames_within(viewer *v, int ms, uint32_t view, unsigned w, unsigned h)
+{
+    return frames_since(v, ms, view, w, h, 0);
 }
 
 static void send(viewer *v, const char *json)
