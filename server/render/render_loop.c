@@ -470,7 +470,8 @@ static void *render_main(void *arg)
                                      .last_render_ms = v->last_render_ms,
                                      .last_input_ms = v->last_input_ms,
                                      .frame_interval_ms = v->fps_cap ? 1000.0 / v->fps_cap : 0};
-            any_watched_dirty |= sv[i].watched && (v->dirty || v->in_flight);
+            /* a still still due is a frame to come: "rendering" stays true until it went */
+            any_watched_dirty |= sv[i].watched && (v->dirty || v->in_flight || v->need_still);
         }
         bool converging = srv_scene_service_converging(&l->svc);
         srv_sched_state ss = {

@@ -44,10 +44,10 @@ static bool frame_where(viewer *v, int timeout_ms, uint32_t view, unsigned w, un
 
 /* Frames that arrive within ms of each other; all must show view `view` at w x h. Returns the
  * count of those captured at since_us or later (the daemon's capture clock; 0: all), or -1 when
- * one does not show it. A frame the view rendered or re-encoded earlier may still be on its way.
- * The daemon reports idle ("rendering": false) while a view's still is pending; on a fast
- * machine the field converged within still_delay_ms of B's resize, and B's still, captured
- * before A moved, arrived after the 300 ms drain. */
+ * one does not show it. A frame the view rendered or re-encoded earlier may still be on its way:
+ * a still re-encodes the view's last image and keeps its capture time (the daemon once reported
+ * idle while a still was pending, and B's still, captured before A moved, came after the drain;
+ * "rendering" now counts a pending still, and the capture clock keeps the check exact). */
 static int frames_since(viewer *v, int ms, uint32_t view, unsigned w, unsigned h, uint64_t since_us)
 {
     int n = 0;
