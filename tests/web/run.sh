@@ -2,8 +2,8 @@
 # Browser tests of the viewer (web/): starts `probecast serve` (the executable given as $1) on
 # free loopback ports with a tiny render size and a scratch --data-dir, runs
 # `node --test viewer.test.mjs` against it in Debian's headless Chromium (playwright-core), then
-# stops the daemon; then `node --test scene.test.mjs` and `video.test.mjs`, which run daemons of
-# their own.
+# stops the daemon; beside it `node --test scene.test.mjs` and then `video.test.mjs`, which run
+# daemons of their own.
 # viewer.test.mjs imports the topic files under viewer/ (stream, camera, panels, layout, views,
 # daemon) in order: they are one session in one process on one page. The viewer tests
 # themselves kill and restart the daemon (same ports and data dir), so the daemon's pid lives in
@@ -75,6 +75,10 @@ stop_daemon() {
 }
 cleanup() {
   stop_daemon
+  if [ -n "${others_pid:-}" ] && alive "$others_pid"; then
+    pkill -TERM -P "$others_pid" 2>/dev/null || true
+    kill -TERM "$others_pid" 2>/dev/null || true
+  fi
   rm -rf "$scratch"
 }
 trap cleanup EXIT
@@ -121,6 +125,21 @@ for a in "${args[@]}"; do
   restart_args+=("$a")
 done
 
+# The scene tests (node tree, picking, gizmo, multi-file uploads) and the video path (WebCodecs
+# VP9 decode into the canvas) start daemons of their own: they run one after the other beside the
+# viewer session (each session waits on its browser and daemon most of the time: a quarter of
+# two cores), their report printed after it. In turn the three took 120 s of CI's wall time.
+others() {
+  local st=0
+  cd "$here"
+  export PCWEB_EXE="$exe" PCWEB_OUT="$out" PCWEB_CHROMIUM="$chromium" PCWEB_ROOT="$root"
+  node --test --test-reporter=spec scene.test.mjs || st=1
+  node --test --test-reporter=spec video.test.mjs || st=1
+  return $st
+}
+others >"$scratch/others.log" 2>&1 &
+others_pid=$!
+
 status=0
 (
   cd "$here"
@@ -130,19 +149,8 @@ status=0
   export PCWEB_ARGS
   node --test --test-reporter=spec viewer.test.mjs
 ) || status=$?
-# The scene tests (node tree, picking, gizmo, multi-file uploads) start a daemon of their own
-# (the viewer tests stop theirs at the end).
-(
-  cd "$here"
-  export PCWEB_EXE="$exe" PCWEB_OUT="$out" PCWEB_CHROMIUM="$chromium" PCWEB_ROOT="$root"
-  node --test --test-reporter=spec scene.test.mjs
-) || status=$?
-# The video path (WebCodecs VP9 decode into the canvas) with a daemon of its own.
-(
-  cd "$here"
-  export PCWEB_EXE="$exe" PCWEB_OUT="$out" PCWEB_CHROMIUM="$chromium" PCWEB_ROOT="$root"
-  node --test --test-reporter=spec video.test.mjs
-) || status=$?
+wait "$others_pid" || status=1
+cat "$scratch/others.log"
 
 stop_daemon
 exit $status
