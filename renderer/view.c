@@ -244,6 +244,7 @@ static rd_vk_result history_begin(rd_view *v, rd_view_history *h, const rd_world
     key.world_changes = w->changes;
     key.gi = w->gi;
     key.converged = rd_world_converged(w);
+    key.mapped = g->ddgi.control.w;
     if (!h->keyed || memcmp(&key, &h->key, sizeof key) != 0) {
         h->epoch = (h->epoch + 1) & 0xffffffu;
         h->frames = 0;

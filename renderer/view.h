@@ -54,6 +54,8 @@ typedef struct rd_view_history_key {
     uint64_t gi;            /* rd_world.gi */
     uint64_t converged;     /* rd_world_converged: a field that falls asleep starts a new epoch
                                (what was averaged while it converged measured another field) */
+    uint64_t mapped;        /* lights whose maps the frame reads (pc_ddgi_volume.control.w):
+                               reflection hits take visibility from them */
 } rd_view_history_key;
 
 /* A per-pixel history (uvec4 per pixel: a mean and epoch << 8 | samples), created when a frame

@@ -142,10 +142,11 @@ static inline float pc_u2f(uint32_t u)
 #define PC_NEAR_SETTLE_FRAMES (PC_NEAR_INTERLEAVE * PC_NEAR_HISTORY_MAX)
 #define PC_NEAR_RATIO_MAX 8.0
 
-/* Shadow rays of camera pixels and reflection hits (rd_view_settings.shadow_cull): none toward
- * a light whose distance map shows the point certainly hidden (shaders/shadow_map.glsl,
- * direct_radiance), or a ray to every light in front of it (exact everywhere, also
- * behind openings narrower than a map texel). */
+/* Shadow rays of camera pixels and reflection hits (rd_view_settings.shadow_cull): camera
+ * pixels trace none toward a light whose distance map shows the point certainly hidden
+ * (shaders/shadow_map.glsl, direct_radiance) and reflection hits read each light's map where
+ * its texels agree (direct_radiance_mapped); or a ray to every light in front of either (exact
+ * everywhere, also behind openings narrower than a map texel). */
 #define PC_SHADOW_CULL_MAPS 0u
 #define PC_SHADOW_CULL_OFF 1u
 

@@ -77,9 +77,9 @@ void rd_shadow_maps_release(rd_shadow_maps *m);
 /* Lights whose map the last update could read. */
 unsigned rd_shadow_maps_valid(const rd_shadow_maps *m);
 /* Lights [0, n) whose maps show the scene as it is now (its geometry and those lights'
- * revisions), for view frames recorded between updates: camera pixels and reflection hits cull
- * their shadow rays by them (shaders/shadow_map.glsl, direct_radiance). 0 when the maps
- * show an older geometry or there are none. */
+ * revisions), for view frames recorded between updates: camera pixels cull their shadow rays
+ * by them (shaders/shadow_map.glsl, direct_radiance) and reflection hits read their visibility
+ * (direct_radiance_mapped). 0 when the maps show an older geometry or there are none. */
 uint32_t rd_shadow_maps_view_lights(const rd_shadow_maps *m, const rd_gpu_scene *scene);
 
 /* Called once per probe update before its shading is recorded into c, after the scene's

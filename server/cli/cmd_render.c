@@ -262,7 +262,8 @@ static void print_timings(const rd_vk *vk, const rd_scene *s, const rd_gpu_scene
                gs->blas_gpu_build_ms, gs->blas_gpu_meshes);
     printf("frame       %ux%u, median of %u frames after %.1f s of warm-up\n", w, h, frames,
            RENDER_WARMUP_MS / 1000.0);
-    /* how camera pixels and reflections chose their shadow rays (direct_radiance) */
+    /* how camera pixels and reflection hits chose their shadow rays (direct_radiance, and
+     * direct_radiance_mapped at reflection hits) */
     if (s->light_count == 0)
         printf("shadows     no lights\n");
     else if (cull == PC_SHADOW_CULL_OFF)
@@ -271,8 +272,9 @@ static void print_timings(const rd_vk *vk, const rd_scene *s, const rd_gpu_scene
         printf("shadows     a ray to every light in front of a point (no distance maps: GI off, "
                "or not worth building yet)\n");
     else
-        printf("shadows     no ray where the distance maps (%u of %u lights) show a point hidden, "
-               "a ray elsewhere\n",
+        printf("shadows     camera pixels: no ray where the distance maps (%u of %u lights) "
+               "show a point hidden, a ray elsewhere; reflection hits: the maps' answer where "
+               "their texels agree\n",
                mapped, s->light_count);
     if (!avg->timed) {
         printf("(this device has no GPU timestamps)\n");
