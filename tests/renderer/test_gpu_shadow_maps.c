@@ -160,6 +160,27 @@ static bool check_light(harness *h, rd_world *w, const rd_scene *s, uint32_t ind
     return map_bad == 0 && ray_bad == 0;
 }
 
+/* Opens builtin `scene` with a 4x4x4 field converged by its own measure, and checks that every
+ * light then has its map. False (the rig closed) when that failed. */
+static bool open_mapped_rig(rd_vk *vk, const char *scene, test_rig *rig)
+{
+    if (!test_rig_open(vk, scene, rig)) return false;
+    rd_renderer *r = &rig->r;
+    const rd_ddgi_settings gi = {.mode = PC_GI_DDGI, .counts = {4, 4, 4}, .rays = 64, .seed = 1};
+    unsigned done = 0;
+    VK_CHECK(
+        rd_renderer_configure_gi(r, rig->s.bounds_min, rig->s.bounds_max, &gi, err, sizeof err));
+    rd_world_set_scene(&r->world, &rig->gs);
+    VK_CHECK(rd_world_converge(&r->world, RD_WORLD_CONVERGE_CAP, &done, err, sizeof err));
+    unsigned lights = rig->s.light_count, mapped = rd_shadow_maps_valid(&r->world.shadow_maps);
+    CHECKF(mapped == lights, "%s: after %u updates %u of %u lights have maps", scene, done, mapped,
+           lights);
+    if (mapped == lights) return true;
+done:
+    test_rig_close(vk, rig);
+    return false;
+}
+
 /* 5. View frames: camera pixels cull their shadow rays by the maps (direct_radiance).
  * On the many-lights Cornell box (four lights, the blocks' shadows) a converged field has every
  * light's map; a frame with the cull must equal one without it exactly (a culled light is one
@@ -167,17 +188,11 @@ static bool check_light(harness *h, rd_world *w, const rd_scene *s, uint32_t ind
 static void check_view_cull(rd_vk *vk)
 {
     test_rig rig;
-    if (!test_rig_open(vk, "hard:many-lights", &rig)) return;
+    if (!open_mapped_rig(vk, "hard:many-lights", &rig)) return;
     rd_renderer *r = &rig.r;
-    const rd_ddgi_settings gi = {.mode = PC_GI_DDGI, .counts = {4, 4, 4}, .rays = 64, .seed = 1};
     enum { W = 48, H = 36 };
     float *img[2] = {malloc(W * H * 3 * sizeof(float)), malloc(W * H * 3 * sizeof(float))};
-    unsigned shadow_rays[2] = {0, 0}, done = 0;
-    VK_CHECK(rd_renderer_configure_gi(r, rig.s.bounds_min, rig.s.bounds_max, &gi, err, sizeof err));
-    rd_world_set_scene(&r->world, &rig.gs);
-    VK_CHECK(rd_world_converge(&r->world, RD_WORLD_CONVERGE_CAP, &done, err, sizeof err));
-    unsigned lights = rig.s.light_count, mapped = rd_shadow_maps_valid(&r->world.shadow_maps);
-    CHECKF(mapped == lights, "after %u updates %u of %u lights have maps", done, mapped, lights);
+    unsigned shadow_rays[2] = {0, 0};
     for (int k = 0; k < 2; k++) {
         rd_frame_settings fs = {.width = W,
                                 .height = H,
@@ -217,17 +232,11 @@ done:
 static void check_reflection_maps(rd_vk *vk)
 {
     test_rig rig;
-    if (!test_rig_open(vk, "hard:many-lights+metal", &rig)) return;
+    if (!open_mapped_rig(vk, "hard:many-lights+metal", &rig)) return;
     rd_renderer *r = &rig.r;
-    const rd_ddgi_settings gi = {.mode = PC_GI_DDGI, .counts = {4, 4, 4}, .rays = 64, .seed = 1};
     enum { W = 48, H = 36, FRAMES = 64 };
     float *img[2] = {malloc(W * H * 3 * sizeof(float)), malloc(W * H * 3 * sizeof(float))};
-    unsigned reflect_rays[2] = {0, 0}, done = 0;
-    VK_CHECK(rd_renderer_configure_gi(r, rig.s.bounds_min, rig.s.bounds_max, &gi, err, sizeof err));
-    rd_world_set_scene(&r->world, &rig.gs);
-    VK_CHECK(rd_world_converge(&r->world, RD_WORLD_CONVERGE_CAP, &done, err, sizeof err));
-    unsigned lights = rig.s.light_count, mapped = rd_shadow_maps_valid(&r->world.shadow_maps);
-    CHECKF(mapped == lights, "after %u updates %u of %u lights have maps", done, mapped, lights);
+    unsigned reflect_rays[2] = {0, 0};
     for (int k = 0; k < 2; k++) {
         rd_frame_settings fs = {.width = W,
                                 .height = H,
