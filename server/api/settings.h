@@ -160,8 +160,9 @@ typedef enum srv_setting_type {
     X(SHADOW_CULL, shadow_cull, ENUM, "shadow_cull", "--shadow-cull", ALL, "", 0, 0,              \
       PC_SHADOW_CULL_MAPS, VIEW, (SRV_SHADOW_CULL_NAMES),                                          \
       "shadow rays of camera pixels and reflections: none toward lights whose distance maps "    \
-      "show the point hidden (maps), or one to every light in front of it (off: exact also "     \
-      "behind openings narrower than a map texel)")
+      "show the point hidden, and at reflection hits the maps' answer where their texels agree " \
+      "(maps), or one to every light in front of it (off: exact also behind openings narrower "  \
+      "than a map texel)")
 /* clang-format on */
 
 /* Values a CPU device (lavapipe) starts with for the settings the command line did not give:

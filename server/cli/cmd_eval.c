@@ -80,6 +80,9 @@ static void eval_usage(FILE *f)
         "  --device INDEX|NAME    Vulkan device\n"
         "  --default-lighting on|off  light scenes without lights, sky or strong emitters\n"
         "                         as `probecast render` does (default on)\n"
+        "  --reflections on|off   ray-traced reflections of glossy materials in every row\n"
+        "                         (default on; off: no indirect specular, as in render;\n"
+        "                         rows say refl-off)\n"
         "  --list                 list the suite with each case's expectation\n"
         "  --dynamic              instead of the suite: a light and an object move in a\n"
         "                         converged field; reports updates, GPU ms and error at\n"
@@ -189,6 +192,7 @@ static void set_base(eval_args *a, const srv_settings *set)
     if (a->near_field == PC_NEAR_OFF) append(l, cap, " near-off");
     a->shadow_cull = set->shadow_cull;
     if (a->shadow_cull == PC_SHADOW_CULL_OFF) append(l, cap, " cull-off");
+    if (a->reflections == PC_REFLECT_OFF) append(l, cap, " refl-off");
     if (a->base.path_bounces != RD_DDGI_DEFAULT_PATH_BOUNCES) {
         char p[24];
         snprintf(p, sizeof p, " paths%u", a->base.path_bounces);
@@ -230,6 +234,12 @@ static int parse(int argc, char **argv, eval_args *a)
             a->cache_dir = v;
         } else if (strcmp(o, "--device") == 0) {
             a->device = v;
+        } else if (strcmp(o, "--reflections") == 0) {
+            if (strcmp(v, "on") != 0 && strcmp(v, "off") != 0) {
+                fprintf(stderr, "probecast eval: --reflections expects on or off\n");
+                return 2;
+            }
+            a->reflections = strcmp(v, "off") == 0 ? PC_REFLECT_OFF : PC_REFLECT_AUTO;
         } else if (strcmp(o, "--default-lighting") == 0) {
             if (strcmp(v, "on") != 0 && strcmp(v, "off") != 0) {
                 fprintf(stderr, "probecast eval: --default-lighting expects on or off\n");
@@ -329,7 +339,8 @@ static bool run_setting(eval_ctx *c, const char *name, rd_scene *s, rd_gpu_scene
                             .height = a->height,
                             .seed = gi->seed,
                             .near_field = a->near_field,
-                            .shadow_cull = a->shadow_cull};
+                            .shadow_cull = a->shadow_cull,
+                            .reflections = a->reflections};
     fs.env = &c->env;
     if (moving) {
         fs.gi_updates = updates / 2 ? updates / 2 : 1;
@@ -380,7 +391,8 @@ static bool run_default(eval_ctx *c, rd_scene *s, rd_gpu_scene *gs, const rd_vie
                             .seed = 1,
                             .env = &c->env,
                             .near_field = a->near_field,
-                            .shadow_cull = a->shadow_cull};
+                            .shadow_cull = a->shadow_cull,
+                            .reflections = a->reflections};
     if (!measure_frame(c, gs, cam, &fs, ref, row)) return false;
     row->probes[0] = c->r.world.ddgi.vol.counts.x;
     row->probes[1] = c->r.world.ddgi.vol.counts.y;

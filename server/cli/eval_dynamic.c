@@ -55,7 +55,8 @@ static bool measure(eval_ctx *c, const rd_view_camera *cam, const float *ref, dy
                            .height = a->height,
                            .seed = 1,
                            .near_field = a->near_field,
-                           .shadow_cull = a->shadow_cull};
+                           .shadow_cull = a->shadow_cull,
+                           .reflections = a->reflections};
     if (rd_view_render_still(&c->r.view, &c->r.world, cam, &vs, c->err, sizeof c->err) != RD_VK_OK)
         return false;
     size_t px = (size_t)a->width * a->height;

@@ -33,6 +33,7 @@ typedef struct eval_args {
     rd_ddgi_settings base;
     unsigned near_field;  /* PC_NEAR_* of every row (--near-field) */
     unsigned shadow_cull; /* PC_SHADOW_CULL_* of every row (--shadow-cull) */
+    unsigned reflections; /* PC_REFLECT_* of every row (--reflections on|off) */
     char base_label[48];  /* those flags as row labels show them ("" at the defaults) */
 } eval_args;
 

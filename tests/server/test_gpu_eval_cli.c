@@ -2,7 +2,8 @@
  * eval does not sweep (--visibility-rays, --probe-relocation, --probe-paths) reach every GI row,
  * the default row included, and the rows say so; without them the rows are the defaults. They
  * were parsed and then ignored. A flag beyond its range is refused before any rendering. The
- * case is hard:mirrored (a plane and a point light: fast; its GI is exactly zero). */
+ * case is hard:mirrored (a plane and a point light: fast; its GI is exactly zero). The view
+ * options (--reflections, --shadow-cull) label the rows too. */
 #include <stdlib.h>
 #include <string.h>
 #include <sys/wait.h>
@@ -72,6 +73,13 @@ int main(void)
         CHECKF(rows_with(flagged, "classic", label) == 1, "the classic row:\n%s", flagged);
     }
     free(plain), free(flagged);
+    /* the view options label the rows (hard:mirrored has nothing glossy to reflect: that
+     * --reflections off reaches the frames would show on hard:glossy, whose default row takes
+     * lavapipe minutes to converge) */
+    char *views = eval("--reflections off --shadow-cull off", &status);
+    CHECKF(views && rows_with(views, "ddgi 8x1x8 r16 u2 h0.90", " cull-off refl-off") == 1,
+           "the ddgi row with the view options:\n%s", views ? views : "(failed)");
+    free(views);
     /* refused before rendering: exit status 2 */
     char cmd[1024];
     snprintf(cmd, sizeof cmd, "'%s' eval --cases mirrored --probe-paths 9 >/dev/null 2>&1",
