@@ -182,10 +182,11 @@ bool shadow_map_hidden(uint64_t maps, uint index, pc_light l, vec3 p, vec3 ng)
     return true;
 }
 
-/* How much of light `index`, chosen for a probe hit (or any light at a reflection hit) at p (unit geometric normal ng on the
- * light's side, ray offset `offset`: pc_surface; the light at distance dist along wi), reaches
- * it: from the light's map where the update has one covering p (lights [0, mapped) of the maps
- * at `maps`) and its four texels agree, else from one shadow ray, counted into rays. Where a
+/* How much of light `index` (chosen for a probe hit, or any light at a reflection hit) at p
+ * (unit geometric normal ng on the light's side, ray offset `offset`: pc_surface; the light at
+ * distance dist along wi) reaches it: from the light's map where the update has one covering p
+ * (lights [0, mapped) of the maps at `maps`) and its four texels agree, else from one shadow
+ * ray, counted into rays. Where a
  * shadow's edge crosses the filter the map's answer is a blend, shifted by the normal offset
  * (1.5 texels, 7 cm at 3 m from a point light): the strip of floor a point light reaches
  * through builtin:hard:narrow-gap's 25 cm gap came out too narrow, and the dark side dark. A
