@@ -18,6 +18,16 @@ const char *srv_arg_value(const char *cmd, int argc, char **argv, int *i)
     return argv[++*i];
 }
 
+bool srv_arg_on_off(const char *opt, const char *s, bool *on)
+{
+    if (s && (strcmp(s, "on") == 0 || strcmp(s, "off") == 0)) {
+        *on = strcmp(s, "on") == 0;
+        return true;
+    }
+    fprintf(stderr, "probecast: %s expects on or off, got '%s'\n", opt, s ? s : "");
+    return false;
+}
+
 bool srv_arg_uint(const char *opt, const char *s, unsigned min, unsigned max, unsigned *out)
 {
     char *end = NULL;

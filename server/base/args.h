@@ -14,6 +14,8 @@ const char *srv_arg_value(const char *cmd, int argc, char **argv, int *i);
 bool srv_arg_uint(const char *opt, const char *s, unsigned min, unsigned max, unsigned *out);
 bool srv_arg_float(const char *opt, const char *s, float *out);
 bool srv_arg_floats(const char *opt, const char *s, float *out, int n);
+/* "on" or "off" (a switch such as --reflections): *on set; else prints one message. */
+bool srv_arg_on_off(const char *opt, const char *s, bool *on);
 
 /* Loads SCENE: "builtin:NAME[:ARG]" or a .gltf/.glb path. Warnings go to stderr.
  * On failure prints one message and returns false. */

@@ -235,17 +235,13 @@ static int parse(int argc, char **argv, eval_args *a)
         } else if (strcmp(o, "--device") == 0) {
             a->device = v;
         } else if (strcmp(o, "--reflections") == 0) {
-            if (strcmp(v, "on") != 0 && strcmp(v, "off") != 0) {
-                fprintf(stderr, "probecast eval: --reflections expects on or off\n");
-                return 2;
-            }
-            a->reflections = strcmp(v, "off") == 0 ? PC_REFLECT_OFF : PC_REFLECT_AUTO;
+            bool on;
+            if (!srv_arg_on_off(o, v, &on)) return 2;
+            a->reflections = on ? PC_REFLECT_AUTO : PC_REFLECT_OFF;
         } else if (strcmp(o, "--default-lighting") == 0) {
-            if (strcmp(v, "on") != 0 && strcmp(v, "off") != 0) {
-                fprintf(stderr, "probecast eval: --default-lighting expects on or off\n");
-                return 2;
-            }
-            a->no_default_lighting = strcmp(v, "off") == 0;
+            bool on;
+            if (!srv_arg_on_off(o, v, &on)) return 2;
+            a->no_default_lighting = !on;
         } else if (strcmp(o, "--ref-spp") == 0) {
             if (!srv_arg_uint(o, v, 1, 1u << 20, &a->ref_spp)) return 2;
         } else if (strcmp(o, "--timing-frames") == 0) {

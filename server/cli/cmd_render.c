@@ -134,22 +134,14 @@ static int parse(int argc, char **argv, render_args *a)
             a->hdr = v;
         } else if (strcmp(o, "--reflections") == 0) {
             NEED_VALUE
-            if (strcmp(v, "on") == 0)
-                a->fs.reflections = PC_REFLECT_AUTO;
-            else if (strcmp(v, "off") == 0)
-                a->fs.reflections = PC_REFLECT_OFF;
-            else {
-                fprintf(stderr, "probecast render: --reflections expects on or off\n");
-                return 2;
-            }
+            bool on;
+            if (!srv_arg_on_off(o, v, &on)) return 2;
+            a->fs.reflections = on ? PC_REFLECT_AUTO : PC_REFLECT_OFF;
         } else if (strcmp(o, "--default-lighting") == 0) {
             NEED_VALUE
-            if (strcmp(v, "on") == 0 || strcmp(v, "off") == 0) {
-                a->no_default_lighting = strcmp(v, "off") == 0;
-            } else {
-                fprintf(stderr, "probecast render: --default-lighting expects on or off\n");
-                return 2;
-            }
+            bool on;
+            if (!srv_arg_on_off(o, v, &on)) return 2;
+            a->no_default_lighting = !on;
         } else if (strcmp(o, "--quality") == 0) {
             NEED_VALUE
             if (!srv_arg_uint(o, v, 1, 100, &a->quality)) return 2;
