@@ -105,60 +105,110 @@ bool rotatable(LbvhUints s, uint n, uint at, pc_bvh_node c)
     return (s.v[lbvh_range_at(n, at) + 2u * id + 1u] & LBVH_COLLAPSED) == 0u;
 }
 
-// Tree rotations (Kensler, "Tree Rotations for Improving Bounding Volume Hierarchies", 2008),
-// at internal node i whose children l (slot 2i+1) and r (slot 2i+2) are finished: of the four
-// swaps of one child with a grandchild under the other, the one that shrinks the other child's
-// box most, if any. The subtree's SAH cost changes by exactly that child's change of area (every
-// other box and subtree stays), so the greedy step never raises it. The changed child keeps its
-// id and slot and gets the moved node in the grandchild's slot; its range is left as it was (it
-// is never collapsed after: lbvh_remap reads ranges of collapsed nodes only, and the ancestors'
-// leaf sets do not change). l and r come back as they are after the swap. One step a node: a
-// second at the same node changed no tree of the test's soups (lavapipe, 100 K and 1 M).
-void rotate(Nodes nodes, LbvhUints s, uint n, uint at, uint i, inout pc_bvh_node l,
-            inout pc_bvh_node r)
+// Treelet restructuring (after Karras and Aila, "Fast Parallel Construction of High-Quality
+// Bounding Volume Hierarchies", 2013, with the treelet rebuilt by greedy agglomeration as
+// Domingues and Pedrini's ATRBVH, 2015), at internal node i whose children l (slot 2i+1) and
+// r (slot 2i+2) are finished: the treelet grows from {l, r} by opening its largest-area member
+// that is an internal, uncollapsed node until it has LBVH_TREELET members (or none opens); the
+// members are then merged pairwise, the pair whose union has the least area first, down to two,
+// i's new children. The subtree's SAH cost changes by exactly the sum of the inner nodes' areas
+// (every member and i's box stay), so the new shape is taken only where that sum is smaller.
+// The opened nodes' ids (their child pairs, cost words) carry the new inner nodes; their ranges
+// are left as they were (a node below i is never collapsed after, lbvh_remap reads ranges of
+// collapsed nodes only, and i's leaf set does not change). A three-member treelet is Kensler's
+// tree rotation (2008), which this pass took before. l and r come back as they are after.
+#define LBVH_TREELET 7u
+#define LBVH_CLUSTERS (2u * LBVH_TREELET - 1u)
+
+float node_area(pc_bvh_node c)
 {
-    float best = 0.0;
-    uint pick = 4u;
-    for (uint side = 0u; side < 2u; side++) {
-        pc_bvh_node stay = side == 0u ? l : r, down = side == 0u ? r : l;
-        if (!rotatable(s, n, at, down)) continue;
-        uint f = floatBitsToUint(down.bmin.w);
-        pc_bvh_node g0 = nodes.n[f], g1 = nodes.n[f + 1u];
-        float was = half_area(down.bmin.xyz, down.bmax.xyz);
-        /* stay swapped with g0: down becomes (stay, g1); with g1: (g0, stay) */
-        float d0 = half_area(min(stay.bmin.xyz, g1.bmin.xyz), max(stay.bmax.xyz, g1.bmax.xyz)) - was;
-        float d1 = half_area(min(stay.bmin.xyz, g0.bmin.xyz), max(stay.bmax.xyz, g0.bmax.xyz)) - was;
-        if (d0 < best) best = d0, pick = 2u * side;
-        if (d1 < best) best = d1, pick = 2u * side + 1u;
+    return half_area(c.bmin.xyz, c.bmax.xyz);
+}
+
+void restructure(Nodes nodes, LbvhUints s, uint n, uint at, uint i, inout pc_bvh_node l,
+                 inout pc_bvh_node r)
+{
+    pc_bvh_node member[LBVH_TREELET];
+    float area[LBVH_TREELET];
+    uint ids[LBVH_TREELET - 2u];
+    member[0] = l;
+    member[1] = r;
+    area[0] = node_area(l);
+    area[1] = node_area(r);
+    uint nm = 2u, nf = 0u;
+    float was = 0.0;
+    while (nm < LBVH_TREELET) {
+        uint pick = LBVH_TREELET;
+        float big = -1.0;
+        for (uint j = 0u; j < nm; j++)
+            if (area[j] > big && rotatable(s, n, at, member[j])) big = area[j], pick = j;
+        if (pick == LBVH_TREELET) break;
+        uint f = floatBitsToUint(member[pick].bmin.w);
+        ids[nf++] = (f - 1u) / 2u;
+        was += big;
+        member[pick] = nodes.n[f];
+        member[nm] = nodes.n[f + 1u];
+        area[pick] = node_area(member[pick]);
+        area[nm] = node_area(member[nm]);
+        nm++;
     }
-    if (pick == 4u || !(best < -1e-6 * half_area(min(l.bmin.xyz, r.bmin.xyz), max(l.bmax.xyz, r.bmax.xyz))))
-        return;
-    uint side = pick / 2u, g = pick % 2u;
-    uint stay_slot = 2u * i + 1u + side, down_slot = 2u * i + 2u - side;
-    pc_bvh_node stay = side == 0u ? l : r, down = side == 0u ? r : l;
-    uint f = floatBitsToUint(down.bmin.w);
-    pc_bvh_node moved = nodes.n[f + g], kept = nodes.n[f + 1u - g];
-    /* the swap: the grandchild takes the child's slot, the child goes under down */
-    nodes.n[stay_slot] = moved;
-    nodes.n[f + g] = stay;
-    if (floatBitsToUint(moved.bmax.w) == 0u)
-        s.v[lbvh_node_slot_at(n, at) + (floatBitsToUint(moved.bmin.w) - 1u) / 2u] = stay_slot;
-    if (floatBitsToUint(stay.bmax.w) == 0u)
-        s.v[lbvh_node_slot_at(n, at) + (floatBitsToUint(stay.bmin.w) - 1u) / 2u] = f + g;
-    /* down's new box and cost */
-    uint id = (f - 1u) / 2u;
-    down.bmin.xyz = min(stay.bmin.xyz, kept.bmin.xyz);
-    down.bmax.xyz = max(stay.bmax.xyz, kept.bmax.xyz);
-    nodes.n[down_slot] = down;
-    float cost = half_area(down.bmin.xyz, down.bmax.xyz) + child_cost(s, n, at, stay) +
-                 child_cost(s, n, at, kept);
-    s.v[lbvh_cost_at(n, at) + id] = floatBitsToUint(cost);
-    if (side == 0u) {
-        l = moved;
-        r = down;
-    } else {
-        l = down;
-        r = moved;
+    if (nf == 0u) return;
+    /* clusters: [0, nm) the members, then one a merge, in order */
+    vec3 lo[LBVH_CLUSTERS], hi[LBVH_CLUSTERS];
+    uint kid[LBVH_TREELET - 2u][2];
+    uint live[LBVH_TREELET];
+    for (uint j = 0u; j < nm; j++) {
+        lo[j] = member[j].bmin.xyz;
+        hi[j] = member[j].bmax.xyz;
+        live[j] = j;
+    }
+    uint nl = nm, nc = nm;
+    float now = 0.0;
+    while (nl > 2u) {
+        float least = uintBitsToFloat(0x7f800000u);
+        uint a = 0u, b = 1u;
+        for (uint x = 0u; x + 1u < nl; x++)
+            for (uint y = x + 1u; y < nl; y++) {
+                float u = half_area(min(lo[live[x]], lo[live[y]]), max(hi[live[x]], hi[live[y]]));
+                if (u < least) least = u, a = x, b = y;
+            }
+        lo[nc] = min(lo[live[a]], lo[live[b]]);
+        hi[nc] = max(hi[live[a]], hi[live[b]]);
+        kid[nc - nm][0] = live[a];
+        kid[nc - nm][1] = live[b];
+        now += half_area(lo[nc], hi[nc]);
+        live[a] = nc++;
+        live[b] = live[--nl];
+    }
+    float root = half_area(min(l.bmin.xyz, r.bmin.xyz), max(l.bmax.xyz, r.bmax.xyz));
+    if (!(now < was - 1e-6 * root)) return;
+    /* write the new shape: cluster c >= nm is inner node ids[c - nm] */
+    float cost[LBVH_CLUSTERS];
+    for (uint j = 0u; j < nm; j++) cost[j] = child_cost(s, n, at, member[j]);
+    for (uint c = nm; c < nc; c++) {
+        uint id = ids[c - nm];
+        cost[c] = half_area(lo[c], hi[c]) + cost[kid[c - nm][0]] + cost[kid[c - nm][1]];
+        s.v[lbvh_cost_at(n, at) + id] = floatBitsToUint(cost[c]);
+    }
+    for (uint c = nm; c <= nc; c++) {
+        /* the children of cluster c (c == nc: node i, whose children are the two left live) */
+        uint first = c == nc ? 2u * i + 1u : 2u * ids[c - nm] + 1u;
+        for (uint side = 0u; side < 2u; side++) {
+            uint k = c == nc ? live[side] : kid[c - nm][side];
+            pc_bvh_node rec;
+            if (k < nm) {
+                rec = member[k];
+            } else {
+                rec.bmin = vec4(lo[k], uintBitsToFloat(2u * ids[k - nm] + 1u));
+                rec.bmax = vec4(hi[k], uintBitsToFloat(0u));
+            }
+            nodes.n[first + side] = rec;
+            if (floatBitsToUint(rec.bmax.w) == 0u)
+                s.v[lbvh_node_slot_at(n, at) + (floatBitsToUint(rec.bmin.w) - 1u) / 2u] =
+                    first + side;
+            if (c == nc && side == 0u) l = rec;
+            if (c == nc && side == 1u) r = rec;
+        }
     }
 }
 
@@ -186,7 +236,7 @@ void main()
     if (i + 1u >= n || s.v[lbvh_done_at(n, at) + i] != 0u) return;
     pc_bvh_node l = nodes.n[2u * i + 1u], r = nodes.n[2u * i + 2u];
     if (!child_ready(s, n, at, l, k) || !child_ready(s, n, at, r, k)) return;
-    rotate(nodes, s, n, at, i, l, r);
+    restructure(nodes, s, n, at, i, l, r);
     uint slot = s.v[lbvh_node_slot_at(n, at) + i];
     vec3 lo = min(l.bmin.xyz, r.bmin.xyz), hi = max(l.bmax.xyz, r.bmax.xyz);
     nodes.n[slot].bmin = vec4(lo, uintBitsToFloat(2u * i + 1u));
