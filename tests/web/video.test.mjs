@@ -64,16 +64,29 @@ const orbit = (ms) => page.evaluate(async (ms) => {
   }
 }, ms);
 
-test('auto asks for VP9 and draws decoded video frames into the canvas', { timeout: 60000 }, async () => {
+/* Keeps the camera moving (orbit, half a second at a time) until cond() holds, or throws after
+ * timeoutMs: frames are video only while the camera moves (the still after it stops is JPEG),
+ * and on a loaded machine a fixed orbit may end before the frames that were asked for came. */
+const orbitUntil = async (cond, what, timeoutMs) => {
+  let moving = true;
+  const mover = (async () => { while (moving) await orbit(500); })();
+  try {
+    await until(cond, what, timeoutMs);
+  } finally {
+    moving = false;
+    await mover;
+  }
+};
+
+test('auto asks for VP9 and draws decoded video frames into the canvas', { timeout: 90000 }, async () => {
   const codec = await page.evaluate(async () => (await import('/js/video.js')).probeVideoCodec());
   assert.equal(codec, 'vp9', 'this Chromium decodes VP9 with WebCodecs');
   await until(async () => (await page.evaluate(() => window.__sentVideo.length)) >= 1, 'a video request', 15000);
   const req = await page.evaluate(() => window.__sentVideo[0]);
   assert.deepEqual(req, { type: 'video', codec: 'vp9', max_kbps: null });
   const n = await page.evaluate(() => window.__frames.length);
-  await orbit(2500);
-  await until(async () => (await page.evaluate((n) => window.__frames.slice(n).filter((f) => f.format === 2).length, n)) >= 5,
-    'five VP9 frames drawn', 20000);
+  await orbitUntil(async () => (await page.evaluate((n) => window.__frames.slice(n).filter((f) => f.format === 2).length, n)) >= 5,
+    'five VP9 frames drawn', 40000);
   const frames = await page.evaluate((n) => window.__frames.slice(n), n);
   const video = frames.filter((f) => f.format === 2);
   assert.ok(video[0].key, 'the first VP9 frame drawn is a key frame');
@@ -90,7 +103,7 @@ test('auto asks for VP9 and draws decoded video frames into the canvas', { timeo
   assert.deepEqual(pageErrors, []);
 });
 
-test('the quality menu\'s JPEG choice returns to JPEG; video again after', { timeout: 60000 }, async () => {
+test('the quality menu\'s JPEG choice returns to JPEG; video again after', { timeout: 90000 }, async () => {
   await showPanel(page, 'panel-quality');
   const k = await page.evaluate(() => window.__sentVideo.length);
   await page.locator('#video-mode button[data-value="jpeg"]').click();
@@ -103,9 +116,8 @@ test('the quality menu\'s JPEG choice returns to JPEG; video again after', { tim
   // counted before the click: a VP9 frame may arrive before the next evaluate returns
   n = await page.evaluate(() => window.__frames.length);
   await page.locator('#video-mode button[data-value="auto"]').click();
-  await orbit(2000);
-  await until(async () => (await page.evaluate((n) => window.__frames.slice(n).filter((f) => f.format === 2).length, n)) >= 3,
-    'VP9 again', 15000);
+  await orbitUntil(async () => (await page.evaluate((n) => window.__frames.slice(n).filter((f) => f.format === 2).length, n)) >= 3,
+    'VP9 again', 30000);
   frames = await page.evaluate((n) => window.__frames.slice(n).filter((f) => f.format === 2), n);
   assert.ok(frames[0].key, 'a new stream starts with a key frame');
 });
