@@ -19,6 +19,7 @@
 #include "lbvh_sort_check.h"
 #include "renderer/accel/bvh.h"
 #include "renderer/accel/gpu_lbvh.h"
+#include "renderer/builtin/procedural.h"
 #include "renderer/vk/vk_context.h"
 #include "test_util.h"
 #include "trace_rig.h"
@@ -227,16 +228,30 @@ typedef struct bench_row {
     double cpu_mrays, lbvh_mrays, sah_ratio, build_ms;
 } bench_row;
 
-/* `test_gpu_lbvh bench [sizes]`: for random soups of each size, the LBVH build's time (best of
+/* `test_gpu_lbvh bench [sizes]`: for random soups of each size (or a builtin scene's largest mesh
+ * where a size is a name such as spheres:1000000), the LBVH build's time (best of
  * 3, submit and wait, then the GPU timestamps of its passes), and the traversal speed of the same
  * rays (pc_sphere_rays; PROBECAST_LBVH_RAYS, default 2^20) through the CPU builder's tree and the
  * LBVH (best of 3 GPU-timed traces each). Prints two tables. */
 static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b, int argc, char **argv)
 {
     uint32_t sizes[16] = {1000, 5000, 20000, 100000}, count = 4, most = 0;
-    if (argc > 0) /* sizes given: `test_gpu_lbvh bench 100000 1000000` */
-        for (count = 0; count < (uint32_t)argc && count < 16; count++)
+    const rd_mesh *named[16] = {0}; /* a builtin scene's largest mesh instead of a soup */
+    rd_scene scenes[16];
+    if (argc > 0) /* sizes given: `test_gpu_lbvh bench 100000 1000000 spheres:1000000` */
+        for (count = 0; count < (uint32_t)argc && count < 16; count++) {
             sizes[count] = (uint32_t)strtoul(argv[count], NULL, 10);
+            if (sizes[count] != 0 || argv[count][0] == '0') continue;
+            rd_scene_init(&scenes[count]);
+            if (!rd_procedural_scene(argv[count], &scenes[count], err, sizeof err)) {
+                fprintf(stderr, "bench: %s\n", err);
+                return;
+            }
+            for (uint32_t m = 0; m < scenes[count].mesh_count; m++)
+                if (!named[count] || scenes[count].meshes[m].tri_count > named[count]->tri_count)
+                    named[count] = &scenes[count].meshes[m];
+            sizes[count] = named[count] ? named[count]->tri_count : 0;
+        }
     for (uint32_t s = 0; s < count; s++) {
         if (sizes[s] == 0 || sizes[s] > RD_GPU_LBVH_MAX_TRIANGLES) {
             fprintf(stderr, "bench: sizes from 1 to %u triangles\n", RD_GPU_LBVH_MAX_TRIANGLES);
@@ -271,7 +286,10 @@ static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b, int argc, char **
     uint32_t done = 0;
     for (uint32_t s = 0; s < count; s++, done++) {
         rng_seed(3 + s);
-        tri_soup(pos, sizes[s], 0.02f);
+        if (named[s])
+            memcpy(pos, named[s]->positions, sizeof(float) * 9 * (size_t)sizes[s]);
+        else
+            tri_soup(pos, sizes[s], 0.02f);
         rd_bvh gpu, cpu;
         double ms = 0, best = 1e30;
         rd_vk_result r = RD_VK_OK;
@@ -336,6 +354,8 @@ static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b, int argc, char **
     rd_buffer_destroy(vk, &res_buf);
     rd_timer_destroy(vk, &timer);
     free(table);
+    for (uint32_t s = 0; s < count; s++)
+        if (named[s]) rd_scene_destroy(&scenes[s]);
     free(hits_lbvh);
     free(hits_cpu);
     free(orgs);
