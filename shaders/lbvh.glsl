@@ -83,6 +83,13 @@ uint lbvh_args_at(uint n, uint leaf_at)
 #define LBVH_COLLAPSED 0x40000000u
 #define LBVH_COUNT_MASK 0x00ffffffu
 #define LBVH_COUNT_AT 6u
+// Word 7: the output tree's depth (levels below the root; lbvh_hierarchy zeroes it, lbvh_boxes
+// writes the root's height), so that a build's caller need not read the tree back for it.
+#define LBVH_DEPTH_AT 7u
+// lbvh_boxes keeps a finished node's height (levels below it, as the output will have them) in
+// the top bits of its done word, the pass that finished it in the low ones.
+#define LBVH_DONE_PASS 0xffu
+#define LBVH_HEIGHT_SHIFT 8u
 // lbvh_scan.comp's block sums (PC_LBVH_SCAN_BLOCK, gpu_types.h) follow the args words.
 uint lbvh_scan_sums_at(uint n, uint leaf_at)
 {

@@ -4,7 +4,8 @@
 // position, count 1, the triangle's box; empty [+inf, -inf] for a triangle with a non-finite
 // vertex). params.z == k >= 1: one thread per internal node not yet done whose children were
 // both done before pass k (leaves, or done[c] in [1, k)) writes its box, the exact union of
-// theirs, and done = k. The tree over distinct 64-bit keys is at most 64 internal levels deep
+// theirs, and done = k with its height (levels below it in the output tree) in the word's top
+// bits (LBVH_HEIGHT_SHIFT); the root's thread writes the tree's depth (LBVH_DEPTH_AT). The tree over distinct 64-bit keys is at most 64 internal levels deep
 // (each level's common prefix is longer than its parent's), so 64 passes finish every node;
 // a done node's thread returns at once, and the thread that finishes the root zeroes the
 // x group count of the indirect dispatch of the passes (scratch, lbvh_args_at; rows of groups
@@ -94,7 +95,16 @@ bool child_ready(LbvhUints s, uint n, uint at, pc_bvh_node c, uint k)
 {
     if (floatBitsToUint(c.bmax.w) != 0u) return true; /* a leaf */
     uint done = s.v[lbvh_done_at(n, at) + (floatBitsToUint(c.bmin.w) - 1u) / 2u];
-    return done != 0u && done < k;
+    return done != 0u && (done & LBVH_DONE_PASS) < k;
+}
+
+// The levels below a finished child in the output tree: 0 for a leaf or a collapsed node.
+uint child_height(LbvhUints s, uint n, uint at, pc_bvh_node c)
+{
+    if (floatBitsToUint(c.bmax.w) != 0u) return 0u;
+    uint id = (floatBitsToUint(c.bmin.w) - 1u) / 2u;
+    if ((s.v[lbvh_range_at(n, at) + 2u * id + 1u] & LBVH_COLLAPSED) != 0u) return 0u;
+    return s.v[lbvh_done_at(n, at) + id] >> LBVH_HEIGHT_SHIFT;
 }
 
 // An internal child that may be descended into by a rotation: not collapsed.
@@ -184,11 +194,18 @@ void restructure(Nodes nodes, LbvhUints s, uint n, uint at, uint i, inout pc_bvh
     if (!(now < was - 1e-6 * root)) return;
     /* write the new shape: cluster c >= nm is inner node ids[c - nm] */
     float cost[LBVH_CLUSTERS];
-    for (uint j = 0u; j < nm; j++) cost[j] = child_cost(s, n, at, member[j]);
+    uint height[LBVH_CLUSTERS];
+    for (uint j = 0u; j < nm; j++) {
+        cost[j] = child_cost(s, n, at, member[j]);
+        height[j] = child_height(s, n, at, member[j]);
+    }
     for (uint c = nm; c < nc; c++) {
-        uint id = ids[c - nm];
-        cost[c] = half_area(lo[c], hi[c]) + cost[kid[c - nm][0]] + cost[kid[c - nm][1]];
+        uint id = ids[c - nm], a = kid[c - nm][0], b = kid[c - nm][1];
+        cost[c] = half_area(lo[c], hi[c]) + cost[a] + cost[b];
+        height[c] = 1u + max(height[a], height[b]);
         s.v[lbvh_cost_at(n, at) + id] = floatBitsToUint(cost[c]);
+        uint done = s.v[lbvh_done_at(n, at) + id] & LBVH_DONE_PASS;
+        s.v[lbvh_done_at(n, at) + id] = done | (height[c] << LBVH_HEIGHT_SHIFT);
     }
     for (uint c = nm; c <= nc; c++) {
         /* the children of cluster c (c == nc: node i, whose children are the two left live) */
@@ -250,6 +267,11 @@ void main()
         clear_below(nodes, s, n, at, i);
     }
     s.v[lbvh_cost_at(n, at) + i] = floatBitsToUint(cost);
-    s.v[lbvh_done_at(n, at) + i] = k;
-    if (i == 0u) s.v[lbvh_args_at(n, at)] = 0u;
+    uint height = 1u + max(child_height(s, n, at, l), child_height(s, n, at, r));
+    s.v[lbvh_done_at(n, at) + i] = k | (height << LBVH_HEIGHT_SHIFT);
+    if (i == 0u) {
+        s.v[lbvh_args_at(n, at)] = 0u;
+        bool collapsed = (s.v[lbvh_range_at(n, at) + 1u] & LBVH_COLLAPSED) != 0u;
+        s.v[LBVH_DEPTH_AT] = collapsed ? 0u : height;
+    }
 }

@@ -62,6 +62,7 @@ void main()
     LbvhUints prim = LbvhUints(pc.buf2);
     g_keys = lbvh_keys(pc.buf0);
     g_n = int(n);
+    if (ti == 0u) s.v[LBVH_DEPTH_AT] = 0u; // lbvh_boxes writes the root's height for n > 1
     if (n <= 1u) {
         if (ti != 0u) return;
         if (n == 0u) {

@@ -319,8 +319,10 @@ rd_vk_result rd_gpu_lbvh_build_download(rd_vk *vk, const rd_gpu_lbvh_builder *b,
             abort();
         }
         out->prim_count = tri_count;
-        r = rd_buffer_download(vk, &scratch, RD_GPU_LBVH_COUNT_OFFSET, &out->node_count, 4, err,
+        uint32_t words[2] = {0, 0}; /* the node count and the depth the build wrote */
+        r = rd_buffer_download(vk, &scratch, RD_GPU_LBVH_COUNT_OFFSET, words, sizeof words, err,
                                errlen);
+        out->node_count = words[0];
         if (r == RD_VK_OK && !(out->node_count >= 1 && out->node_count <= nn)) {
             snprintf(err, errlen, "GPU LBVH: %u nodes out of %u", out->node_count, nn);
             r = RD_VK_ERR_VULKAN;
@@ -331,6 +333,10 @@ rd_vk_result rd_gpu_lbvh_build_download(rd_vk *vk, const rd_gpu_lbvh_builder *b,
         if (r == RD_VK_OK && prim_bytes)
             r = rd_buffer_download(vk, &prim, 0, out->prim_index, prim_bytes, err, errlen);
         if (r == RD_VK_OK) out->depth = tree_depth(out);
+        if (r == RD_VK_OK && words[1] != out->depth) { /* the tests build many trees */
+            snprintf(err, errlen, "GPU LBVH: depth %u written, %u walked", words[1], out->depth);
+            r = RD_VK_ERR_VULKAN;
+        }
     }
     rd_buffer_destroy(vk, &scratch);
     rd_buffer_destroy(vk, &prim);

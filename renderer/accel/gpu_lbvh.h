@@ -90,8 +90,10 @@ uint64_t rd_gpu_lbvh_scratch_bytes(uint32_t tri_count);
 void rd_gpu_lbvh_record_sort(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress keys,
                              uint32_t n, VkDeviceAddress sort_scratch);
 uint64_t rd_gpu_lbvh_sort_scratch_bytes(uint32_t n);
-/* Byte offset in the scratch of the uint node count a build writes. */
+/* Byte offsets in the scratch of the uint node count a build writes, and of the tree's depth
+ * (levels below the root), which follows it. */
 #define RD_GPU_LBVH_COUNT_OFFSET 24u
+#define RD_GPU_LBVH_DEPTH_OFFSET 28u
 
 /* Records a build into c (tri_count at most RD_GPU_LBVH_MAX_TRIANGLES: asserted; callers check
  * it, as rd_gpu_lbvh_build_download does, and report an error beyond it). positions: device address
@@ -108,8 +110,8 @@ void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress
                         VkDeviceAddress prim_index, const rd_buffer *scratch, rd_timer *timer);
 
 /* Blocking convenience (tests, benchmarks): uploads positions, builds, waits, and reads the
- * tree back into out (an rd_bvh the caller frees with rd_bvh_destroy; depth computed on the
- * CPU). gpu_ms (may be NULL): wall time of the submit and wait of the build alone; timer (may
+ * tree back into out (an rd_bvh the caller frees with rd_bvh_destroy; depth walked on the CPU,
+ * and an error where the build wrote another). gpu_ms (may be NULL): wall time of the submit and wait of the build alone; timer (may
  * be NULL): begun here and resolved after the wait, one section a pass. On error
  * out is zeroed; more than RD_GPU_LBVH_MAX_TRIANGLES is RD_VK_ERR_UNSUPPORTED with a message,
  * before anything is read or allocated. */

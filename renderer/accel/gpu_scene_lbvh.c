@@ -113,33 +113,8 @@ typedef struct lbvh_kit {
     rd_pipeline place;
 } lbvh_kit;
 
-/* The depth of tree (node_count nodes, indices relative to it), walked from its root; UINT32_MAX
- * when it is not one whole tree (a child out of range, or nodes the root does not reach). */
-static uint32_t tree_depth(const pc_bvh_node *nodes, uint32_t node_count)
-{
-    uint32_t depth = 0, seen = 0, top = 0;
-    uint32_t *stack = xcalloc(2 * (size_t)node_count + 2, sizeof *stack); /* node, level */
-    stack[top++] = 0, stack[top++] = 0;
-    while (top && seen <= node_count) {
-        uint32_t level = stack[--top], i = stack[--top];
-        const pc_bvh_node *nd = &nodes[i];
-        seen++;
-        depth = level > depth ? level : depth;
-        uint32_t first = pc_f2u(nd->bmin.w), count = pc_f2u(nd->bmax.w);
-        if (count) continue;
-        if (first < 1 || first + 1 >= node_count || top + 4 > 2 * (size_t)node_count + 2) {
-            seen = UINT32_MAX;
-            break;
-        }
-        stack[top++] = first, stack[top++] = level + 1;
-        stack[top++] = first + 1, stack[top++] = level + 1;
-    }
-    free(stack);
-    return seen == node_count ? depth : UINT32_MAX;
-}
-
 /* Mesh j's BLAS built on the GPU (kit ready): 0 deep or more on success, UINT32_MAX when the
- * tree cannot be kept (too deep, not whole); not RD_VK_OK when the build could not run. */
+ * tree cannot be kept (a node count out of range); not RD_VK_OK when the build could not run. */
 static rd_vk_result gpu_build(rd_vk *vk, rd_gpu_scene *gs, const lbvh_kit *kit,
                               const rd_gpu_scene_lbvh_mesh *j, uint32_t *depth, char *err,
                               size_t errlen)
@@ -171,19 +146,13 @@ static rd_vk_result gpu_build(rd_vk *vk, rd_gpu_scene *gs, const lbvh_kit *kit,
                                        n, pos.address, source.address, &b);
         r = rd_cmd_submit_wait(vk, &c, err, errlen);
     }
-    /* the depth, which the LBVH does not bound: its nodes come back */
-    uint32_t count = 0;
+    /* the depth, which the LBVH does not bound: the build writes it beside its node count */
+    uint32_t words[2] = {0, 0};
     if (r == RD_VK_OK)
-        r = rd_buffer_download(vk, &b.scratch, RD_GPU_LBVH_COUNT_OFFSET, &count, 4, err, errlen);
-    if (r == RD_VK_OK) {
-        *depth = UINT32_MAX;
-        if (count >= 1 && count <= rd_gpu_lbvh_node_count(n)) {
-            pc_bvh_node *nodes = xcalloc(count, sizeof *nodes);
-            r = rd_buffer_download(vk, &b.out, 0, nodes, sizeof *nodes * count, err, errlen);
-            if (r == RD_VK_OK) *depth = tree_depth(nodes, count);
-            free(nodes);
-        }
-    }
+        r = rd_buffer_download(vk, &b.scratch, RD_GPU_LBVH_COUNT_OFFSET, words, sizeof words, err,
+                               errlen);
+    if (r == RD_VK_OK)
+        *depth = words[0] >= 1 && words[0] <= rd_gpu_lbvh_node_count(n) ? words[1] : UINT32_MAX;
     rd_buffer_destroy(vk, &source);
     rd_buffer_destroy(vk, &pos);
     rd_gpu_scene_lbvh_build_destroy(vk, &b);

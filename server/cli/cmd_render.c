@@ -250,7 +250,7 @@ static void print_timings(const rd_vk *vk, const rd_scene *s, const rd_gpu_scene
            gs->tlas_build_ms, gs->upload_ms);
     if (gs->blas_gpu_meshes) /* part of the bottom level's time (PROBECAST_BLAS_BUILD) */
         printf("bvh gpu     %.1f ms building %u meshes' bottom levels on the GPU (LBVH: build, "
-               "placing, depth read-back), the rest on the CPU\n",
+               "placing, node count and depth read back), the rest on the CPU\n",
                gs->blas_gpu_build_ms, gs->blas_gpu_meshes);
     printf("frame       %ux%u, median of %u frames after %.1f s of warm-up\n", w, h, frames,
            RENDER_WARMUP_MS / 1000.0);

@@ -4,7 +4,8 @@
  * non-finite vertex) and an empty mesh uploaded with PROBECAST_BLAS_BUILD=gpu and =cpu: every
  * non-empty mesh built by the GPU in the first, none in the second, the same local frames, and
  * each mesh's BLAS as the scene holds it (nodes and records read back) gives the same closest hit
- * (triangle and t) ray by ray as the CPU-built scene's; the same through the CPU fallback (every
+ * (triangle and t) ray by ray as the CPU-built scene's, and the deepest walks as many levels as
+ * the depth the builds wrote (the LBVH's, no read-back); the same through the CPU fallback (every
  * GPU tree taken as too deep by a test hook); and an image of a builtin scene rendered
  * end to end (test_render) matches the CPU-built one's within float tolerance. */
 #include <math.h>
@@ -96,9 +97,27 @@ static void read_mesh(rd_vk *vk, const rd_gpu_scene *gs, const rd_scene *s, uint
     free(t);
 }
 
+/* Levels below the root of tree, walked. */
+static uint32_t walked_depth(const rd_bvh *tree)
+{
+    uint32_t *stack = calloc(2 * (size_t)tree->node_count + 2, sizeof *stack), top = 0, depth = 0;
+    if (!stack) abort();
+    stack[top++] = 0, stack[top++] = 0;
+    while (top) {
+        uint32_t level = stack[--top], i = stack[--top];
+        depth = level > depth ? level : depth;
+        uint32_t first = pc_f2u(tree->nodes[i].bmin.w), count = pc_f2u(tree->nodes[i].bmax.w);
+        if (count || first + 1 >= tree->node_count) continue;
+        stack[top++] = first, stack[top++] = level + 1;
+        stack[top++] = first + 1, stack[top++] = level + 1;
+    }
+    free(stack);
+    return depth;
+}
+
 /* Rays from a sphere around mesh m's box through points inside it: the same closest hit through
- * both scenes' BLASes of m. */
-static void compare_mesh(rd_vk *vk, const rd_gpu_scene *gpu, const rd_gpu_scene *cpu,
+ * both scenes' BLASes of m. Returns the depth of the first's BLAS of m, walked. */
+static uint32_t compare_mesh(rd_vk *vk, const rd_gpu_scene *gpu, const rd_gpu_scene *cpu,
                          const rd_scene *s, uint32_t m)
 {
     rd_bvh a, b;
@@ -129,10 +148,12 @@ static void compare_mesh(rd_vk *vk, const rd_gpu_scene *gpu, const rd_gpu_scene 
     printf("mesh %u (%u triangles): %u of %u rays hit, %u differ\n", m, n, hits, rays, bad);
     CHECKF(bad == 0, "mesh %u: %u of %u rays differ between the GPU and CPU builds", m, bad, rays);
     CHECKF(hits > 0 || n == 0, "mesh %u: no ray hit", m);
+    uint32_t depth = walked_depth(&a);
     rd_bvh_destroy(&a);
     rd_bvh_destroy(&b);
     free(pa);
     free(pb);
+    return depth;
 }
 
 /* fallback: every GPU tree counts as too deep (the test hook), so the CPU builds each mesh
@@ -163,8 +184,13 @@ static void test_scene(rd_vk *vk, bool fallback)
     CHECK(gpu.mesh_origin[3] != 0); /* the far soup's */
     CHECKF(gpu.max_blas_depth > 0 && gpu.max_blas_depth <= RD_BVH_MAX_DEPTH, "depth %u",
            gpu.max_blas_depth);
-    for (uint32_t m = 0; m < s.mesh_count; m++)
-        compare_mesh(vk, &gpu, &cpu, &s, m);
+    uint32_t deepest = 0; /* the LBVH writes its depth; the scene keeps the deepest */
+    for (uint32_t m = 0; m < s.mesh_count; m++) {
+        uint32_t d = compare_mesh(vk, &gpu, &cpu, &s, m);
+        deepest = d > deepest ? d : deepest;
+    }
+    CHECKF(deepest == gpu.max_blas_depth, "the deepest BLAS walks %u levels, the scene says %u",
+           deepest, gpu.max_blas_depth);
 done:
     unsetenv("PROBECAST_BLAS_BUILD");
     rd_gpu_scene_destroy(vk, &gpu);
