@@ -32,7 +32,7 @@ static const rd_pipeline_desc kPipelines[] = {
 /* Groups in one dimension of a dispatch: the least maxComputeWorkGroupCount Vulkan allows. */
 #define MAX_GROUPS_PER_DIM 65535u
 /* The scratch layout of shaders/lbvh.glsl, in uints: 8 of bounds (word 6: the output's node
- * count), 2N of keys, then leaf_slot, node_slot, done (n each), range and alive (2n each), cost
+ * count, word 7 its depth), 2N of keys, then leaf_slot, node_slot, done (n each), range and alive (2n each), cost
  * (n), 4 of indirect dispatch; then, 16-byte aligned, the working tree of 2n - 1 nodes. */
 #define KEYS_AT 8u
 #define TAIL_WORDS 8u

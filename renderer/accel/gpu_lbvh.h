@@ -25,14 +25,16 @@
  *      per node, coherent buffers and memory barriers, gave wrong boxes above the first level
  *      on lavapipe with 64-thread workgroups and right ones with 1-thread workgroups (34 ms
  *      there against these passes' 69 ms for 100 K triangles); why is not known yet.)
- *      Each node, once its children are finished, first takes one tree rotation (Kensler 2008:
- *      a child swapped with a grandchild under the other child, where that shrinks the other
- *      child's box most), so subtrees move to the side they overlap less than the Morton median
- *      put them on. The same passes weigh the collapse of each subtree of at most max_leaf
- *      triangles into one leaf (their sorted leaves are contiguous: rotations below a node do
- *      not change its leaf set, and a rotated child is not collapsed after) by SAH, bottom-up: a node's cost is the
- *      least of its split's (its area plus its children's costs) and one leaf's (its area times
- *      its triangles); where the leaf wins, the node is flagged and its descendants marked gone.
+ *      Each node, once its children are finished, first restructures its treelet of up to 7
+ *      members (Karras and Aila 2013; rebuilt by greedy agglomeration as ATRBVH, kept where
+ *      its inner nodes' areas sum less), so subtrees move out of the Morton medians' cuts. The
+ *      same passes weigh the collapse of each subtree of at most max_leaf triangles into one
+ *      leaf (their sorted leaves are contiguous: a treelet below a node does not change its
+ *      leaf set, and a restructured node is not collapsed after) by SAH, bottom-up: a node's
+ *      cost is the least of its split's (its area plus its children's costs) and one leaf's
+ *      (its area times its triangles); where the leaf wins, the node is flagged and its
+ *      descendants marked gone. Each finished node's height rides in its done word; the root's
+ *      thread writes the tree's depth beside the node count.
  *   6. lbvh_scan, lbvh_remap: the nodes that stay numbered by a prefix sum and copied to the
  *      output, a flagged node as one leaf.
  * Leaf policy: the least cost over the collapses of the radix tree's subtrees of at most

@@ -118,7 +118,7 @@ static uint32_t walked_depth(const rd_bvh *tree)
 /* Rays from a sphere around mesh m's box through points inside it: the same closest hit through
  * both scenes' BLASes of m. Returns the depth of the first's BLAS of m, walked. */
 static uint32_t compare_mesh(rd_vk *vk, const rd_gpu_scene *gpu, const rd_gpu_scene *cpu,
-                         const rd_scene *s, uint32_t m)
+                             const rd_scene *s, uint32_t m)
 {
     rd_bvh a, b;
     float *pa, *pb;
