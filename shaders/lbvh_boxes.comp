@@ -128,6 +128,9 @@ bool rotatable(LbvhUints s, uint n, uint at, pc_bvh_node c)
 // collapsed nodes only, and i's leaf set does not change). A three-member treelet is Kensler's
 // tree rotation (2008), which this pass took before. l and r come back as they are after.
 #define LBVH_TREELET 7u
+// Only nodes over at least this many triangles restructure (as Karras and Aila's gamma): below,
+// the collapse decides the leaves, and the passes' few ready threads a warp pay for the rest.
+#define LBVH_TREELET_FROM 7u
 #define LBVH_CLUSTERS (2u * LBVH_TREELET - 1u)
 
 float node_area(pc_bvh_node c)
@@ -135,43 +138,54 @@ float node_area(pc_bvh_node c)
     return half_area(c.bmin.xyz, c.bmax.xyz);
 }
 
+// A member's node record from its box and w words (x: bmin.w, y: bmax.w).
+pc_bvh_node member_node(vec3 lo, vec3 hi, uvec2 w)
+{
+    pc_bvh_node c;
+    c.bmin = vec4(lo, uintBitsToFloat(w.x));
+    c.bmax = vec4(hi, uintBitsToFloat(w.y));
+    return c;
+}
+
 void restructure(Nodes nodes, LbvhUints s, uint n, uint at, uint i, inout pc_bvh_node l,
                  inout pc_bvh_node r)
 {
-    pc_bvh_node member[LBVH_TREELET];
+    /* clusters: [0, nm) the members, then one a merge, in order; a member is kept as its box,
+     * its w words, its area and whether it may be opened (fewer live values than whole nodes) */
+    vec3 lo[LBVH_CLUSTERS], hi[LBVH_CLUSTERS];
+    uvec2 mw[LBVH_TREELET];
     float area[LBVH_TREELET];
+    bool opens[LBVH_TREELET];
     uint ids[LBVH_TREELET - 2u];
-    member[0] = l;
-    member[1] = r;
-    area[0] = node_area(l);
-    area[1] = node_area(r);
+    lo[0] = l.bmin.xyz, hi[0] = l.bmax.xyz, mw[0] = floatBitsToUint(vec2(l.bmin.w, l.bmax.w));
+    lo[1] = r.bmin.xyz, hi[1] = r.bmax.xyz, mw[1] = floatBitsToUint(vec2(r.bmin.w, r.bmax.w));
+    area[0] = node_area(l), area[1] = node_area(r);
+    opens[0] = rotatable(s, n, at, l), opens[1] = rotatable(s, n, at, r);
     uint nm = 2u, nf = 0u;
     float was = 0.0;
     while (nm < LBVH_TREELET) {
         uint pick = LBVH_TREELET;
         float big = -1.0;
         for (uint j = 0u; j < nm; j++)
-            if (area[j] > big && rotatable(s, n, at, member[j])) big = area[j], pick = j;
+            if (opens[j] && area[j] > big) big = area[j], pick = j;
         if (pick == LBVH_TREELET) break;
-        uint f = floatBitsToUint(member[pick].bmin.w);
+        uint f = mw[pick].x;
         ids[nf++] = (f - 1u) / 2u;
         was += big;
-        member[pick] = nodes.n[f];
-        member[nm] = nodes.n[f + 1u];
-        area[pick] = node_area(member[pick]);
-        area[nm] = node_area(member[nm]);
+        for (uint side = 0u; side < 2u; side++) {
+            uint j = side == 0u ? pick : nm;
+            pc_bvh_node c = nodes.n[f + side];
+            lo[j] = c.bmin.xyz, hi[j] = c.bmax.xyz;
+            mw[j] = floatBitsToUint(vec2(c.bmin.w, c.bmax.w));
+            area[j] = node_area(c);
+            opens[j] = rotatable(s, n, at, c);
+        }
         nm++;
     }
     if (nf == 0u) return;
-    /* clusters: [0, nm) the members, then one a merge, in order */
-    vec3 lo[LBVH_CLUSTERS], hi[LBVH_CLUSTERS];
     uint kid[LBVH_TREELET - 2u][2];
     uint live[LBVH_TREELET];
-    for (uint j = 0u; j < nm; j++) {
-        lo[j] = member[j].bmin.xyz;
-        hi[j] = member[j].bmax.xyz;
-        live[j] = j;
-    }
+    for (uint j = 0u; j < nm; j++) live[j] = j;
     uint nl = nm, nc = nm;
     float now = 0.0;
     while (nl > 2u) {
@@ -196,8 +210,9 @@ void restructure(Nodes nodes, LbvhUints s, uint n, uint at, uint i, inout pc_bvh
     float cost[LBVH_CLUSTERS];
     uint height[LBVH_CLUSTERS];
     for (uint j = 0u; j < nm; j++) {
-        cost[j] = child_cost(s, n, at, member[j]);
-        height[j] = child_height(s, n, at, member[j]);
+        pc_bvh_node c = member_node(lo[j], hi[j], mw[j]);
+        cost[j] = child_cost(s, n, at, c);
+        height[j] = child_height(s, n, at, c);
     }
     for (uint c = nm; c < nc; c++) {
         uint id = ids[c - nm], a = kid[c - nm][0], b = kid[c - nm][1];
@@ -212,17 +227,10 @@ void restructure(Nodes nodes, LbvhUints s, uint n, uint at, uint i, inout pc_bvh
         uint first = c == nc ? 2u * i + 1u : 2u * ids[c - nm] + 1u;
         for (uint side = 0u; side < 2u; side++) {
             uint k = c == nc ? live[side] : kid[c - nm][side];
-            pc_bvh_node rec;
-            if (k < nm) {
-                rec = member[k];
-            } else {
-                rec.bmin = vec4(lo[k], uintBitsToFloat(2u * ids[k - nm] + 1u));
-                rec.bmax = vec4(hi[k], uintBitsToFloat(0u));
-            }
+            uvec2 w = k < nm ? mw[k] : uvec2(2u * ids[k - nm] + 1u, 0u);
+            pc_bvh_node rec = member_node(lo[k], hi[k], w);
             nodes.n[first + side] = rec;
-            if (floatBitsToUint(rec.bmax.w) == 0u)
-                s.v[lbvh_node_slot_at(n, at) + (floatBitsToUint(rec.bmin.w) - 1u) / 2u] =
-                    first + side;
+            if (w.y == 0u) s.v[lbvh_node_slot_at(n, at) + (w.x - 1u) / 2u] = first + side;
             if (c == nc && side == 0u) l = rec;
             if (c == nc && side == 1u) r = rec;
         }
@@ -253,7 +261,8 @@ void main()
     if (i + 1u >= n || s.v[lbvh_done_at(n, at) + i] != 0u) return;
     pc_bvh_node l = nodes.n[2u * i + 1u], r = nodes.n[2u * i + 2u];
     if (!child_ready(s, n, at, l, k) || !child_ready(s, n, at, r, k)) return;
-    restructure(nodes, s, n, at, i, l, r);
+    if ((s.v[lbvh_range_at(n, at) + 2u * i + 1u] & LBVH_COUNT_MASK) >= LBVH_TREELET_FROM)
+        restructure(nodes, s, n, at, i, l, r);
     uint slot = s.v[lbvh_node_slot_at(n, at) + i];
     vec3 lo = min(l.bmin.xyz, r.bmin.xyz), hi = max(l.bmax.xyz, r.bmax.xyz);
     nodes.n[slot].bmin = vec4(lo, uintBitsToFloat(2u * i + 1u));
