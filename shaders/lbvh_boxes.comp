@@ -26,14 +26,15 @@
 // 0.89 / 0.88 / 0.87, SAH 1.10 / 1.11 / 1.13, two levels deeper; weight 0.75 0.93 / 0.94 / 0.89,
 // SAH 1.17 / 1.17 / 1.17. Morton splits overlap more than binned SAH ones, so the model's
 // smaller cost did not trace faster; the traversal is what counts.
-// Before its box, a finished node takes one tree rotation (rotate, below: Kensler 2008) where
-// that shrinks a child's box: the radix tree's splits are the Morton codes' spatial medians, and
-// a rotation moves a subtree to the side it overlaps less. Measured (NVIDIA H100, `test_gpu_lbvh
-// bench 1000000 2000000 8000000`, two rounds in one call, tests/bench/results/h100/
-// lbvh_rotations_stop46.txt): SAH ratio 1.165 / 1.172 / 1.174 -> 1.154 / 1.160 / 1.162, trace rate
-// against the CPU builder's tree 0.94 / 0.94 / 0.89 -> 0.95 / 0.95 / 0.90, build 1.64 / 2.63 / 9.4
-// -> 1.9 / 2.8 / 10.1 ms. With leaf weight 1 as well the SAH ratio is 1.08 / 1.09 / 1.10 but the
-// trace rate 0.90 / 0.89 / 0.89: the weight stays 0.75.
+// Before its box, a finished node over at least LBVH_TREELET_FROM triangles restructures its
+// treelet (restructure, below): the radix tree's splits are the Morton codes' spatial medians,
+// blind to triangle sizes, and a treelet moves subtrees to the side they overlap less. Measured
+// (NVIDIA H100, `test_gpu_lbvh bench 1000000 2000000 8000000 spheres:1000000 interior`,
+// tests/bench/results/h100/lbvh_treelets_stop48.txt) against stop 46's one rotation a node
+// (Kensler 2008, which a three-member treelet is): SAH ratio to the CPU builder on soups 1.154 ->
+// 1.137, on the sphere grid 1.918 -> 1.479, on the interior's largest mesh 1.616 -> 1.138; trace
+// rate against the CPU builder's tree 0.94 -> 0.955, 0.64 -> 0.72, 0.49 -> 0.67. With leaf weight
+// 1 as well the soups' SAH ratio is 1.05 but they trace at 0.90-0.91: the weight stays 0.75.
 // Runs after lbvh_hierarchy (slots, interior w words, cleared done words).
 // Push constants (pc_push): buf0 = positions, buf1 = nodes (pc_bvh_node), buf2 = scratch
 // (shaders/lbvh.glsl); params.x = n, params.y = uint offset of leaf_slot in scratch,
