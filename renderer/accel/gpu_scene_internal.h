@@ -96,8 +96,13 @@ typedef enum rd_blas_build {
  * level 2.0 s against 1.4 s, upload 410 against 233 ms: the reserved 2n - 1 nodes, the
  * single-threaded local-frame copy, the depth read-back), and its trees traced primary rays
  * 1.6x slower (0.80 against 0.49 ms at 640x360; depth 32 against 22), far from the 0.89-0.94x
- * test_gpu_lbvh's single-sphere bench measures. Until that is understood the GPU path is
- * PROBECAST_BLAS_BUILD=gpu's. */
+ * test_gpu_lbvh's single-sphere bench measures. Stop 48 (NVIDIA H100, treelet restructuring,
+ * no tree read-back: tests/bench/results/h100/lbvh_treelets_stop48.txt) narrowed it but did not
+ * close it: 1080p primary rays over GPU-built trees 0.84 against 0.63 ms on spheres:1000000 and
+ * 0.89 against 0.50 on builtin:interior (0.95 and 1.26 with one rotation a node), bottom level
+ * 273 against 246 ms and 160 against 162. Real meshes' triangles vary in size, which Morton
+ * order ignores (the LBVH's SAH 1.48 and 1.14 times the CPU builder's on those two scenes'
+ * largest meshes). Until the GPU's trees trace as fast, the GPU path is PROBECAST_BLAS_BUILD=gpu's. */
 rd_blas_build rd_blas_build_parse(const char *value);
 rd_blas_build rd_blas_build_from_env(void);
 /* Whether a static mesh of tri_count triangles is built by the GPU under policy, on a device
