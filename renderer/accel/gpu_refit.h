@@ -55,7 +55,10 @@ void rd_gpu_refit_blas_destroy(rd_vk *vk, rd_gpu_refit_blas *b); /* idempotent *
  * Measured with probecast_deformbench (a sheet skinned to two joints, bent 10-150 degrees from
  * its rest pose): 1.01-1.29 for 8 K and 66 K triangles, the worst at 150 degrees, where the
  * bend folds the tree's rest-pose split planes over each other; 1.25 rebuilds only such folds.
- * A rough choice: the trace cost of a ratio has not been measured on the GPU yet. */
+ * Its trace cost, measured since (NVIDIA H100, probecast_deformbench's swing cycle, refit only
+ * for 10 s: tests/bench/results/h100/lbvh_treelets_stop48.txt): SAH ratios of 1.10-1.20 traced
+ * at 0.81-0.85 of a fresh build's speed for 1 M triangles, 1.09-1.15 at 0.84-0.98 for 66 K; so
+ * a refitted tree under this ratio may trace up to about a fifth slower than a fresh one. */
 #define RD_GPU_REFIT_REBUILD_SAH_RATIO 1.25
 
 /* true when the refitted tree (SAH cost sah_refitted) should be rebuilt, given a fresh build's
