@@ -5,8 +5,9 @@
 // vertex). params.z == k >= 1: one thread per internal node not yet done whose children were
 // both done before pass k (leaves, or done[c] in [1, k)) writes its box, the exact union of
 // theirs, and done = k with its height (levels below it in the output tree) in the word's top
-// bits (LBVH_HEIGHT_SHIFT); the root's thread writes the tree's depth (LBVH_DEPTH_AT). The tree over distinct 64-bit keys is at most 64 internal levels deep
-// (each level's common prefix is longer than its parent's), so 64 passes finish every node;
+// bits (LBVH_HEIGHT_SHIFT); the root's thread writes the tree's depth (LBVH_DEPTH_AT). The tree
+// over distinct 64-bit keys is at most 64 internal levels deep (each level's common prefix is
+// longer than its parent's), so 64 passes finish every node;
 // a done node's thread returns at once, and the thread that finishes the root zeroes the
 // x group count of the indirect dispatch of the passes (scratch, lbvh_args_at; rows of groups
 // in y, lbvh_hierarchy), so the passes after it launch nothing.

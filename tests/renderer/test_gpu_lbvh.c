@@ -11,10 +11,12 @@
  * every pass. The radix sort on its own (rd_gpu_lbvh_record_sort) equals a stable CPU sort of the
  * same keys (1 to 70001 keys, duplicate codes, rows of 1 and 3 groups; lbvh_sort_check.c), and the
  * sorted keys a build leaves in its scratch are its triangles ascending by (code, index)
- * (lbvh_sort_check.c too). Prints the build time (submit and wait) of each size. `test_gpu_lbvh
- * bench [sizes]` (up to RD_GPU_LBVH_MAX_TRIANGLES, e.g. `bench 1000000 8000000`) builds larger
- * meshes and prints two tables: the build's passes, and the traversal speed of the same rays
- * through the CPU builder's tree and the LBVH (run_bench). */
+ * (lbvh_sort_check.c too). Prints the build time (submit and wait) of each size. The CPU PLOC
+ * reference (ploc_ref.h) passes the same structural and closest-hit checks on every mesh, its SAH
+ * printed beside the LBVH's. `test_gpu_lbvh bench [sizes]` (up to RD_GPU_LBVH_MAX_TRIANGLES, e.g.
+ * `bench 1000000 8000000 spheres:1000000 interior`) builds larger meshes and prints two tables:
+ * the build's passes, and the traversal speed of the same rays through the CPU builder's tree,
+ * the LBVH and the PLOC reference's tree (run_bench). */
 #include "bvh_check.h"
 #include "lbvh_sort_check.h"
 #include "renderer/accel/bvh.h"
@@ -22,6 +24,7 @@
 #include "renderer/builtin/procedural.h"
 #include "renderer/vk/vk_context.h"
 #include "test_util.h"
+#include "ploc_ref.h"
 #include "trace_rig.h"
 
 #include <math.h>
@@ -31,6 +34,8 @@
 #include <time.h>
 
 static char err[512];
+/* PLOC's neighbour radius for the reference builds (Meister and Bittner's default range) */
+#define PLOC_RADIUS 16u
 static double g_worst_ratio = 0;
 static uint32_t g_gpu_rays = 0, g_gpu_differ = 0;
 static rd_pipeline g_trace; /* shaders/test_trace.comp: trace_ray of shaders/trace.glsl */
@@ -85,6 +90,11 @@ static double check_build(rd_vk *vk, const rd_gpu_lbvh_builder *b, const char *w
         CHECKF(gpu.node_count == (n ? 2 * n - 1 : 1), "%s: %u nodes", what, gpu.node_count);
     int bad = check_triangles(what, &gpu, pos, n, max_leaf);
     CHECKF(bad == 0, "%s: %d structural problems", what, bad);
+    /* the CPU PLOC reference (ploc_ref.h) on the same mesh: the same promises */
+    rd_bvh ploc;
+    CHECK(pc_ploc_build(&ploc, pos, n, PLOC_RADIUS, max_leaf, PC_LBVH_LEAF_WEIGHT, NULL));
+    int bad_ploc = check_triangles(what, &ploc, pos, n, max_leaf);
+    CHECKF(bad_ploc == 0, "%s: the PLOC reference has %d structural problems", what, bad_ploc);
 
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (uint32_t i = 0; i < n; i++) {
@@ -101,6 +111,9 @@ static double check_build(rd_vk *vk, const rd_gpu_lbvh_builder *b, const char *w
         uint32_t hits =
             compare_rays(what, &gpu, pos, n, orgs, orgs + 3 * (size_t)rays, rays, 0, INFINITY);
         CHECKF(hits > 0, "%s: no ray hit anything", what);
+        if (bad_ploc == 0)
+            CHECK(compare_rays(what, &ploc, pos, n, orgs, orgs + 3 * (size_t)rays, rays, 0,
+                               INFINITY) == hits);
         if (!box_empty(&gpu.nodes[0])) {
             uint32_t differ =
                 gpu_trace_differences(vk, &gpu, pos, n, orgs, orgs + 3 * (size_t)rays, rays);
@@ -116,10 +129,13 @@ static double check_build(rd_vk *vk, const rd_gpu_lbvh_builder *b, const char *w
     CHECK(rd_bvh_build_triangles(&cpu, pos, n, NULL));
     double sah_gpu = rd_bvh_sah_cost(&gpu), sah_cpu = rd_bvh_sah_cost(&cpu);
     double ratio = sah_cpu > 0 ? sah_gpu / sah_cpu : 0;
+    double ploc_ratio = sah_cpu > 0 ? rd_bvh_sah_cost(&ploc) / sah_cpu : 0;
     fprintf(stderr,
             "%-26s %5u tris leaf<=%u %5u nodes depth %2u (CPU %2u) SAH %8.2f vs CPU %8.2f = "
-            "%.2fx %7.2f ms\n",
-            what, n, max_leaf, gpu.node_count, gpu.depth, cpu.depth, sah_gpu, sah_cpu, ratio, ms);
+            "%.2fx (PLOC %.2fx) %7.2f ms\n",
+            what, n, max_leaf, gpu.node_count, gpu.depth, cpu.depth, sah_gpu, sah_cpu, ratio,
+            ploc_ratio, ms);
+    rd_bvh_destroy(&ploc);
     if (sah_cpu > 0) CHECKF(ratio < 3.0, "%s: SAH %.3f over the CPU build's", what, ratio);
     /* random soups: treelet restructuring and the collapse by weighted SAH keep the LBVH within
      * issue 24's 10% of the CPU builder (measured 1.07x at 100 and 1.06x at 5000 triangles with
@@ -226,6 +242,7 @@ static void run_tests(rd_vk *vk, const rd_gpu_lbvh_builder *b)
 typedef struct bench_row {
     uint32_t tris, differ, depth;
     double cpu_mrays, lbvh_mrays, sah_ratio, build_ms;
+    double ploc_mrays, ploc_sah_ratio; /* the CPU PLOC reference's tree (ploc_ref.h) */
 } bench_row;
 
 /* `test_gpu_lbvh bench [sizes]`: for random soups of each size (or a builtin scene's largest mesh
@@ -309,6 +326,11 @@ static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b, int argc, char **
         row->build_ms = best;
         row->depth = gpu.depth;
         row->sah_ratio = rd_bvh_sah_cost(&gpu) / rd_bvh_sah_cost(&cpu);
+        rd_bvh ploc;
+        if (!pc_ploc_build(&ploc, pos, sizes[s], PLOC_RADIUS, max_leaf ? max_leaf : 4,
+                           PC_LBVH_LEAF_WEIGHT, NULL))
+            abort();
+        row->ploc_sah_ratio = rd_bvh_sah_cost(&ploc) / rd_bvh_sah_cost(&cpu);
         printf("%8u %8.2f", sizes[s], best);
         for (uint32_t k = 1; k <= 5; k++)
             printf(" %8.2f", timer.valid && k < timer.count ? timer.ms[k] : -1.0);
@@ -323,6 +345,8 @@ static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b, int argc, char **
         if (ok) {
             row->cpu_mrays = pc_trace_speed(vk, &g_trace, &timer, &cpu, pos, sizes[s], &ray_buf,
                                             &res_buf, rays, 3, hits_cpu);
+            row->ploc_mrays = pc_trace_speed(vk, &g_trace, &timer, &ploc, pos, sizes[s], &ray_buf,
+                                             &res_buf, rays, 3, NULL);
             row->lbvh_mrays = pc_trace_speed(vk, &g_trace, &timer, &gpu, pos, sizes[s], &ray_buf,
                                              &res_buf, rays, 3, hits_lbvh);
             for (uint32_t i = 0; i < rays; i++) {
@@ -338,18 +362,22 @@ static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b, int argc, char **
         rd_buffer_destroy(vk, &ray_buf);
         rd_bvh_destroy(&gpu);
         rd_bvh_destroy(&cpu);
+        rd_bvh_destroy(&ploc);
         if (!ok) break;
     }
     printf("\ntraversal: %u rays from a sphere around the mesh toward points in its box, "
            "trace.glsl (test_trace.comp), best of 3 %s\n",
            rays, timer.valid ? "GPU-timed traces" : "traces (wall time: no timestamps)");
-    printf("%8s %11s %11s %6s %9s %9s %6s %7s\n", "tris", "cpu_Mrays", "lbvh_Mrays", "ratio",
-           "sah_ratio", "build_ms", "depth", "differ");
+    printf("%8s %11s %11s %6s %9s %9s %6s %7s %11s %6s %9s\n", "tris", "cpu_Mrays",
+           "lbvh_Mrays", "ratio", "sah_ratio", "build_ms", "depth", "differ", "ploc_Mrays",
+           "ratio", "sah_ratio");
     for (uint32_t s = 0; s < done; s++) {
         const bench_row *row = &table[s];
-        printf("%8u %11.2f %11.2f %6.3f %9.3f %9.2f %6u %7u\n", row->tris, row->cpu_mrays,
-               row->lbvh_mrays, row->cpu_mrays > 0 ? row->lbvh_mrays / row->cpu_mrays : 0,
-               row->sah_ratio, row->build_ms, row->depth, row->differ);
+        double c = row->cpu_mrays > 0 ? row->cpu_mrays : 1e-30;
+        printf("%8u %11.2f %11.2f %6.3f %9.3f %9.2f %6u %7u %11.2f %6.3f %9.3f\n", row->tris,
+               row->cpu_mrays, row->lbvh_mrays, row->lbvh_mrays / c, row->sah_ratio,
+               row->build_ms, row->depth, row->differ, row->ploc_mrays, row->ploc_mrays / c,
+               row->ploc_sah_ratio);
     }
     rd_buffer_destroy(vk, &res_buf);
     rd_timer_destroy(vk, &timer);
