@@ -34,8 +34,13 @@
 // tests/bench/results/h100/lbvh_treelets_stop48.txt) against stop 46's one rotation a node
 // (Kensler 2008, which a three-member treelet is): SAH ratio to the CPU builder on soups 1.154 ->
 // 1.137, on the sphere grid 1.918 -> 1.479, on the interior's largest mesh 1.616 -> 1.138; trace
-// rate against the CPU builder's tree 0.94 -> 0.955, 0.64 -> 0.72, 0.49 -> 0.67. With leaf weight
-// 1 as well the soups' SAH ratio is 1.05 but they trace at 0.90-0.91: the weight stays 0.75.
+// rate against the CPU builder's tree 0.94 -> 0.955, 0.64 -> 0.72, 0.49 -> 0.67 with treelets of 7;
+// with treelets of 9 (the default) SAH 1.134 / 1.427 / 1.071, trace 0.955 / 0.74 / 0.82, the
+// boxes of 1 M triangles 0.9 -> 4.6 ms at every node (treelets of 7: 3.2 ms; the gate below came
+// after, its time not measured on a GPU yet: on lavapipe it leaves the trees as they were). With
+// leaf weight 1 as well the soups' SAH ratio is 1.05 but they trace at 0.90-0.91: the weight stays
+// 0.75. The CPU PLOC reference (tests/renderer/ploc_ref.h) builds better trees still on real
+// meshes (lavapipe: sphere grid 1.13, the interior's largest mesh 0.85 of the CPU builder's SAH).
 // Runs after lbvh_hierarchy (slots, interior w words, cleared done words).
 // Push constants (pc_push): buf0 = positions, buf1 = nodes (pc_bvh_node), buf2 = scratch
 // (shaders/lbvh.glsl); params.x = n, params.y = uint offset of leaf_slot in scratch,
@@ -129,10 +134,10 @@ bool rotatable(LbvhUints s, uint n, uint at, pc_bvh_node c)
 // are left as they were (a node below i is never collapsed after, lbvh_remap reads ranges of
 // collapsed nodes only, and i's leaf set does not change). A three-member treelet is Kensler's
 // tree rotation (2008), which this pass took before. l and r come back as they are after.
-#define LBVH_TREELET 7u
+#define LBVH_TREELET 9u
 // Only nodes over at least this many triangles restructure (as Karras and Aila's gamma): below,
 // the collapse decides the leaves, and the passes' few ready threads a warp pay for the rest.
-#define LBVH_TREELET_FROM 7u
+#define LBVH_TREELET_FROM 9u
 #define LBVH_CLUSTERS (2u * LBVH_TREELET - 1u)
 
 float node_area(pc_bvh_node c)

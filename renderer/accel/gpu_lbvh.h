@@ -25,9 +25,10 @@
  *      per node, coherent buffers and memory barriers, gave wrong boxes above the first level
  *      on lavapipe with 64-thread workgroups and right ones with 1-thread workgroups (34 ms
  *      there against these passes' 69 ms for 100 K triangles); why is not known yet.)
- *      Each node, once its children are finished, first restructures its treelet of up to 7
- *      members (Karras and Aila 2013; rebuilt by greedy agglomeration as ATRBVH, kept where
- *      its inner nodes' areas sum less), so subtrees move out of the Morton medians' cuts. The
+ *      Each node over at least 9 triangles, once its children are finished, first restructures
+ *      its treelet of up to 9 members (Karras and Aila 2013; rebuilt by greedy agglomeration as
+ *      ATRBVH, kept where its inner nodes' areas sum less), so subtrees move out of the Morton
+ *      medians' cuts. The
  *      same passes weigh the collapse of each subtree of at most max_leaf triangles into one
  *      leaf (their sorted leaves are contiguous: a treelet below a node does not change its
  *      leaf set, and a restructured node is not collapsed after) by SAH, bottom-up: a node's
@@ -113,9 +114,9 @@ void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress
 
 /* Blocking convenience (tests, benchmarks): uploads positions, builds, waits, and reads the
  * tree back into out (an rd_bvh the caller frees with rd_bvh_destroy; depth walked on the CPU,
- * and an error where the build wrote another). gpu_ms (may be NULL): wall time of the submit and wait of the build alone; timer (may
- * be NULL): begun here and resolved after the wait, one section a pass. On error
- * out is zeroed; more than RD_GPU_LBVH_MAX_TRIANGLES is RD_VK_ERR_UNSUPPORTED with a message,
+ * and an error where the build wrote another). gpu_ms (may be NULL): wall time of the submit
+ * and wait of the build alone; timer (may be NULL): begun here and resolved after the wait, one
+ * section a pass. On error out is zeroed; more than RD_GPU_LBVH_MAX_TRIANGLES is RD_VK_ERR_UNSUPPORTED with a message,
  * before anything is read or allocated. */
 rd_vk_result rd_gpu_lbvh_build_download(rd_vk *vk, const rd_gpu_lbvh_builder *b,
                                         const float *positions, uint32_t tri_count,
