@@ -144,9 +144,9 @@ static inline float pc_u2f(uint32_t u)
 
 /* Shadow rays of camera pixels and reflection hits (rd_view_settings.shadow_cull): camera
  * pixels trace none toward a light whose distance map shows the point certainly hidden
- * (shaders/shadow_map.glsl, direct_radiance) and reflection hits read each light's map where
- * its texels agree (direct_radiance_mapped); or a ray to every light in front of either (exact
- * everywhere, also behind openings narrower than a map texel). */
+ * (shaders/shadow_map.glsl, direct_radiance with DIRECT_CULLED_RAYS) and reflection hits read
+ * each light's map where its texels agree (DIRECT_MAP_VISIBILITY); or a ray to every light in
+ * front of either (exact everywhere, also behind openings narrower than a map texel). */
 #define PC_SHADOW_CULL_MAPS 0u
 #define PC_SHADOW_CULL_OFF 1u
 

@@ -51,8 +51,9 @@ void main()
             uint shadow = 0u;
             pc_brdf b = surface_brdf(sf);
             vec3 v = -dir;
-            radiance += throughput * direct_radiance(g.scene, 0ul, 0u, sf.position, sf.normal,
-                                                     sf.geom_normal, sf.offset, v, b, shadow);
+            radiance += throughput * direct_radiance(g.scene, 0ul, 0u, DIRECT_CULLED_RAYS,
+                                                     sf.position, sf.normal, sf.geom_normal,
+                                                     sf.offset, v, b, shadow);
             rays += shadow;
             if (bounce == max_bounces) break;
             /* random numbers in the order of the Lambertian-only tracer: roulette, then the

@@ -9,7 +9,7 @@
  *   miss: env_radiance(l);
  *   hit:  emission + direct light with the hit's full BRDF toward -l, every light's
  *         visibility read from its map where the map's texels agree, a shadow ray elsewhere
- *         (direct_radiance_mapped, as probe-ray hits do; camera pixels trace exact rays)
+ *         (direct_radiance, DIRECT_MAP_VISIBILITY, as probe-ray hits do; camera pixels trace exact rays)
  *         + occlusion * A(N.V) / pi * E(hit), with E the probe field's irradiance
  *         (env_irradiance outside the volume) and A = brdf_hit_albedo toward -l: the hit's
  *         indirect light is taken as diffuse, reflected with the BRDF's own albedo (as at
@@ -46,9 +46,9 @@ vec3 incoming(pc_globals g, vec3 origin, vec3 n0, vec3 l, inout uint rays)
     }
     pc_surface sf = surface_at(g.scene, hit, l);
     pc_brdf b = surface_brdf(sf);
-    vec3 direct = direct_radiance_mapped(g.scene, g.ddgi.shadow_maps, g.ddgi.control.w,
-                                         sf.position, sf.normal, sf.geom_normal, sf.offset, -l, b,
-                                         rays);
+    vec3 direct = direct_radiance(g.scene, g.ddgi.shadow_maps, g.ddgi.control.w,
+                                  DIRECT_MAP_VISIBILITY, sf.position, sf.normal, sf.geom_normal,
+                                  sf.offset, -l, b, rays);
     vec3 e = ddgi_irradiance_at_hit(g.ddgi, g.scene, false, env_irradiance(g.env, sf.normal),
                                     sf.position, sf.normal, l, hit.t, n0, 0.0);
     vec3 a = brdf_hit_albedo(g.brdf_albedo, b, clamp(dot(sf.normal, -l), 0.0, 1.0));

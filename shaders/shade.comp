@@ -26,8 +26,8 @@ void main()
         if (t.position.w >= 0.0) {
             vec3 p = t.position.xyz, v = normalize(g.view.eye.xyz - p);
             pc_brdf b = gbuffer_brdf(t);
-            l += direct_radiance(g.scene, g.ddgi.shadow_maps, g.ddgi.control.w, p,
-                                        t.normal.xyz, t.geom_normal.xyz, t.albedo.w, v, b, rays);
+            l += direct_radiance(g.scene, g.ddgi.shadow_maps, g.ddgi.control.w, DIRECT_CULLED_RAYS,
+                                 p, t.normal.xyz, t.geom_normal.xyz, t.albedo.w, v, b, rays);
         }
         RadianceRef(pc.buf2).v[i] = vec4(l, 1.0);
     }

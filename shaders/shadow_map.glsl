@@ -3,9 +3,9 @@
  * map is traced, not rasterised (shadow_map.comp: one ray per texel through the scene's BVH),
  * and rebuilt only when the lights or the geometry change (renderer/gi/shadow_maps.h), so a probe
  * hit's visibility costs four texel reads instead of a shadow ray (a ray where they disagree:
- * probe_light_visibility; reflection hits too, for every light: direct_radiance_mapped). Camera
- * pixels keep exact shadow rays, except toward lights the map shows certainly hidden
- * (direct_radiance).
+ * probe_light_visibility; reflection hits too, for every light: direct_radiance with
+ * DIRECT_MAP_VISIBILITY). Camera pixels keep exact shadow rays, except toward lights the map shows
+ * certainly hidden (direct_radiance with DIRECT_CULLED_RAYS).
  *
  * Layout of the maps buffer (floats and uints of 4 bytes), a header, then the maps:
  * - words [0, MAX_LIGHTS): each light's map offset in words (0: the light has no valid map; its
@@ -203,20 +203,35 @@ float probe_light_visibility(pc_scene_refs s, uint64_t maps, uint mapped, uint i
 }
 
 /* Radiance reflected toward v by a surface with BRDF b from all punctual lights:
- * sum over lights of f(v, l) * E_i * cos * visibility, with ray-traced hard shadows (shadow
- * rays start on the geometric side, moved by the surface's ray offset; lights below the shading
- * or the geometric surface give nothing). Counts the shadow rays it traces into *rays.
- * The lights' maps (lights [0, mapped) of `maps`; mapped 0: none, as the path tracer passes)
- * serve as a cull for camera pixels: a light whose map shows p certainly
- * hidden (shadow_map_hidden) gets no shadow ray; every other light gets its exact ray, so shadow
- * edges, lit surfaces and lights without a map are as without maps. The cull can err only where
- * light passes through an opening narrower than a texel (5 cm at 3 m from a point light: 128
- * texels a face), which the map does not see. Why: in builtin:interior every pixel traced a ray
- * to every light in front of it, 7.2 a pixel, most of them to lamps in other rooms behind walls
- * (issue 25). Views pass mapped only while every map shows the scene as it is
- * (rd_world_fill_view_globals). */
-vec3 direct_radiance(pc_scene_refs s, uint64_t maps, uint mapped, vec3 p, vec3 n, vec3 ng,
-                     float offset, vec3 v, pc_brdf b, inout uint rays)
+ * sum over lights of f(v, l) * E_i * cos * visibility (lights below the shading or the geometric
+ * surface give nothing; shadow rays start on the geometric side, moved by the surface's ray
+ * offset, and are counted into rays). The lights' maps are lights [0, mapped) of `maps` (mapped
+ * 0: none, as the path tracer passes; views pass mapped only while every map shows the scene as
+ * it is, rd_world_fill_view_globals). Two visibilities, by `visibility`:
+ *
+ * DIRECT_CULLED_RAYS (camera pixels): ray-traced hard shadows, the maps only a cull: a light
+ * whose map shows p certainly hidden (shadow_map_hidden) gets no shadow ray; every other light
+ * gets its exact ray, so shadow edges, lit surfaces and lights without a map are as without
+ * maps. The cull can err only where light passes through an opening narrower than a texel (5 cm
+ * at 3 m from a point light: 128 texels a face), which the map does not see. Why: in
+ * builtin:interior every pixel traced a ray to every light in front of it, 7.2 a pixel, most of
+ * them to lamps in other rooms behind walls (issue 25).
+ *
+ * DIRECT_MAP_VISIBILITY (reflection hits): every light's visibility from its map where the map's
+ * four texels agree (probe_light_visibility, as probe-ray hits take their chosen light's), a
+ * shadow ray elsewhere, and exact rays for lights without a map. A reflection is seen through a
+ * lobe that blurs it, and the map errs only at openings or occluders narrower than a texel; its
+ * rays were most of the reflection pass. NVIDIA H100, builtin:interior 1080p (12 lights):
+ * reflect 1.21 -> 0.93 ms; the converged image against the former's relMSE 0.00001 (74 of
+ * 129,600 pixels off by 5%), against the path tracer unchanged (-40.52%, relMSE 0.1136);
+ * cornell-glossy 0.230 -> 0.209 ms, the same image (tests/bench/results/h100/
+ * reflection_hits_stop47.txt). One light chosen by its term instead (direct_radiance_sampled's
+ * choice) took 0.85 ms, at the cost of selection noise in mirrors while the camera moves (no
+ * history then). */
+#define DIRECT_CULLED_RAYS 0u
+#define DIRECT_MAP_VISIBILITY 1u
+vec3 direct_radiance(pc_scene_refs s, uint64_t maps, uint mapped, uint visibility, vec3 p, vec3 n,
+                     vec3 ng, float offset, vec3 v, pc_brdf b, inout uint rays)
 {
     vec3 sum = vec3(0.0);
     vec3 origin = offset_ray_origin(p, ng, offset);
@@ -225,33 +240,12 @@ vec3 direct_radiance(pc_scene_refs s, uint64_t maps, uint mapped, vec3 p, vec3 n
         float dist;
         vec3 f = light_term(s, i, p, n, ng, v, b, wi, dist);
         if (all(equal(f, vec3(0.0)))) continue;
+        if (visibility == DIRECT_MAP_VISIBILITY) {
+            sum += f * probe_light_visibility(s, maps, mapped, i, p, ng, offset, wi, dist, rays);
+            continue;
+        }
         if (i < mapped && shadow_map_hidden(maps, i, LightRef(s.lights).v[i], p, ng)) continue;
         if (shadow_ray_clear(s, origin, wi, dist, rays)) sum += f;
-    }
-    return sum;
-}
-
-/* direct_radiance for reflection hits: every light's visibility from its map where the map's
- * four texels agree (probe_light_visibility, as probe-ray hits take their chosen light's), a
- * shadow ray elsewhere, and exact rays for lights without a map (mapped as direct_radiance says).
- * A reflection is seen through a lobe that blurs it, and the map errs only at openings or
- * occluders narrower than a texel; its rays were most of the reflection pass. NVIDIA H100,
- * builtin:interior 1080p (12 lights): reflect 1.21 -> 0.93 ms; the converged image against the
- * former's relMSE 0.00001 (74 of 129,600 pixels off by 5%), against the path tracer unchanged
- * (-40.52%, relMSE 0.1136); cornell-glossy 0.230 -> 0.209 ms, the same image
- * (tests/bench/results/h100/reflection_hits_stop47.txt). One light chosen by its term instead
- * (direct_radiance_sampled's choice) took 0.85 ms, at the cost of selection noise in mirrors
- * while the camera moves (no history then). */
-vec3 direct_radiance_mapped(pc_scene_refs s, uint64_t maps, uint mapped, vec3 p, vec3 n, vec3 ng,
-                            float offset, vec3 v, pc_brdf b, inout uint rays)
-{
-    vec3 sum = vec3(0.0);
-    for (uint i = 0u; i < s.counts.y; i++) {
-        vec3 wi;
-        float dist;
-        vec3 f = light_term(s, i, p, n, ng, v, b, wi, dist);
-        if (all(equal(f, vec3(0.0)))) continue;
-        sum += f * probe_light_visibility(s, maps, mapped, i, p, ng, offset, wi, dist, rays);
     }
     return sum;
 }

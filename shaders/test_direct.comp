@@ -42,8 +42,8 @@ void main()
         uint rays = 0u;
         float total = light_weight_total(g.scene, sf.position, sf.normal, sf.geom_normal, -d,
                                          lambert);
-        exact = vec4(direct_radiance(g.scene, 0ul, 0u, sf.position, sf.normal, sf.geom_normal,
-                                     sf.offset, -d, lambert, rays),
+        exact = vec4(direct_radiance(g.scene, 0ul, 0u, DIRECT_CULLED_RAYS, sf.position, sf.normal,
+                                     sf.geom_normal, sf.offset, -d, lambert, rays),
                      total);
         uint n = pc.params.y, sampled = 0u;
         vec3 sum = vec3(0.0);

@@ -79,7 +79,8 @@ unsigned rd_shadow_maps_valid(const rd_shadow_maps *m);
 /* Lights [0, n) whose maps show the scene as it is now (its geometry and those lights'
  * revisions), for view frames recorded between updates: camera pixels cull their shadow rays
  * by them (shaders/shadow_map.glsl, direct_radiance) and reflection hits read their visibility
- * (direct_radiance_mapped). 0 when the maps show an older geometry or there are none. */
+ * (direct_radiance with DIRECT_MAP_VISIBILITY). 0 when the maps show an older geometry or there
+ * are none. */
 uint32_t rd_shadow_maps_view_lights(const rd_shadow_maps *m, const rd_gpu_scene *scene);
 
 /* Called once per probe update before its shading is recorded into c, after the scene's

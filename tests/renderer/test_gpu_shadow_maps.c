@@ -219,9 +219,9 @@ done:
 }
 
 /* 6. Reflection hits read every light's visibility from its map where the map's texels agree
- * (direct_radiance_mapped), with a shadow ray elsewhere; --shadow-cull off traces every ray. On
- * the many-lights Cornell box with metallic 0.5, roughness 0.5 walls (reflection rays
- * everywhere), a converged field with every light's map: the maps spare most of the reflection
+ * (direct_radiance, DIRECT_MAP_VISIBILITY), with a shadow ray elsewhere; --shadow-cull off
+ * traces every ray. On the many-lights Cornell box with metallic 0.5, roughness 0.5 walls
+ * (reflection rays everywhere), a converged field with every light's map: the maps spare most of the reflection
  * pass's shadow rays, and the image after FRAMES frames (each a reflection ray a pixel, averaged
  * by the view's history; another shadow cull starts another history) is the one exact rays give,
  * within the rays' sampling noise (this size, lavapipe: another seed of the same frames moves
