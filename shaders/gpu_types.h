@@ -69,6 +69,16 @@ static inline float pc_u2f(uint32_t u)
 #define PC_LBVH_SORT_TILE (PC_WG_1D * PC_LBVH_SORT_ROUNDS)
 #define PC_LBVH_SORT_SCAN_PER_THREAD 32u
 #define PC_LBVH_SORT_SCAN_BLOCK (PC_WG_1D * PC_LBVH_SORT_SCAN_PER_THREAD)
+/* The GPU PLOC builder (shaders/ploc_*.comp, renderer/accel/gpu_ploc.c): clusters search their
+ * nearest neighbour among PC_PLOC_RADIUS places either side (Meister and Bittner 2018's default);
+ * PC_PLOC_ROUNDS rounds of clustering (39-58 measured on meshes), then at most
+ * PC_PLOC_FORCED_ROUNDS rounds that pair neighbours (2i, 2i + 1) whatever their boxes, so that
+ * every build ends (count halves each round: 2^24 -> 1 in 24); a round's merges and keeps are
+ * counted in blocks of PC_PLOC_BLOCK places (PC_PLOC_BLOCK / PC_WG_1D a thread). */
+#define PC_PLOC_RADIUS 16u
+#define PC_PLOC_ROUNDS 64u
+#define PC_PLOC_FORCED_ROUNDS 25u
+#define PC_PLOC_BLOCK 256u
 
 /* ---- enumerations (plain constants: GLSL has no enums) ------------------------------- */
 #define PC_LIGHT_POINT 0u

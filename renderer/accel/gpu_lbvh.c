@@ -1,5 +1,6 @@
 /* gpu_lbvh.c: a linear BVH built on the GPU (see gpu_lbvh.h). */
 #include "renderer/accel/gpu_lbvh.h"
+#include "renderer/accel/gpu_ploc.h"
 
 #include <assert.h>
 #include <stdio.h>
@@ -15,6 +16,9 @@
 #include "shaders/lbvh_remap.spv.h"
 #include "shaders/lbvh_scan.spv.h"
 #include "shaders/lbvh_sort.spv.h"
+#include "shaders/ploc_emit.spv.h"
+#include "shaders/ploc_init.spv.h"
+#include "shaders/ploc_round.spv.h"
 
 #define PUSH_SIZE ((uint32_t)sizeof(pc_push))
 static const rd_pipeline_desc kPipelines[] = {
@@ -26,6 +30,9 @@ static const rd_pipeline_desc kPipelines[] = {
     RD_PIPELINE_DESC(rd_gpu_lbvh_builder, boxes, "lbvh_boxes", pc_spv_lbvh_boxes, PUSH_SIZE),
     RD_PIPELINE_DESC(rd_gpu_lbvh_builder, scan, "lbvh_scan", pc_spv_lbvh_scan, PUSH_SIZE),
     RD_PIPELINE_DESC(rd_gpu_lbvh_builder, remap, "lbvh_remap", pc_spv_lbvh_remap, PUSH_SIZE),
+    RD_PIPELINE_DESC(rd_gpu_lbvh_builder, ploc_init, "ploc_init", pc_spv_ploc_init, PUSH_SIZE),
+    RD_PIPELINE_DESC(rd_gpu_lbvh_builder, ploc_round, "ploc_round", pc_spv_ploc_round, PUSH_SIZE),
+    RD_PIPELINE_DESC(rd_gpu_lbvh_builder, ploc_emit, "ploc_emit", pc_spv_ploc_emit, PUSH_SIZE),
 };
 #define PIPELINE_COUNT (sizeof kPipelines / sizeof kPipelines[0])
 
@@ -109,15 +116,24 @@ static uint64_t work_nodes_at(uint32_t n)
     return (4 * words + 15) & ~(uint64_t)15;
 }
 
-/* Byte offset of the sort's scratch (rd_gpu_lbvh_sort_scratch_bytes), after the working tree. */
-static uint64_t sort_at(uint32_t n)
+/* Word offset of the PLOC area (shaders/ploc.glsl), after the keys: a multiple of 4. */
+static uint32_t ploc_at(uint32_t n)
 {
+    return (uint32_t)((KEYS_AT + 2 * padded_keys(n) + 3) & ~(uint64_t)3);
+}
+
+/* Byte offset of the sort's scratch (rd_gpu_lbvh_sort_scratch_bytes), after the working tree
+ * (LBVH) or the PLOC area. */
+static uint64_t sort_at(const rd_gpu_lbvh_builder *b, uint32_t n)
+{
+    if (b->method == RD_GPU_BVH_PLOC)
+        return (4 * (ploc_at(n) + rd_gpu_ploc_words(n)) + 15) & ~(uint64_t)15;
     return work_nodes_at(n) + sizeof(pc_bvh_node) * (uint64_t)rd_gpu_lbvh_node_count(n);
 }
 
-uint64_t rd_gpu_lbvh_scratch_bytes(uint32_t tri_count)
+uint64_t rd_gpu_lbvh_scratch_bytes(const rd_gpu_lbvh_builder *b, uint32_t tri_count)
 {
-    return sort_at(tri_count) + rd_gpu_lbvh_sort_scratch_bytes(tri_count);
+    return sort_at(b, tri_count) + rd_gpu_lbvh_sort_scratch_bytes(tri_count);
 }
 
 static uint32_t max_leaf_def(uint32_t max_leaf)
@@ -131,17 +147,17 @@ static uint64_t groups(uint64_t threads)
 }
 
 /* Groups a row of a dispatch: the builder's test hook, else the per-dimension limit. */
-static uint32_t row_groups(const rd_gpu_lbvh_builder *b)
+uint32_t rd_gpu_lbvh_row_groups(const rd_gpu_lbvh_builder *b)
 {
     return b->row_groups && b->row_groups < MAX_GROUPS_PER_DIM ? b->row_groups : MAX_GROUPS_PER_DIM;
 }
 
-/* Dispatches count groups of 1D work as rows of row_groups(b) groups (x) in y, the shaders'
+/* Dispatches count groups of 1D work as rows of rd_gpu_lbvh_row_groups(b) groups (x) in y, the shaders'
  * lbvh_group() (shaders/lbvh.glsl) numbering them; the last row's extra groups return. */
-static void dispatch_1d(rd_cmd *c, const rd_gpu_lbvh_builder *b, const rd_pipeline *p,
-                        const pc_push *push, uint64_t count)
+void rd_gpu_lbvh_dispatch_rows(rd_cmd *c, const rd_gpu_lbvh_builder *b, const rd_pipeline *p,
+                               const pc_push *push, uint64_t count)
 {
-    uint64_t row = row_groups(b);
+    uint64_t row = rd_gpu_lbvh_row_groups(b);
     if (count < row) row = count;
     if (row == 0) return;
     uint64_t rows = (count + row - 1) / row;
@@ -162,19 +178,19 @@ void rd_gpu_lbvh_record_sort(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAd
         VkDeviceAddress from = pass % 2 ? other : keys, to = pass % 2 ? keys : other;
         uint32_t shift = 8 * pass;
         pc_push p = {.buf0 = from, .buf2 = hist, .params = {n, shift, tiles, 0}};
-        dispatch_1d(c, b, &b->sort, &p, tiles);
+        rd_gpu_lbvh_dispatch_rows(c, b, &b->sort, &p, tiles);
         rd_cmd_barrier(c);
         p = (pc_push){.buf1 = sums, .buf2 = hist, .params = {words, shift, tiles, 1}};
-        dispatch_1d(c, b, &b->sort, &p, sort_scan_blocks(n));
+        rd_gpu_lbvh_dispatch_rows(c, b, &b->sort, &p, sort_scan_blocks(n));
         rd_cmd_barrier(c);
         p.params.w = 2;
         rd_cmd_dispatch(c, &b->sort, &p, 1, 1, 1);
         rd_cmd_barrier(c);
         p.params.w = 3;
-        dispatch_1d(c, b, &b->sort, &p, sort_scan_blocks(n));
+        rd_gpu_lbvh_dispatch_rows(c, b, &b->sort, &p, sort_scan_blocks(n));
         rd_cmd_barrier(c);
         p = (pc_push){.buf0 = from, .buf1 = to, .buf2 = hist, .params = {n, shift, tiles, 4}};
-        dispatch_1d(c, b, &b->sort, &p, tiles);
+        rd_gpu_lbvh_dispatch_rows(c, b, &b->sort, &p, tiles);
         rd_cmd_barrier(c);
     }
 }
@@ -200,26 +216,31 @@ void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress
         rd_cmd_dispatch(c, &b->bounds, &push, 1, 1, 1); /* reset */
         rd_cmd_barrier(c);
         push.params.z = 1;
-        dispatch_1d(c, b, &b->bounds, &push, groups(n));
+        rd_gpu_lbvh_dispatch_rows(c, b, &b->bounds, &push, groups(n));
         rd_cmd_barrier(c);
         push.params = (pc_uvec4){n, (uint32_t)nkeys, 0, 0};
-        dispatch_1d(c, b, &b->morton, &push, groups(nkeys));
+        rd_gpu_lbvh_dispatch_rows(c, b, &b->morton, &push, groups(nkeys));
         rd_cmd_barrier(c);
         if (timer) rd_timer_mark(c, timer, "lbvh_keys");
-        rd_gpu_lbvh_record_sort(c, b, scratch + 4 * KEYS_AT, n, scratch + sort_at(n));
+        rd_gpu_lbvh_record_sort(c, b, scratch + 4 * KEYS_AT, n, scratch + sort_at(b, n));
         if (timer) rd_timer_mark(c, timer, "lbvh_sort");
+    }
+    if (b->method == RD_GPU_BVH_PLOC) {
+        rd_gpu_ploc_record(c, b, positions, n, ml, nodes, prim_index, scratch_buf, ploc_at(n),
+                           timer);
+        return;
     }
     pc_push h = {.buf0 = scratch,
                  .buf1 = n ? work : nodes,
                  .buf2 = prim_index,
-                 .params = {n, leaf_at, 0, row_groups(b)}};
-    dispatch_1d(c, b, &b->hierarchy, &h, groups(n > 1 ? n - 1 : 1));
+                 .params = {n, leaf_at, 0, rd_gpu_lbvh_row_groups(b)}};
+    rd_gpu_lbvh_dispatch_rows(c, b, &b->hierarchy, &h, groups(n > 1 ? n - 1 : 1));
     rd_cmd_barrier(c);
     if (timer) rd_timer_mark(c, timer, "lbvh_hierarchy");
     if (n > 0) {
         pc_push x = {
             .buf0 = positions, .buf1 = work, .buf2 = scratch, .params = {n, leaf_at, 0, ml}};
-        dispatch_1d(c, b, &b->boxes, &x, groups(n)); /* the leaves */
+        rd_gpu_lbvh_dispatch_rows(c, b, &b->boxes, &x, groups(n)); /* the leaves */
         rd_cmd_barrier(c);
         VkDeviceSize args = 4 * ((VkDeviceSize)leaf_at + TAIL_WORDS * (VkDeviceSize)n);
         for (uint32_t k = 1; n > 1 && k <= BOX_PASSES; k++) {
@@ -230,16 +251,16 @@ void rd_gpu_lbvh_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress
         if (timer) rd_timer_mark(c, timer, "lbvh_boxes");
         /* block sums, their scan, then each block's words */
         pc_push sc = {.buf2 = scratch, .params = {n, leaf_at, 0, 0}};
-        dispatch_1d(c, b, &b->scan, &sc, scan_blocks(n));
+        rd_gpu_lbvh_dispatch_rows(c, b, &b->scan, &sc, scan_blocks(n));
         rd_cmd_barrier(c);
         sc.params.z = 1;
         rd_cmd_dispatch(c, &b->scan, &sc, 1, 1, 1);
         rd_cmd_barrier(c);
         sc.params.z = 2;
-        dispatch_1d(c, b, &b->scan, &sc, scan_blocks(n));
+        rd_gpu_lbvh_dispatch_rows(c, b, &b->scan, &sc, scan_blocks(n));
         rd_cmd_barrier(c);
         pc_push rm = {.buf0 = work, .buf1 = nodes, .buf2 = scratch, .params = {n, leaf_at, 0, 0}};
-        dispatch_1d(c, b, &b->remap, &rm, groups(2 * (uint64_t)n - 1));
+        rd_gpu_lbvh_dispatch_rows(c, b, &b->remap, &rm, groups(2 * (uint64_t)n - 1));
         rd_cmd_barrier(c);
         if (timer) rd_timer_mark(c, timer, "lbvh_collapse");
     }
@@ -298,7 +319,7 @@ rd_vk_result rd_gpu_lbvh_build_download(rd_vk *vk, const rd_gpu_lbvh_builder *b,
     if (r == RD_VK_OK) r = rd_buffer_create(vk, &nodes, node_bytes, RD_MEMORY_DEVICE, err, errlen);
     if (r == RD_VK_OK) r = rd_buffer_create(vk, &prim, prim_bytes, RD_MEMORY_DEVICE, err, errlen);
     if (r == RD_VK_OK)
-        r = rd_buffer_create(vk, &scratch, rd_gpu_lbvh_scratch_bytes(tri_count), RD_MEMORY_DEVICE,
+        r = rd_buffer_create(vk, &scratch, rd_gpu_lbvh_scratch_bytes(b, tri_count), RD_MEMORY_DEVICE,
                              err, errlen);
     rd_cmd c;
     if (r == RD_VK_OK) r = rd_cmd_begin(vk, &c, err, errlen);

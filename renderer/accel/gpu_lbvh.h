@@ -61,8 +61,18 @@
 #include "renderer/accel/bvh.h"
 #include "renderer/vk/vk_compute.h"
 
+/* The hierarchy over the sorted keys (rd_gpu_lbvh_builder.method): the LBVH's radix tree with
+ * treelet restructuring (the passes above), or PLOC clustering (gpu_ploc.h). Both end in the
+ * same node layout, leaves collapsed by the same weighted SAH. */
+#define RD_GPU_BVH_LBVH 0u
+#define RD_GPU_BVH_PLOC 1u
+
 typedef struct rd_gpu_lbvh_builder {
     rd_pipeline bounds, morton, sort, hierarchy, boxes, scan, remap;
+    rd_pipeline ploc_init, ploc_round, ploc_emit;
+    /* RD_GPU_BVH_LBVH (as create leaves it) or RD_GPU_BVH_PLOC; a scratch buffer is sized for
+     * one method (rd_gpu_lbvh_scratch_bytes). */
+    uint32_t method;
     /* Groups a row of a pass's dispatch (x; rows in y): 0 (as create leaves it) = 65535, the
      * least per-dimension limit Vulkan allows. A test hook: tests lower it so that small meshes
      * need several rows. */
@@ -84,8 +94,8 @@ void rd_gpu_lbvh_builder_destroy(rd_vk *vk, rd_gpu_lbvh_builder *b); /* idempote
 /* Nodes a build over tri_count triangles writes at most: 2 tri_count - 1 (1 for none); with
  * leaves of several triangles fewer, their count at RD_GPU_LBVH_COUNT_OFFSET in the scratch. */
 uint32_t rd_gpu_lbvh_node_count(uint32_t tri_count);
-/* Bytes of scratch a build needs (16-byte aligned device address). */
-uint64_t rd_gpu_lbvh_scratch_bytes(uint32_t tri_count);
+/* Bytes of scratch a build with b's method needs (16-byte aligned device address). */
+uint64_t rd_gpu_lbvh_scratch_bytes(const rd_gpu_lbvh_builder *b, uint32_t tri_count);
 /* Records the sort of a build (pass 3) on its own, for tests: sorts n keys (at most
  * RD_GPU_LBVH_MAX_TRIANGLES; uvec2 each at keys: x a payload, y the 32-bit code) ascending by y,
  * stably, in place. keys and sort_scratch (rd_gpu_lbvh_sort_scratch_bytes(n) bytes; a

@@ -413,7 +413,7 @@ rd_vk_result rd_gpu_scene_deform_run(rd_vk *vk, rd_gpu_scene *gs, const rd_scene
         if (rd_gpu_lbvh_node_count(tris) > blas_slots(&s->meshes[list[k]], 0)) /* never */
             snprintf(err, errlen, "an LBVH of %u triangles does not fit the BLAS's slots", tris);
         else
-            br = rd_gpu_scene_lbvh_build_create(vk, &builds[k], tris, err, errlen);
+            br = rd_gpu_scene_lbvh_build_create(vk, &builds[k], &g->lbvh, tris, err, errlen);
         if (br == RD_VK_OK) {
             built[k] = 1;
         } else {

@@ -81,14 +81,16 @@ void rd_gpu_scene_deform_destroy(rd_vk *vk, rd_gpu_scene *gs);
 /* gpu_scene_lbvh.c: bottom levels built by the GPU LBVH (gpu_lbvh.h) in place in the scene's
  * buffers, for static meshes at upload and deforming meshes' rebuilds (gpu_scene_deform.c).
  *
- * Who builds a static mesh's BLAS at upload: PROBECAST_BLAS_BUILD=auto|cpu|gpu (parsed once per
- * upload by rd_blas_build_from_env; rd_blas_build_parse: NULL or "" is auto, anything unknown a
- * warning and auto). auto: the CPU (below); cpu: never; gpu: every mesh the LBVH takes (at
- * least one triangle, at most RD_GPU_LBVH_MAX_TRIANGLES). */
+ * Who builds a static mesh's BLAS at upload: PROBECAST_BLAS_BUILD=auto|cpu|gpu|ploc (parsed once
+ * per upload by rd_blas_build_from_env; rd_blas_build_parse: NULL or "" is auto, anything unknown
+ * a warning and auto). auto: the CPU (below); cpu: never; gpu: every mesh the GPU builder takes
+ * (at least one triangle, at most RD_GPU_LBVH_MAX_TRIANGLES) by its LBVH; ploc: the same meshes by
+ * its PLOC method (gpu_ploc.h). */
 typedef enum rd_blas_build {
     RD_BLAS_BUILD_AUTO = 0,
     RD_BLAS_BUILD_CPU,
     RD_BLAS_BUILD_GPU,
+    RD_BLAS_BUILD_GPU_PLOC,
 } rd_blas_build;
 /* auto builds on the CPU for now: measured on an NVIDIA H200 (16 host cores;
  * tests/bench/results/h200/blas_upload_stop43.txt), builtin:spheres:8000000 (eight meshes of
@@ -119,6 +121,7 @@ typedef struct rd_gpu_scene_lbvh_mesh {
 } rd_gpu_scene_lbvh_mesh;
 struct rd_gpu_scene_lbvh_jobs {
     uint32_t count;
+    uint32_t method; /* the GPU builder's (gpu_lbvh.h: RD_GPU_BVH_LBVH or RD_GPU_BVH_PLOC) */
     rd_gpu_scene_lbvh_mesh *meshes;
 };
 void rd_gpu_scene_lbvh_jobs_free(rd_gpu_scene_lbvh_jobs *j); /* NULL is fine */
@@ -141,7 +144,8 @@ typedef struct rd_gpu_scene_lbvh_build {
     rd_buffer out, scratch;
     VkDeviceSize prim_at;
 } rd_gpu_scene_lbvh_build;
-rd_vk_result rd_gpu_scene_lbvh_build_create(rd_vk *vk, rd_gpu_scene_lbvh_build *b, uint32_t tris,
+rd_vk_result rd_gpu_scene_lbvh_build_create(rd_vk *vk, rd_gpu_scene_lbvh_build *b,
+                                            const rd_gpu_lbvh_builder *lbvh, uint32_t tris,
                                             char *err, size_t errlen);
 void rd_gpu_scene_lbvh_build_destroy(rd_vk *vk, rd_gpu_scene_lbvh_build *b); /* idempotent */
 /* blas_place.comp's pipeline (its SPIR-V is embedded once, in gpu_scene_lbvh.c). */

@@ -16,8 +16,10 @@ rd_blas_build rd_blas_build_parse(const char *value)
     if (!value || !*value || strcmp(value, "auto") == 0) return RD_BLAS_BUILD_AUTO;
     if (strcmp(value, "cpu") == 0) return RD_BLAS_BUILD_CPU;
     if (strcmp(value, "gpu") == 0) return RD_BLAS_BUILD_GPU;
+    if (strcmp(value, "ploc") == 0) return RD_BLAS_BUILD_GPU_PLOC;
     fprintf(stderr,
-            "probecast: warning: PROBECAST_BLAS_BUILD=%s is not auto, cpu or gpu: using auto\n",
+            "probecast: warning: PROBECAST_BLAS_BUILD=%s is not auto, cpu, gpu or ploc: using "
+            "auto\n",
             value);
     return RD_BLAS_BUILD_AUTO;
 }
@@ -34,6 +36,7 @@ bool rd_blas_build_on_gpu(rd_blas_build policy, bool gpu_device, uint32_t tri_co
     case RD_BLAS_BUILD_CPU:
         return false;
     case RD_BLAS_BUILD_GPU:
+    case RD_BLAS_BUILD_GPU_PLOC:
         return true;
     default: /* auto: the CPU (gpu_scene_internal.h says why) */
         (void)gpu_device;
@@ -56,7 +59,8 @@ void rd_gpu_scene_lbvh_build_destroy(rd_vk *vk, rd_gpu_scene_lbvh_build *b)
     rd_buffer_destroy(vk, &b->out);
 }
 
-rd_vk_result rd_gpu_scene_lbvh_build_create(rd_vk *vk, rd_gpu_scene_lbvh_build *b, uint32_t tris,
+rd_vk_result rd_gpu_scene_lbvh_build_create(rd_vk *vk, rd_gpu_scene_lbvh_build *b,
+                                            const rd_gpu_lbvh_builder *lbvh, uint32_t tris,
                                             char *err, size_t errlen)
 {
     memset(b, 0, sizeof *b);
@@ -68,8 +72,8 @@ rd_vk_result rd_gpu_scene_lbvh_build_create(rd_vk *vk, rd_gpu_scene_lbvh_build *
     rd_vk_result r = rd_buffer_create(vk, &b->out, b->prim_at + 4 * (VkDeviceSize)tris,
                                       RD_MEMORY_DEVICE, err, errlen);
     if (r == RD_VK_OK)
-        r = rd_buffer_create(vk, &b->scratch, rd_gpu_lbvh_scratch_bytes(tris), RD_MEMORY_DEVICE,
-                             err, errlen);
+        r = rd_buffer_create(vk, &b->scratch, rd_gpu_lbvh_scratch_bytes(lbvh, tris),
+                             RD_MEMORY_DEVICE, err, errlen);
     if (r != RD_VK_OK) rd_gpu_scene_lbvh_build_destroy(vk, b);
     return r;
 }
@@ -123,7 +127,7 @@ static rd_vk_result gpu_build(rd_vk *vk, rd_gpu_scene *gs, const lbvh_kit *kit,
     VkDeviceSize tri_bytes = sizeof(pc_tri) * (VkDeviceSize)n;
     rd_gpu_scene_lbvh_build b;
     rd_buffer pos = {0}, source = {0};
-    rd_vk_result r = rd_gpu_scene_lbvh_build_create(vk, &b, n, err, errlen);
+    rd_vk_result r = rd_gpu_scene_lbvh_build_create(vk, &b, &kit->lbvh, n, err, errlen);
     if (r == RD_VK_OK)
         r = rd_buffer_create(vk, &pos, sizeof(float) * 9 * (VkDeviceSize)n, RD_MEMORY_DEVICE, err,
                              errlen);
@@ -223,6 +227,7 @@ rd_vk_result rd_gpu_scene_lbvh_run(rd_vk *vk, rd_gpu_scene *gs, char *err, size_
     double t0 = now_ms();
     lbvh_kit kit = {0};
     rd_vk_result kr = rd_gpu_lbvh_builder_create(vk, &kit.lbvh, err, errlen);
+    kit.lbvh.method = jobs->method;
     if (kr == RD_VK_OK) kr = rd_gpu_scene_place_create(vk, &kit.place, err, errlen);
     if (kr != RD_VK_OK && !vk->device_lost)
         fprintf(stderr, "probecast: no GPU BVH builds, the CPU builds them: %s\n", err);

@@ -230,6 +230,8 @@ rd_vk_result rd_gpu_scene_prepare_device(rd_gpu_scene_prep *p, const rd_scene *s
     p->attrs = xcalloc(tri_total, sizeof *p->attrs);
     if (gpu_count) {
         p->lbvh_jobs = xcalloc(1, sizeof *p->lbvh_jobs);
+        p->lbvh_jobs->method =
+            policy == RD_BLAS_BUILD_GPU_PLOC ? RD_GPU_BVH_PLOC : RD_GPU_BVH_LBVH;
         p->lbvh_jobs->meshes = xcalloc(gpu_count, sizeof *p->lbvh_jobs->meshes);
     }
     uint32_t node_base = 0, tri_base = 0;

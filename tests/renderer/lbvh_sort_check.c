@@ -127,7 +127,7 @@ static void check_build_keys(rd_vk *vk, const rd_gpu_lbvh_builder *b, const char
                                RD_MEMORY_DEVICE, err, sizeof err) == RD_VK_OK &&
               rd_buffer_create(vk, &bprim, (size_t)n * 4, RD_MEMORY_DEVICE, err, sizeof err) ==
                   RD_VK_OK &&
-              rd_buffer_create(vk, &scratch, rd_gpu_lbvh_scratch_bytes(n), RD_MEMORY_DEVICE, err,
+              rd_buffer_create(vk, &scratch, rd_gpu_lbvh_scratch_bytes(b, n), RD_MEMORY_DEVICE, err,
                                sizeof err) == RD_VK_OK &&
               rd_cmd_begin(vk, &c, err, sizeof err) == RD_VK_OK;
     if (ok) {

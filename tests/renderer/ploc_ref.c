@@ -89,7 +89,7 @@ static key *leaves(builder *b, const float *pos, uint32_t n)
         for (int k = 0; k < 3; k++) {
             c->lo[k] = fin ? fminf(v[k], fminf(v[3 + k], v[6 + k])) : INFINITY;
             c->hi[k] = fin ? fmaxf(v[k], fmaxf(v[3 + k], v[6 + k])) : -INFINITY;
-            float m = (v[k] + v[3 + k] + v[6 + k]) / 3;
+            float m = (v[k] + v[3 + k] + v[6 + k]) * (1.0f / 3.0f);
             if (fin) clo[k] = fminf(clo[k], m), chi[k] = fmaxf(chi[k], m);
         }
     }
@@ -99,7 +99,7 @@ static key *leaves(builder *b, const float *pos, uint32_t n)
         uint32_t code = 1u << 30, q[3];
         if (finite_tri(v)) {
             for (int k = 0; k < 3; k++) {
-                float ext = chi[k] - clo[k], m = (v[k] + v[3 + k] + v[6 + k]) / 3;
+                float ext = chi[k] - clo[k], m = (v[k] + v[3 + k] + v[6 + k]) * (1.0f / 3.0f);
                 float u = ext > 0 ? (m - clo[k]) / ext * 1024.0f : 0;
                 q[k] = u < 0 ? 0 : u > 1023 ? 1023 : (uint32_t)u;
             }

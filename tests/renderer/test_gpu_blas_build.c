@@ -1,7 +1,8 @@
 /* test_gpu_blas_build.c: static meshes' BLASes built by the GPU LBVH at upload
  * (PROBECAST_BLAS_BUILD, gpu_scene_lbvh.c), on lavapipe. The variable's parse and the policy;
  * a scene of random soups (one far from its origin, so that it has a local origin; one with a
- * non-finite vertex) and an empty mesh uploaded with PROBECAST_BLAS_BUILD=gpu and =cpu: every
+ * non-finite vertex) and an empty mesh uploaded with PROBECAST_BLAS_BUILD=gpu (and =ploc, the
+ * builder's PLOC method) and =cpu: every
  * non-empty mesh built by the GPU in the first, none in the second, the same local frames, and
  * each mesh's BLAS as the scene holds it (nodes and records read back) gives the same closest hit
  * (triangle and t) ray by ray as the CPU-built scene's, and the deepest walks as many levels as
@@ -34,6 +35,8 @@ static void test_parse(void)
     CHECK(rd_blas_build_parse("auto") == RD_BLAS_BUILD_AUTO);
     CHECK(rd_blas_build_parse("cpu") == RD_BLAS_BUILD_CPU);
     CHECK(rd_blas_build_parse("gpu") == RD_BLAS_BUILD_GPU);
+    CHECK(rd_blas_build_parse("ploc") == RD_BLAS_BUILD_GPU_PLOC);
+    CHECK(rd_blas_build_on_gpu(RD_BLAS_BUILD_GPU_PLOC, false, 1));
     CHECK(rd_blas_build_parse("GPU!") == RD_BLAS_BUILD_AUTO); /* a warning, then auto */
     const uint32_t big = 8000000;
     CHECK(!rd_blas_build_on_gpu(RD_BLAS_BUILD_AUTO, false, big)); /* lavapipe keeps the CPU */
@@ -158,7 +161,7 @@ static uint32_t compare_mesh(rd_vk *vk, const rd_gpu_scene *gpu, const rd_gpu_sc
 
 /* fallback: every GPU tree counts as too deep (the test hook), so the CPU builds each mesh
  * after the GPU placed its records in the LBVH's leaf order, and reorders them. */
-static void test_scene(rd_vk *vk, bool fallback)
+static void test_scene(rd_vk *vk, bool fallback, const char *policy)
 {
     rd_scene s;
     rd_scene_init(&s);
@@ -171,7 +174,7 @@ static void test_scene(rd_vk *vk, bool fallback)
     rd_scene_add_node(&s, &node);
     CHECKF(rd_scene_update(&s, err, sizeof err), "%s", err);
     rd_gpu_scene gpu = {0}, cpu = {0};
-    setenv("PROBECAST_BLAS_BUILD", "gpu", 1);
+    setenv("PROBECAST_BLAS_BUILD", policy, 1);
     rd_gpu_scene_lbvh_depth_limit = fallback ? 0 : RD_BVH_MAX_DEPTH;
     VK_CHECK(rd_gpu_scene_create(vk, &gpu, &s, err, sizeof err));
     rd_gpu_scene_lbvh_depth_limit = RD_BVH_MAX_DEPTH;
@@ -202,10 +205,10 @@ done:
  * (the same hits; only the traversal order differs). Spheres, not cornell: the box's walls meet
  * in edges shared by triangles of different materials, where a hit at equal t may go to either
  * (5 of cornell's 1728 pixels did). */
-static void test_image(rd_vk *vk)
+static void test_image(rd_vk *vk, const char *policy)
 {
     test_render_desc d = {.scene = "spheres:4000", .width = 48, .height = 36};
-    setenv("PROBECAST_BLAS_BUILD", "gpu", 1);
+    setenv("PROBECAST_BLAS_BUILD", policy, 1);
     float *a = test_render(vk, &d, NULL, NULL);
     setenv("PROBECAST_BLAS_BUILD", "cpu", 1);
     float *b = test_render(vk, &d, NULL, NULL);
@@ -219,9 +222,10 @@ static void test_image(rd_vk *vk)
         bad += e > 1e-3;
     }
     double mean = a ? test_image_mean(a, floats, &nf) : 0;
-    printf("image: mean %.4f, worst relative difference %.2e, %zu values past 1e-3\n", mean, worst,
-           bad);
-    CHECKF(bad == 0 && nf == 0 && mean > 0, "image: %zu values differ, %zu non-finite", bad, nf);
+    printf("image (%s): mean %.4f, worst relative difference %.2e, %zu values past 1e-3\n", policy,
+           mean, worst, bad);
+    CHECKF(bad == 0 && nf == 0 && mean > 0, "image (%s): %zu values differ, %zu non-finite",
+           policy, bad, nf);
     free(a);
     free(b);
 }
@@ -231,8 +235,10 @@ int main(void)
     test_parse();
     rd_vk vk;
     if (!test_vk_open(&vk)) return test_finish();
-    test_scene(&vk, false);
-    test_scene(&vk, true);
-    test_image(&vk);
+    test_scene(&vk, false, "gpu");
+    test_scene(&vk, true, "gpu");
+    test_scene(&vk, false, "ploc"); /* the builder's PLOC method (gpu_ploc.h) */
+    test_image(&vk, "gpu");
+    test_image(&vk, "ploc");
     return test_vk_close(&vk);
 }

@@ -16,7 +16,11 @@
  * printed beside the LBVH's. `test_gpu_lbvh bench [sizes]` (up to RD_GPU_LBVH_MAX_TRIANGLES, e.g.
  * `bench 1000000 8000000 spheres:1000000 interior`) builds larger meshes and prints two tables:
  * the build's passes, and the traversal speed of the same rays through the CPU builder's tree,
- * the LBVH and the PLOC reference's tree (run_bench). */
+ * the LBVH and the PLOC reference's tree (run_bench); PROBECAST_GPU_BVH=ploc benches the GPU PLOC
+ * method in the LBVH's columns. The GPU PLOC method (gpu_ploc.h) passes every check above too, and
+ * its trees equal the CPU reference's node for node (the same choices; soups of 100 and more
+ * within 1.15x of the CPU builder's SAH: PLOC's trees are better on real meshes, worse on
+ * uniform soups, tests/bench/results/lavapipe/lbvh_ploc_sah_stop48.txt). */
 #include "bvh_check.h"
 #include "lbvh_sort_check.h"
 #include "renderer/accel/bvh.h"
@@ -75,6 +79,25 @@ static uint32_t gpu_trace_differences(rd_vk *vk, const rd_bvh *bvh, const float 
     return differ;
 }
 
+/* 0 when a and b are the same tree (nodes bit for bit, the same triangles in every leaf, the same
+ * depth), else 1 + the first node that differs. */
+static uint32_t same_tree(const rd_bvh *a, const rd_bvh *b)
+{
+    uint32_t n = a->node_count < b->node_count ? a->node_count : b->node_count;
+    for (uint32_t i = 0; i < n; i++)
+        if (memcmp(&a->nodes[i], &b->nodes[i], sizeof a->nodes[i]) != 0) return i + 1;
+    if (a->node_count != b->node_count || a->depth != b->depth ||
+        a->prim_count != b->prim_count)
+        return n + 1;
+    for (uint32_t i = 0; i < a->node_count; i++) {
+        const pc_bvh_node *nd = &a->nodes[i];
+        uint32_t first = rd_bvh_node_first(nd), count = rd_bvh_node_count(nd);
+        for (uint32_t k = 0; k < count && a->prim_count; k++)
+            if (a->prim_index[first + k] != b->prim_index[first + k]) return i + 1;
+    }
+    return 0;
+}
+
 /* Builds pos on the GPU with leaves of at most max_leaf triangles and checks it; returns its
  * SAH cost (-1 when the build failed). */
 static double check_build(rd_vk *vk, const rd_gpu_lbvh_builder *b, const char *what,
@@ -95,6 +118,11 @@ static double check_build(rd_vk *vk, const rd_gpu_lbvh_builder *b, const char *w
     CHECK(pc_ploc_build(&ploc, pos, n, PLOC_RADIUS, max_leaf, PC_LBVH_LEAF_WEIGHT, NULL));
     int bad_ploc = check_triangles(what, &ploc, pos, n, max_leaf);
     CHECKF(bad_ploc == 0, "%s: the PLOC reference has %d structural problems", what, bad_ploc);
+    if (b->method == RD_GPU_BVH_PLOC) { /* the GPU's PLOC makes the reference's choices */
+        uint32_t differ = same_tree(&gpu, &ploc);
+        CHECKF(differ == 0, "%s: GPU PLOC differs from the reference at node %u (%u and %u nodes)",
+               what, differ - 1, gpu.node_count, ploc.node_count);
+    }
 
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (uint32_t i = 0; i < n; i++) {
@@ -142,7 +170,8 @@ static double check_build(rd_vk *vk, const rd_gpu_lbvh_builder *b, const char *w
      * PC_LBVH_LEAF_WEIGHT 0.75; one rotation a node instead of the treelets gave 1.11x and 1.09x,
      * no restructuring and every subtree of up to 4 triangles collapsed 1.26x) */
     if (max_leaf == 4 && n >= 100 && strncmp(what, "random soup", 11) == 0)
-        CHECKF(ratio < 1.1, "%s: SAH %.3f times the CPU build's", what, ratio);
+        CHECKF(ratio < (b->method == RD_GPU_BVH_PLOC ? 1.15 : 1.1),
+               "%s: SAH %.3f times the CPU build's", what, ratio);
     if (ratio > g_worst_ratio) g_worst_ratio = ratio;
     rd_bvh_destroy(&cpu);
     rd_bvh_destroy(&gpu);
@@ -163,7 +192,7 @@ static void check_mesh(rd_vk *vk, const rd_gpu_lbvh_builder *b, const char *what
 
 static void run_tests(rd_vk *vk, const rd_gpu_lbvh_builder *b)
 {
-    lbvh_sort_checks(vk, b);
+    if (b->method == RD_GPU_BVH_LBVH) lbvh_sort_checks(vk, b); /* the methods share the sort */
     static const uint32_t sizes[] = {0, 1, 2, 3, 7, 100, 5000};
     float *pos = tris_alloc(5000);
     for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++) {
@@ -296,8 +325,9 @@ static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b, int argc, char **
     /* PROBECAST_LBVH_LEAF: the leaf policy (max_leaf; default 0: up to 4) */
     const char *leaf_env = getenv("PROBECAST_LBVH_LEAF");
     uint32_t max_leaf = leaf_env ? (uint32_t)strtoul(leaf_env, NULL, 10) : 0;
-    printf("leaves of up to %u; ms: submit and wait (best of 3), then GPU timestamps of the last\n",
-           max_leaf ? max_leaf : 4);
+    printf("GPU builder %s; leaves of up to %u; ms: submit and wait (best of 3), then GPU "
+           "timestamps of the last (PLOC: keys, sort, rounds, emit)\n",
+           b->method == RD_GPU_BVH_PLOC ? "PLOC" : "LBVH", max_leaf ? max_leaf : 4);
     printf("%8s %8s %8s %8s %8s %8s %8s %9s %6s\n", "tris", "wall_ms", "keys", "sort", "hierarchy",
            "boxes", "collapse", "sah_ratio", "depth");
     uint32_t done = 0;
@@ -326,11 +356,15 @@ static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b, int argc, char **
         row->build_ms = best;
         row->depth = gpu.depth;
         row->sah_ratio = rd_bvh_sah_cost(&gpu) / rd_bvh_sah_cost(&cpu);
-        rd_bvh ploc;
-        if (!pc_ploc_build(&ploc, pos, sizes[s], PLOC_RADIUS, max_leaf ? max_leaf : 4,
-                           PC_LBVH_LEAF_WEIGHT, NULL))
+        /* the CPU PLOC reference takes minutes at millions of triangles: PROBECAST_PLOC_REF=0
+         * leaves it out (its columns 0) */
+        rd_bvh ploc = {0};
+        const char *ref_env = getenv("PROBECAST_PLOC_REF");
+        bool ref = !ref_env || strcmp(ref_env, "0") != 0;
+        if (ref && !pc_ploc_build(&ploc, pos, sizes[s], PLOC_RADIUS, max_leaf ? max_leaf : 4,
+                                  PC_LBVH_LEAF_WEIGHT, NULL))
             abort();
-        row->ploc_sah_ratio = rd_bvh_sah_cost(&ploc) / rd_bvh_sah_cost(&cpu);
+        row->ploc_sah_ratio = ref ? rd_bvh_sah_cost(&ploc) / rd_bvh_sah_cost(&cpu) : 0;
         printf("%8u %8.2f", sizes[s], best);
         for (uint32_t k = 1; k <= 5; k++)
             printf(" %8.2f", timer.valid && k < timer.count ? timer.ms[k] : -1.0);
@@ -345,8 +379,9 @@ static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b, int argc, char **
         if (ok) {
             row->cpu_mrays = pc_trace_speed(vk, &g_trace, &timer, &cpu, pos, sizes[s], &ray_buf,
                                             &res_buf, rays, 3, hits_cpu);
-            row->ploc_mrays = pc_trace_speed(vk, &g_trace, &timer, &ploc, pos, sizes[s], &ray_buf,
-                                             &res_buf, rays, 3, NULL);
+            if (ref)
+                row->ploc_mrays = pc_trace_speed(vk, &g_trace, &timer, &ploc, pos, sizes[s],
+                                                 &ray_buf, &res_buf, rays, 3, NULL);
             row->lbvh_mrays = pc_trace_speed(vk, &g_trace, &timer, &gpu, pos, sizes[s], &ray_buf,
                                              &res_buf, rays, 3, hits_lbvh);
             for (uint32_t i = 0; i < rays; i++) {
@@ -403,10 +438,16 @@ int main(int argc, char **argv)
     if (rc == RD_VK_OK) rc = pc_trace_pipeline_create(&vk, &g_trace, err, sizeof err);
     CHECKF(rc == RD_VK_OK, "%s", err);
     if (rc == RD_VK_OK) {
+        const char *method = getenv("PROBECAST_GPU_BVH"); /* bench: lbvh (default) or ploc */
+        if (method && strcmp(method, "ploc") == 0) b.method = RD_GPU_BVH_PLOC;
         if (bench)
             run_bench(&vk, &b, argc - 2, argv + 2);
-        else
+        else {
             run_tests(&vk, &b);
+            fprintf(stderr, "-- the PLOC method (gpu_ploc.h) on the same meshes --\n");
+            b.method = RD_GPU_BVH_PLOC;
+            run_tests(&vk, &b);
+        }
     }
     if (!bench) {
         fprintf(stderr, "worst SAH ratio GPU LBVH / CPU binned SAH: %.3f\n", g_worst_ratio);
