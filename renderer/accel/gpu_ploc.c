@@ -21,8 +21,8 @@ static uint64_t blocks(uint32_t n)
 
 uint64_t rd_gpu_ploc_words(uint32_t n)
 {
-    uint64_t sums_end = CTRL_WORDS + (uint64_t)ROUNDS_ALL * LOG_WORDS + 3 * (uint64_t)n +
-                        2 * blocks(n);
+    uint64_t sums_end =
+        CTRL_WORDS + (uint64_t)ROUNDS_ALL * LOG_WORDS + 3 * (uint64_t)n + 2 * blocks(n);
     uint64_t clusters = n ? 2 * (uint64_t)n - 1 : 0;
     return ((sums_end + 3) & ~(uint64_t)3) + CLUSTER_WORDS * clusters;
 }
