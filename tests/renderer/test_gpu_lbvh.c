@@ -268,10 +268,77 @@ static void run_tests(rd_vk *vk, const rd_gpu_lbvh_builder *b)
     free(pos);
 }
 
+/* Slab test of a node's box: whether the ray enters it before tmax, and where (tn). */
+static bool stat_box(const pc_bvh_node *n, const float o[3], const float inv[3], float tmax,
+                     float *tn)
+{
+    const float lo[3] = {n->bmin.x, n->bmin.y, n->bmin.z}, hi[3] = {n->bmax.x, n->bmax.y, n->bmax.z};
+    float t0 = 0, t1 = tmax;
+    for (int k = 0; k < 3; k++) {
+        float a = (lo[k] - o[k]) * inv[k], b = (hi[k] - o[k]) * inv[k];
+        if (a > b) {
+            float x = a;
+            a = b, b = x;
+        }
+        t0 = a > t0 ? a : t0;
+        t1 = b < t1 ? b : t1;
+    }
+    *tn = t0;
+    return t0 <= t1;
+}
+
+/* Nodes whose children a ray tests and triangles it tests, per ray, traversing nearest child
+ * first as shaders/trace.glsl does (a popped node not re-culled against the closest hit, as
+ * there): what a tree costs these rays, apart from memory. */
+static void traversal_stats(const rd_bvh *bvh, const float *pos, const float *orgs,
+                            const float *dirs, uint32_t rays, double *nodes, double *tris)
+{
+    uint64_t nsum = 0, tsum = 0;
+    uint32_t stack[128];
+    for (uint32_t r = 0; r < rays; r++) {
+        const float *o = orgs + 3 * (size_t)r, *d = dirs + 3 * (size_t)r;
+        float inv[3] = {1 / d[0], 1 / d[1], 1 / d[2]}, best = INFINITY, tn;
+        if (!stat_box(&bvh->nodes[0], o, inv, best, &tn)) continue;
+        uint32_t sp = 0, at = 0;
+        for (;;) {
+            const pc_bvh_node *n = &bvh->nodes[at];
+            uint32_t first = rd_bvh_node_first(n), count = rd_bvh_node_count(n);
+            bool next = false;
+            if (count) {
+                for (uint32_t i = first; i < first + count; i++) {
+                    const float *v = pos + 9 * (size_t)bvh->prim_index[i];
+                    float t, u, w;
+                    bool back;
+                    tsum++;
+                    if (rd_ray_triangle(o, d, v, v + 3, v + 6, 0, best, &t, &u, &w, &back))
+                        best = t;
+                }
+            } else {
+                nsum++;
+                float t0, t1;
+                bool h0 = stat_box(&bvh->nodes[first], o, inv, best, &t0);
+                bool h1 = stat_box(&bvh->nodes[first + 1], o, inv, best, &t1);
+                if (h0 && h1 && sp < 128) stack[sp++] = t0 <= t1 ? first + 1 : first;
+                if (h0 || h1) {
+                    at = h1 && (!h0 || t1 < t0) ? first + 1 : first;
+                    next = true;
+                }
+            }
+            if (next) continue;
+            if (sp == 0) break;
+            at = stack[--sp];
+        }
+    }
+    *nodes = (double)nsum / rays;
+    *tris = (double)tsum / rays;
+}
+
 typedef struct bench_row {
     uint32_t tris, differ, depth;
     double cpu_mrays, lbvh_mrays, sah_ratio, build_ms;
     double ploc_mrays, ploc_sah_ratio; /* the CPU PLOC reference's tree (ploc_ref.h) */
+    double cpu_nodes, cpu_tris, gpu_nodes, gpu_tris; /* traversal_stats of the two trees */
+    uint32_t cpu_count, gpu_count;                   /* their nodes */
 } bench_row;
 
 /* `test_gpu_lbvh bench [sizes]`: for random soups of each size (or a builtin scene's largest mesh
@@ -384,6 +451,11 @@ static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b, int argc, char **
                                                  &ray_buf, &res_buf, rays, 3, NULL);
             row->lbvh_mrays = pc_trace_speed(vk, &g_trace, &timer, &gpu, pos, sizes[s], &ray_buf,
                                              &res_buf, rays, 3, hits_lbvh);
+            uint32_t few = rays < 65536 ? rays : 65536;
+            traversal_stats(&cpu, pos, orgs, dirs, few, &row->cpu_nodes, &row->cpu_tris);
+            traversal_stats(&gpu, pos, orgs, dirs, few, &row->gpu_nodes, &row->gpu_tris);
+            row->cpu_count = cpu.node_count;
+            row->gpu_count = gpu.node_count;
             for (uint32_t i = 0; i < rays; i++) {
                 const pc_trace_hit *a = &hits_cpu[i], *h = &hits_lbvh[i];
                 bool same =
@@ -413,6 +485,15 @@ static void run_bench(rd_vk *vk, const rd_gpu_lbvh_builder *b, int argc, char **
                row->cpu_mrays, row->lbvh_mrays, row->lbvh_mrays / c, row->sah_ratio,
                row->build_ms, row->depth, row->differ, row->ploc_mrays, row->ploc_mrays / c,
                row->ploc_sah_ratio);
+    }
+    printf("\nper ray (the first 65536, on the CPU, nearest child first as trace.glsl): interior "
+           "nodes and triangles tested, CPU builder's tree against the GPU's\n");
+    printf("%8s %9s %9s %9s %9s %9s %9s\n", "tris", "cpu_nodes", "gpu_nodes", "cpu_visit",
+           "gpu_visit", "cpu_tests", "gpu_tests");
+    for (uint32_t s = 0; s < done; s++) {
+        const bench_row *row = &table[s];
+        printf("%8u %9u %9u %9.1f %9.1f %9.1f %9.1f\n", row->tris, row->cpu_count, row->gpu_count,
+               row->cpu_nodes, row->gpu_nodes, row->cpu_tris, row->gpu_tris);
     }
     rd_buffer_destroy(vk, &res_buf);
     rd_timer_destroy(vk, &timer);
