@@ -243,6 +243,9 @@ static rd_vk_result make_pipelines(rd_vk *vk, rd_gpu_scene_deform *g, char *err,
     if (r == RD_VK_OK) r = rd_pipelines_create(vk, g, kPipelines, PIPELINE_COUNT, err, errlen);
     if (r == RD_VK_OK) r = rd_gpu_scene_place_create(vk, &g->place, err, errlen);
     if (r == RD_VK_OK) r = rd_gpu_lbvh_builder_create(vk, &g->lbvh, err, errlen);
+    /* rebuilds by the LBVH, or by PLOC where PROBECAST_BLAS_BUILD=ploc asks the GPU for it */
+    if (r == RD_VK_OK && rd_blas_build_from_env() == RD_BLAS_BUILD_GPU_PLOC)
+        g->lbvh.method = RD_GPU_BVH_PLOC;
     if (r == RD_VK_OK) r = rd_timer_create(vk, &g->timer, err, errlen);
     g->pipelines = r == RD_VK_OK;
     if (r != RD_VK_OK) { /* all idempotent: the next pose tries again from nothing */

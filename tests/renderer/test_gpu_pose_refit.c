@@ -14,7 +14,9 @@
  * nearly straight) degrades, and the check's verdict rebuilds it on the GPU (the LBVH) at the
  * next pose, as the 64th pose after that rebuilds it again: each time the records, tree and hits
  * (ray by ray, against a fresh CPU build) of the all-CPU path's; a check still pending when the
- * scene is destroyed is waited for (ASan: nothing leaks, nothing is read after it is freed). */
+ * scene is destroyed is waited for (ASan: nothing leaks, nothing is read after it is freed).
+ * ctest runs it twice: test_gpu_pose_refit_ploc with PROBECAST_BLAS_BUILD=ploc, where the GPU
+ * builder's PLOC method makes the rebuilds and the backdrop's BLAS. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
