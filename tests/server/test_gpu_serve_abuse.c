@@ -180,11 +180,14 @@ static void test_viewer_never_reads(void)
     cJSON *s = stats();
     double skipped0 = stat(s, "stream", "frames_skipped");
     cJSON_Delete(s);
-    /* the stuck viewer's buffers fill within the first seconds; then memory must stay flat */
+    /* the stuck viewer's buffers fill within the first seconds; then memory must stay flat. The
+     * first reading is taken once the reading viewer has had 4 frames and 2 s have passed (on a
+     * loaded machine the daemon's first frames, with their one-time allocations, came after 2 s:
+     * 9 frames in 6 s, RSS +41 MiB), the second 4 s after it (20 s at most in all) */
     int frames = 0;
     unsigned long long rss1 = 0;
-    double t0 = pc_now_ms();
-    while (pc_now_ms() - t0 < 6000) {
+    double t0 = pc_now_ms(), t1 = 0;
+    while (pc_now_ms() - t0 < 20000 && !(rss1 && pc_now_ms() - t1 >= 4000)) {
         /* the camera moves, so there are always newer frames than the stuck viewer took */
         char cam[160];
         snprintf(cam, sizeof cam,
@@ -196,12 +199,15 @@ static void test_viewer_never_reads(void)
             frames++;
             pc_frame_free(&f);
         }
-        if (!rss1 && pc_now_ms() - t0 > 2000) rss1 = pc_daemon_memory_kib(&d, "VmRSS");
+        if (!rss1 && frames >= 4 && pc_now_ms() - t0 > 2000) {
+            rss1 = pc_daemon_memory_kib(&d, "VmRSS");
+            t1 = pc_now_ms();
+        }
     }
     unsigned long long rss2 = pc_daemon_memory_kib(&d, "VmRSS");
     pc_ws_close(&ws);
     long long grew = (long long)rss2 - (long long)rss1;
-    CHECKF(frames >= 2, "the reading viewer got %d frames in 6 s beside a stuck one", frames);
+    CHECKF(frames >= 4, "the reading viewer got %d frames beside a stuck one", frames);
     CHECKF(rss1 > 0 && grew < 16 * 1024, "the daemon's RSS grew by %lld KiB in 4 s", grew);
     /* the stuck viewer reads again: it gets the newest frame, the ones in between skipped */
     double skipped1 = skipped0;
@@ -219,7 +225,7 @@ static void test_viewer_never_reads(void)
         }
         close(stuck);
     }
-    printf("a viewer that never reads: the other viewer got %d frames in 6 s, the daemon's RSS "
+    printf("a viewer that never reads: the other viewer got %d frames, the daemon's RSS "
            "%+lld KiB over the last 4 s, %g frames skipped for the stuck one (%zu KiB waiting "
            "for it)\n",
            frames, grew, skipped1 - skipped0, drained >> 10);
