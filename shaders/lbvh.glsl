@@ -16,6 +16,8 @@
 #ifndef LBVH_GLSL
 #define LBVH_GLSL
 
+#include "bvh_build_types.h"
+
 #define LBVH_KEYS_AT 8u
 
 // Every pass is a 2D dispatch of 1D work (renderer/accel/gpu_lbvh.c: a row of at most 65535
@@ -109,6 +111,17 @@ void lbvh_triangle(uint64_t positions, uint t, out vec3 a, out vec3 b, out vec3 
 bool lbvh_finite(vec3 v)
 {
     return !any(isnan(v)) && !any(isinf(v));
+}
+
+// Triangle t's box; an empty one (+inf / -inf) and false when a vertex is not finite.
+bool lbvh_triangle_box(uint64_t positions, uint t, out vec3 lo, out vec3 hi)
+{
+    vec3 a, b, c;
+    lbvh_triangle(positions, t, a, b, c);
+    bool finite = lbvh_finite(a) && lbvh_finite(b) && lbvh_finite(c);
+    lo = finite ? min(a, min(b, c)) : vec3(uintBitsToFloat(0x7f800000u));
+    hi = finite ? max(a, max(b, c)) : vec3(-uintBitsToFloat(0x7f800000u));
+    return finite;
 }
 
 // Floats to uints that compare in the same order (for atomicMin / atomicMax).

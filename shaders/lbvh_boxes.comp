@@ -253,13 +253,8 @@ void main()
     if (k == 0u) {
         if (i >= n) return;
         uint tri = lbvh_keys(pc.buf2).k[i].x;
-        vec3 a, b, c;
-        lbvh_triangle(pc.buf0, tri, a, b, c);
-        vec3 lo = min(a, min(b, c)), hi = max(a, max(b, c));
-        if (!lbvh_finite(a) || !lbvh_finite(b) || !lbvh_finite(c)) {
-            lo = vec3(uintBitsToFloat(0x7f800000u));
-            hi = -lo;
-        }
+        vec3 lo, hi;
+        lbvh_triangle_box(pc.buf0, tri, lo, hi);
         uint slot = s.v[lbvh_leaf_slot_at(n, at) + i];
         nodes.n[slot].bmin = vec4(lo, uintBitsToFloat(i));
         nodes.n[slot].bmax = vec4(hi, uintBitsToFloat(1u));

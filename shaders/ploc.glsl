@@ -3,7 +3,7 @@
 // (lbvh.glsl: words [0, 8) bounds, node count and depth, then the sorted keys); the PLOC area
 // starts at word `at` (params.y, a multiple of 4), in uints:
 //   [at, at + 16): control; word 0 the merges made so far (the next cluster id is n + it);
-//   then a record of PLOC_LOG_WORDS a round (PLOC_ROUNDS_ALL of them): the round's indirect
+//   then a record of PC_PLOC_LOG_WORDS a round (PC_PLOC_ROUNDS_ALL of them): the round's indirect
 //   dispatches and counts (PLOC_LOG_* below);
 //   cur0[n], cur1[n]: the clusters in place order (round r reads cur(r % 2), writes the other);
 //   nn[n]: each place's nearest neighbour's place;
@@ -16,18 +16,11 @@
 
 #include "lbvh.glsl"
 
-#define PLOC_ROUNDS_ALL (PC_PLOC_ROUNDS + PC_PLOC_FORCED_ROUNDS)
-#define PLOC_CTRL_WORDS 16u
-#define PLOC_LOG_WORDS 16u
-// a round's record: indirect dispatches (groups in rows: x, y, 1) of its neighbour search (one
-// thread a place), of its block passes (a workgroup a block) and of its output (one thread a
-// cluster it made, shaders/ploc_emit.comp); its place count, merge base and merges
-#define PLOC_LOG_NN_ARGS 0u
-#define PLOC_LOG_COUNT 3u
-#define PLOC_LOG_BLOCK_ARGS 4u
-#define PLOC_LOG_BASE 7u
-#define PLOC_LOG_EMIT_ARGS 8u
-#define PLOC_LOG_MERGES 11u
+// The control and round records' words are PC_PLOC_* (bvh_build_types.h, shared with gpu_ploc.c):
+// a round's indirect dispatches (groups in rows: x, y, 1) of its neighbour search (one thread a
+// place), of its block passes (a workgroup a block) and of its output (one thread a cluster it
+// made, shaders/ploc_emit.comp); its place count, merge base and merges.
+
 // a cluster's count word: triangles below (bits 0-23) and whether it becomes one output leaf
 #define PLOC_COLLAPSED 0x40000000u
 #define PLOC_COUNT_MASK 0x00ffffffu
@@ -56,15 +49,15 @@ uint ploc_blocks(uint n)
 }
 uint ploc_log_at(uint at, uint round)
 {
-    return at + PLOC_CTRL_WORDS + round * PLOC_LOG_WORDS;
+    return at + PC_PLOC_CTRL_WORDS + round * PC_PLOC_LOG_WORDS;
 }
 uint ploc_cur_at(uint n, uint at, uint round)
 {
-    return at + PLOC_CTRL_WORDS + PLOC_ROUNDS_ALL * PLOC_LOG_WORDS + (round % 2u) * n;
+    return at + PC_PLOC_CTRL_WORDS + PC_PLOC_ROUNDS_ALL * PC_PLOC_LOG_WORDS + (round % 2u) * n;
 }
 uint ploc_nn_at(uint n, uint at)
 {
-    return at + PLOC_CTRL_WORDS + PLOC_ROUNDS_ALL * PLOC_LOG_WORDS + 2u * n;
+    return at + PC_PLOC_CTRL_WORDS + PC_PLOC_ROUNDS_ALL * PC_PLOC_LOG_WORDS + 2u * n;
 }
 uint ploc_sums_at(uint n, uint at)
 {

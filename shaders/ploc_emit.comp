@@ -41,11 +41,11 @@ void main()
     uint n = pc.params.x, at = pc.params.y, round = pc.params.z, k = lbvh_thread();
     LbvhUints s = LbvhUints(pc.buf2);
     uint log_at = ploc_log_at(at, round);
-    if (k >= s.v[log_at + PLOC_LOG_MERGES]) return;
+    if (k >= s.v[log_at + PC_PLOC_LOG_MERGES]) return;
     PlocClusters cl = ploc_clusters(pc.buf2, n, at);
     LbvhUints prim = LbvhUints(pc.globals);
     Nodes nodes = Nodes(pc.buf1);
-    uint id = n + s.v[log_at + PLOC_LOG_BASE] + k;
+    uint id = n + s.v[log_at + PC_PLOC_LOG_BASE] + k;
     PlocCluster c = cl.c[id];
     uint slot = c.out_.y;
     if (slot == 0xffffffffu) return;

@@ -32,13 +32,13 @@ void main()
     uint n = pc.params.x, at = pc.params.y, row = pc.params.w, i = lbvh_thread();
     LbvhUints s = LbvhUints(pc.buf2);
     if (i == 0u) {
-        for (uint w = 0u; w < PLOC_CTRL_WORDS + PLOC_ROUNDS_ALL * PLOC_LOG_WORDS; w++)
+        for (uint w = 0u; w < PC_PLOC_CTRL_WORDS + PC_PLOC_ROUNDS_ALL * PC_PLOC_LOG_WORDS; w++)
             s.v[at + w] = 0u;
         uint log0 = ploc_log_at(at, 0u);
-        s.v[log0 + PLOC_LOG_COUNT] = n;
+        s.v[log0 + PC_PLOC_LOG_COUNT] = n;
         if (n >= 2u) {
-            ploc_write_args(s, log0 + PLOC_LOG_NN_ARGS, (n + PC_WG_1D - 1u) / PC_WG_1D, row);
-            ploc_write_args(s, log0 + PLOC_LOG_BLOCK_ARGS, ploc_blocks(n), row);
+            ploc_write_args(s, log0 + PC_PLOC_LOG_NN_ARGS, (n + PC_WG_1D - 1u) / PC_WG_1D, row);
+            ploc_write_args(s, log0 + PC_PLOC_LOG_BLOCK_ARGS, ploc_blocks(n), row);
         }
         if (n <= 1u) { // no clustering: one leaf, or an empty root (as the other builders give)
             pc_bvh_node root;
@@ -47,12 +47,10 @@ void main()
             root.bmin.w = uintBitsToFloat(0u);
             root.bmax.w = uintBitsToFloat(0u);
             if (n == 1u) {
-                vec3 a, b, c;
-                lbvh_triangle(pc.buf0, 0u, a, b, c);
-                if (lbvh_finite(a) && lbvh_finite(b) && lbvh_finite(c)) {
-                    root.bmin.xyz = min(a, min(b, c));
-                    root.bmax.xyz = max(a, max(b, c));
-                }
+                vec3 lo, hi;
+                lbvh_triangle_box(pc.buf0, 0u, lo, hi);
+                root.bmin.xyz = lo;
+                root.bmax.xyz = hi;
                 root.bmax.w = uintBitsToFloat(1u);
                 LbvhUints(pc.globals).v[0] = 0u;
             }
@@ -62,12 +60,8 @@ void main()
         }
     }
     if (i >= n || n < 2u) return;
-    vec3 a, b, c;
-    lbvh_triangle(pc.buf0, i, a, b, c);
-    bool finite = lbvh_finite(a) && lbvh_finite(b) && lbvh_finite(c);
     PlocCluster k;
-    k.lo.xyz = finite ? min(a, min(b, c)) : vec3(uintBitsToFloat(0x7f800000u));
-    k.hi.xyz = finite ? max(a, max(b, c)) : vec3(-uintBitsToFloat(0x7f800000u));
+    bool finite = lbvh_triangle_box(pc.buf0, i, k.lo.xyz, k.hi.xyz);
     k.lo.w = ploc_half_area(k.lo.xyz, k.hi.xyz);
     k.hi.w = 0.0;
     k.info = uvec4(1u, finite ? 0u : 1u, 0xffffffffu, 0xffffffffu);

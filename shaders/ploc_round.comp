@@ -1,6 +1,6 @@
 // ploc_round.comp: one round of PLOC clustering (Meister and Bittner 2018, "Parallel Locally-
 // Ordered Clustering for Bounding Volume Hierarchy Construction"; renderer/accel/gpu_ploc.c
-// records PLOC_ROUNDS_ALL rounds, the rounds after the last merge dispatch no groups). The
+// records PC_PLOC_ROUNDS_ALL rounds, the rounds after the last merge dispatch no groups). The
 // clusters of round r sit in places 0..count-1 of cur(r) (shaders/ploc.glsl), in Morton order.
 // Four phases (params.w & 15), a barrier between each:
 //   0: one thread a place finds its nearest neighbour: the place within PC_PLOC_RADIUS either
@@ -80,7 +80,7 @@ void main()
     uint row = pc.params.w >> 16, t = gl_LocalInvocationID.x;
     LbvhUints s = LbvhUints(pc.buf2);
     uint log_at = ploc_log_at(at, round);
-    uint count = s.v[log_at + PLOC_LOG_COUNT];
+    uint count = s.v[log_at + PC_PLOC_LOG_COUNT];
     uint cur = ploc_cur_at(n, at, round), next = ploc_cur_at(n, at, round + 1u);
     uint nn_at = ploc_nn_at(n, at), sums = ploc_sums_at(n, at);
     PlocClusters cl = ploc_clusters(pc.buf2, n, at);
@@ -142,17 +142,17 @@ void main()
         }
         if (t != 0u) return;
         uint made = s.v[at];
-        s.v[log_at + PLOC_LOG_BASE] = made;
-        s.v[log_at + PLOC_LOG_MERGES] = total.y;
+        s.v[log_at + PC_PLOC_LOG_BASE] = made;
+        s.v[log_at + PC_PLOC_LOG_MERGES] = total.y;
         s.v[at] = made + total.y;
-        ploc_write_args(s, log_at + PLOC_LOG_EMIT_ARGS, (total.y + PC_WG_1D - 1u) / PC_WG_1D, row);
-        if (round + 1u < PLOC_ROUNDS_ALL) {
+        ploc_write_args(s, log_at + PC_PLOC_LOG_EMIT_ARGS, (total.y + PC_WG_1D - 1u) / PC_WG_1D, row);
+        if (round + 1u < PC_PLOC_ROUNDS_ALL) {
             uint next_log = ploc_log_at(at, round + 1u);
-            s.v[next_log + PLOC_LOG_COUNT] = total.x;
+            s.v[next_log + PC_PLOC_LOG_COUNT] = total.x;
             if (total.x >= 2u) {
-                ploc_write_args(s, next_log + PLOC_LOG_NN_ARGS,
+                ploc_write_args(s, next_log + PC_PLOC_LOG_NN_ARGS,
                                 (total.x + PC_WG_1D - 1u) / PC_WG_1D, row);
-                ploc_write_args(s, next_log + PLOC_LOG_BLOCK_ARGS, ploc_blocks(total.x), row);
+                ploc_write_args(s, next_log + PC_PLOC_LOG_BLOCK_ARGS, ploc_blocks(total.x), row);
             }
         }
         return;
@@ -178,7 +178,7 @@ void main()
         }
         return;
     }
-    uint made = s.v[log_at + PLOC_LOG_BASE];
+    uint made = s.v[log_at + PC_PLOC_LOG_BASE];
     uvec2 run = g_sums[t] + uvec2(s.v[sums + 2u * block], s.v[sums + 2u * block + 1u]);
     for (uint k = 0u; k < PER_THREAD; k++) {
         uint i = p0 + k;

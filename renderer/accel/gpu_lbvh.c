@@ -152,8 +152,8 @@ uint32_t rd_gpu_lbvh_row_groups(const rd_gpu_lbvh_builder *b)
     return b->row_groups && b->row_groups < MAX_GROUPS_PER_DIM ? b->row_groups : MAX_GROUPS_PER_DIM;
 }
 
-/* Dispatches count groups of 1D work as rows of rd_gpu_lbvh_row_groups(b) groups (x) in y, the shaders'
- * lbvh_group() (shaders/lbvh.glsl) numbering them; the last row's extra groups return. */
+/* Dispatches count groups of 1D work as rows of rd_gpu_lbvh_row_groups(b) groups (x) in y, the
+ * shaders' lbvh_group() (shaders/lbvh.glsl) numbering them; the last row's extra groups return. */
 void rd_gpu_lbvh_dispatch_rows(rd_cmd *c, const rd_gpu_lbvh_builder *b, const rd_pipeline *p,
                                const pc_push *push, uint64_t count)
 {
@@ -319,8 +319,8 @@ rd_vk_result rd_gpu_lbvh_build_download(rd_vk *vk, const rd_gpu_lbvh_builder *b,
     if (r == RD_VK_OK) r = rd_buffer_create(vk, &nodes, node_bytes, RD_MEMORY_DEVICE, err, errlen);
     if (r == RD_VK_OK) r = rd_buffer_create(vk, &prim, prim_bytes, RD_MEMORY_DEVICE, err, errlen);
     if (r == RD_VK_OK)
-        r = rd_buffer_create(vk, &scratch, rd_gpu_lbvh_scratch_bytes(b, tri_count), RD_MEMORY_DEVICE,
-                             err, errlen);
+        r = rd_buffer_create(vk, &scratch, rd_gpu_lbvh_scratch_bytes(b, tri_count),
+                             RD_MEMORY_DEVICE, err, errlen);
     rd_cmd c;
     if (r == RD_VK_OK) r = rd_cmd_begin(vk, &c, err, errlen);
     if (r == RD_VK_OK) {

@@ -68,6 +68,7 @@
 
 #include "renderer/accel/bvh.h"
 #include "renderer/vk/vk_compute.h"
+#include "shaders/bvh_build_types.h"
 
 /* The hierarchy over the sorted keys (rd_gpu_lbvh_builder.method): the LBVH's radix tree with
  * treelet restructuring (the passes above), or PLOC clustering (gpu_ploc.h). Both end in the

@@ -3,16 +3,9 @@
 
 #include <assert.h>
 
-/* shaders/ploc.glsl's layout, in words from the area's start: control, a record a round, cur0,
- * cur1 and nn (n each), the block sums (2 a block), then (4-word aligned) 2n - 1 clusters of 16
- * words. */
-#define CTRL_WORDS 16u
-#define LOG_WORDS 16u
-#define ROUNDS_ALL (PC_PLOC_ROUNDS + PC_PLOC_FORCED_ROUNDS)
-#define LOG_NN_ARGS 0u
-#define LOG_BLOCK_ARGS 4u
-#define LOG_EMIT_ARGS 8u
-#define CLUSTER_WORDS 16u
+/* shaders/ploc.glsl's layout, in words from the area's start (its constants in
+ * shaders/bvh_build_types.h): control, a record a round, cur0, cur1 and nn (n each), the block sums
+ * (2 a block), then (4-word aligned) 2n - 1 clusters. */
 
 static uint64_t blocks(uint32_t n)
 {
@@ -21,10 +14,10 @@ static uint64_t blocks(uint32_t n)
 
 uint64_t rd_gpu_ploc_words(uint32_t n)
 {
-    uint64_t sums_end =
-        CTRL_WORDS + (uint64_t)ROUNDS_ALL * LOG_WORDS + 3 * (uint64_t)n + 2 * blocks(n);
+    uint64_t sums_end = PC_PLOC_CTRL_WORDS + (uint64_t)PC_PLOC_ROUNDS_ALL * PC_PLOC_LOG_WORDS +
+                        3 * (uint64_t)n + 2 * blocks(n);
     uint64_t clusters = n ? 2 * (uint64_t)n - 1 : 0;
-    return ((sums_end + 3) & ~(uint64_t)3) + CLUSTER_WORDS * clusters;
+    return ((sums_end + 3) & ~(uint64_t)3) + PC_PLOC_CLUSTER_WORDS * clusters;
 }
 
 /* Rounds to record: clustering rounds (each merges at least one pair: the pair of least union
@@ -61,21 +54,21 @@ void rd_gpu_ploc_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress
     uint32_t clustering, forced;
     rounds(n, &clustering, &forced);
     uint32_t total = clustering + forced;
-    VkDeviceSize log0 = 4 * ((VkDeviceSize)area_at + CTRL_WORDS);
+    VkDeviceSize log0 = 4 * ((VkDeviceSize)area_at + PC_PLOC_CTRL_WORDS);
     for (uint32_t r = 0; r < total; r++) {
-        VkDeviceSize log = log0 + 4 * (VkDeviceSize)r * LOG_WORDS;
+        VkDeviceSize log = log0 + 4 * (VkDeviceSize)r * PC_PLOC_LOG_WORDS;
         uint32_t w = max_leaf << 4 | (r >= clustering ? 1u << 8 : 0) | row << 16;
         pc_push p = {.buf2 = scratch->address, .params = {n, area_at, r, w}};
-        rd_cmd_dispatch_indirect(c, &b->ploc_round, &p, scratch, log + 4 * LOG_NN_ARGS);
+        rd_cmd_dispatch_indirect(c, &b->ploc_round, &p, scratch, log + 4 * PC_PLOC_LOG_NN_ARGS);
         rd_cmd_barrier(c);
         p.params.w = w | 1;
-        rd_cmd_dispatch_indirect(c, &b->ploc_round, &p, scratch, log + 4 * LOG_BLOCK_ARGS);
+        rd_cmd_dispatch_indirect(c, &b->ploc_round, &p, scratch, log + 4 * PC_PLOC_LOG_BLOCK_ARGS);
         rd_cmd_barrier(c);
         p.params.w = w | 2;
         rd_cmd_dispatch(c, &b->ploc_round, &p, 1, 1, 1);
         rd_cmd_barrier(c);
         p.params.w = w | 3;
-        rd_cmd_dispatch_indirect(c, &b->ploc_round, &p, scratch, log + 4 * LOG_BLOCK_ARGS);
+        rd_cmd_dispatch_indirect(c, &b->ploc_round, &p, scratch, log + 4 * PC_PLOC_LOG_BLOCK_ARGS);
         rd_cmd_barrier(c);
     }
     if (timer) rd_timer_mark(c, timer, "ploc_rounds");
@@ -84,16 +77,17 @@ void rd_gpu_ploc_record(rd_cmd *c, const rd_gpu_lbvh_builder *b, VkDeviceAddress
                      .buf1 = nodes,
                      .buf2 = scratch->address,
                      .params = {n, area_at, r, 0}};
-        VkDeviceSize log = log0 + 4 * (VkDeviceSize)r * LOG_WORDS;
-        rd_cmd_dispatch_indirect(c, &b->ploc_emit, &p, scratch, log + 4 * LOG_EMIT_ARGS);
+        VkDeviceSize log = log0 + 4 * (VkDeviceSize)r * PC_PLOC_LOG_WORDS;
+        rd_cmd_dispatch_indirect(c, &b->ploc_emit, &p, scratch, log + 4 * PC_PLOC_LOG_EMIT_ARGS);
         rd_cmd_barrier(c);
     }
     if (timer) rd_timer_mark(c, timer, "ploc_emit");
 }
 
 /* every word index of the scratch (keys, then the PLOC area) fits in 32 bits */
-_Static_assert(8 + 4ull * RD_GPU_LBVH_MAX_TRIANGLES + CTRL_WORDS + ROUNDS_ALL * LOG_WORDS +
-                       3ull * RD_GPU_LBVH_MAX_TRIANGLES + RD_GPU_LBVH_MAX_TRIANGLES / 64 +
-                       CLUSTER_WORDS * 2ull * RD_GPU_LBVH_MAX_TRIANGLES <
+_Static_assert(8 + 4ull * RD_GPU_LBVH_MAX_TRIANGLES + PC_PLOC_CTRL_WORDS +
+                       PC_PLOC_ROUNDS_ALL * PC_PLOC_LOG_WORDS + 3ull * RD_GPU_LBVH_MAX_TRIANGLES +
+                       RD_GPU_LBVH_MAX_TRIANGLES / 64 +
+                       PC_PLOC_CLUSTER_WORDS * 2ull * RD_GPU_LBVH_MAX_TRIANGLES <
                    (1ull << 32),
                "32-bit indices");
