@@ -145,7 +145,8 @@ void main()
         s.v[log_at + PC_PLOC_LOG_BASE] = made;
         s.v[log_at + PC_PLOC_LOG_MERGES] = total.y;
         s.v[at] = made + total.y;
-        ploc_write_args(s, log_at + PC_PLOC_LOG_EMIT_ARGS, (total.y + PC_WG_1D - 1u) / PC_WG_1D, row);
+        ploc_write_args(s, log_at + PC_PLOC_LOG_EMIT_ARGS, (total.y + PC_WG_1D - 1u) / PC_WG_1D,
+                        row);
         if (round + 1u < PC_PLOC_ROUNDS_ALL) {
             uint next_log = ploc_log_at(at, round + 1u);
             s.v[next_log + PC_PLOC_LOG_COUNT] = total.x;

@@ -272,7 +272,8 @@ static void run_tests(rd_vk *vk, const rd_gpu_lbvh_builder *b)
 static bool stat_box(const pc_bvh_node *n, const float o[3], const float inv[3], float tmax,
                      float *tn)
 {
-    const float lo[3] = {n->bmin.x, n->bmin.y, n->bmin.z}, hi[3] = {n->bmax.x, n->bmax.y, n->bmax.z};
+    const float lo[3] = {n->bmin.x, n->bmin.y, n->bmin.z};
+    const float hi[3] = {n->bmax.x, n->bmax.y, n->bmax.z};
     float t0 = 0, t1 = tmax;
     for (int k = 0; k < 3; k++) {
         float a = (lo[k] - o[k]) * inv[k], b = (hi[k] - o[k]) * inv[k];
@@ -534,7 +535,8 @@ int main(int argc, char **argv)
         fprintf(stderr, "worst SAH ratio over the CPU builder's: GPU LBVH %.3f, GPU PLOC %.3f\n",
                 g_worst_ratio[RD_GPU_BVH_LBVH], g_worst_ratio[RD_GPU_BVH_PLOC]);
         fprintf(stderr,
-                "GPU traversal (trace.glsl) over the GPU trees: %u of %u rays differ from the CPU\n",
+                "GPU traversal (trace.glsl) over the GPU trees: %u of %u rays differ from the "
+                "CPU\n",
                 g_gpu_differ, g_gpu_rays);
     }
     rd_pipeline_destroy(&vk, &g_trace);
